@@ -1,0 +1,88 @@
+"""The ``vidstyle`` command line.
+
+Each stage lives in its own module under ``vidstyle/commands/`` and exposes ``register(app)``, which
+adds its commands (or a command group) to the root Typer app. Modules are discovered, so adding a stage
+touches one new file. Errors derived from :class:`vidstyle.errors.VidstyleError` become a one-line
+message on stderr and a non-zero exit status.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import pkgutil
+import sys
+
+import typer
+
+from . import __version__
+from .errors import VidstyleError
+
+app = typer.Typer(
+    name="vidstyle",
+    help="Learn a performer's action style from video and turn it into new 3D character motion.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"vidstyle {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="More logging (-vv for debug)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only warnings and errors."),
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print version."),
+) -> None:
+    from .logutil import configure
+
+    configure(-1 if quiet else verbose)
+
+
+def _register_commands() -> None:
+    from . import commands
+
+    for mod in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
+        if mod.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{commands.__name__}.{mod.name}")
+        module.register(app)
+
+
+_register_commands()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Console-script entry point. Returns the exit status instead of raising SystemExit."""
+    try:
+        app(args=argv, standalone_mode=False)
+    except VidstyleError as e:
+        msg = " ".join(str(e).split())  # one line, always
+        print(f"vidstyle: error: {msg}", file=sys.stderr)
+        return e.exit_code
+    except typer.Exit as e:
+        return e.exit_code
+    except typer.Abort:
+        print("vidstyle: aborted", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print("vidstyle: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # click usage errors
+        import click
+
+        if isinstance(e, click.ClickException):
+            e.show()
+            return e.exit_code
+        logging.getLogger("vidstyle").exception("internal error")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

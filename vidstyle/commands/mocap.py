@@ -1,0 +1,118 @@
+"""``vidstyle mocap``: inspect and convert BVH files."""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+mocap_app = typer.Typer(help="Inspect and convert motion capture (BVH) files.", no_args_is_help=True)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(mocap_app, name="mocap")
+
+
+@mocap_app.command("info")
+def info(
+    file: Path = typer.Argument(..., help="BVH file."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
+) -> None:
+    """Joints, frames, fps, duration and bounding box of a BVH file."""
+    from ..mocap import global_positions, read_bvh
+
+    motion = read_bvh(file)
+    pos = global_positions(motion)
+    lo = pos.reshape(-1, 3).min(axis=0) if motion.n_frames else np.zeros(3)
+    hi = pos.reshape(-1, 3).max(axis=0) if motion.n_frames else np.zeros(3)
+    summary = {
+        "file": str(file),
+        "joints": motion.n_joints,
+        "joint_names": motion.skeleton.names,
+        "frames": motion.n_frames,
+        "fps": motion.fps,
+        "duration_s": motion.duration,
+        "bbox_min": lo.round(4).tolist(),
+        "bbox_max": hi.round(4).tolist(),
+        "channels": int(sum(len(c) for c in motion.skeleton.channels)),
+        "end_sites": len(motion.skeleton.end_sites),
+    }
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=str(file), show_header=False)
+    for key in ("joints", "frames", "fps", "duration_s", "channels", "end_sites", "bbox_min", "bbox_max"):
+        val = summary[key]
+        table.add_row(key, f"{val:g}" if isinstance(val, float) else str(val))
+    Console().print(table)
+
+
+@mocap_app.command("positions")
+def positions(
+    file: Path = typer.Argument(..., help="BVH file."),
+    out: Path = typer.Option(..., "--out", "-o", help="OUT.npy (frames x joints x 3) or OUT.csv."),
+) -> None:
+    """Global joint positions (frames x joints x 3, joints in file order) to .npy or .csv.
+
+    The CSV has one row per frame and columns ``<joint>_x, <joint>_y, <joint>_z`` for every joint.
+    """
+    from ..fileio import atomic_path, write_npy
+    from ..mocap import global_positions, read_bvh
+
+    suffix = out.suffix.lower()
+    if suffix not in (".npy", ".csv"):
+        raise InputError(f"{out}: output must end in .npy or .csv")
+    motion = read_bvh(file)
+    pos = global_positions(motion)
+    if suffix == ".npy":
+        write_npy(out, pos.astype(np.float64))
+    else:
+        header = ",".join(f"{n}_{a}" for n in motion.skeleton.names for a in "xyz")
+        with atomic_path(out) as tmp:
+            np.savetxt(tmp, pos.reshape(motion.n_frames, -1), delimiter=",", header=header, comments="", fmt="%.6f")
+    log.info("wrote %s (%d frames x %d joints x 3)", out, motion.n_frames, motion.n_joints)
+
+
+@mocap_app.command("convert")
+def convert(
+    src: Path = typer.Argument(..., help="Input BVH."),
+    dst: Path = typer.Argument(..., help="Output BVH."),
+    fps: float = typer.Option(None, "--fps", help="Resample to this frame rate (slerp)."),
+    mirror: bool = typer.Option(False, "--mirror", help="Swap left and right (mirror image)."),
+    normalize_facing: bool = typer.Option(
+        False, "--normalize-facing", help="Rotate about the vertical so frame 0 faces +Z, root over the origin."
+    ),
+    start: int = typer.Option(None, "--start", help="First frame to keep (0-based)."),
+    stop: int = typer.Option(None, "--stop", help="Frame after the last to keep."),
+) -> None:
+    """Rewrite a BVH, optionally cut, resampled, mirrored or facing-normalised."""
+    from ..mocap import read_bvh, write_bvh
+
+    if fps is not None and not fps > 0:
+        raise InputError(f"--fps: must be positive, got {fps}")
+    motion = read_bvh(src)
+    if start is not None or stop is not None:
+        motion = motion[start:stop]
+        if motion.n_frames == 0:
+            raise InputError(f"{src}: --start/--stop select no frames (file has {len(read_bvh(src))})")
+    if fps is not None:
+        motion = motion.resample(fps)
+    if mirror:
+        try:
+            motion = motion.mirror()
+        except ValueError as e:
+            raise InputError(f"{src}: cannot mirror: {e}") from None
+    if normalize_facing and motion.n_frames:
+        motion = motion.normalize_facing()
+    write_bvh(motion, dst)
+    log.info("wrote %s (%d frames at %g fps)", dst, motion.n_frames, motion.fps)

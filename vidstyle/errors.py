@@ -1,0 +1,14 @@
+"""Exceptions that the CLI turns into a one-line message and a non-zero exit."""
+
+
+class VidstyleError(Exception):
+    """Base class of every error caused by bad input (file, shape, parameter), not by a bug.
+
+    The message must name the offending file (or argument) and the problem, on one line.
+    """
+
+    exit_code = 2
+
+
+class InputError(VidstyleError):
+    """A file or argument that cannot be used (missing, unreadable, wrong shape, wrong schema)."""

@@ -1,0 +1,28 @@
+"""Logging and progress bars. Configured by the CLI only, never at import time."""
+
+from __future__ import annotations
+
+import logging
+from typing import Iterable, Iterator, TypeVar
+
+T = TypeVar("T")
+
+
+def configure(verbosity: int = 0) -> None:
+    from rich.logging import RichHandler
+
+    level = logging.WARNING if verbosity < 0 else logging.INFO if verbosity == 0 else logging.DEBUG
+    logging.basicConfig(
+        level=level,
+        format="%(message)s",
+        datefmt="[%X]",
+        handlers=[RichHandler(show_path=False, rich_tracebacks=False)],
+        force=True,
+    )
+
+
+def progress(items: Iterable[T], description: str, total: int | None = None) -> Iterator[T]:
+    """Iterate with a rich progress bar (on stderr; hidden when stderr is not a terminal)."""
+    from rich.progress import track
+
+    yield from track(items, description=description, total=total, transient=True)
