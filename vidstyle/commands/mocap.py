@@ -25,11 +25,12 @@ def info(
     file: Path = typer.Argument(..., help="BVH file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ) -> None:
-    """Joints, frames, fps, duration and bounding box of a BVH file."""
-    from ..mocap import global_positions, read_bvh
+    """Joints, frames, fps, duration and bounding box (joints and End Sites, all frames) of a BVH file."""
+    from ..mocap import end_site_positions, forward_kinematics, read_bvh
 
     motion = read_bvh(file)
-    pos = global_positions(motion)
+    pos, mats = forward_kinematics(motion)
+    pos = np.concatenate([pos, end_site_positions(motion, mats, pos)[1]], axis=1)
     lo = pos.reshape(-1, 3).min(axis=0) if motion.n_frames else np.zeros(3)
     hi = pos.reshape(-1, 3).max(axis=0) if motion.n_frames else np.zeros(3)
     summary = {

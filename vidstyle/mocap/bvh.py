@@ -17,6 +17,7 @@ import io
 import math
 import os
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -340,7 +341,10 @@ def motion_to_channels(motion: Motion) -> np.ndarray:
             seq = "".join(c[0] for c in rot)
             if len(seq) < 3:  # complete the sequence with the missing axes; they are expected to be ~0
                 seq += "".join(a for a in "XYZ" if a not in seq)
-            eul = Rotation.from_quat(motion.rotations[:, j]).as_euler(seq, degrees=True)
+            with warnings.catch_warnings():
+                # at gimbal lock scipy picks one of the equivalent decompositions: still exact
+                warnings.simplefilter("ignore", UserWarning)
+                eul = Rotation.from_quat(motion.rotations[:, j]).as_euler(seq, degrees=True)
             for k, c in enumerate(rot):
                 angles[c] = eul[:, k]
         for c in chans:
