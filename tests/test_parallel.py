@@ -1,0 +1,33 @@
+"""parallel_map: joblib locally and a Dask cluster give the same ordered results as a plain loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vidstyle.errors import InputError
+from vidstyle.parallel import parallel_map
+
+
+def _work(seed: int) -> float:
+    return float(np.random.default_rng(seed).normal(size=1000).sum())
+
+
+def test_local_matches_serial():
+    items = list(range(7))
+    expected = [_work(i) for i in items]
+    assert parallel_map(_work, items, jobs=1) == expected
+    assert parallel_map(_work, items, jobs=2) == expected
+    assert parallel_map(_work, [], jobs=2) == []
+
+
+def test_dask_cluster_matches_local():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        got = parallel_map(_work, list(range(6)), scheduler=cluster.scheduler_address)
+    assert got == [_work(i) for i in range(6)]
+
+
+def test_unreachable_scheduler_is_a_clear_error():
+    with pytest.raises(InputError, match="cannot connect"):
+        parallel_map(_work, [1], scheduler="tcp://127.0.0.1:9")

@@ -1,0 +1,80 @@
+"""One code path for per-item work (per video, per tile): joblib on this machine, Dask on a cluster.
+
+``parallel_map(fn, items, jobs=-1, scheduler=None)`` returns ``[fn(x) for x in items]`` in order.
+With ``scheduler="tcp://host:port"`` the calls run on that Dask cluster (``dask.distributed.Client``);
+otherwise through joblib's loky backend with ``jobs`` workers (all cores for -1). ``fn`` must be a
+module-level function (picklable). OpenCV and BLAS are limited to one thread inside each worker, so
+``jobs`` workers never oversubscribe the cores.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from typing import Callable, Iterable, Sequence, TypeVar
+
+from .errors import InputError
+
+log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def _single_threaded(fn: Callable[[T], R], item: T) -> R:
+    try:
+        import cv2
+
+        cv2.setNumThreads(1)
+    except ImportError:  # pragma: no cover - opencv is a dependency
+        pass
+    try:
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1):
+            return fn(item)
+    except ImportError:  # pragma: no cover
+        return fn(item)
+
+
+def parallel_map(
+    fn: Callable[[T], R],
+    items: Iterable[T],
+    jobs: int = -1,
+    scheduler: str | None = None,
+    description: str = "working",
+) -> list[R]:
+    """Apply ``fn`` to every item, in parallel, preserving order. See the module docstring."""
+    items = list(items)
+    if not items:
+        return []
+    if scheduler:
+        return _dask_map(fn, items, scheduler, description)
+    n = os.cpu_count() or 1
+    workers = n if jobs is None or jobs < 0 else max(1, jobs)
+    workers = min(workers, len(items))
+    if workers == 1:
+        from .logutil import progress
+
+        return [fn(x) for x in progress(items, description, total=len(items))]
+    from joblib import Parallel, delayed
+
+    log.info("%s: %d items on %d local workers", description, len(items), workers)
+    return list(Parallel(n_jobs=workers, backend="loky")(delayed(_single_threaded)(fn, x) for x in items))
+
+
+def _dask_map(fn: Callable[[T], R], items: Sequence[T], scheduler: str, description: str) -> list[R]:
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError("--scheduler: dask[distributed] is not installed (pip install 'vidstyle[dask]')") from None
+    try:
+        client = Client(scheduler, timeout="10s")
+    except (OSError, TimeoutError) as e:
+        raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+    try:
+        log.info("%s: %d items on Dask cluster %s", description, len(items), scheduler)
+        futures = client.map(_single_threaded, [fn] * len(items), items, pure=False)
+        return client.gather(futures)
+    finally:
+        client.close()
