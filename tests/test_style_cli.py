@@ -1,0 +1,140 @@
+"""``vidstyle learn-style`` / ``generate`` end to end, and bad input."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+
+from vidstyle.cli import main
+from vidstyle.style.artifact import Style
+from vidstyle.style.synthetic import CLASSES, write_fake_dataset
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    root = tmp_path_factory.mktemp("ds")
+    write_fake_dataset(root, n_performers=2, n_videos=2, events_per_video=80, seed=3)
+    return root
+
+
+@pytest.fixture(scope="module")
+def style_file(dataset, tmp_path_factory):
+    out = tmp_path_factory.mktemp("style") / "style.json"
+    labels = [str(dataset / "labels" / f"p00_perf{i}.json") for i in range(2)]
+    assert main(["learn-style", *labels, "--out", str(out), "--n-init", "2", "--modes", "1-4"]) == 0
+    return out
+
+
+def test_style_file_schema(style_file, dataset):
+    doc = json.loads(style_file.read_text())
+    assert doc["schema_version"] == 1 and doc["kind"] == "vidstyle.style" and doc["seed"] == 0
+    assert doc["actions"] == list(CLASSES[:6]) and doc["classes"] == list(CLASSES)
+    assert doc["params"]["events"]["ignore"] == ["Guard", "Step"]
+    assert doc["performer"] == "p00" and len(doc["sources"]) == 2
+    assert doc["n_events"] == sum(s["n_events"] for s in doc["sources"]) == sum(doc["action_counts"].values())
+    A, K = 6, doc["model_b"]["n_modes"]
+    assert np.asarray(doc["model_a"]["transition"]).shape == (A, A)
+    assert np.asarray(doc["model_a"]["emission"]).shape == (A, A)
+    assert np.asarray(doc["model_b"]["emission"]).shape == (K, A)
+    assert set(doc["model_b"]["selection"]["scores"]) == {"1", "2", "3", "4"}
+    for key in ("model_a", "model_b", "bigram"):
+        assert np.isfinite(doc[key]["log_likelihood"])
+    assert set(doc["durations"]) == set(doc["actions"])
+    # the learned chain is much closer to the performer's true chain than a uniform chain is
+    truth = np.asarray(json.loads((dataset / "dataset.json").read_text())["performers"][0]["chain"]["transition"])
+    mae = np.abs(np.asarray(doc["model_a"]["transition"]) - truth).mean()
+    assert mae < 0.5 * np.abs(1 / 6 - truth).mean()
+    again = json.loads(json.dumps(Style.load(style_file).to_dict(), default=lambda o: o.tolist()))
+    assert again.keys() == doc.keys()
+    for key in ("model_a", "model_b", "bigram"):
+        for m in ("start", "transition"):
+            np.testing.assert_allclose(again[key][m], doc[key][m])
+    assert again["durations"] == doc["durations"] and again["params"] == doc["params"]
+
+
+def test_generate_text_is_deterministic(style_file, capsys):
+    args = ["generate", "--style", str(style_file), "--start", "Jab", "--length", "40", "--seed", "1"]
+    assert main(args) == 0
+    first = capsys.readouterr().out
+    assert main(args) == 0
+    assert capsys.readouterr().out == first
+    words = first.split()
+    assert len(words) == 40 and words[0] == "Jab" and set(words) <= set(CLASSES[:6])
+    assert main(args[:-1] + ["2"]) == 0
+    assert capsys.readouterr().out != first
+
+
+@pytest.mark.parametrize("model", ["a", "b", "bigram"])
+def test_generate_json_and_csv(style_file, tmp_path, model):
+    js, cs = tmp_path / "seq.json", tmp_path / "seq.csv"
+    base = ["generate", "--style", str(style_file), "--start", "Hook", "--length", "12", "--seed", "4",
+            "--model", model]
+    assert main(base + ["--format", "json", "--out", str(js)]) == 0
+    assert main(base + ["--format", "csv", "--out", str(cs)]) == 0
+    doc = json.loads(js.read_text())
+    assert doc["seed"] == 4 and doc["start"] == "Hook" and len(doc["events"]) == 12
+    ev = doc["events"]
+    assert ev[0]["action"] == "Hook" and all(e["duration_frames"] >= 1 for e in ev)
+    assert all(b["start_frame"] == a["start_frame"] + a["duration_frames"] for a, b in itertools.pairwise(ev))
+    rows = cs.read_text().strip().splitlines()
+    assert rows[0] == "index,action,duration_frames,start_frame" and len(rows) == 13
+    assert rows[1].split(",")[1:3] == [ev[0]["action"], str(ev[0]["duration_frames"])]
+
+
+def _label_file(path, labels, classes=CLASSES):
+    path.write_text(json.dumps({"fps": 20, "classes": list(classes), "labels": labels}))
+    return str(path)
+
+
+def _fails(capsys, args, out=None, message=None):
+    code = main(args)
+    err = capsys.readouterr().err
+    assert code != 0, err
+    assert err.startswith("vidstyle: error:") and err.count("\n") == 1, err
+    if message:
+        assert message in err, err
+    if out is not None:
+        assert not out.exists()
+
+
+def test_bad_generate_input(style_file, tmp_path, capsys):
+    out = tmp_path / "o.txt"
+    g = ["generate", "--style", str(style_file), "--out", str(out)]
+    _fails(capsys, g + ["--start", "Kick"], out, "unknown action 'Kick'")
+    _fails(capsys, g + ["--start", "Guard"], out, "ignored filler")
+    _fails(capsys, g + ["--start", "Jab", "--length", "0"], out, "--length")
+    _fails(capsys, g + ["--start", "Jab", "--format", "xml"], out, "--format")
+    _fails(capsys, g + ["--start", "Jab", "--model", "c"], out, "--model")
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"kind": "something"}))
+    _fails(capsys, ["generate", "--style", str(bad), "--start", "Jab", "--out", str(out)], out, "not a vidstyle style")
+    _fails(capsys, ["generate", "--style", str(tmp_path / "none.json"), "--out", str(out)], out, "not found")
+
+
+def test_bad_learn_input(tmp_path, capsys):
+    out = tmp_path / "style.json"
+    rng = np.random.default_rng(0)
+    good = []
+    for a in rng.integers(0, 6, size=30):
+        good += [CLASSES[a]] * 8 + ["Guard"] * 4
+    ok = _label_file(tmp_path / "ok.json", good)
+    learn = ["learn-style", "--out", str(out), "--n-init", "1", "--modes", "1-2"]
+    _fails(capsys, learn + [_label_file(tmp_path / "empty.json", [])], out, "empty label file")
+    _fails(capsys, learn + [_label_file(tmp_path / "one.json", ["Jab"] * 40)], out, "at least 2 events")
+    single = (["Jab"] * 8 + ["Guard"] * 4) * 10
+    _fails(capsys, learn + [_label_file(tmp_path / "single.json", single)], out, "2 different actions")
+    _fails(capsys, learn + [_label_file(tmp_path / "idle.json", ["Guard"] * 50)], out, "no action events")
+    other = _label_file(tmp_path / "other.json", ["Jab", "Kick"] * 5, classes=["Jab", "Kick", "Guard"])
+    _fails(capsys, learn + [ok, other], out, "differ from")
+    _fails(capsys, learn + [_label_file(tmp_path / "x.json", ["Jab", "Kick"])], out, "not in 'classes'")
+    _fails(capsys, learn + [ok, "--min-run", "0"], out, "--min-run")
+    _fails(capsys, learn + [ok, "--modes", "x"], out, "--modes")
+    _fails(capsys, learn + [str(tmp_path / "missing.json")], out, "file not found")
+    # a class that never occurs in training: learning works, generating from it is refused
+    no_kick = [x for x in good if x != "RoundhouseKick"]
+    assert main(learn + [_label_file(tmp_path / "nokick.json", no_kick)]) == 0
+    _fails(capsys, ["generate", "--style", str(out), "--start", "RoundhouseKick"], None, "never occurs")
+    assert main(["generate", "--style", str(out), "--start", "Jab", "--length", "30"]) == 0

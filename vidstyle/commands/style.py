@@ -1,0 +1,215 @@
+"""Behaviour style commands: ``learn-style``, ``generate`` and ``evaluate style``.
+
+    vidstyle learn-style labels/p03_*.json --out style.json
+    vidstyle generate --style style.json --start Jab --length 40 --seed 1 --format text
+    vidstyle evaluate style --dataset DIR [--labels-dir RECOGNISED] --out metrics.json
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import logging
+from pathlib import Path
+
+import typer
+
+from ..errors import InputError
+from ._evaluate import evaluate_app
+
+log = logging.getLogger(__name__)
+
+FORMATS = ("text", "json", "csv")
+
+
+def _style_params(
+    ignore: str, min_confidence: float, min_run: int, max_gap: int, split_repeats: bool, seed: int,
+    n_init: int, n_iter: int, alpha: float, learn_emission: bool, emission_prior: float, modes: str,
+    mode_criterion: str,
+):
+    from ..style.artifact import StyleParams, parse_k_range
+    from ..style.events import EventParams
+
+    events = EventParams(
+        ignore=tuple(x.strip() for x in ignore.split(",") if x.strip()), min_confidence=min_confidence,
+        min_run=min_run, max_gap=max_gap, split_repeats=split_repeats,
+    )
+    return StyleParams(
+        events=events, seed=seed, alpha=alpha, learn_emission=learn_emission, emission_prior=emission_prior,
+        n_init=n_init, n_iter=n_iter, k_range=parse_k_range(modes), mode_criterion=mode_criterion,
+    )
+
+
+# option declarations shared by learn-style and evaluate style
+_IGNORE = typer.Option("Guard,Step", "--ignore", help="Comma-separated filler classes that are not actions.")
+_MIN_CONF = typer.Option(0.5, "--min-confidence", help="Frames below this confidence are dropped.")
+_MIN_RUN = typer.Option(3, "--min-run", help="Runs shorter than this (frames) are noise.")
+_MAX_GAP = typer.Option(4, "--max-gap", help="A run resumed after at most this many noise frames is one event.")
+_SPLIT = typer.Option(True, "--split-repeats/--no-split-repeats",
+                      help="Cut runs of several back-to-back occurrences of an action into events.")
+_SEED = typer.Option(0, "--seed", help="Seed of every random choice (restarts, folds, sampling).")
+_N_INIT = typer.Option(4, "--n-init", help="EM restarts per model; the best training likelihood is kept.")
+_N_ITER = typer.Option(200, "--n-iter", help="Maximum EM iterations per restart.")
+_ALPHA = typer.Option(0.5, "--alpha", help="Dirichlet pseudo-count per transition cell (smoothing).")
+_LEARN_E = typer.Option(True, "--learn-emission/--fixed-emission",
+                        help="Model (a): learn recognition confusions (else emissions = identity).")
+_E_PRIOR = typer.Option(10.0, "--emission-prior", help="Model (a): pseudo-events per row of the diagonal prior.")
+_MODES = typer.Option("1-6", "--modes", help="Model (b): candidate numbers of behaviour modes, e.g. 1-6.")
+_CRIT = typer.Option("heldout", "--mode-criterion", help="Model (b): choose modes by 'heldout' or 'bic'.")
+
+
+def learn_style(
+    labels: list[Path] = typer.Argument(..., help="Label files (JSON, one per video)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Where to write style.json."),
+    ignore: str = _IGNORE,
+    min_confidence: float = _MIN_CONF,
+    min_run: int = _MIN_RUN,
+    max_gap: int = _MAX_GAP,
+    split_repeats: bool = _SPLIT,
+    seed: int = _SEED,
+    n_init: int = _N_INIT,
+    n_iter: int = _N_ITER,
+    alpha: float = _ALPHA,
+    learn_emission: bool = _LEARN_E,
+    emission_prior: float = _E_PRIOR,
+    modes: str = _MODES,
+    mode_criterion: str = _CRIT,
+) -> None:
+    """Learn a performer's action style (HMMs + durations) from frame labels."""
+    from ..fileio import write_json
+    from ..style.artifact import Style
+    from ..style.events import load_label_file
+
+    params = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
+                           alpha, learn_emission, emission_prior, modes, mode_criterion)
+    tracks = [load_label_file(p) for p in labels]
+    style = Style.from_tracks(tracks, params)
+    write_json(out, style.to_dict())
+    log.info("wrote %s (%d events, model (b): %d modes)", out, int(style.action_counts.sum()),
+             style.model_b.n_modes_)
+
+
+def generate(
+    style_path: Path = typer.Option(..., "--style", "-s", help="style.json from learn-style."),
+    start: str | None = typer.Option(None, "--start", help="First action (default: drawn from the model)."),
+    length: int = typer.Option(40, "--length", "-n", help="Number of action events."),
+    seed: int = typer.Option(0, "--seed", help="Random seed; the output is a function of it."),
+    fmt: str = typer.Option("text", "--format", "-f", help="text (thesis Table 4 style), json or csv."),
+    model: str = typer.Option("a", "--model", "-m", help="a (thesis HMM), b (behaviour modes) or bigram."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
+) -> None:
+    """Generate a new action sequence (with durations) in a learned style."""
+    from ..fileio import write_json, write_text
+    from ..style.artifact import Style
+
+    if fmt not in FORMATS:
+        raise InputError(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
+    style = Style.load(style_path)
+    events = style.generate(length, start=start, seed=seed, model=model)
+    if fmt == "json":
+        doc = {"kind": "vidstyle.sequence", "schema_version": 1, "style": str(style_path), "model": model,
+               "start": events[0]["action"], "length": length, "seed": seed, "fps": style.fps,
+               "events": events}
+        if out is not None:
+            write_json(out, doc)
+            return
+        text = json.dumps(doc, indent=2) + "\n"
+    elif fmt == "csv":
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["index", "action", "duration_frames", "start_frame"])
+        for i, e in enumerate(events):
+            w.writerow([i, e["action"], e["duration_frames"], e["start_frame"]])
+        text = buf.getvalue()
+    else:
+        text = " ".join(e["action"] for e in events) + "\n"
+    if out is not None:
+        write_text(out, text)
+    else:
+        typer.echo(text, nl=False)
+
+
+@evaluate_app.command("style")
+def evaluate_style(
+    dataset: Path = typer.Option(..., "--dataset", "-d", help="Directory holding dataset.json."),
+    labels_dir: Path | None = typer.Option(
+        None, "--labels-dir", help="Recognised label files (<video id>.json); evaluated beside ground truth."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Where to write metrics JSON."),
+    heldout_fraction: float = typer.Option(0.34, "--heldout-fraction", help="Share of videos (or events) held out."),
+    n_generate: int = typer.Option(20, "--n-generate", help="Generated sequences per performer."),
+    generate_length: int = typer.Option(40, "--generate-length", help="Events per generated sequence."),
+    ignore: str = _IGNORE,
+    min_confidence: float = _MIN_CONF,
+    min_run: int = _MIN_RUN,
+    max_gap: int = _MAX_GAP,
+    split_repeats: bool = _SPLIT,
+    seed: int = _SEED,
+    n_init: int = _N_INIT,
+    n_iter: int = _N_ITER,
+    alpha: float = _ALPHA,
+    learn_emission: bool = _LEARN_E,
+    emission_prior: float = _E_PRIOR,
+    modes: str = _MODES,
+    mode_criterion: str = _CRIT,
+) -> None:
+    """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
+    from ..fileio import write_json
+    from ..style.evaluate import EvalParams, evaluate_dataset
+
+    if labels_dir is not None and not labels_dir.is_dir():
+        raise InputError(f"{labels_dir}: --labels-dir is not a directory")
+    sp = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
+                       alpha, learn_emission, emission_prior, modes, mode_criterion)
+    params = EvalParams(style=sp, heldout_fraction=heldout_fraction, n_generate=n_generate,
+                        generate_length=generate_length)
+    metrics = evaluate_dataset(dataset, params, labels_dir)
+    if out is not None:
+        write_json(out, metrics)
+    _print_table(metrics)
+
+
+def _print_table(metrics: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    srcs = metrics["sources"]
+    names = list(srcs)
+    t = Table(title=f"style metrics (seed {metrics['seed']})")
+    t.add_column("metric")
+    for n in names:
+        t.add_column(n.replace("_", " "), justify="right")
+
+    def f(x, fmt="{:.3f}"):
+        return "-" if x is None else fmt.format(x)
+
+    def row(label, get, fmt="{:.3f}"):
+        t.add_row(label, *(f(get(srcs[n]["summary"]), fmt) for n in names))
+
+    row("performers", lambda s: s["n_performers"], "{:d}")
+    row("train / held-out events", lambda s: f"{s['n_train_events']} / {s['n_heldout_events']}", "{}")
+    row("transition MAE, model (a)", lambda s: s["transition_mae"]["a"])
+    row("transition MAE, bigram", lambda s: s["transition_mae"]["bigram"])
+    row("transition MAE, model (b) implied", lambda s: s["transition_mae"]["b_implied"])
+    row("duration mean error (frames)", lambda s: s["duration_mean_abs_error_frames"], "{:.2f}")
+    for m in ("a", "b"):
+        for n in (2, 3):
+            row(f"JSD {n}-gram ({m}) same / other",
+                lambda s, m=m, n=n: f"{s['fidelity'][m][f'jsd_{n}gram_same']:.3f} / "
+                                    f"{s['fidelity'][m][f'jsd_{n}gram_other']:.3f}", "{}")
+    row("JSD 2-gram real train vs held-out", lambda s: s["fidelity"]["a"]["jsd_2gram_train_vs_heldout"])
+    row("identification (a) by held-out data", lambda s: s["identification"]["a"]["accuracy_by_heldout_data"], "{:.1%}")
+    row("identification (a) by true chain", lambda s: s["identification"]["a"]["accuracy_by_true_chain"], "{:.1%}")
+    row("identification (b) by held-out data", lambda s: s["identification"]["b"]["accuracy_by_heldout_data"], "{:.1%}")
+    row("held-out sequences identified by (a)",
+        lambda s: s["identification"]["heldout_sequences_by_model_a"]["accuracy"], "{:.1%}")
+    row("held-out loglik/event (a)", lambda s: s["heldout_loglik_per_event"]["a"], "{:.4f}")
+    row("held-out loglik/event (b)", lambda s: s["heldout_loglik_per_event"]["b"], "{:.4f}")
+    row("held-out loglik/event bigram", lambda s: s["heldout_loglik_per_event"]["bigram"], "{:.4f}")
+    row("modes chosen (b)", lambda s: " ".join(str(k) for k in s["n_modes"].values()), "{}")
+    Console().print(t)
+
+
+def register(app: typer.Typer) -> None:
+    app.command("learn-style")(learn_style)
+    app.command("generate")(generate)

@@ -1,0 +1,304 @@
+"""``vidstyle evaluate style``: style metrics on performers whose true chains are known.
+
+For every performer of a dataset manifest (``DIR/dataset.json``), the performance videos are split
+into training and held-out parts (by video when there are at least two, else by time: the last
+``heldout_fraction`` of the events). A :class:`~vidstyle.style.artifact.Style` is learned on the
+training part, then (docs/evaluation.md, "style"):
+
+* transition-matrix error: mean absolute difference between the learned and the true action
+  transition matrix, for model (a), the bigram baseline and the transition implied by model (b);
+* style fidelity: Jensen-Shannon divergence (bits) of bigram and trigram distributions of generated
+  sequences against the held-out sequences of the same performer, and (mean) of the other performers;
+* identification: generated sequences are attributed to the performer whose held-out data (a smoothed
+  bigram fitted on it) explains them best; also with the true chains as the judge, and real held-out
+  sequences attributed by the learned models (a);
+* held-out log-likelihood per event of models (a), (b) and the bigram baseline.
+
+Run once on ground-truth labels and, with ``labels_dir``, once on recognised labels; the difference
+is the cost of recognition errors.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..fileio import read_json
+from .artifact import Style, StyleParams
+from .events import EventSequence, load_label_file, tracks_to_events
+from .models import BigramModel, normalise_rows
+from .ngram import ngram_jsd
+
+log = logging.getLogger(__name__)
+
+TARGETS = {"transition_mae": 0.05, "identification_accuracy": 0.90, "min_performers": 5}
+
+
+@dataclass(frozen=True)
+class EvalParams:
+    style: StyleParams = field(default_factory=StyleParams)
+    heldout_fraction: float = 0.34
+    n_generate: int = 20
+    generate_length: int = 40
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.heldout_fraction < 1.0:
+            raise InputError(f"--heldout-fraction: must be in (0, 1), got {self.heldout_fraction}")
+        if self.n_generate < 1 or self.generate_length < 3:
+            raise InputError("--n-generate must be >= 1 and --generate-length >= 3")
+
+    def to_dict(self) -> dict:
+        return {"style": self.style.to_dict(), "heldout_fraction": self.heldout_fraction,
+                "n_generate": self.n_generate, "generate_length": self.generate_length}
+
+
+@dataclass
+class PerformerData:
+    pid: str
+    train: list[EventSequence]
+    heldout: list[EventSequence]
+    true_start: np.ndarray  # (A,) in manifest action order
+    true_transition: np.ndarray  # (A, A)
+    true_duration_mean: np.ndarray  # (A,) frames, NaN if unknown
+
+
+def load_manifest(dataset_dir: str | Path) -> dict:
+    """Read and check the parts of ``DIR/dataset.json`` used here."""
+    path = Path(dataset_dir) / "dataset.json"
+    doc = read_json(path)
+    try:
+        actions = [str(a) for a in doc["actions"]]
+        performers = doc["performers"]
+        videos = doc["videos"]
+        for p in performers:
+            ch = p["chain"]
+            A = len(ch["actions"])
+            if set(ch["actions"]) != set(actions):
+                raise InputError(f"{path}: performer {p['id']}: chain actions differ from 'actions'")
+            if np.asarray(ch["transition"], dtype=float).shape != (A, A):
+                raise InputError(f"{path}: performer {p['id']}: transition is not {A}x{A}")
+        for v in videos:
+            v["id"], v["performer"], v["kind"], v["labels"]
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError) as e:
+        raise InputError(f"{path}: malformed manifest ({type(e).__name__}: {e})") from None
+    if len(actions) < 2:
+        raise InputError(f"{path}: need at least 2 actions")
+    return doc
+
+
+def _reorder(chain: dict, actions: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    idx = [chain["actions"].index(a) for a in actions]
+    start = np.asarray(chain.get("start", np.full(len(idx), 1.0 / len(idx))), dtype=float)[idx]
+    trans = np.asarray(chain["transition"], dtype=float)[np.ix_(idx, idx)]
+    dm = chain.get("duration_frames") or {}
+    dur = np.array([float(dm[a][0]) if a in dm else np.nan for a in actions])
+    return start, trans, dur
+
+
+def _split(seqs: list[EventSequence], frac: float) -> tuple[list[EventSequence], list[EventSequence]]:
+    seqs = [s for s in seqs if len(s)]
+    if len(seqs) >= 2:
+        n_held = min(len(seqs) - 1, max(1, round(frac * len(seqs))))
+        return seqs[:-n_held], seqs[-n_held:]
+    if not seqs or len(seqs[0]) < 4:
+        return seqs, []
+    s = seqs[0]
+    cut = math.ceil((1 - frac) * len(s))
+    return [s.slice(0, cut)], [s.slice(cut, len(s))]
+
+
+def load_performers(
+    dataset_dir: str | Path, manifest: dict, params: EvalParams, labels_dir: str | Path | None = None
+) -> list[PerformerData]:
+    """Events of every performer's performance videos, split into train / held-out."""
+    root = Path(dataset_dir)
+    actions = [str(a) for a in manifest["actions"]]
+    out = []
+    for p in manifest["performers"]:
+        vids = sorted(
+            (v for v in manifest["videos"] if v["performer"] == p["id"] and v["kind"] == "performance"),
+            key=lambda v: v["id"],
+        )
+        if not vids:
+            log.warning("performer %s has no performance videos; skipped", p["id"])
+            continue
+        tracks = []
+        for v in vids:
+            if labels_dir is None:
+                path = root / v["labels"]
+            else:
+                cands = [Path(labels_dir) / f"{v['id']}.json", Path(labels_dir) / Path(v["labels"]).name]
+                path = next((c for c in cands if c.exists()), cands[0])
+                if not path.exists():
+                    raise InputError(f"{path}: recognised labels for video {v['id']} not found")
+            tracks.append(load_label_file(path))
+        seqs = tracks_to_events(tracks, params.style.events, actions)
+        for s in seqs:
+            s.performer = p["id"]
+        train, held = _split(seqs, params.heldout_fraction)
+        start, trans, dur = _reorder(p["chain"], actions)
+        out.append(PerformerData(p["id"], train, held, start, trans, dur))
+    return out
+
+
+def _mean(xs) -> float | None:
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    return float(np.mean(xs)) if xs else None
+
+
+def evaluate_performers(perfs: list[PerformerData], params: EvalParams) -> dict[str, Any]:
+    """All style metrics for one label source (see the module docstring)."""
+    if len(perfs) < 2:
+        raise InputError(f"dataset: need at least 2 performers with events, got {len(perfs)}")
+    seed = params.style.seed
+    styles: dict[str, Style] = {}
+    rows: list[dict[str, Any]] = []
+    generated: dict[str, dict[str, list[np.ndarray]]] = {}
+    for i, p in enumerate(perfs):
+        if not p.heldout:
+            raise InputError(f"performer {p.pid}: too few events to hold any out")
+        st = Style.fit(p.train, params.style, what=f"performer {p.pid} training labels")
+        styles[p.pid] = st
+        held = [s.actions for s in p.heldout]
+        n_held = int(sum(len(h) for h in held))
+        gens = {}
+        for j, which in enumerate(("a", "b")):
+            rng = np.random.default_rng([seed, i, j])
+            m = st.model(which)
+            gens[which] = [m.sample(params.generate_length, random_state=rng) for _ in range(params.n_generate)]
+        generated[p.pid] = gens
+        dmask = np.isfinite(p.true_duration_mean) & (st.action_counts > 0)
+        rows.append({
+            "performer": p.pid,
+            "n_train_events": int(st.action_counts.sum()),
+            "n_heldout_events": n_held,
+            "n_train_sequences": len(p.train),
+            "n_heldout_sequences": len(p.heldout),
+            "transition_mae": {
+                "a": float(np.abs(st.model_a.transition_ - p.true_transition).mean()),
+                "bigram": float(np.abs(st.bigram.transition_ - p.true_transition).mean()),
+                "b_implied": float(np.abs(st.model_b.action_transition() - p.true_transition).mean()),
+            },
+            "duration_mean_abs_error_frames": (
+                float(np.abs(st.durations.mean_frames_[dmask] - p.true_duration_mean[dmask]).mean())
+                if dmask.any() else None
+            ),
+            "heldout_loglik_per_event": {
+                "a": st.model_a.score_per_event(held),
+                "b": st.model_b.score_per_event(held),
+                "bigram": st.bigram.score_per_event(held),
+            },
+            "n_modes": st.model_b.n_modes_,
+            "model_a_converged": st.model_a.converged_,
+            "model_b_converged": st.model_b.converged_,
+        })
+        log.info("performer %s: %d train / %d held-out events, MAE(a) %.3f, K=%d", p.pid,
+                 rows[-1]["n_train_events"], n_held, rows[-1]["transition_mae"]["a"], st.model_b.n_modes_)
+
+    pids = [p.pid for p in perfs]
+    held_by = {p.pid: [s.actions for s in p.heldout] for p in perfs}
+    A = len(perfs[0].true_transition)
+    judges = {
+        "heldout_bigram": {q: BigramModel(n_actions=A, alpha=params.style.alpha).fit(held_by[q]) for q in pids},
+        "true_chain": {},
+    }
+    for p in perfs:
+        g = BigramModel(n_actions=A)
+        g.n_actions_ = A
+        g.start_ = normalise_rows(np.clip(p.true_start, 1e-12, None))
+        g.transition_ = normalise_rows(np.clip(p.true_transition, 1e-12, None))
+        judges["true_chain"][p.pid] = g
+
+    def identify(seqs_by_pid: dict[str, list[np.ndarray]], judge: dict) -> tuple[float, dict]:
+        correct = total = 0
+        confusion = {p: {q: 0 for q in pids} for p in pids}
+        for p, seqs in seqs_by_pid.items():
+            for s in seqs:
+                scores = [judge[q].score([s]) for q in pids]
+                guess = pids[int(np.argmax(scores))]
+                confusion[p][guess] += 1
+                correct += guess == p
+                total += 1
+        return correct / max(total, 1), confusion
+
+    fidelity: dict[str, Any] = {}
+    ident: dict[str, Any] = {}
+    for which in ("a", "b"):
+        gen = {p: generated[p][which] for p in pids}
+        fid = {}
+        for n in (2, 3):
+            same = [ngram_jsd(gen[p], held_by[p], n) for p in pids]
+            other = [float(np.mean([ngram_jsd(gen[p], held_by[q], n) for q in pids if q != p])) for p in pids]
+            fid[f"jsd_{n}gram_same"] = float(np.mean(same))
+            fid[f"jsd_{n}gram_other"] = float(np.mean(other))
+            fid[f"jsd_{n}gram_same_lt_other_fraction"] = float(np.mean([s < o for s, o in zip(same, other)]))
+            for r, s, o in zip(rows, same, other):
+                r.setdefault("jsd", {})[f"{which}_{n}gram"] = {"same": s, "other": o}
+        # reference: the real training data of each performer against its own held-out data
+        fid["jsd_2gram_train_vs_heldout"] = float(np.mean(
+            [ngram_jsd([s.actions for s in p.train], held_by[p.pid], 2) for p in perfs]))
+        fidelity[which] = fid
+        acc, conf = identify(gen, judges["heldout_bigram"])
+        acc_true, _ = identify(gen, judges["true_chain"])
+        ident[which] = {"accuracy_by_heldout_data": acc, "accuracy_by_true_chain": acc_true,
+                        "confusion_by_heldout_data": conf}
+    acc_real, conf_real = identify(held_by, {p: styles[p].model_a for p in pids})
+    ident["heldout_sequences_by_model_a"] = {"accuracy": acc_real, "confusion": conf_real}
+
+    def pooled_ll(key: str) -> float:
+        num = sum(r["heldout_loglik_per_event"][key] * r["n_heldout_events"] for r in rows)
+        return num / sum(r["n_heldout_events"] for r in rows)
+
+    mae_a = [r["transition_mae"]["a"] for r in rows]
+    ll = {k: pooled_ll(k) for k in ("a", "b", "bigram")}
+    summary = {
+        "n_performers": len(rows),
+        "n_train_events": int(sum(r["n_train_events"] for r in rows)),
+        "n_heldout_events": int(sum(r["n_heldout_events"] for r in rows)),
+        "transition_mae": {k: _mean(r["transition_mae"][k] for r in rows) for k in ("a", "bigram", "b_implied")},
+        "transition_mae_max_a": float(max(mae_a)),
+        "duration_mean_abs_error_frames": _mean(r["duration_mean_abs_error_frames"] for r in rows),
+        "heldout_loglik_per_event": ll,
+        "b_minus_bigram_loglik_per_event": ll["b"] - ll["bigram"],
+        "fidelity": fidelity,
+        "identification": ident,
+        "n_modes": {r["performer"]: r["n_modes"] for r in rows},
+        "targets": {
+            "transition_mae_a_le_0.05": _mean(mae_a) <= TARGETS["transition_mae"],
+            "identification_a_ge_0.90": ident["a"]["accuracy_by_heldout_data"] >= TARGETS["identification_accuracy"],
+            "n_performers_ge_5": len(rows) >= TARGETS["min_performers"],
+            "b_beats_bigram_heldout": ll["b"] > ll["bigram"],
+        },
+    }
+    return {"summary": summary, "performers": rows}
+
+
+def evaluate_dataset(
+    dataset_dir: str | Path, params: EvalParams, labels_dir: str | Path | None = None
+) -> dict[str, Any]:
+    """Metrics document: ground-truth labels, and recognised labels when ``labels_dir`` is given."""
+    manifest = load_manifest(dataset_dir)
+    # load every label file before any fitting, so a missing or bad file fails fast
+    inputs = {"ground_truth": load_performers(dataset_dir, manifest, params)}
+    if labels_dir is not None:
+        inputs["recognised"] = load_performers(dataset_dir, manifest, params, labels_dir)
+    sources = {name: evaluate_performers(perfs, params) for name, perfs in inputs.items()}
+    return {
+        "kind": "vidstyle.metrics.style",
+        "schema_version": 1,
+        "seed": params.style.seed,
+        "params": params.to_dict(),
+        "dataset": str(dataset_dir),
+        "dataset_seed": manifest.get("seed"),
+        "labels_dir": None if labels_dir is None else str(labels_dir),
+        "targets": TARGETS,
+        "sources": sources,
+    }
