@@ -1,0 +1,96 @@
+"""Salient points: frame-difference silhouette, optical flow, greedy non-maximum suppression."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vidstyle.errors import InputError
+from vidstyle.features.salient import SalientParams, salient_points, select_points, silhouette
+
+
+def moving_disc(T=12, H=60, W=80, speed=3, radius=9):
+    t, r, c = np.meshgrid(np.arange(T), np.arange(H), np.arange(W), indexing="ij")
+    inside = (r - 30) ** 2 + (c - 15 - speed * t) ** 2 <= radius**2
+    rng = np.random.default_rng(0)
+    texture = 0.15 * rng.random((H, W))  # moves with the disc, so the flow inside it is well defined
+    frames = np.full((T, H, W), 0.2, dtype=np.float32)
+    for k in range(T):
+        frames[k] = np.where(inside[k], 0.7 + np.roll(texture, speed * k, axis=1), 0.2)
+    return frames, inside
+
+
+def test_silhouette_is_the_thresholded_difference_of_next_and_previous():
+    rng = np.random.default_rng(1)
+    f = rng.random((5, 6, 7)).astype(np.float32)
+    assert np.array_equal(silhouette(f, 2, 0.3), np.abs(f[3] - f[1]) > 0.3)
+    assert np.array_equal(silhouette(f, 0, 0.3), np.abs(f[1] - f[0]) > 0.3)  # one-sided at the ends
+    assert np.array_equal(silhouette(f, 4, 0.3), np.abs(f[4] - f[3]) > 0.3)
+    assert not silhouette(f[:1], 0, 0.0).any()
+
+
+def greedy_reference(score, n, min_distance):
+    H, W = score.shape
+    cand = [(-score[r, c], r * W + c, r, c) for r in range(H) for c in range(W) if np.isfinite(score[r, c])]
+    cand.sort()
+    out = []
+    for _, _, r, c in cand:
+        if len(out) == n:
+            break
+        if all((r - a) ** 2 + (c - b) ** 2 >= min_distance**2 for a, b in out):
+            out.append((r, c))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("min_distance", [0.0, 1.0, 2.5, 5.0, 7.3])
+def test_select_points_equals_brute_force_greedy(min_distance):
+    rng = np.random.default_rng(2)
+    for trial in range(5):
+        score = rng.integers(0, 6, size=(23, 31)).astype(np.float32)  # many ties
+        score[rng.random(score.shape) < 0.4] = -np.inf
+        got = select_points(score, 12, min_distance)
+        assert np.array_equal(got, greedy_reference(score, 12, min_distance)), (trial, min_distance)
+
+
+def test_select_points_respects_distance_and_count():
+    rng = np.random.default_rng(3)
+    score = rng.random((50, 50)).astype(np.float32)
+    pts = select_points(score, 10, 6.0)
+    assert len(pts) == 10
+    d = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1)) + np.eye(10) * 100
+    assert d.min() >= 6.0
+    assert len(select_points(np.full((4, 4), -np.inf, dtype=np.float32), 10, 1.0)) == 0
+
+
+@pytest.mark.parametrize("flow", ["dis", "farneback"])
+def test_points_lie_on_the_moving_silhouette(flow):
+    frames, _ = moving_disc()
+    p = SalientParams(n_points=10, threshold=0.05, min_distance=4.0, flow=flow)
+    pts = salient_points(frames, p)
+    assert pts.dtype == np.int32 and pts.shape[1] == 3
+    counts = np.bincount(pts[:, 0], minlength=len(frames))
+    assert counts.max() <= 10 and counts[1:-1].min() >= 5
+    for t, r, c in pts:
+        assert silhouette(frames, t, 0.05)[r, c]
+    # per frame: sorted by frame, and at least min_distance apart
+    assert np.all(np.diff(pts[:, 0]) >= 0)
+    for t in np.unique(pts[:, 0]):
+        q = pts[pts[:, 0] == t, 1:].astype(float)
+        d = np.sqrt(((q[:, None] - q[None]) ** 2).sum(-1)) + np.eye(len(q)) * 100
+        assert d.min() >= 4.0
+    assert np.array_equal(pts, salient_points(frames, p))  # deterministic
+
+
+def test_static_and_single_frame_videos_have_no_points():
+    frames = np.full((6, 20, 20), 0.5, dtype=np.float32)
+    assert salient_points(frames).shape == (0, 3)
+    assert salient_points(frames[:1]).shape == (0, 3)
+
+
+def test_bad_parameters():
+    with pytest.raises(InputError, match="flow"):
+        SalientParams(flow="lucas-kanade")
+    with pytest.raises(InputError, match="n_points"):
+        SalientParams(n_points=-1)
+    with pytest.raises(InputError, match="frames"):
+        salient_points(np.zeros((3, 4)))

@@ -1,0 +1,242 @@
+"""3D SIFT as the authors' released code computes it: bit-exact against a literal per-sample reference."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+
+from vidstyle.errors import InputError
+from vidstyle.features import scovanner2007 as sc
+from vidstyle.features.sift3d import describe
+
+# --- literal reference: one sample at a time, Python floats -------------------------------------------
+
+
+def ref_gradient(vol, t, r, c):
+    T, H, W = vol.shape
+
+    def diff(lo, hi, n, i):  # lo(i) / hi(i) read the neighbour below / above along the axis
+        if n == 1:
+            return 0.0
+        if i == 0:
+            return 2 * (hi(1) - hi(0))
+        if i == n - 1:
+            return 2 * (hi(n - 1) - hi(n - 2))
+        return hi(i + 1) - hi(i - 1)
+
+    g1 = diff(None, lambda k: float(vol[t, r, k]), W, c)
+    # g2 is positive towards row 0: I(r-1) - I(r+1), and on the border planes 2 * (I(0) - I(1)) etc.
+    if H == 1:
+        g2 = 0.0
+    elif r == 0:
+        g2 = 2 * (float(vol[t, 0, c]) - float(vol[t, 1, c]))
+    elif r == H - 1:
+        g2 = 2 * (float(vol[t, H - 2, c]) - float(vol[t, H - 1, c]))
+    else:
+        g2 = float(vol[t, r - 1, c]) - float(vol[t, r + 1, c])
+    g3 = diff(None, lambda k: float(vol[k, r, c]), T, t)
+    return g1, g2, g3
+
+
+def ref_histogram(vol, point, bins):
+    T, H, W = vol.shape
+    bins = [tuple(float(x) for x in b) for b in bins]
+    hist = [0.0] * 640
+    t0, r0, c0 = (int(v) for v in point)
+    for dt in range(-6, 7):
+        for dr in range(-6, 7):
+            for dc in range(-6, 7):
+                t, r, c = t0 + dt, r0 + dr, c0 + dc
+                if not (0 <= t < T and 0 <= r < H and 0 <= c < W):
+                    continue
+                g1, g2, g3 = ref_gradient(vol, t, r, c)
+                m = math.sqrt(g1 * g1 + g2 * g2 + g3 * g3)
+                if m == 0:
+                    continue
+                u1, u2, u3 = g1 / m, g2 / m, g3 / m
+                d = [u1 * b[0] + u2 * b[1] + u3 * b[2] for b in bins]
+                top = sorted(range(80), key=lambda k: (-d[k], k))[:3]
+                p = [d[k] ** 20 for k in top]
+                s = p[0] + p[1] + p[2]
+                G = math.exp(-(dr * dr + dc * dc + dt * dt) / (2 * 5**2))
+                sub = ((dt >= 0) * 2 + (dr >= 0)) * 2 + (dc >= 0)
+                for k, pk in zip(top, p):
+                    hist[sub * 80 + k] += m * G * (pk / s)
+    return hist
+
+
+def ref_quantise(hist):
+    def normalise(h):
+        acc = 0.0
+        for x in h:
+            acc += x * x
+        n = math.sqrt(acc)
+        return [x / n for x in h] if n > 0 else list(h)
+
+    h = normalise(hist)
+    h = normalise([min(x, 0.2) for x in h])
+    out = []
+    for x in h:
+        v = x * 512
+        f = math.floor(v)
+        r = f + 1 if v - f >= 0.5 else f  # half away from zero
+        out.append(min(r, 255))
+    return np.array(out, dtype=np.uint8)
+
+
+def border_and_inner_points(shape, rng, n_random):
+    T, H, W = shape
+    corners = [(t, r, c) for t in (0, T - 1) for r in (0, H - 1) for c in (0, W - 1)]
+    near = [(1, 1, W - 2), (T // 2, 0, W // 2), (T // 2, H // 2, 5), (T - 2, H - 6, W // 2)]
+    rand = [
+        (int(rng.integers(0, T)), int(rng.integers(0, H)), int(rng.integers(0, W))) for _ in range(n_random)
+    ]
+    pts = np.array(corners[:4] + near + rand)
+    return np.clip(pts, 0, np.array(shape) - 1)
+
+
+# --- bit-exactness ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["uniform", "quantised", "thin"])
+def test_matches_literal_reference_bit_for_bit(kind):
+    rng = np.random.default_rng({"uniform": 10, "quantised": 11, "thin": 12}[kind])
+    if kind == "uniform":
+        vol = rng.random((15, 17, 19))
+    elif kind == "quantised":
+        # few grey levels: many axis-aligned and symmetric gradients, hence exact ties between bins
+        vol = rng.integers(0, 3, size=(14, 16, 15)).astype(np.float64)
+    else:
+        vol = rng.random((1, 12, 20)) * 100  # one frame: g3 = 0 everywhere
+    pts = border_and_inner_points(vol.shape, rng, 4)
+    bins = sc.orientation_bins()
+    hist = sc.histograms(vol, pts)
+    got = describe(vol, pts, variant="scovanner2007")
+    assert got.dtype == np.uint8 and got.shape == (len(pts), 640)
+    for i, p in enumerate(pts):
+        ref = ref_histogram(vol, p, bins)
+        assert np.array_equal(hist[i], np.array(ref)), f"float64 histogram differs at point {p}"
+        assert np.array_equal(got[i], ref_quantise(ref)), f"uint8 descriptor differs at point {p}"
+
+
+def test_float32_input_is_computed_in_float64():
+    rng = np.random.default_rng(13)
+    vol = rng.random((13, 14, 15)).astype(np.float32)
+    pts = np.array([[6, 7, 7], [0, 13, 0]])
+    got = sc.describe(vol, pts)
+    for i, p in enumerate(pts):
+        assert np.array_equal(
+            got[i], ref_quantise(ref_histogram(vol.astype(np.float64), p, sc.orientation_bins()))
+        )
+
+
+def test_chunks_do_not_change_the_result(monkeypatch):
+    rng = np.random.default_rng(14)
+    vol = rng.random((40, 12, 13))
+    pts = np.column_stack([rng.integers(0, 40, 30), rng.integers(0, 12, 30), rng.integers(0, 13, 30)])
+    whole = sc.histograms(vol, pts)
+    monkeypatch.setattr(sc, "CHUNK_FRAMES", 3)
+    assert np.array_equal(sc.histograms(vol, pts), whole)
+
+
+def test_quantise_rules():
+    h = np.zeros((3, 640))
+    h[1, 0] = 5.0  # one entry: 1 -> clipped 0.2 -> renormalised 1 -> 512 -> capped 255
+    h[2, :2] = 1.0  # two equal entries: 1/sqrt2 -> 0.2 each -> 1/sqrt2 -> 362.04 -> 255
+    h[2, 2] = 0.0
+    q = sc.quantise(h)
+    assert not q[0].any()
+    assert q[1, 0] == 255 and q[1, 1:].sum() == 0
+    assert list(q[2, :3]) == [255, 255, 0]
+    # half away from zero (np.round would give 2 for 2.5): build a histogram whose values are exact
+    v = np.zeros((1, 640))
+    v[0, :25] = 1.0  # 1/5 each (exact after normalising? 0.2 -> renormalised 0.2) -> 102.4 -> 102
+    assert sc.quantise(v)[0, 0] == 102
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="no parameters"):
+        describe(np.zeros((3, 3, 3)), [[1, 1, 1]], variant="scovanner2007", n_subregions=4)
+
+
+# --- bins -----------------------------------------------------------------------------------------------
+
+
+def test_icosahedron_constants_are_exact():
+    phi = (1 + math.sqrt(5)) / 2
+    assert sc.A == phi / math.sqrt(1 + phi * phi)
+    assert sc.B == 1 / math.sqrt(1 + phi * phi)
+    assert sc.A == pytest.approx(0.85065080835204, abs=1e-14)
+    assert sc.B == pytest.approx(0.52573111211913, abs=1e-14)
+    v, f = sc.icosahedron()
+    assert v.shape == (12, 3) and f.shape == (20, 3)
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 1.0, atol=1e-15)
+    edges = {tuple(sorted(e)) for tri in f for e in itertools.combinations(tri, 2)}
+    assert len(edges) == 30
+    assert all(np.isclose(np.linalg.norm(v[a] - v[b]), 2 * sc.B) for a, b in edges)
+    assert np.all(np.bincount(f.reshape(-1)) == 5)
+    # outward counter-clockwise
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    assert np.all(np.sum(n * v[f].sum(1), axis=1) > 0)
+
+
+def solid_angle(a, b, c):
+    """Van Oosterom & Strackee (1983): solid angle of the spherical triangle abc."""
+    num = abs(np.dot(a, np.cross(b, c)))
+    den = 1 + np.dot(a, b) + np.dot(b, c) + np.dot(c, a)
+    return 2 * math.atan2(num, den)
+
+
+def test_80_bins_match_an_independent_construction():
+    bins = sc.orientation_bins()
+    assert bins.shape == (80, 3)
+    np.testing.assert_allclose(np.linalg.norm(bins, axis=1), 1.0, atol=1e-15)
+    # independent: convex hull of the 12 vertices, subdivided, centroids normalised
+    phi = (1 + math.sqrt(5)) / 2
+    a, b = phi / math.sqrt(1 + phi * phi), 1 / math.sqrt(1 + phi * phi)
+    verts = []
+    for s1, s2 in itertools.product((1, -1), repeat=2):
+        verts += [(s1 * a, s2 * b, 0), (0, s1 * a, s2 * b), (s2 * b, 0, s1 * a)]
+    verts = np.array(verts)
+    hull = ConvexHull(verts)
+    assert len(hull.simplices) == 20
+    unit = lambda x: x / np.linalg.norm(x)
+    mine, areas = [], []
+    for i, j, k in hull.simplices:
+        p, q, r = verts[i], verts[j], verts[k]
+        pq, qr, rp = unit(p + q), unit(q + r), unit(r + p)
+        for tri in ((p, pq, rp), (pq, q, qr), (rp, qr, r), (pq, qr, rp)):
+            mine.append(unit(sum(tri)))
+            areas.append(solid_angle(*tri))
+    mine = np.array(mine)
+    # same set of directions
+    d = np.abs(mine @ bins.T - 1)
+    assert np.all(d.min(axis=1) < 1e-12) and np.all(d.min(axis=0) < 1e-12)
+    assert sum(areas) == pytest.approx(4 * math.pi)
+    assert max(areas) / min(areas) < 1.3  # equal-area-ish
+    # nearly uniform spacing: nearest-neighbour angles all within 15 % of each other
+    cos = bins @ bins.T - 2 * np.eye(80)
+    nn = np.arccos(cos.max(axis=1))
+    assert nn.max() / nn.min() < 1.15
+
+
+def test_top3_bins_equal_brute_force_including_ties():
+    rng = np.random.default_rng(15)
+    g = rng.standard_normal((50_000, 3))
+    # add directions with exact symmetric ties: axes, vertices, edge midpoints, face centres
+    v, f = sc.icosahedron()
+    special = np.concatenate([np.eye(3), -np.eye(3), v, v[f].sum(1), (v[:, None] + v[None]).reshape(-1, 3)])
+    special = special[np.linalg.norm(special, axis=1) > 1e-9]
+    g = np.concatenate([g, special, 3 * special])
+    m, top, w = sc.assign_bins(g[:, 0], g[:, 1], g[:, 2])
+    bins = sc.orientation_bins()
+    u = g / m[:, None]
+    d = u[:, 0:1] * bins[:, 0] + u[:, 1:2] * bins[:, 1] + u[:, 2:3] * bins[:, 2]
+    want = np.argsort(-d, axis=1, kind="stable")[:, :3]
+    assert np.array_equal(top, want)
+    np.testing.assert_allclose(w.sum(1), 1.0)
+    assert np.all(np.diff(np.take_along_axis(d, top, 1), axis=1) <= 0)

@@ -1,0 +1,69 @@
+"""``vidstyle features``: salient points and 3D SIFT descriptors, one ``.npz`` per video."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import typer
+
+log = logging.getLogger(__name__)
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("features")
+    def features(
+        videos: list[Path] = typer.Argument(..., help="Input videos (anything OpenCV reads: mp4, avi, ...)."),
+        out: Path = typer.Option(
+            ..., "--out", "-o", help="Output directory; writes <video stem>.npz per video."
+        ),
+        jobs: int = typer.Option(-1, "--jobs", "-j", help="Videos processed in parallel (-1: all cores)."),
+        variant: str = typer.Option(
+            "thesis",
+            "--variant",
+            help="Descriptor: 'thesis' (8x4 bins, rotation-invariant, float32, 256-D) or 'scovanner2007' "
+            "(the authors' released code: 80 icosahedral bins, uint8, 640-D).",
+        ),
+        points: int = typer.Option(10, "--points", "-n", help="Salient points per frame (thesis: 10)."),
+        threshold: float = typer.Option(
+            0.05,
+            "--threshold",
+            help="Silhouette threshold on |frame(t+1) - frame(t-1)|, intensities in [0, 1].",
+        ),
+        min_distance: float = typer.Option(
+            5.0, "--min-distance", help="Minimum distance in pixels between the points of one frame."
+        ),
+        flow: str = typer.Option(
+            "dis", "--flow", help="Optical flow: dis, dis-ultrafast, dis-medium, farneback."
+        ),
+        subregions: int = typer.Option(
+            2, "--subregions", help="Thesis variant: sub-regions per axis (2 -> 2x2x2 -> 256-D; 4 -> 1024-D)."
+        ),
+        subregion_size: float = typer.Option(
+            4.0, "--subregion-size", help="Thesis variant: sub-region edge in pixels and frames."
+        ),
+        smooth: float = typer.Option(
+            1.0, "--smooth", help="Thesis variant: Gaussian smoothing sigma of the volume before gradients."
+        ),
+    ) -> None:
+        """Extract per-frame salient points (largest optical flow on the frame-difference silhouette) and
+        their 3D SIFT descriptors from each VIDEO, writing OUT/<stem>.npz (points, descriptors,
+        frame_index, params, n_frames, height, width, fps, video)."""
+        from ..errors import InputError
+        from ..features.extract import run_features
+        from ..features.salient import SalientParams
+        from ..features.sift3d import Sift3DParams
+
+        if variant == "scovanner2007" and (subregions != 2 or subregion_size != 4.0 or smooth != 1.0):
+            raise InputError("--variant scovanner2007: --subregions/--subregion-size/--smooth do not apply")
+        salient = SalientParams(n_points=points, threshold=threshold, min_distance=min_distance, flow=flow)
+        sift = (
+            Sift3DParams(n_subregions=subregions, subregion_size=subregion_size, smooth_sigma=smooth)
+            if variant == "thesis"
+            else None
+        )
+        done = run_features(
+            [str(v) for v in videos], out, jobs=jobs, variant=variant, salient=salient, sift=sift
+        )
+        total = sum(d["points"] for d in done)
+        log.info("features: %d video(s), %d points -> %s", len(done), total, out)

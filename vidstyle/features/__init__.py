@@ -1,0 +1,21 @@
+"""Feature extraction: salient points on video frames and their 3D SIFT descriptors.
+
+Modules:
+
+- :mod:`~vidstyle.features.videoio` — read a video as a grayscale float volume (frames, height, width).
+- :mod:`~vidstyle.features.salient` — per-frame salient points: frame-difference silhouette, dense optical
+  flow, the N largest-flow silhouette pixels at least a minimum distance apart (thesis N = 10).
+- :mod:`~vidstyle.features.sift3d` — 3D SIFT (Scovanner, Ali, Shah 2007) as the thesis describes it:
+  8x4 (theta, phi) orientation bins normalised by solid angle, Gaussian weighting, rotation to the
+  dominant orientation, 2x2x2 sub-regions -> 256-D; and the public entry point
+  :func:`~vidstyle.features.sift3d.describe` for both variants.
+- :mod:`~vidstyle.features.scovanner2007` — the descriptor as the authors' released code computes it
+  (80 icosahedral bins, no rotation, 640-D uint8), bit-exact by its own definition.
+- :mod:`~vidstyle.features.extract` — one video -> one ``.npz`` (schema in that module), many videos in
+  parallel with joblib.
+"""
+
+from .salient import SalientParams, salient_points
+from .sift3d import Sift3DParams, describe
+
+__all__ = ["SalientParams", "Sift3DParams", "describe", "salient_points"]

@@ -1,0 +1,330 @@
+"""3D SIFT as the authors' released code computes it (``describe(..., variant="scovanner2007")``).
+
+This differs from the paper (Scovanner, Ali, Shah 2007) and from the thesis variant in
+:mod:`vidstyle.features.sift3d`; the definition below was established by reading that code. With the
+volume I indexed as I(r, c, t) (row, column, frame) and computed in float64:
+
+- Gradient per voxel, no smoothing, raw differences (not halved):
+  g1 = I(r, c+1, t) - I(r, c-1, t); g2 = I(r-1, c, t) - I(r+1, c, t) (positive towards row 0);
+  g3 = I(r, c, t+1) - I(r, c, t-1). On the first/last plane of an axis the one-sided difference times 2,
+  e.g. g1(c=0) = 2 * (I(c=1) - I(c=0)), g2(r=0) = 2 * (I(r=0) - I(r=1)). An axis of length 1 has zero
+  gradient. Magnitude m = sqrt(g1*g1 + g2*g2 + g3*g3), direction u = g / m (each component divided by m);
+  voxels with m = 0 are skipped.
+- 80 orientation bins: the faces of the unit icosahedron, vertices the cyclic permutations of
+  (+-a, +-b, 0) with a = phi / sqrt(1 + phi^2), b = 1 / sqrt(1 + phi^2), phi the golden ratio, evaluated in
+  float64 exactly like that (rounded constants move samples across bin boundaries). Each face is split
+  once into four at its edge midpoints, the midpoints pushed onto the unit sphere; a bin's direction is
+  its face's centroid normalised, c = (v1 + v2 + v3) / sqrt(c . c).
+- Each voxel goes to its 3 bins of largest cosine d_k = u1*c1 + u2*c2 + u3*c3 (evaluated in that order,
+  no fused multiply-add), ties broken by the lower bin index, in decreasing order of d; weights
+  w_k = d_k^20 / (d_(1)^20 + d_(2)^20 + d_(3)^20) (sum in that order, powers by the C library's ``pow``,
+  as Python's ``float ** 20``). No solid-angle normalisation, no dominant orientation, no rotation.
+- Neighbourhood: offsets -6..+6 on every axis (13^3 voxels) around the point, visited with the frame
+  offset outermost, then row, then column; samples outside the volume are skipped. Each adds
+  m * G * w_k (left to right) with G = exp(-(dr^2 + dc^2 + dt^2) / (2 * 5^2)) (C library ``exp``).
+- Sub-regions 2x2x2 with hard assignment, per axis offsets -6..-1 -> 0 and 0..+6 -> 1. Descriptor
+  layout: index ((s_t * 2 + s_r) * 2 + s_c) * 80 + bin, bins in the order of :func:`orientation_bins`.
+- 640 values: L2-normalise (divide by the square root of the sum of squares accumulated in index
+  order), entries above 0.2 set to 0.2, L2-normalise again, times 512, rounded half away from zero,
+  capped at 255, uint8. An all-zero histogram gives all zeros.
+
+Accumulation happens sample by sample in the visiting order above (``np.bincount`` adds in input order),
+so the float64 histograms are bit-identical to a literal per-sample loop, not just the uint8 result.
+Speed: the 3-bin assignment is a per-voxel property (there is no rotation), so it is computed once per
+voxel of the neighbourhoods in use, with a BLAS pre-selection of candidate bins and the exact
+element-wise cosines for the final choice.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+
+#: Fixed parameters of this variant (recorded in the .npz ``params``).
+PARAMS = {
+    "n_bins": 80,
+    "half_width": 6,
+    "sigma": 5.0,
+    "n_subregions": [2, 2, 2],
+    "power": 20,
+    "clip": 0.2,
+    "scale": 512,
+    "dim": 640,
+}
+HALF = 6
+SIGMA = 5.0
+POWER = 20
+N_BINS = 80
+DIM = 8 * N_BINS
+#: Frames of points handled together (bounds memory for long videos).
+CHUNK_FRAMES = 32
+
+_PHI = (1.0 + math.sqrt(5.0)) / 2.0
+A = _PHI / math.sqrt(1.0 + _PHI * _PHI)
+B = 1.0 / math.sqrt(1.0 + _PHI * _PHI)
+
+
+@cache
+def _icosahedron() -> tuple[np.ndarray, np.ndarray]:
+    verts = []
+    for sa in (A, -A):
+        for sb in (B, -B):
+            verts.append((sa, sb, 0.0))
+    for sa in (A, -A):
+        for sb in (B, -B):
+            verts.append((0.0, sa, sb))
+    for sa in (A, -A):
+        for sb in (B, -B):
+            verts.append((sb, 0.0, sa))
+    v = np.array(verts, dtype=np.float64)
+    # neighbours are at distance 2b (the edge); the next distance is 2a > 2b
+    d2 = ((v[:, None, :] - v[None, :, :]) ** 2).sum(-1)
+    edge = np.isclose(d2, 4 * B * B)
+    faces = []
+    n = len(v)
+    for i in range(n):
+        for j in range(i + 1, n):
+            for k in range(j + 1, n):
+                if edge[i, j] and edge[j, k] and edge[i, k]:
+                    # orient counter-clockwise seen from outside
+                    if np.dot(np.cross(v[j] - v[i], v[k] - v[i]), v[i] + v[j] + v[k]) < 0:
+                        faces.append((i, k, j))
+                    else:
+                        faces.append((i, j, k))
+    return v, np.array(faces, dtype=np.int64)
+
+
+def icosahedron() -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (12, 3), faces (20, 3) vertex indices, outward counter-clockwise), in (g1, g2, g3)."""
+    v, f = _icosahedron()
+    return v.copy(), f.copy()
+
+
+def _unit(x: np.ndarray) -> np.ndarray:
+    return x / math.sqrt(float(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]))
+
+
+@cache
+def _bins() -> np.ndarray:
+    v, faces = _icosahedron()
+    out = []
+    for i, j, k in faces:
+        p, q, r = v[i], v[j], v[k]
+        pq, qr, rp = _unit(p + q), _unit(q + r), _unit(r + p)
+        for tri in ((p, pq, rp), (pq, q, qr), (rp, qr, r), (pq, qr, rp)):
+            out.append(_unit(tri[0] + tri[1] + tri[2]))
+    b = np.array(out, dtype=np.float64)
+    b.setflags(write=False)
+    return b
+
+
+def orientation_bins() -> np.ndarray:
+    """The 80 bin directions (80, 3): face f of :func:`icosahedron` gives bins 4f..4f+3 (corner
+    triangles at its 1st, 2nd, 3rd vertex, then the middle one)."""
+    return _bins().copy()
+
+
+def gradients(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(g1, g2, g3) float64 of a (frames, rows, cols) volume as defined in the module docstring."""
+    from .sift3d import central_difference
+
+    vol = np.asarray(volume, dtype=np.float64)
+    return central_difference(vol, 2), -central_difference(vol, 1), central_difference(vol, 0)
+
+
+def _gauss_table() -> np.ndarray:
+    # math.exp (the C library), not np.exp (SIMD, differs in the last bit for ~5 % of arguments)
+    return np.array([math.exp(-d2 / (2 * SIGMA**2)) for d2 in range(3 * HALF * HALF + 1)])
+
+
+def _offsets() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Offsets (N, 3) (dt, dr, dc) in visiting order, their Gaussian weight, their sub-region index."""
+    g = np.arange(-HALF, HALF + 1)
+    dt, dr, dc = (a.reshape(-1) for a in np.meshgrid(g, g, g, indexing="ij"))
+    gauss = _gauss_table()[dt * dt + dr * dr + dc * dc]
+    sub = ((dt >= 0) * 2 + (dr >= 0)) * 2 + (dc >= 0)
+    return np.stack([dt, dr, dc], axis=1), gauss, sub
+
+
+#: Resolution of the cube map that lists candidate bins per direction cell (cells of about 2.8 degrees).
+CUBE_RES = 32
+
+
+@cache
+def _candidate_table() -> tuple[np.ndarray, int]:
+    """Per cube-map cell, the bins that can be among the top 3 for some direction in the cell.
+
+    Cell (face, i, j) of the cube map is the gnomonic image of a square; every direction in it lies
+    within angle rho of the cell's centre direction u0 (the maximum is at a corner, as the angular
+    distance from u0 has convex level sets in gnomonic coordinates). For u in the cell the cosine to a
+    bin at angle alpha from u0 lies in [cos(alpha + rho), cos(alpha - rho)]; at least three bins reach
+    L3, the third largest lower bound, so a bin whose upper bound is below L3 can never be in the top 3
+    nor tie with the third. Rows padded with -1, candidates in increasing bin index.
+    """
+    C = _bins()
+    n = CUBE_RES
+    edges = np.linspace(-1.0, 1.0, n + 1)
+    lists = []
+    for face in range(6):
+        for i in range(n):
+            for j in range(n):
+                corners = [_cube_dir(face, edges[i + a], edges[j + b]) for a in (0, 1) for b in (0, 1)]
+                u0 = _cube_dir(face, (edges[i] + edges[i + 1]) / 2, (edges[j] + edges[j + 1]) / 2)
+                rho = max(math.acos(min(1.0, float(u0 @ c))) for c in corners) + 1e-6
+                alpha = np.arccos(np.clip(C @ u0, -1.0, 1.0))
+                lower = np.cos(np.minimum(alpha + rho, np.pi))
+                upper = np.cos(np.maximum(alpha - rho, 0.0))
+                l3 = np.sort(lower)[-3]
+                lists.append(np.flatnonzero(upper >= l3 - 1e-9))
+    k = max(len(x) for x in lists)
+    table = np.full((len(lists), k), -1, dtype=np.int64)
+    for r, x in enumerate(lists):
+        table[r, : len(x)] = x
+    return table, k
+
+
+def _cube_dir(face: int, x: float, y: float) -> np.ndarray:
+    axis, sign = divmod(face, 2)
+    v = np.empty(3)
+    v[axis] = 1.0 if sign == 0 else -1.0
+    others = [a for a in range(3) if a != axis]
+    v[others[0]], v[others[1]] = x, y
+    return v / np.linalg.norm(v)
+
+
+def _cube_cell(u1: np.ndarray, u2: np.ndarray, u3: np.ndarray) -> np.ndarray:
+    u = np.stack([u1, u2, u3], axis=1)
+    axis = np.argmax(np.abs(u), axis=1)
+    rows = np.arange(len(u))
+    major = u[rows, axis]
+    sign = (major < 0).astype(np.int64)
+    o0 = np.where(axis == 0, 1, 0)
+    o1 = np.where(axis == 2, 1, 2)
+    n = CUBE_RES
+    # the cell containing the point's projection; rounding can only move it across a cell edge by far
+    # less than the 1e-6 rad margin of the table
+    x = np.clip(np.floor((u[rows, o0] / np.abs(major) + 1) * (n / 2)), 0, n - 1).astype(np.int64)
+    y = np.clip(np.floor((u[rows, o1] / np.abs(major) + 1) * (n / 2)), 0, n - 1).astype(np.int64)
+    return ((axis * 2 + sign) * n + x) * n + y
+
+
+def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per voxel (flat arrays): magnitude (V,), top-3 bins (V, 3) and their weights (V, 3).
+
+    Voxels with zero magnitude get bins 0 and weights 0.
+    """
+    g1, g2, g3 = (np.asarray(a, dtype=np.float64).reshape(-1) for a in (g1, g2, g3))
+    V = g1.size
+    m = np.sqrt(g1 * g1 + g2 * g2 + g3 * g3)
+    bins = np.zeros((V, 3), dtype=np.int64)
+    wts = np.zeros((V, 3), dtype=np.float64)
+    nz = np.flatnonzero(m > 0)
+    if nz.size == 0:
+        return m, bins, wts
+    mm = m[nz]
+    u1, u2, u3 = g1[nz] / mm, g2[nz] / mm, g3[nz] / mm
+    C = _bins()
+    table, _ = _candidate_table()
+    cands = table[_cube_cell(u1, u2, u3)]  # (V, k), increasing bin index, -1 = padding
+    valid = cands >= 0
+    cc = np.where(valid, cands, 0)
+    # exact cosines, element-wise in the defined order (no BLAS, no fused multiply-add)
+    d = u1[:, None] * C[cc, 0] + u2[:, None] * C[cc, 1] + u3[:, None] * C[cc, 2]
+    d[~valid] = -np.inf
+    rows = np.arange(nz.size)
+    top = np.empty((nz.size, 3), dtype=np.int64)
+    dv = np.empty((nz.size, 3), dtype=np.float64)
+    for k in range(3):
+        j = np.argmax(d, axis=1)  # first maximum = lowest bin index among equal cosines
+        top[:, k] = cc[rows, j]
+        dv[:, k] = d[rows, j]
+        d[rows, j] = -np.inf
+    # d ** 20 through the C library's pow (Python floats), as the literal definition; numpy's SIMD pow
+    # differs from it in the last bit for a few % of arguments
+    p = np.array([x**POWER for x in dv.reshape(-1).tolist()], dtype=np.float64).reshape(-1, 3)
+    total = (p[:, 0] + p[:, 1]) + p[:, 2]
+    bins[nz] = top
+    wts[nz] = p / total[:, None]
+    return m, bins, wts
+
+
+def quantise(hist: np.ndarray) -> np.ndarray:
+    """Rows of float64 histograms (n, 640) -> uint8 descriptors as the released code does."""
+    h = np.asarray(hist, dtype=np.float64)
+    out = np.zeros(h.shape, dtype=np.uint8)
+    for i in range(2):
+        # sequential sum (cumsum) in index order, not numpy's pairwise sum, to match a literal loop
+        n = np.sqrt(np.cumsum(h * h, axis=1)[:, -1:]) if h.shape[1] else np.zeros((len(h), 1))
+        h = np.divide(h, n, out=np.zeros_like(h), where=n > 0)
+        if i == 0:
+            h = np.minimum(h, 0.2)
+    v = h * 512
+    t = np.trunc(v)
+    r = t + (v - t >= 0.5)  # half away from zero (all values are >= 0); v - t is exact
+    np.minimum(r, 255, out=r)
+    out[:] = r.astype(np.uint8)
+    return out
+
+
+def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The float64 640-bin histograms (before quantisation) of ``points`` (n, 3: frame, row, col)."""
+    from .sift3d import _check_points, _check_volume
+
+    vol = np.asarray(_check_volume(volume), dtype=np.float64)
+    pts = _check_points(vol, points)
+    T, H, W = vol.shape
+    out = np.zeros((len(pts), DIM), dtype=np.float64)
+    if len(pts) == 0:
+        return out
+    offs, gauss, sub = _offsets()
+    R = HALF
+    Hp, Wp = H + 2 * R, W + 2 * R
+    flat_off = (offs[:, 0] * Hp + offs[:, 1]) * Wp + offs[:, 2]
+    order = np.argsort(pts[:, 0], kind="stable")
+    frames = pts[order, 0]
+    start = 0
+    while start < len(order):
+        f0 = int(frames[start])
+        stop = int(np.searchsorted(frames, f0 + CHUNK_FRAMES, side="left"))
+        f1 = int(frames[stop - 1]) + 1
+        a, b = max(f0 - R, 0), min(f1 + R, T)  # frames sampled
+        ga, gb = max(a - 1, 0), min(b + 1, T)  # frames their gradients read
+        g1, g2, g3 = gradients(vol[ga:gb])
+        # the extra frame on each side makes g3 central on frames a..b-1 unless they border the volume;
+        # the extra frames themselves (one-sided there, but not at a volume border) are dropped
+        g1, g2, g3 = (g[a - ga : a - ga + b - a] for g in (g1, g2, g3))
+        sel = order[start:stop]
+        q = pts[sel]
+        # only voxels inside some point's cube need a bin assignment
+        need = np.zeros((b - a, H, W), dtype=bool)
+        need[q[:, 0] - a, q[:, 1], q[:, 2]] = True
+        from scipy.ndimage import maximum_filter
+
+        need = maximum_filter(need, size=2 * R + 1, mode="constant", cval=False)
+        vox = np.flatnonzero(need)
+        m_all = np.zeros((b - a + 2 * R, Hp, Wp))
+        bins_all = np.zeros((b - a + 2 * R, Hp, Wp, 3), dtype=np.int64)
+        w_all = np.zeros((b - a + 2 * R, Hp, Wp, 3))
+        m, bins, wts = assign_bins(g1.reshape(-1)[vox], g2.reshape(-1)[vox], g3.reshape(-1)[vox])
+        tt, rr, cc = np.unravel_index(vox, need.shape)
+        m_all[tt + R, rr + R, cc + R] = m
+        bins_all[tt + R, rr + R, cc + R] = bins
+        w_all[tt + R, rr + R, cc + R] = wts
+        m_all, bins_all, w_all = m_all.reshape(-1), bins_all.reshape(-1, 3), w_all.reshape(-1, 3)
+        base = ((q[:, 0] - a + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)
+        idx = base[:, None] + flat_off[None, :]  # (P, N) in visiting order
+        mg = m_all[idx] * gauss[None, :]  # m * G
+        contrib = mg[:, :, None] * w_all[idx]  # (m * G) * w_k
+        target = (np.arange(len(sel))[:, None, None] * DIM + sub[None, :, None] * N_BINS) + bins_all[idx]
+        # samples outside the volume add (+0.0), which leaves every sum unchanged
+        hist = np.bincount(target.reshape(-1), contrib.reshape(-1), minlength=len(sel) * DIM)
+        out[sel] = hist.reshape(len(sel), DIM)
+        start = stop
+    return out
+
+
+def describe(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """uint8 descriptors (n, 640) of ``points`` (n, 3 ints: frame, row, column) in ``volume``."""
+    return quantise(histograms(volume, points))
