@@ -1,0 +1,187 @@
+"""Procedural performers: skeleton layout, guard continuity, feet on the floor, no flips, BVH export."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vidstyle.demo import ACTIONS, Body, Performer, Segment, Style, build_skeleton, build_take
+from vidstyle.demo.performer import Chain
+from vidstyle.mocap import format_bvh, global_positions, parse_bvh, read_bvh
+
+MOCAP_FPS = 60
+
+
+def _performer(seed: int, lead: str | None = None) -> Performer:
+    p = Performer.random(f"p{seed:02d}", np.random.default_rng(seed))
+    if lead is not None:
+        p = Performer(p.id, p.body, Style.from_dict({**p.style.to_dict(), "lead": lead}), p.chain)
+    return p
+
+
+def _isolated(p: Performer, action: str, rng: np.random.Generator, pad: int = 6):
+    d = p.chain.sample_duration(action, rng) if action in ACTIONS else 12
+    return build_take(p, [Segment("Guard", pad), Segment(action, d, 1), Segment("Guard", pad)], rng), pad * 3, (pad + d) * 3
+
+
+@pytest.fixture(scope="module", params=["orthodox", "southpaw"])
+def takes(request):
+    """Every action and a step, isolated between guard pauses, for one performer of each lead."""
+    p = _performer(7, request.param)
+    rng = np.random.default_rng(11)
+    return p, {a: _isolated(p, a, rng) for a in ACTIONS + ("Step",)}
+
+
+def test_skeleton_has_the_cmu_layout(cmu_dir):
+    cmu = read_bvh(cmu_dir / "01_01.bvh").skeleton
+    ours = build_skeleton(Body())
+    assert ours.names == cmu.names
+    assert np.array_equal(ours.parents, cmu.parents)
+    assert ours.channels == cmu.channels
+    assert sorted(ours.end_sites) == sorted(cmu.end_sites)
+
+
+def test_skeleton_scale_is_cmu_units_and_symmetric():
+    body = Body(height_m=1.80)
+    sk = build_skeleton(body)
+    motion = build_take(Performer("x", body, Style(bounce=0.0), Chain.random(np.random.default_rng(0), Style())),
+                        [Segment("Guard", 4)], np.random.default_rng(0)).motion
+    pos = global_positions(motion)
+    # standing in guard (knees bent, head tilted) the head top is a little under the stature
+    from vidstyle.mocap import end_site_positions
+
+    owners, ends = end_site_positions(motion)
+    head_top = ends[0, owners.index(sk.index("Head")), 1]
+    assert 0.88 * body.H < head_top < 1.0 * body.H
+    assert body.H == pytest.approx(1.80 / 0.0564)
+    mm = sk.mirror_map()
+    assert np.allclose(sk.offsets[mm] * [-1, 1, 1], sk.offsets)
+    assert pos.shape == (motion.n_frames, 31, 3)
+
+
+def test_every_action_starts_and_ends_in_the_guard(takes):
+    p, by_action = takes
+    for action, (take, start, end) in by_action.items():
+        pos = global_positions(take.motion)
+        rel = pos - pos[:, :1] * [1, 0, 1]  # a step moves the stance: compare the pose, not the place
+        guard = rel[0]
+        for f in (start, end):
+            err = np.linalg.norm(rel[f] - guard, axis=-1).max()
+            assert err < 0.01 * p.body.H, (action, f, err / p.body.H)
+        # ... and in between it really leaves the guard
+        moved = np.linalg.norm(rel[start:end] - guard, axis=-1).max()
+        assert moved > 0.08 * p.body.H, (action, moved / p.body.H)
+        assert take.labels[start - 1] == "Guard" and take.labels[start] == action and take.labels[end] == "Guard"
+
+
+def _feet(p: Performer, take):
+    sk = take.motion.skeleton
+    pos = global_positions(take.motion)
+    ankles = pos[:, [sk.index("LeftFoot"), sk.index("RightFoot")]]
+    toes = pos[:, [sk.index("LeftToeBase"), sk.index("RightToeBase")]]
+    return ankles, toes
+
+
+def test_feet_rest_on_the_floor_and_never_go_through_it(takes):
+    p, by_action = takes
+    ah = p.body.ankle_height
+    for action, (take, start, end) in by_action.items():
+        ankles, toes = _feet(p, take)
+        guard = np.array([lab == "Guard" for lab in take.labels])
+        # standing: both soles at the floor (the ankle at its flat-foot height)
+        assert np.abs(ankles[guard, :, 1] - ah).max() < 0.002 * p.body.H, action
+        # always: nothing below the floor (toe joints sit 0.012 H above the sole; allow 0.004 H)
+        assert ankles[..., 1].min() > ah - 0.002 * p.body.H, action
+        assert toes[..., 1].min() > 0.008 * p.body.H, (action, toes[..., 1].min() / p.body.H)
+        # during a kick the support foot stays down, the kicking foot leaves the floor
+        if action in ("LowKick", "RoundhouseKick"):
+            lifted = (ankles[start:end, :, 1].max(axis=0) - ah) / p.body.H
+            assert lifted.min() < 0.002 and lifted.max() > 0.15, action
+
+
+def test_planted_feet_do_not_skid(takes):
+    p, by_action = takes
+    ah = p.body.ankle_height
+    for action, (take, _, _) in by_action.items():
+        ankles, _ = _feet(p, take)
+        for k in range(2):
+            down = ankles[:, k, 1] < ah + 0.001 * p.body.H
+            # runs of planted frames: the ankle may not drift horizontally within a run
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], down.astype(int), [0]])))
+            for s, e in zip(edges[::2], edges[1::2]):
+                xz = ankles[s:e, k][:, [0, 2]]
+                drift = np.linalg.norm(xz - xz[0], axis=1).max()
+                assert drift < 0.004 * p.body.H, (action, k, s, e, drift / p.body.H)
+
+
+def test_no_joint_flips_and_smooth_rotations(takes):
+    _, by_action = takes
+    for action, (take, _, _) in by_action.items():
+        q = take.motion.rotations
+        dots = np.abs(np.sum(q[1:] * q[:-1], axis=-1)).clip(0, 1)
+        step_deg = np.degrees(2 * np.arccos(dots))
+        # 60 fps: a jab's elbow peaks near 2000 deg/s (about 35 deg per frame), a flip is 90-180
+        assert step_deg.max() < 45.0, (action, step_deg.max())
+        # and no spikes: every frame's step is close to its neighbours' (a flip is an isolated jump)
+        neighbours = np.maximum(step_deg[:-2], step_deg[2:])
+        assert np.all(step_deg[1:-1] <= 2.0 * neighbours + 5.0), action
+        pos = global_positions(take.motion)
+        speed = np.linalg.norm(np.diff(pos, axis=0), axis=-1).max() * MOCAP_FPS
+        assert speed < 15 / 0.0564, action  # < 15 m/s anywhere
+
+
+def test_actions_are_distinct_poses(takes):
+    p, by_action = takes
+    peaks = {}
+    for action in ACTIONS:
+        take, start, end = by_action[action]
+        pos = global_positions(take.motion)
+        rel = pos - pos[:, :1] * [1, 0, 1]
+        dev = np.linalg.norm(rel[start:end] - rel[0], axis=-1).sum(axis=1)
+        peaks[action] = rel[start + int(np.argmax(dev))]
+    for i, a in enumerate(ACTIONS):
+        for b in ACTIONS[i + 1:]:
+            d = np.linalg.norm(peaks[a] - peaks[b], axis=-1).max()
+            assert d > 0.15 * p.body.H, (a, b, d / p.body.H)
+
+
+def test_bvh_export_round_trips(takes, tmp_path):
+    _, by_action = takes
+    take = by_action["RoundhouseKick"][0]
+    path = tmp_path / "clip.bvh"
+    from vidstyle.mocap import write_bvh
+
+    write_bvh(take.motion, path)
+    back = read_bvh(path)
+    assert back.n_frames == take.motion.n_frames and back.fps == pytest.approx(MOCAP_FPS)
+    assert back.skeleton.names == take.motion.skeleton.names
+    err = np.abs(global_positions(back) - global_positions(take.motion)).max()
+    assert err < 1e-3
+    assert format_bvh(parse_bvh(format_bvh(back))) == format_bvh(back)
+
+
+def test_southpaw_is_the_mirror_image():
+    ortho, south = _performer(3, "orthodox"), _performer(3, "southpaw")
+    plan = [Segment("Guard", 4), Segment("Jab", 10), Segment("Guard", 4)]
+    a = build_take(ortho, plan, np.random.default_rng(5)).motion
+    b = build_take(south, plan, np.random.default_rng(5)).motion
+    pa, pb = global_positions(a), global_positions(b)
+    mm = a.skeleton.mirror_map()
+    assert np.allclose(pa[:, mm] * [-1, 1, 1], pb, atol=1e-6)
+    # orthodox jabs with the left hand (+X side), a southpaw with the right
+    left, right = a.skeleton.index("LeftHand"), a.skeleton.index("RightHand")
+    assert np.ptp(pa[:, left, 2]) > 2 * np.ptp(pa[:, right, 2])
+    assert np.ptp(pb[:, right, 2]) > 2 * np.ptp(pb[:, left, 2])
+
+
+def test_same_seed_same_motion_different_seed_different_motion():
+    def make(seed):
+        p = _performer(seed)
+        rng = np.random.default_rng(seed)
+        from vidstyle.demo import performance_plan
+
+        return build_take(p, performance_plan(p, 200, rng), rng)
+
+    a, b, c = make(1), make(1), make(2)
+    assert format_bvh(a.motion) == format_bvh(b.motion) and a.labels == b.labels
+    assert a.labels != c.labels or not np.allclose(a.motion.rotations, c.motion.rotations)

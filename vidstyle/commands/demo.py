@@ -1,0 +1,108 @@
+"""``vidstyle demo``: procedural kickboxing performers and the embedded demo dataset."""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+import typer
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+demo_app = typer.Typer(help="Procedural kickboxing performers and the demo dataset (video + mocap + labels).",
+                       no_args_is_help=True)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(demo_app, name="demo")
+
+
+@demo_app.command("make-dataset")
+def make_dataset_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
+    seed: int = typer.Option(0, "--seed", help="Everything is drawn from this seed (same seed, same files)."),
+    performers: int = typer.Option(None, "--performers", help="Number of performers [10; --small: 3]."),
+    views: str = typer.Option(None, "--views", help="Comma-separated views: front,left,right,back or azimuths "
+                              "in degrees relative to the performer's facing [front,left,right; --small: front,left]."),
+    single_seconds: float = typer.Option(None, "--single-seconds", help="Length of each single-action video "
+                                         "[16; --small: 4]."),
+    performances: int = typer.Option(None, "--performances", help="Performance takes per performer [2; --small: 1]."),
+    performance_seconds: float = typer.Option(None, "--performance-seconds",
+                                              help="Length of each performance [60; --small: 8]."),
+    background: str = typer.Option(None, "--background", help="Video background: texture or plain [texture]."),
+    no_video: bool = typer.Option(False, "--no-video", help="Write mocap and labels only (no rendering; the manifest's video and truth paths then do not exist)."),
+    small: bool = typer.Option(False, "--small", help="A small dataset for tests and CI (explicit options still apply)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a non-empty --out (only once the new dataset "
+                                   "is complete)."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of "
+                                  "local workers."),
+) -> None:
+    """Generate the demo dataset: single-action videos (every performer x action x view) and long
+    performances of each performer following their own action chain, each with per-frame labels,
+    transition frames, the true chain, the ground-truth sidecar and the BVH it was rendered from.
+
+    Layout: DIR/dataset.json, DIR/videos/<id>.mp4 (+ .truth.npz), DIR/labels/<id>.json,
+    DIR/mocap/<take>.bvh (+ .labels.json). Deterministic in --seed.
+    """
+    from ..demo.dataset import DatasetParams, make_dataset, with_overrides
+
+    base = DatasetParams.small(seed) if small else DatasetParams(seed=seed)
+    view_list = None
+    if views is not None:
+        view_list = tuple(v.strip() for v in views.split(",") if v.strip())
+    if background is not None and background not in ("plain", "texture"):
+        raise InputError(f"--background: must be plain or texture, got {background!r}")
+    params = with_overrides(base, performers=performers, views=view_list, single_seconds=single_seconds,
+                            performances=performances, performance_seconds=performance_seconds,
+                            background=background, render=False if no_video else None)
+    t0 = time.perf_counter()
+    manifest = make_dataset(out, params, overwrite=overwrite, jobs=jobs, scheduler=scheduler)
+    log.info("dataset %s ready in %.1f s", manifest, time.perf_counter() - t0)
+
+
+@demo_app.command("performer")
+def performer_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="Output BVH (a .labels.json with per-frame labels is "
+                             "written beside it)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the dataset the performer belongs to."),
+    index: int = typer.Option(0, "--performer", help="Performer number within that seed (p00 = 0)."),
+    action: str = typer.Option(None, "--action", help="Repeat one action (Jab, Hook, Uppercut, Defense, LowKick, "
+                               "RoundhouseKick); default: a performance following the performer's chain."),
+    seconds: float = typer.Option(8.0, "--seconds", help="Length of the clip."),
+    fps: int = typer.Option(60, "--fps", help="Mocap frame rate (a multiple of 20)."),
+) -> None:
+    """Write one procedural clip as BVH: a performer repeating an action, or performing their chain."""
+    import numpy as np
+
+    from ..demo.actions import ACTIONS
+    from ..demo.dataset import DatasetParams, label_document, make_performer
+    from ..demo.timeline import build_take, performance_plan, single_action_plan
+    from ..fileio import write_json
+    from ..mocap import write_bvh
+
+    if action is not None:
+        match = [a for a in ACTIONS if a.lower() == action.lower()]
+        if not match:
+            raise InputError(f"--action: unknown action {action!r} (one of {', '.join(ACTIONS)})")
+        action = match[0]
+    if fps <= 0 or fps % 20:
+        raise InputError(f"--fps: must be a positive multiple of 20, got {fps}")
+    if seconds < 1.5:
+        raise InputError(f"--seconds: must be at least 1.5, got {seconds}")
+    if index < 0:
+        raise InputError(f"--performer: must be >= 0, got {index}")
+    params = DatasetParams(seed=seed, mocap_fps=fps)
+    performer = make_performer(params, index)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index, 999]))
+    n = int(round(seconds * 20))
+    plan = single_action_plan(performer, action, n, rng) if action else performance_plan(performer, n, rng)
+    take = build_take(performer, plan, rng, video_fps=20, ratio=fps // 20)
+    write_bvh(take.motion, out)
+    labels_path = out.with_name(out.stem + ".labels.json")
+    write_json(labels_path, label_document(take.labels, float(fps), take.chain, bvh=out.name, performer=performer.id))
+    log.info("wrote %s (%d frames at %d fps, %s) and %s", out, take.motion.n_frames, fps,
+             performer.style.lead, labels_path)
