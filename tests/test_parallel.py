@@ -31,3 +31,14 @@ def test_dask_cluster_matches_local():
 def test_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(InputError, match="cannot connect"):
         parallel_map(_work, [1], scheduler="tcp://127.0.0.1:9")
+
+
+def test_atomic_files_get_the_normal_mode(tmp_path):
+    import os
+
+    from vidstyle.fileio import write_json
+
+    write_json(tmp_path / "a.json", {"x": 1})
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    assert os.stat(tmp_path / "a.json").st_mode & 0o777 == os.stat(plain).st_mode & 0o777

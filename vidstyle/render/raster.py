@@ -1,0 +1,228 @@
+"""Per-pixel z-buffer rasteriser for tapered capsules (numpy, one frame at a time).
+
+Each capsule is drawn as a sphere-swept segment in screen space: for every pixel of its bounding box
+the closest point on the projected axis gives the parameter ``t``, the interpolated pixel radius
+``r(t)`` and centre depth ``z(t)``. A pixel at distance ``d < r`` from the axis sees the surface at depth
+``z(t) - R(t) sqrt(1 - (d/r)^2)`` (``R`` the world radius) with camera-space normal
+``(dx/r, dy/r, -sqrt(1 - (d/r)^2))``: exact for spheres, a close approximation for capsules that are
+not strongly foreshortened. The nearest surface wins each pixel (z-buffer), so depth order is correct
+wherever parts interpenetrate or cross.
+
+Pixels on the silhouette are anti-aliased: a pixel with partial coverage ``0 < c < 1`` competes with the
+depth ``z + (1 - c) * BIG``, so it only wins over background (or a lesser-covered fringe) and is blended
+with the background by ``c``.
+
+Per pixel the buffer keeps (depth, normal x, normal y, coverage, capsule * 16 + material); shading is
+computed once per frame for the winners: Lambert from a fixed light plus ambient, and a one-pixel dark
+outline where the depth jumps between different body volumes (the silhouette, a limb in front of the
+torso or of another limb; none along the seams where the torso's capsules meet).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+LIGHT = np.array([-0.45, -0.6, -0.66])  # towards the light, camera coordinates (up-left, in front)
+LIGHT = LIGHT / np.linalg.norm(LIGHT)
+AMBIENT = 0.38
+DIFFUSE = 0.72
+OUTLINE = 0.5  # brightness factor of outline pixels
+FAR = 1e30  # depth of the background
+FRINGE = 1.01e30  # depth penalty of a pixel with zero coverage (loses even against the background)
+D, NX, NY, COV, CODE = range(5)
+MAT_BITS = 16  # code = capsule * MAT_BITS + material
+
+
+class Rasterizer:
+    """Reusable buffers for one image size. :meth:`draw` fills them for one frame."""
+
+    def __init__(self, width: int, height: int) -> None:
+        self.W, self.H = int(width), int(height)
+        self.buf = np.empty((self.H, self.W, 5), dtype=np.float32)
+        self.buf[...] = (FAR, 0.0, 0.0, 0.0, -1.0)
+        self.xs = np.arange(self.W, dtype=np.float32)
+        self.ys = np.arange(self.H, dtype=np.float32)[:, None]
+        self.bbox = (0, 0, 0, 0)  # y0, y1, x0, x1 of the last frame's figure
+        self.shade: np.ndarray | None = None  # (h, w) shading of the bbox after :meth:`finish`
+        self.material: np.ndarray | None = None
+
+    # views of the buffer -------------------------------------------------------------------------
+    @property
+    def depth(self) -> np.ndarray:
+        """(H, W) depth of the front-most surface (>= FAR / 2 where there is none)."""
+        return self.buf[..., D]
+
+    @property
+    def coverage(self) -> np.ndarray:
+        return self.buf[..., COV]
+
+    @property
+    def capsule(self) -> np.ndarray:
+        """(H, W) int front-most capsule id (-1 = none)."""
+        return np.floor(self.buf[..., CODE] / MAT_BITS).astype(np.int32)
+
+    def clear(self) -> None:
+        y0, y1, x0, x1 = self.bbox
+        if y1 > y0 and x1 > x0:
+            self.buf[y0:y1, x0:x1] = (FAR, 0.0, 0.0, 0.0, -1.0)
+        self.bbox = (0, 0, 0, 0)
+
+    def draw(self, uv, z, rpx, rworld, mat, split, order, head, face_dir) -> None:
+        """Draw one frame.
+
+        uv (C, 2, 2) pixel end points, z (C, 2) depths, rpx (C, 2) pixel radii, rworld (C, 2) world radii,
+        mat (C, 2) materials, split (C,), order: capsule indices to draw (far to near), head (C,) bool,
+        face_dir (3,) camera-space forward direction of the face (hair on the back of the head).
+        """
+        self.clear()
+        W, H = self.W, self.H
+        buf, xs, ys = self.buf, self.xs, self.ys
+        fy0, fy1, fx0, fx1 = H, 0, W, 0
+        uvl, zl, rl, rwl = uv.tolist(), z.tolist(), rpx.tolist(), rworld.tolist()
+        matl, spl, headl = mat.tolist(), split.tolist(), head.tolist()
+        for c in order.tolist():
+            (ax, ay), (bx, by) = uvl[c]
+            za, zb = zl[c]
+            if not (za > 0 and zb > 0):
+                continue  # behind the camera
+            ra, rb = rl[c]
+            rmax = (ra if ra > rb else rb) + 1.5
+            x0 = int(min(ax, bx) - rmax)
+            x1 = int(max(ax, bx) + rmax) + 2
+            y0 = int(min(ay, by) - rmax)
+            y1 = int(max(ay, by) + rmax) + 2
+            x0, y0 = max(x0, 0), max(y0, 0)
+            x1, y1 = min(x1, W), min(y1, H)
+            if x1 <= x0 or y1 <= y0:
+                continue
+            dx, dy = bx - ax, by - ay
+            L2 = dx * dx + dy * dy
+            gx = xs[x0:x1] - ax  # (w,)
+            gy = ys[y0:y1] - ay  # (h, 1)
+            if L2 > 1e-9:
+                t = gx * (dx / L2) + gy * (dy / L2)
+                np.maximum(t, 0.0, out=t)
+                np.minimum(t, 1.0, out=t)
+                ex = gx - t * dx
+                ey = gy - t * dy
+            else:
+                t = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
+                ex = gx + t
+                ey = gy + t
+            d2 = ex * ex
+            d2 += ey * ey
+            rec = np.empty((y1 - y0, x1 - x0, 5), dtype=np.float32)
+            wa, wb = rwl[c]
+            if abs(rb - ra) > 1e-6 * (ra + 1e-9):
+                r = t * (rb - ra)
+                r += ra
+                np.maximum(r, 0.5, out=r)
+                rinv = 1.0 / r
+                wc = t * (wb - wa)
+                wc += wa
+                cov = (r + 0.5) - np.sqrt(d2)
+            else:
+                r = max(ra, 0.5)
+                rinv = 1.0 / r
+                wc = wa
+                cov = (r + 0.5) - np.sqrt(d2)
+            np.minimum(cov, 1.0, out=rec[..., COV])
+            # surface depth: z(t) - R(t) sqrt(1 - (d/r)^2)
+            np.multiply(ex, rinv, out=rec[..., NX])
+            np.multiply(ey, rinv, out=rec[..., NY])
+            q = d2 * (rinv * rinv)
+            np.minimum(q, 1.0, out=q)
+            np.subtract(1.0, q, out=q)
+            np.sqrt(q, out=q)  # = sqrt(1 - (d/r)^2) = -normal z
+            q *= wc
+            depth = t * (zb - za)
+            depth += za
+            depth -= q
+            # partial coverage: pushed far back so fringes only win over background
+            pen = rec[..., COV] * -FRINGE
+            pen += FRINGE
+            np.add(depth, pen, out=rec[..., D])
+            reg = buf[y0:y1, x0:x1]
+            win = rec[..., D] < reg[..., D]
+            if not win.any():
+                continue
+            ma, mb = matl[c]
+            if ma == mb:
+                rec[..., CODE] = c * MAT_BITS + ma
+            else:
+                np.copyto(rec[..., CODE], np.where(t < spl[c], float(c * MAT_BITS + ma), float(c * MAT_BITS + mb)))
+            if headl[c] and face_dir is not None:
+                # hair on the back of the head: normal pointing away from the face
+                fx_, fy_, fz_ = (float(v) for v in face_dir)
+                nz = np.sqrt(np.maximum(1.0 - rec[..., NX] ** 2 - rec[..., NY] ** 2, 0.0))
+                back = rec[..., NX] * fx_ + rec[..., NY] * fy_ - nz * fz_ < -0.25
+                rec[..., CODE][back] = c * MAT_BITS + mb
+            np.copyto(reg, rec, where=win[..., None])
+            if y0 < fy0:
+                fy0 = y0
+            if y1 > fy1:
+                fy1 = y1
+            if x0 < fx0:
+                fx0 = x0
+            if x1 > fx1:
+                fx1 = x1
+        self.bbox = (fy0, fy1, fx0, fx1) if fy1 > fy0 else (0, 0, 0, 0)
+
+    def finish(self, jump: float, group: np.ndarray) -> None:
+        """Shade the frame's figure: Lambert + ambient, and outlines where a 4-connected neighbour
+        belongs to another body volume (``group[capsule]``, ``group[-1]`` for background) and lies more
+        than ``jump`` (world units) deeper."""
+        y0, y1, x0, x1 = self.bbox
+        if y1 <= y0:
+            self.shade = self.material = None
+            return
+        reg = self.buf[y0:y1, x0:x1]
+        code = reg[..., CODE].astype(np.int32)
+        cap = code >> 4 if MAT_BITS == 16 else code // MAT_BITS
+        self.material = (code - cap * MAT_BITS).astype(np.intp)
+        nx, ny = reg[..., NX], reg[..., NY]
+        lx, ly, lz = (float(v) for v in LIGHT)
+        nz2 = nx * nx
+        nz2 += ny * ny
+        np.minimum(nz2, 1.0, out=nz2)
+        np.subtract(1.0, nz2, out=nz2)
+        np.sqrt(nz2, out=nz2)
+        lam = nx * lx
+        lam += ny * ly
+        lam -= nz2 * lz
+        np.maximum(lam, 0.0, out=lam)
+        lam *= DIFFUSE
+        lam += AMBIENT
+        d = reg[..., D]
+        g = group[cap]
+        edge = np.zeros(d.shape, dtype=bool)
+        edge[:-1] |= ((d[1:] - d[:-1]) > jump) & (g[1:] != g[:-1])
+        edge[1:] |= ((d[:-1] - d[1:]) > jump) & (g[:-1] != g[1:])
+        edge[:, :-1] |= ((d[:, 1:] - d[:, :-1]) > jump) & (g[:, 1:] != g[:, :-1])
+        edge[:, 1:] |= ((d[:, :-1] - d[:, 1:]) > jump) & (g[:, :-1] != g[:, 1:])
+        lam[edge] *= OUTLINE
+        self.shade = lam
+
+    def composite(self, out: np.ndarray, palette: np.ndarray) -> None:
+        """Blend the shaded figure over ``out`` ((H, W, 3) float32, modified in place)."""
+        y0, y1, x0, x1 = self.bbox
+        if y1 <= y0 or self.shade is None:
+            return
+        col = palette[self.material]  # palette must have MAT_BITS rows (background code -1 -> row 15)
+        col *= self.shade[..., None]
+        reg = out[y0:y1, x0:x1]
+        col -= reg
+        col *= self.buf[y0:y1, x0:x1, COV, None]  # in [0, 1] wherever a capsule won
+        reg += col
+
+    def part_mask(self, owner: np.ndarray, dtype=np.int8) -> np.ndarray:
+        """(H, W) part ids (the owning joint of the front-most capsule; -1 = background). A pixel belongs
+        to the figure when its centre lies inside a capsule (coverage >= 0.5)."""
+        mask = np.full((self.H, self.W), -1, dtype=dtype)
+        y0, y1, x0, x1 = self.bbox
+        if y1 > y0:
+            reg = self.buf[y0:y1, x0:x1]
+            cid = np.floor(reg[..., CODE] / MAT_BITS).astype(np.int64)
+            on = (cid >= 0) & (reg[..., COV] >= 0.5)
+            mask[y0:y1, x0:x1] = np.where(on, owner[np.maximum(cid, 0)], -1)
+        return mask
