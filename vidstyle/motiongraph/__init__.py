@@ -1,0 +1,39 @@
+"""Motion graphs (Kovar, Gleicher, Pighin 2002): windowed point-cloud frame distance computed for all
+pairs by tiled GEMMs, transitions at local minima, C^1 blends, pruning to the largest strongly connected
+component, and walks that realise an action sequence at minimum transition cost.
+
+>>> from vidstyle.motiongraph import MotionGraph, load_clips, plan_walk, render_walk   # doctest: +SKIP
+>>> graph = MotionGraph(window=10, fps=30).fit(load_clips(["clips/"], ["clips.csv"]))  # doctest: +SKIP
+"""
+
+from .blend import blend_frames, blend_weight, slerp
+from .distance import WindowSet, align_windows, all_pair_candidates, compute_tile, joint_weights
+from .graph import SCHEMA, Clip, MotionGraph, has_tpose_first_frame, load_clips
+from .labels import CMU_KEYWORDS, LabelBook, cmu_action
+from .synthesis import Step, Walk, parse_sequence, plan_walk, read_sequence, render_walk, walk_labels
+
+__all__ = [
+    "CMU_KEYWORDS",
+    "Clip",
+    "LabelBook",
+    "MotionGraph",
+    "SCHEMA",
+    "Step",
+    "Walk",
+    "WindowSet",
+    "align_windows",
+    "all_pair_candidates",
+    "blend_frames",
+    "blend_weight",
+    "cmu_action",
+    "compute_tile",
+    "has_tpose_first_frame",
+    "joint_weights",
+    "load_clips",
+    "parse_sequence",
+    "plan_walk",
+    "read_sequence",
+    "render_walk",
+    "slerp",
+    "walk_labels",
+]
