@@ -1,0 +1,130 @@
+"""``vidstyle vocabulary / train-recognizer / recognize / evaluate recognition`` end to end."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tests.conftest import SEED
+from vidstyle.cli import main
+from vidstyle.recognition.synthetic import make_dataset
+
+
+@pytest.fixture(scope="module")
+def ds(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cli")
+    make_dataset(root, n_performers=4, views=("front", "left"), seed=SEED, dim=24, reps=(2, 3), n_actions=5)
+    return root
+
+
+def test_pipeline_by_dataset(ds, tmp_path):
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--seed", str(SEED)]
+    assert main(["vocabulary", *common, "--words", "60", "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", "24",
+                 "--out", str(tmp_path / "m.joblib"), "--onnx"]) == 0
+    assert (tmp_path / "m.onnx").is_file()
+    manifest = json.loads((ds / "dataset.json").read_text())
+    vid = manifest["videos"][0]["id"]
+    feats = ds / "features" / f"{vid}.npz"
+    assert main(["recognize", str(feats), "--model", str(tmp_path / "m.joblib"), "--window", "4",
+                 "--out", str(tmp_path / "lab.json")]) == 0
+    doc = json.loads((tmp_path / "lab.json").read_text())
+    truth = json.loads((ds / "labels" / f"{vid}.json").read_text())
+    n = len(truth["labels"])
+    assert len(doc["labels"]) == len(doc["raw"]) == len(doc["confidence"]) == n
+    assert doc["smoothing_window"] == 4 and doc["model"] == str(tmp_path / "m.joblib")
+    assert set(doc["labels"]) <= set(doc["classes"]) and doc["classes"] == truth["classes"]
+    assert all(0 <= c <= 1 for c in doc["confidence"])
+    # the model records set B, which shares nothing with set A of the vocabulary
+    from vidstyle.recognition.recognizer import read_header
+
+    h = read_header(tmp_path / "m.joblib")
+    b = {f["features"] for f in h["training_files"]}
+    assert b and not b & set(h["vocabulary"]["training_files"])
+    assert h["split"]["set"] == "B" and h["seed"] == SEED
+
+
+def test_explicit_files_and_overlap_guard(ds, tmp_path):
+    manifest = json.loads((ds / "dataset.json").read_text())
+    ids = [v["id"] for v in manifest["videos"]]
+    f = [str(ds / "features" / f"{i}.npz") for i in ids]
+    lab = [str(ds / "labels" / f"{i}.json") for i in ids]
+    assert main(["vocabulary", *f[:6], "--words", "40", "--method", "hierarchical", "--branching", "4",
+                 "--out", str(tmp_path / "v.npz")]) == 0
+    labels_args = [x for p in lab[6:14] for x in ("--labels", p)]
+    assert main(["train-recognizer", *f[6:14], *labels_args, "--vocab", str(tmp_path / "v.npz"),
+                 "--components", "16", "--no-grouping", "--out", str(tmp_path / "m.joblib")]) == 0
+    overlap = [x for p in lab[:8] for x in ("--labels", p)]
+    assert main(["train-recognizer", *f[:8], *overlap, "--vocab", str(tmp_path / "v.npz"),
+                 "--out", str(tmp_path / "m2.joblib")]) == 2
+    assert not (tmp_path / "m2.joblib").exists()
+
+
+def test_evaluate_recognition(ds, tmp_path):
+    out = tmp_path / "metrics.json"
+    assert main(["evaluate", "recognition", "--dataset", str(ds), "--features-dir", str(ds / "features"),
+                 "--words", "60", "--components", "24", "--split", "unseen-view", "--test-view", "left",
+                 "--seed", str(SEED), "--out", str(out)]) == 0
+    m = json.loads(out.read_text())
+    assert m["split"]["kind"] == "unseen-view" and m["split"]["test_views"] == ["left"]
+    assert 0 <= m["frame_accuracy"]["smoothed"] <= 1 and m["seed"] == SEED
+    assert out.with_suffix(".png").stat().st_size > 1000
+    import cv2
+
+    img = cv2.imread(str(out.with_suffix(".png")))
+    assert img is not None and img.ndim == 3
+
+
+def test_bad_inputs_exit_2(ds, tmp_path, capsys):
+    assert main(["vocabulary", str(tmp_path / "none.npz"), "--out", str(tmp_path / "v.npz")]) == 2
+    assert "none.npz" in capsys.readouterr().err
+    assert main(["recognize", str(tmp_path / "none.npz"), "--model", str(tmp_path / "m.joblib"),
+                 "--out", str(tmp_path / "l.json")]) == 2
+    # labels whose length differs from the features' n_frames
+    manifest = json.loads((ds / "dataset.json").read_text())
+    vid = manifest["videos"][0]["id"]
+    bad = json.loads((ds / "labels" / f"{vid}.json").read_text())
+    bad["labels"] = bad["labels"][:-3]
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    assert main(["vocabulary", str(ds / "features" / f"{manifest['videos'][1]['id']}.npz"), "--words", "10",
+                 "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", str(ds / "features" / f"{vid}.npz"), "--labels", str(tmp_path / "bad.json"),
+                 "--vocab", str(tmp_path / "v.npz"), "--out", str(tmp_path / "m.joblib")]) == 2
+    assert "labels but" in capsys.readouterr().err
+    # a features file of another descriptor dimension than the vocabulary
+    np.savez(tmp_path / "other.npz", descriptors=np.ones((4, 7), np.float32), frame_index=np.arange(4), n_frames=4)
+    (tmp_path / "four.json").write_text(json.dumps({"classes": ["Jab", "Guard"], "labels": ["Jab"] * 2 + ["Guard"] * 2}))
+    assert main(["train-recognizer", str(tmp_path / "other.npz"), "--labels", str(tmp_path / "four.json"),
+                 "--vocab", str(tmp_path / "v.npz"), "--out", str(tmp_path / "m.joblib")]) == 2
+    assert "dimension 7" in capsys.readouterr().err
+    (tmp_path / "unknown.json").write_text(json.dumps({"classes": ["Jab"], "labels": ["Jab", "Kick", "Jab", "Jab"]}))
+    assert main(["train-recognizer", str(tmp_path / "other.npz"), "--labels", str(tmp_path / "unknown.json"),
+                 "--vocab", str(tmp_path / "v.npz"), "--out", str(tmp_path / "m.joblib")]) == 2
+    assert "Kick" in capsys.readouterr().err
+
+
+def test_recognize_a_video_through_the_features_stage(tmp_path):
+    pytest.importorskip("vidstyle.features.extract")
+    import cv2
+
+    rng = np.random.default_rng(SEED)
+    path = tmp_path / "clip.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 20, (160, 120))
+    for t in range(16):  # a bright square moving right over noise: motion for the salient points
+        img = (rng.random((120, 160)) * 40).astype(np.uint8)
+        img[40:80, 20 + 6 * t : 60 + 6 * t] = 220
+        w.write(cv2.cvtColor(img, cv2.COLOR_GRAY2BGR))
+    w.release()
+    assert main(["features", str(path), "--out", str(tmp_path / "f")]) == 0
+    feats = tmp_path / "f" / "clip.npz"
+    n = int(np.load(feats)["n_frames"])
+    (tmp_path / "l.json").write_text(json.dumps({"classes": ["Jab", "Guard"], "labels": ["Guard"] * (n // 2) + ["Jab"] * (n - n // 2)}))
+    assert main(["vocabulary", str(feats), "--words", "4", "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", str(feats), "--labels", str(tmp_path / "l.json"), "--vocab", str(tmp_path / "v.npz"),
+                 "--allow-overlap", "--components", "2", "--out", str(tmp_path / "m.joblib")]) == 0
+    assert main(["recognize", str(path), "--model", str(tmp_path / "m.joblib"), "--out", str(tmp_path / "a.json")]) == 0
+    assert main(["recognize", str(feats), "--model", str(tmp_path / "m.joblib"), "--out", str(tmp_path / "b.json")]) == 0
+    a, b = (json.loads((tmp_path / f).read_text()) for f in ("a.json", "b.json"))
+    assert a["raw"] == b["raw"] and len(a["labels"]) == n  # same features whether computed now or read

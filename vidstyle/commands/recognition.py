@@ -1,0 +1,314 @@
+"""``vidstyle vocabulary``, ``vidstyle train-recognizer``, ``vidstyle recognize`` and
+``vidstyle evaluate recognition``: frame-wise action recognition (thesis 4.1-4.3)."""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+
+from ..errors import InputError
+from ._evaluate import evaluate_app
+
+log = logging.getLogger(__name__)
+
+
+def register(app: typer.Typer) -> None:
+    app.command("vocabulary")(vocabulary)
+    app.command("train-recognizer")(train_recognizer)
+    app.command("recognize")(recognize)
+
+
+def _dataset_split(dataset: Path, split: str, seed: int, test_view: Optional[str]):
+    from ..recognition.io import load_dataset
+    from ..recognition.splits import make_split
+
+    ds = load_dataset(dataset)
+    return ds, make_split(ds, split, seed=seed, test_view=test_view)
+
+
+def _features_files(features: list[Path], features_dir: Optional[Path], dataset: Optional[Path], what: str):
+    if features and (features_dir or dataset):
+        raise InputError(f"{what}: give FEATURES files or --features-dir with --dataset, not both")
+    if not features and not (features_dir and dataset):
+        raise InputError(f"{what}: give FEATURES files, or --features-dir and --dataset")
+
+
+def vocabulary(
+    features: list[Path] = typer.Argument(None, help="Features .npz files of set A (or use --dataset)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output vocab.npz."),
+    words: int = typer.Option(1000, "--words", help="Number of words (thesis: 1000 of 500/1000/1500)."),
+    method: str = typer.Option("minibatch", "--method", help="minibatch | hierarchical | kmeans."),
+    branching: int = typer.Option(10, "--branching", help="Children per node of the hierarchical tree."),
+    max_descriptors: int = typer.Option(100_000, "--max-descriptors", help="Fit on at most this many (sampled)."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: fit on set A of --split."),
+    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
+    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (sampling, k-means, split)."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel file loading (-1 = all cores)."),
+) -> None:
+    """Cluster 3D SIFT descriptors of set A into visual words (k-means centres)."""
+    from ..recognition.io import features_path
+    from ..recognition.recognizer import load_many
+    from ..recognition.vocabulary import Vocabulary
+
+    features = list(features or [])
+    _features_files(features, features_dir, dataset, "vocabulary")
+    extra = {}
+    if dataset:
+        ds, sp = _dataset_split(dataset, split, seed, test_view)
+        features = [features_path(features_dir, i) for i in sp.vocab]
+        extra = {"split": {"kind": sp.kind, "seed": sp.seed, "set": "A", "params": sp.params}}
+    t0 = time.perf_counter()
+    feats = load_many(features, n_jobs=jobs)
+    dims = {f.dim for f in feats if f.descriptors.shape[0]}
+    if len(dims) > 1:
+        raise InputError(f"features: descriptors of different dimensions {sorted(dims)} (mixed variants?)")
+    desc = [f.descriptors for f in feats if f.descriptors.shape[0]]
+    if not desc:
+        raise InputError("features: no descriptors in any file")
+    X = np.concatenate(desc)
+    voc = Vocabulary(n_words=words, method=method, branching=branching, max_descriptors=max_descriptors, random_state=seed)
+    voc.fit(X)
+    voc.save(out, training_files=[str(p) for p in features], extra=extra)
+    log.info(
+        "wrote %s: %d words (%s) from %d of %d descriptors of %d files in %.1f s",
+        out, voc.n_words_, method, voc.n_fit_descriptors_, X.shape[0], len(feats), time.perf_counter() - t0,
+    )
+
+
+def train_recognizer(
+    features: list[Path] = typer.Argument(None, help="Features .npz files of set B (with --labels)."),
+    labels: list[Path] = typer.Option(None, "--labels", help="Labels JSON per FEATURES file, same order."),
+    vocab: Path = typer.Option(..., "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
+    onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
+    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
+    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
+    context: int = typer.Option(2, "--context", help="Frames each side in a frame's histogram (thesis 2)."),
+    grouping: bool = typer.Option(True, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
+    grouping_threshold: float = typer.Option(0.8, "--grouping-threshold", help="Correlation above which words pool."),
+    normalize: str = typer.Option("sqrt", "--normalize", help="l1 | sqrt | l2 | none."),
+    components: int = typer.Option(128, "--components", help="PCA dimensions."),
+    classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo (thesis) | svc-ovr (baseline)."),
+    c: float = typer.Option(10.0, "--C", help="SVM cost."),
+    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
+    smoothing: str = typer.Option("vote", "--smoothing", help="vote | mean."),
+    allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
+    seed: int = typer.Option(0, "--seed", help="Random seed."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+) -> None:
+    """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on set B."""
+    from ..recognition.io import features_path, load_dataset, load_labels
+    from ..recognition.recognizer import ActionRecognizer, load_many, save_model
+    from ..recognition.vocabulary import Vocabulary
+
+    features = list(features or [])
+    labels = list(labels or [])
+    _features_files(features, features_dir, dataset, "train-recognizer")
+    split_info = None
+    classes = None
+    if dataset:
+        if labels:
+            raise InputError("--labels: not used with --dataset (the manifest names the labels)")
+        ds, sp = _dataset_split(dataset, split, seed, test_view)
+        by_id = ds.by_id()
+        features = [features_path(features_dir, i) for i in sp.train]
+        labels = [ds.labels_path(by_id[i]) for i in sp.train]
+        classes = ds.classes or None
+        split_info = {"kind": sp.kind, "seed": sp.seed, "set": "B", "params": sp.params, "test": sp.test}
+    if len(labels) != len(features):
+        raise InputError(f"--labels: {len(labels)} labels files for {len(features)} features files")
+    voc = Vocabulary.load(vocab)
+    overlap = {Path(p).resolve() for p in getattr(voc, "training_files_", [])} & {p.resolve() for p in features}
+    if overlap and not allow_overlap:
+        raise InputError(
+            f"{vocab}: {len(overlap)} training file(s) also built the vocabulary (e.g. {sorted(overlap)[0]});"
+            " sets A and B must be disjoint (or pass --allow-overlap)"
+        )
+    tracks = [load_labels(p) for p in labels]
+    feats = load_many(features, n_jobs=jobs)
+    for f, t in zip(feats, tracks):
+        if len(t.labels) != f.n_frames:
+            raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
+    if classes is None:
+        classes = tracks[0].classes
+        for t in tracks[1:]:
+            if t.classes != classes:
+                classes = sorted(set(classes) | set(t.classes))
+    rec = ActionRecognizer(
+        vocabulary=voc, context=context, grouping=grouping, grouping_threshold=grouping_threshold,
+        normalize=normalize, n_components=components, classifier=classifier, C=c,
+        max_frames_per_class=max_frames_per_class or None, smoothing_window=window, smoothing=smoothing,
+        n_jobs=jobs, random_state=seed,
+    )
+    t0 = time.perf_counter()
+    rec.fit(feats, [t.labels for t in tracks], classes=classes)
+    feature_params = _feature_params(features)
+    header = save_model(
+        out,
+        rec,
+        training_files=[{"features": str(f), "labels": str(lab)} for f, lab in zip(features, labels)],
+        extra={"split": split_info, "features_params": feature_params, "vocabulary_file": str(vocab)},
+    )
+    log.info("wrote %s (%d classes, %.1f s): %s", out, len(rec.classes_), time.perf_counter() - t0, header["summary"])
+    if onnx:
+        from ..recognition.onnx_export import export_onnx
+
+        onnx_path = out.with_suffix(".onnx")
+        export_onnx(rec, onnx_path)
+        log.info("wrote %s", onnx_path)
+
+
+def _feature_params(paths) -> dict | None:
+    import json
+
+    for p in paths:
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                if "params" in z.files:
+                    return json.loads(str(z["params"]))
+        except Exception:  # informative only
+            return None
+    return None
+
+
+def _video_features(path: Path, header: dict):
+    """Compute features of a video with the features stage (same variant as the training files)."""
+    import tempfile
+
+    from ..recognition.io import load_features
+
+    try:
+        from ..features.extract import process_video
+    except ImportError:
+        raise InputError(f"{path}: not a features .npz, and the features stage is not installed") from None
+    fp = header.get("features_params") or {}
+    variant = fp.get("variant", "thesis")
+    salient = None
+    try:
+        from ..features.salient import SalientParams
+
+        if isinstance(fp.get("salient"), dict):
+            salient = SalientParams(**fp["salient"])
+    except Exception:  # older/newer params: fall back to the defaults, which is what training used by default
+        log.warning("%s: could not rebuild the training salient-point parameters; using defaults", path)
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d) / f"{path.stem}.npz"
+        process_video(path, tmp, variant=variant, salient=salient)
+        return load_features(tmp)
+
+
+def recognize(
+    input: Path = typer.Argument(..., help="Features .npz of a video (or the video itself)."),
+    model: Path = typer.Option(..., "--model", "-m", help="Model .joblib from train-recognizer."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output labels JSON."),
+    window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
+    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean (default: the model's)."),
+    fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
+) -> None:
+    """Per-frame action labels with confidence, raw and smoothed."""
+    from ..fileio import write_json
+    from ..recognition.io import load_features
+    from ..recognition.recognizer import load_model
+
+    rec, header = load_model(model)
+    if window is not None:
+        rec.smoothing_window = window
+    if smoothing is not None:
+        rec.smoothing = smoothing
+    if not input.exists():
+        raise InputError(f"{input}: file not found")
+    if input.suffix.lower() == ".npz":
+        feats = load_features(input)
+        video = feats.video or str(input)
+        if fps is None:
+            with np.load(input, allow_pickle=False) as z:
+                fps = float(z["fps"]) if "fps" in z.files and float(z["fps"]) > 0 else None
+    else:
+        feats = _video_features(input, header)
+        video = str(input)
+    res = rec.predict_video(feats)
+    classes = [str(c) for c in rec.classes_]
+    doc = {
+        "video": video,
+        "fps": fps if fps else 20,
+        "classes": classes,
+        "labels": [classes[i] for i in res["smoothed"]],
+        "confidence": np.round(res["smoothed_confidence"], 4).tolist(),
+        "raw": [classes[i] for i in res["raw"]],
+        "raw_confidence": np.round(res["confidence"], 4).tolist(),
+        "smoothing_window": rec.smoothing_window,
+        "smoothing": rec.smoothing,
+        "model": str(model),
+        "features": str(input),
+    }
+    write_json(out, doc)
+    n = len(doc["labels"])
+    log.info("wrote %s: %d frames, %s", out, n, ", ".join(f"{c} {doc['labels'].count(c)}" for c in classes if c in doc["labels"]))
+
+
+@evaluate_app.command("recognition")
+def evaluate_recognition(
+    dataset: Path = typer.Option(..., "--dataset", help="dataset.json (or its directory)."),
+    features_dir: Path = typer.Option(..., "--features-dir", help="Directory of <video id>.npz."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
+    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
+    ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing."),
+    words: int = typer.Option(1000, "--words", help="Vocabulary size (ablation: 500/1000/1500)."),
+    vocab_method: str = typer.Option("minibatch", "--vocab-method", help="minibatch | hierarchical | kmeans."),
+    classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo | svc-ovr."),
+    baseline: bool = typer.Option(True, "--baseline/--no-baseline", help="Also score a plain SVC on the same features."),
+    grouping_threshold: float = typer.Option(0.8, "--grouping-threshold", help="Word grouping correlation threshold."),
+    components: int = typer.Option(128, "--components", help="PCA dimensions."),
+    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    window: int = typer.Option(6, "--window", help="Smoothing window."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (split, vocabulary, sampling)."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+) -> None:
+    """Train vocabulary (set A) and recognizer (set B) on a split, test on held-out videos, write metrics."""
+    from ..fileio import write_json
+    from ..recognition.evaluate import confusion_png, evaluate_recognition as run
+    from ..recognition.io import load_dataset
+
+    ds = load_dataset(dataset)
+    params = {
+        "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
+        "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
+    }
+    m = run(
+        ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
+        recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
+    )
+    write_json(out, m)
+    png = out.with_suffix(".png")
+    cm = np.asarray(m["confusion"]["smoothed"])
+    confusion_png(png, cm, m["confusion"]["classes"], f"{split}, {ablation}: smoothed frame acc {m['frame_accuracy']['smoothed']:.3f}")
+    confusion_png(out.with_name(out.stem + "_raw.png"), np.asarray(m["confusion"]["raw"]), m["confusion"]["classes"],
+                  f"{split}, {ablation}: raw frame acc {m['frame_accuracy']['raw']:.3f}")
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title=f"recognition ({split}, ablation {ablation}, {words} words)")
+    for col in ("metric", "value"):
+        t.add_column(col)
+    t.add_row("frame accuracy raw", f"{m['frame_accuracy']['raw']:.3f}")
+    t.add_row("frame accuracy smoothed", f"{m['frame_accuracy']['smoothed']:.3f}")
+    va = m["video_accuracy"]
+    t.add_row("video accuracy", "n/a" if va is None else f"{va:.3f} of {m['n_test_single_videos']}")
+    if "baseline" in m:
+        b = m["baseline"]
+        t.add_row("baseline svc-ovr raw / smoothed", f"{b['frame_accuracy']['raw']:.3f} / {b['frame_accuracy']['smoothed']:.3f}")
+    t.add_row("test videos / frames", f"{m['n_test_videos']} / {m['n_test_frames']}")
+    t.add_row("time vocab / train / predict (s)", " / ".join(f"{m['timing_s'][k]:.1f}" for k in ("vocabulary", "train", "predict")))
+    Console().print(t)
+    log.info("wrote %s, %s", out, png)

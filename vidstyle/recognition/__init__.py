@@ -1,0 +1,44 @@
+"""Frame-wise action recognition (thesis chapter 4.1-4.3): vocabulary, frame histograms, word grouping,
+PCA, one-vs-all + one-vs-one SVMs, smoothing; splits, metrics and ONNX export.
+
+Modules:
+
+- :mod:`~vidstyle.recognition.io` — features / labels / dataset manifest readers (schemas there).
+- :mod:`~vidstyle.recognition.vocabulary` — :class:`Vocabulary` (MiniBatch, hierarchical tree, full k-means).
+- :mod:`~vidstyle.recognition.histograms` — :class:`FrameFeaturizer`, :class:`WordGrouping`, normalisation.
+- :mod:`~vidstyle.recognition.classifier` — :class:`OvaOvoSVC` (thesis) and :class:`OvrSVC` (baseline).
+- :mod:`~vidstyle.recognition.smoothing` — :func:`smooth_labels` (window vote or mean score).
+- :mod:`~vidstyle.recognition.recognizer` — :class:`ActionRecognizer`, model files.
+- :mod:`~vidstyle.recognition.onnx_export` — ONNX graph + :class:`OnnxRecognizer`.
+- :mod:`~vidstyle.recognition.splits` — disjoint sets A / B / test by performer or view.
+- :mod:`~vidstyle.recognition.evaluate` — metrics, confusion PNG, the evaluation run.
+- :mod:`~vidstyle.recognition.synthetic` — synthetic feature files with known labels (tests, benchmarks).
+"""
+
+from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
+from .histograms import FrameFeaturizer, WordGrouping, normalize_rows
+from .io import VideoFeatures, load_dataset, load_features, load_labels
+from .recognizer import ActionRecognizer, load_model, save_model
+from .smoothing import smooth_labels
+from .splits import Split, make_split
+from .vocabulary import Vocabulary
+
+__all__ = [
+    "ActionRecognizer",
+    "FrameFeaturizer",
+    "OvaOvoSVC",
+    "OvrSVC",
+    "Split",
+    "VideoFeatures",
+    "Vocabulary",
+    "WordGrouping",
+    "combine_ova_ovo",
+    "load_dataset",
+    "load_features",
+    "load_labels",
+    "load_model",
+    "make_split",
+    "normalize_rows",
+    "save_model",
+    "smooth_labels",
+]

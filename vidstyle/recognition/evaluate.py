@@ -1,0 +1,273 @@
+"""Recognition metrics (evaluation.md) and the train-and-test run behind ``vidstyle evaluate recognition``.
+
+- frame accuracy, raw and smoothed: fraction of test frames whose predicted class equals the truth;
+- video accuracy: for each *single-action* test video, the most frequent predicted label among the frames
+  predicted as an action (classes in ``ignore``, Guard and Step, are not actions) must equal the video's
+  action; a video with no frame predicted as an action counts as wrong. Reported on the smoothed labels
+  (``video_accuracy``) and on the raw ones;
+- confusion matrices, row-normalised (rows = truth, columns = prediction; a class absent from the test
+  truth has a zero row), as JSON and as a PNG heatmap drawn with OpenCV.
+
+Ablations (each switches one thesis choice off, everything else equal): ``no-grouping``, ``no-context``
+(histogram of frame n only), ``no-smoothing`` (window 1). Vocabulary size is ``--words``; 2D SIFT and the
+two 3D SIFT variants are different *features directories* (the features stage writes them), so they are
+measured by pointing ``--features-dir`` at each; the metrics record the features' ``params``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from .io import Dataset, features_path, load_features, load_labels
+from .splits import make_split
+
+log = logging.getLogger(__name__)
+
+ABLATIONS = ("none", "no-grouping", "no-context", "no-smoothing")
+IGNORE = ("Guard", "Step")
+
+
+def confusion_counts(y_true: np.ndarray, y_pred: np.ndarray, n_classes: int) -> np.ndarray:
+    cm = np.zeros((n_classes, n_classes), np.int64)
+    np.add.at(cm, (np.asarray(y_true, np.int64), np.asarray(y_pred, np.int64)), 1)
+    return cm
+
+
+def row_normalise(cm: np.ndarray) -> np.ndarray:
+    s = cm.sum(axis=1, keepdims=True).astype(float)
+    return np.divide(cm, s, out=np.zeros(cm.shape), where=s > 0)
+
+
+def video_label(pred: Sequence[str], ignore: Sequence[str] = IGNORE) -> str | None:
+    """Most frequent predicted action (ties -> first in sorted order); None when no frame is an action."""
+    acts = [p for p in pred if p not in set(ignore)]
+    if not acts:
+        return None
+    names, counts = np.unique(np.asarray(acts), return_counts=True)
+    return str(names[np.argmax(counts)])
+
+
+def confusion_png(path: str | Path, cm: np.ndarray, classes: Sequence[str], title: str = "") -> None:
+    """Row-normalised confusion matrix as a heatmap with the values written in the cells."""
+    import cv2
+
+    from ..fileio import atomic_path
+
+    k = len(classes)
+    cell, left, top = 64, 150, 150
+    h, w = top + k * cell + 20, left + k * cell + 20
+    img = np.full((h, w, 3), 255, np.uint8)
+    vals = np.clip(np.asarray(cm, float), 0, 1)
+    heat = cv2.applyColorMap((vals * 255).astype(np.uint8), cv2.COLORMAP_VIRIDIS)
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    for i in range(k):
+        for j in range(k):
+            x0, y0 = left + j * cell, top + i * cell
+            img[y0 : y0 + cell, x0 : x0 + cell] = heat[i, j]
+            txt = f"{vals[i, j]:.2f}"
+            colour = (0, 0, 0) if vals[i, j] > 0.6 else (255, 255, 255)
+            cv2.putText(img, txt, (x0 + 10, y0 + cell // 2 + 5), font, 0.45, colour, 1, cv2.LINE_AA)
+        cv2.putText(img, str(classes[i])[:14], (5, top + i * cell + cell // 2 + 5), font, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+    # column labels, written rotated: draw on a strip and rotate it
+    strip = np.full((cell * k, top - 10, 3), 255, np.uint8)
+    for j in range(k):
+        cv2.putText(strip, str(classes[j])[:14], (5, j * cell + cell // 2 + 5), font, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+    rot = cv2.rotate(strip, cv2.ROTATE_90_COUNTERCLOCKWISE)
+    img[5 : 5 + rot.shape[0], left : left + rot.shape[1]] = rot
+    if title:
+        cv2.putText(img, title[:60], (5, 18), font, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
+    cv2.putText(img, "rows: truth, columns: predicted", (5, h - 5), font, 0.4, (80, 80, 80), 1, cv2.LINE_AA)
+    with atomic_path(path) as tmp:
+        if not cv2.imwrite(str(tmp), img):
+            raise InputError(f"{path}: could not write PNG")
+
+
+def score_videos(
+    classes: Sequence[str],
+    truths: Sequence[Sequence[str]],
+    outputs: Sequence[dict],
+    ids: Sequence[str],
+    actions: Sequence[str | None],
+    ignore: Sequence[str] = IGNORE,
+) -> dict[str, Any]:
+    """Frame and video metrics of predictions (``outputs`` of :meth:`ActionRecognizer.predict_video`)."""
+    classes = list(classes)
+    index = {c: i for i, c in enumerate(classes)}
+    K = len(classes)
+    cm_raw = np.zeros((K, K), np.int64)
+    cm_sm = np.zeros((K, K), np.int64)
+    per_video = []
+    vid_ok_sm, vid_ok_raw, n_single = 0, 0, 0
+    for vid, truth, out, action in zip(ids, truths, outputs, actions):
+        y = np.array([index[c] for c in truth], np.int64)
+        cm_raw += confusion_counts(y, out["raw"], K)
+        cm_sm += confusion_counts(y, out["smoothed"], K)
+        row = {
+            "id": vid,
+            "n_frames": int(len(y)),
+            "frame_accuracy_raw": float((out["raw"] == y).mean()) if len(y) else 0.0,
+            "frame_accuracy_smoothed": float((out["smoothed"] == y).mean()) if len(y) else 0.0,
+        }
+        if action:
+            n_single += 1
+            got_sm = video_label([classes[i] for i in out["smoothed"]], ignore)
+            got_raw = video_label([classes[i] for i in out["raw"]], ignore)
+            vid_ok_sm += got_sm == action
+            vid_ok_raw += got_raw == action
+            row.update(action=action, predicted=got_sm, predicted_raw=got_raw, correct=got_sm == action)
+        per_video.append(row)
+    n = int(cm_raw.sum())
+    per_class = {
+        c: {
+            "n_frames": int(cm_raw[i].sum()),
+            "recall_raw": float(cm_raw[i, i] / cm_raw[i].sum()) if cm_raw[i].sum() else None,
+            "recall_smoothed": float(cm_sm[i, i] / cm_sm[i].sum()) if cm_sm[i].sum() else None,
+        }
+        for i, c in enumerate(classes)
+    }
+    return {
+        "frame_accuracy": {
+            "raw": float(np.trace(cm_raw) / n) if n else 0.0,
+            "smoothed": float(np.trace(cm_sm) / n) if n else 0.0,
+        },
+        "video_accuracy": float(vid_ok_sm / n_single) if n_single else None,
+        "video_accuracy_raw": float(vid_ok_raw / n_single) if n_single else None,
+        "n_test_videos": len(ids),
+        "n_test_single_videos": n_single,
+        "n_test_frames": n,
+        "per_class": per_class,
+        "confusion": {
+            "classes": classes,
+            "raw": row_normalise(cm_raw).round(4).tolist(),
+            "smoothed": row_normalise(cm_sm).round(4).tolist(),
+            "counts_raw": cm_raw.tolist(),
+            "counts_smoothed": cm_sm.tolist(),
+        },
+        "videos": per_video,
+    }
+
+
+def ablation_params(ablation: str) -> dict[str, Any]:
+    if ablation not in ABLATIONS:
+        raise InputError(f"--ablation: must be one of {', '.join(ABLATIONS)}, got {ablation!r}")
+    return {
+        "none": {},
+        "no-grouping": {"grouping": False},
+        "no-context": {"context": 0},
+        "no-smoothing": {"smoothing_window": 1},
+    }[ablation]
+
+
+def _load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None):
+    from joblib import Parallel, delayed
+
+    by_id = dataset.by_id()
+
+    def one(i):
+        f = load_features(features_path(features_dir, i))
+        t = load_labels(dataset.labels_path(by_id[i]))
+        if len(t.labels) != f.n_frames:
+            raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
+        return f, t
+
+    pairs = Parallel(n_jobs=n_jobs or 1, prefer="threads")(delayed(one)(i) for i in ids)
+    return [p[0] for p in pairs], [p[1] for p in pairs]
+
+
+def evaluate_recognition(
+    dataset: Dataset,
+    features_dir: str | Path,
+    split_kind: str = "unseen-performer",
+    seed: int = 0,
+    ablation: str = "none",
+    n_words: int = 1000,
+    vocab_method: str = "minibatch",
+    recognizer_params: dict | None = None,
+    baseline: bool = True,
+    test_view: str | None = None,
+    n_jobs: int | None = None,
+) -> dict[str, Any]:
+    """Train the vocabulary on A and the recognizer on B of a seeded split, test on the held-out set."""
+    from .recognizer import ActionRecognizer
+    from .vocabulary import Vocabulary
+
+    features_dir = Path(features_dir)
+    split = make_split(dataset, split_kind, seed=seed, test_view=test_view)
+    log.info("split %s: A %d, B %d, test %d videos", split.kind, len(split.vocab), len(split.train), len(split.test))
+    params = dict(recognizer_params or {})
+    params.update(ablation_params(ablation))
+    params.setdefault("random_state", seed)
+    params.setdefault("n_jobs", n_jobs)
+
+    t0 = time.perf_counter()
+    feats_a, _ = _load_set(dataset, features_dir, split.vocab, n_jobs)
+    desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
+    voc = Vocabulary(n_words=n_words, method=vocab_method, random_state=seed).fit(desc)
+    voc.training_files_ = [f.path for f in feats_a]
+    t_voc = time.perf_counter() - t0
+    del feats_a, desc
+
+    t0 = time.perf_counter()
+    feats_b, labels_b = _load_set(dataset, features_dir, split.train, n_jobs)
+    classes = dataset.classes or sorted({c for t in labels_b for c in t.labels})
+    rec = ActionRecognizer(vocabulary=voc, **params).fit(feats_b, [t.labels for t in labels_b], classes=classes)
+    t_train = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    feats_t, labels_t = _load_set(dataset, features_dir, split.test, n_jobs)
+    unknown = sorted({c for t in labels_t for c in t.labels} - set(rec.classes_))
+    if unknown:
+        raise InputError(f"test labels: classes not seen in training: {unknown[:5]}")
+    Hs = rec._histograms_many(feats_t)
+    outputs = [rec.predict_histograms(H) for H in Hs]
+    t_pred = time.perf_counter() - t0
+
+    by_id = dataset.by_id()
+    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.test]
+    truths = [t.labels for t in labels_t]
+    metrics = score_videos(rec.classes_, truths, outputs, split.test, actions)
+    feature_params = None
+    try:
+        with np.load(features_path(features_dir, split.test[0]), allow_pickle=False) as z:
+            if "params" in z.files:
+                feature_params = json.loads(str(z["params"]))
+    except Exception:  # params are informative only
+        feature_params = None
+    result: dict[str, Any] = {
+        "kind": "vidstyle.metrics.recognition",
+        "schema_version": 1,
+        "seed": seed,
+        "split": split.to_dict(),
+        "ablation": ablation,
+        "params": {
+            "vocabulary": voc.get_params(),
+            "recognizer": rec.public_params(),
+            "features": feature_params,
+            "features_dir": str(features_dir),
+        },
+        "model": rec.summary(),
+        **metrics,
+        "timing_s": {"vocabulary": t_voc, "train": t_train, "predict": t_pred},
+    }
+    if baseline and rec.classifier != "svc-ovr":
+        # same vocabulary, histograms and PCA features; only the classifier differs
+        t0 = time.perf_counter()
+        base = ActionRecognizer(vocabulary=voc, **{**params, "classifier": "svc-ovr"}).fit(
+            feats_b, [t.labels for t in labels_b], classes=classes
+        )
+        bout = [base.predict_histograms(H) for H in Hs]
+        bm = score_videos(base.classes_, truths, bout, split.test, actions)
+        result["baseline"] = {
+            "classifier": "svc-ovr",
+            "frame_accuracy": bm["frame_accuracy"],
+            "video_accuracy": bm["video_accuracy"],
+            "train_s": time.perf_counter() - t0,
+        }
+    return result

@@ -1,0 +1,317 @@
+"""The frame-wise action recognizer: vocabulary -> context histograms -> word grouping -> normalisation
+-> PCA -> SVMs -> smoothing (thesis 4.2-4.3), as one estimator.
+
+Model file (``.joblib``): ``{"header": <JSON str>, "model": ActionRecognizer}``; the header holds
+``kind`` ("vidstyle.recognizer"), ``schema_version``, ``params``, ``seed``, ``classes``, ``training_files``
+(features and labels of set B), ``vocabulary`` (its params and training files = set A), ``sklearn``
+and ``vidstyle`` versions, ``n_train_frames`` and grouping statistics. :func:`read_header` reads it without
+trusting anything else.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+from sklearn.base import BaseEstimator
+
+from ..errors import InputError
+from .classifier import OvaOvoSVC, OvrSVC
+from .histograms import NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, normalize_rows
+from .io import VideoFeatures, load_features
+from .smoothing import smooth_labels
+from .vocabulary import Vocabulary
+
+log = logging.getLogger(__name__)
+
+SCHEMA_VERSION = 1
+CLASSIFIERS = ("ova-ovo", "svc-ovr")
+
+
+def _as_features(x: VideoFeatures | str | Path) -> VideoFeatures:
+    return x if isinstance(x, VideoFeatures) else load_features(x)
+
+
+def load_many(paths: Sequence[str | Path], n_jobs: int | None = None) -> list[VideoFeatures]:
+    """Load features files in parallel (npz inflation releases the GIL, so threads suffice)."""
+    from joblib import Parallel, delayed
+
+    if len(paths) <= 1 or n_jobs in (None, 1):
+        return [load_features(p) for p in paths]
+    return Parallel(n_jobs=n_jobs, prefer="threads")(delayed(load_features)(p) for p in paths)
+
+
+class ActionRecognizer(BaseEstimator):
+    """Per-frame action recognizer with scikit-learn conventions.
+
+    Parameters
+    ----------
+    vocabulary: a fitted :class:`Vocabulary` (fitted on set A). ``fit`` refuses to run without one.
+    context: frames on each side counted into a frame's histogram (thesis 2 -> frames n-2..n+2; 0 = ablation).
+    grouping: pool contextually related words (:class:`WordGrouping`); False = ablation.
+    grouping_threshold, grouping_distribution, grouping_pooling: see :class:`WordGrouping`.
+    normalize: ``l1``, ``sqrt`` (Hellinger), ``l2`` or ``none``, after grouping.
+    n_components: PCA dimensions (capped by the data).
+    classifier: ``"ova-ovo"`` (thesis) or ``"svc-ovr"`` (plain multi-class SVC baseline).
+    C, gamma: of the RBF SVMs.
+    max_frames_per_class: training frames sampled per class (RBF SVM training is O(n^2)); None = all.
+    smoothing_window, smoothing: see :func:`smooth_labels`.
+    n_jobs: joblib workers for per-video work and SVM training.
+    random_state: seed of every random choice.
+    """
+
+    def __init__(
+        self,
+        vocabulary: Vocabulary | None = None,
+        context: int = 2,
+        grouping: bool = True,
+        grouping_threshold: float = 0.8,
+        grouping_distribution: str = "frames",
+        grouping_pooling: str = "components",
+        normalize: str = "sqrt",
+        n_components: int = 128,
+        classifier: str = "ova-ovo",
+        C: float = 10.0,
+        gamma: float | str = "scale",
+        max_frames_per_class: int | None = 1500,
+        smoothing_window: int = 6,
+        smoothing: str = "vote",
+        n_jobs: int | None = None,
+        random_state: int | None = 0,
+    ):
+        self.vocabulary = vocabulary
+        self.context = context
+        self.grouping = grouping
+        self.grouping_threshold = grouping_threshold
+        self.grouping_distribution = grouping_distribution
+        self.grouping_pooling = grouping_pooling
+        self.normalize = normalize
+        self.n_components = n_components
+        self.classifier = classifier
+        self.C = C
+        self.gamma = gamma
+        self.max_frames_per_class = max_frames_per_class
+        self.smoothing_window = smoothing_window
+        self.smoothing = smoothing
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
+    # ------------------------------------------------------------ features
+    def _check_params(self) -> None:
+        if self.vocabulary is None or not hasattr(self.vocabulary, "cluster_centers_"):
+            raise InputError("recognizer: needs a fitted vocabulary (vidstyle vocabulary ... --out vocab.npz)")
+        if self.classifier not in CLASSIFIERS:
+            raise InputError(f"--classifier: must be one of {', '.join(CLASSIFIERS)}, got {self.classifier!r}")
+        if self.normalize not in NORMS:
+            raise InputError(f"--normalize: must be one of {', '.join(NORMS)}, got {self.normalize!r}")
+        if self.context < 0:
+            raise InputError(f"--context: must be >= 0, got {self.context}")
+        if self.n_components < 1:
+            raise InputError(f"--components: must be >= 1, got {self.n_components}")
+
+    def histograms(self, video: VideoFeatures | str | Path) -> sp.csr_matrix:
+        """(n_frames, n_words) context word counts of one video (the ONNX model's input)."""
+        v = _as_features(video)
+        voc = self.vocabulary
+        if v.descriptors.shape[0] and v.dim != voc.n_features_in_:
+            raise InputError(
+                f"{v.path or v.video}: descriptors have dimension {v.dim}, the vocabulary {voc.n_features_in_}"
+                " (features from a different descriptor variant?)"
+            )
+        words = voc.transform(v.descriptors) if v.descriptors.shape[0] else np.zeros(0, np.int32)
+        return FrameFeaturizer(voc.n_words_, self.context).transform_video(words, v.frame_index, v.n_frames)
+
+    def _histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
+        from joblib import Parallel, delayed
+
+        if len(videos) <= 1 or self.n_jobs in (None, 1):
+            return [self.histograms(v) for v in videos]
+        return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.histograms)(v) for v in videos)
+
+    def _embed(self, H: sp.spmatrix) -> np.ndarray:
+        X = normalize_rows(self.grouping_.transform(H), self.normalize)
+        return self.pca_.transform(X)
+
+    def transform(self, video) -> np.ndarray:
+        """PCA frame features (n_frames, n_components) of one video."""
+        return self._embed(self.histograms(video))
+
+    # ----------------------------------------------------------------- fit
+    def fit(self, X: Sequence, y: Sequence[Sequence[str]], classes: Sequence[str] | None = None):
+        """``X``: features (paths or :class:`VideoFeatures`) of set B; ``y``: per-frame labels of each."""
+        from sklearn.decomposition import PCA
+
+        self._check_params()
+        if len(X) != len(y) or not X:
+            raise InputError(f"recognizer: {len(X)} feature files but {len(y)} label sequences")
+        videos = [_as_features(v) for v in X]
+        for v, lab in zip(videos, y):
+            if len(lab) != v.n_frames:
+                raise InputError(f"{v.path or v.video}: {len(lab)} labels for n_frames={v.n_frames}")
+        all_labels = np.concatenate([np.asarray(lab, dtype=object) for lab in y]).astype(str)
+        self.classes_ = np.array(list(classes) if classes is not None else sorted(set(all_labels)))
+        unknown = sorted(set(all_labels) - set(self.classes_))
+        if unknown:
+            raise InputError(f"labels: classes not in {list(self.classes_)}: {unknown[:5]}")
+        index = {c: i for i, c in enumerate(self.classes_)}
+        yi = np.array([index[c] for c in all_labels], np.int64)
+        vid = np.concatenate([np.full(v.n_frames, i) for i, v in enumerate(videos)])
+
+        Hs = self._histograms_many(videos)
+        H = sp.vstack(Hs).tocsr()
+        rng = np.random.default_rng(self.random_state)
+        rows = _sample_per_class(yi, self.max_frames_per_class, rng)
+
+        if self.grouping:
+            self.grouping_ = WordGrouping(self.grouping_threshold, self.grouping_distribution, self.grouping_pooling)
+        else:
+            self.grouping_ = IdentityGrouping()
+        self.grouping_.fit(H, y=yi, groups=vid)
+        Xg = normalize_rows(self.grouping_.transform(H[rows]), self.normalize)
+        n_comp = int(min(self.n_components, Xg.shape[0], Xg.shape[1]))
+        self.pca_ = PCA(n_components=n_comp, random_state=self.random_state).fit(Xg)
+        Z = self.pca_.transform(Xg)
+        if self.classifier == "ova-ovo":
+            self.clf_ = OvaOvoSVC(C=self.C, gamma=self.gamma, n_jobs=self.n_jobs).fit(Z, yi[rows])
+        else:
+            self.clf_ = OvrSVC(C=self.C, gamma=self.gamma).fit(Z, yi[rows])
+        self.n_train_frames_ = int(len(yi))
+        self.n_fit_frames_ = int(len(rows))
+        self.train_class_counts_ = {str(c): int((yi == i).sum()) for i, c in enumerate(self.classes_)}
+        log.info(
+            "recognizer: %d frames (%d used for the SVMs), %d words -> %d bins -> %d PCA dims, %d classes",
+            self.n_train_frames_, self.n_fit_frames_, H.shape[1], self.grouping_.n_groups_, n_comp, len(self.classes_),
+        )
+        return self
+
+    # ------------------------------------------------------------- predict
+    def _scores_full(self, pred: np.ndarray, scores: np.ndarray, conf: np.ndarray):
+        """Map the classifier's class indices (classes seen in training) to ``classes_``."""
+        present = self.clf_.classes_.astype(np.int64)
+        full = np.zeros((scores.shape[0], len(self.classes_)))
+        full[:, present] = scores
+        return present[pred], full, conf
+
+    def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
+        if H.shape[0] == 0:
+            e = np.zeros(0, np.int64)
+            return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
+                    "smoothed": e, "smoothed_confidence": np.zeros(0)}
+        Z = self._embed(H)
+        raw, scores, conf = self._scores_full(*self.clf_.predict_with_scores(Z))
+        return self._finish(raw, scores, conf)
+
+    def _finish(self, raw, scores, conf) -> dict[str, np.ndarray]:
+        sm, sconf = smooth_labels(raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing)
+        return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}
+
+    def predict_video(self, video) -> dict[str, np.ndarray]:
+        """Class indices into ``classes_`` per frame: ``raw``, ``smoothed``, with ``confidence``,
+        ``smoothed_confidence`` and ``scores`` (n_frames, n_classes)."""
+        return self.predict_histograms(self.histograms(video))
+
+    def predict(self, video) -> np.ndarray:
+        """Raw per-frame class names of one video."""
+        return self.classes_[self.predict_video(video)["raw"]]
+
+    def predict_many(self, videos: Sequence) -> list[dict[str, np.ndarray]]:
+        from joblib import Parallel, delayed
+
+        if len(videos) <= 1 or self.n_jobs in (None, 1):
+            return [self.predict_video(v) for v in videos]
+        return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.predict_video)(v) for v in videos)
+
+    # ---------------------------------------------------------------- info
+    def summary(self) -> dict[str, Any]:
+        return {
+            "n_train_frames": self.n_train_frames_,
+            "n_fit_frames": self.n_fit_frames_,
+            "train_class_counts": self.train_class_counts_,
+            "n_words": self.vocabulary.n_words_,
+            "n_groups": self.grouping_.n_groups_,
+            "related_pairs": self.grouping_.n_related_pairs_,
+            "largest_group": self.grouping_.largest_group_,
+            "pca_components": int(self.pca_.n_components_),
+            "pca_explained_variance": float(self.pca_.explained_variance_ratio_.sum()),
+            "n_support_vectors": int(getattr(self.clf_, "support_vectors_", getattr(getattr(self.clf_, "svc_", None), "support_vectors_", np.zeros((0,)))).shape[0]),
+        }
+
+    def public_params(self) -> dict[str, Any]:
+        p = self.get_params(deep=False)
+        p.pop("vocabulary")
+        return p
+
+
+def _sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) -> np.ndarray:
+    if cap is None:
+        return np.arange(len(y))
+    rows = []
+    for c in np.unique(y):
+        idx = np.flatnonzero(y == c)
+        if idx.size > cap:
+            idx = np.sort(rng.choice(idx, cap, replace=False))
+        rows.append(idx)
+    return np.sort(np.concatenate(rows))
+
+
+# ------------------------------------------------------------------- files
+def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
+    import joblib
+    import sklearn
+
+    from .. import __version__
+    from ..fileio import atomic_path
+
+    voc = model.vocabulary
+    header = {
+        "kind": "vidstyle.recognizer",
+        "schema_version": SCHEMA_VERSION,
+        "params": model.public_params(),
+        "seed": model.random_state,
+        "classes": [str(c) for c in model.classes_],
+        "training_files": list(training_files),
+        "vocabulary": {
+            "params": voc.get_params(),
+            "n_words": voc.n_words_,
+            "dim": voc.n_features_in_,
+            "training_files": list(getattr(voc, "training_files_", [])),
+        },
+        "summary": model.summary(),
+        "sklearn": sklearn.__version__,
+        "vidstyle": __version__,
+    }
+    if extra:
+        header.update(extra)
+    with atomic_path(path) as tmp:
+        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
+    return header
+
+
+def load_model(path: str | Path) -> tuple[ActionRecognizer, dict]:
+    import joblib
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: model file not found")
+    try:
+        obj = joblib.load(path)
+    except Exception as e:
+        raise InputError(f"{path}: not a readable model file ({type(e).__name__})") from None
+    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), ActionRecognizer):
+        raise InputError(f"{path}: not a vidstyle recognizer model")
+    header = json.loads(obj["header"])
+    if header.get("schema_version") != SCHEMA_VERSION:
+        raise InputError(f"{path}: model schema {header.get('schema_version')}, expected {SCHEMA_VERSION}")
+    import sklearn
+
+    if header.get("sklearn") != sklearn.__version__:
+        log.warning("%s was saved with scikit-learn %s, running %s", path, header.get("sklearn"), sklearn.__version__)
+    return obj["model"], header
+
+
+def read_header(path: str | Path) -> dict:
+    return load_model(path)[1]
