@@ -60,3 +60,9 @@ def test_errors_are_one_line_and_leave_no_output(tmp_path, capsys):
     assert not out.exists() and sorted(x.name for x in tmp_path.iterdir()) == ["bad.bvh"]
     assert main(["mocap", "info", str(tmp_path / "nope.bvh")]) == 2
     assert main(["mocap", "positions", str(bad), "--out", str(tmp_path / "x.txt")]) == 2
+
+
+def test_usage_errors_are_short_not_tracebacks(capsys):
+    assert main(["mocap", "info", "--no-such-option"]) == 2
+    err = capsys.readouterr().err
+    assert "No such option" in err and "Traceback" not in err

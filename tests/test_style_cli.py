@@ -138,3 +138,27 @@ def test_bad_learn_input(tmp_path, capsys):
     assert main(learn + [_label_file(tmp_path / "nokick.json", no_kick)]) == 0
     _fails(capsys, ["generate", "--style", str(out), "--start", "RoundhouseKick"], None, "never occurs")
     assert main(["generate", "--style", str(out), "--start", "Jab", "--length", "30"]) == 0
+
+
+def test_learn_style_per_performer_from_a_dataset(dataset, tmp_path):
+    out_dir = tmp_path / "styles"
+    assert main(["learn-style", "--dataset", str(dataset), "--out-dir", str(out_dir), "--n-init", "1",
+                 "--modes", "1-2"]) == 0
+    assert sorted(p.name for p in out_dir.iterdir()) == ["p00.json", "p01.json"]
+    # the per-performer file equals learning from that performer's files directly
+    single = tmp_path / "p01.json"
+    labels = [str(dataset / "labels" / f"p01_perf{i}.json") for i in range(2)]
+    assert main(["learn-style", *labels, "--out", str(single), "--n-init", "1", "--modes", "1-2"]) == 0
+    a, b = json.loads((out_dir / "p01.json").read_text()), json.loads(single.read_text())
+    assert a["model_a"]["transition"] == b["model_a"]["transition"] and a["n_events"] == b["n_events"]
+
+
+def test_learn_style_dataset_mode_errors_write_nothing(dataset, tmp_path, capsys):
+    out_dir = tmp_path / "styles"
+    # recognised labels requested but missing: nothing written
+    assert main(["learn-style", "--dataset", str(dataset), "--out-dir", str(out_dir),
+                 "--labels-dir", str(tmp_path / "none")]) == 2
+    assert "label file not found" in capsys.readouterr().err
+    assert not out_dir.exists()
+    assert main(["learn-style", "--dataset", str(dataset), "--out", str(tmp_path / "x.json")]) == 2
+    assert main(["learn-style"]) == 2

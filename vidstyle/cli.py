@@ -73,10 +73,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("vidstyle: interrupted", file=sys.stderr)
         return 130
-    except Exception as e:  # click usage errors
-        import click
-
-        if isinstance(e, click.ClickException):
+    except Exception as e:
+        # usage errors (unknown option, missing argument): Typer raises click's ClickException, from
+        # its vendored copy of click in recent versions, so match the interface rather than the class
+        if callable(getattr(e, "show", None)) and isinstance(getattr(e, "exit_code", None), int):
             e.show()
             return e.exit_code
         logging.getLogger("vidstyle").exception("internal error")

@@ -60,8 +60,16 @@ _CRIT = typer.Option("heldout", "--mode-criterion", help="Model (b): choose mode
 
 
 def learn_style(
-    labels: list[Path] = typer.Argument(..., help="Label files (JSON, one per video)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Where to write style.json."),
+    labels: list[Path] = typer.Argument(None, help="Label files (JSON, one per video) of one performer."),
+    out: Path = typer.Option(None, "--out", "-o", help="Where to write style.json (with LABELS)."),
+    dataset: Path = typer.Option(
+        None, "--dataset", help="Dataset directory (dataset.json): learn one style per performer from its performances."
+    ),
+    labels_dir: Path = typer.Option(
+        None, "--labels-dir", help="With --dataset: recognised label files <video id>.json (default: ground truth)."
+    ),
+    out_dir: Path = typer.Option(None, "--out-dir", help="With --dataset: write <performer>.json here."),
+    views: str = typer.Option(None, "--views", help="With --dataset: only these views (comma-separated)."),
     ignore: str = _IGNORE,
     min_confidence: float = _MIN_CONF,
     min_run: int = _MIN_RUN,
@@ -76,18 +84,45 @@ def learn_style(
     modes: str = _MODES,
     mode_criterion: str = _CRIT,
 ) -> None:
-    """Learn a performer's action style (HMMs + durations) from frame labels."""
-    from ..fileio import write_json
+    """Learn a performer's action style (HMMs + durations) from frame labels.
+
+    Either LABELS... --out style.json (one performer), or --dataset DIR --out-dir DIR [--labels-dir REC]
+    (one <performer>.json per performer of the dataset, from its performance videos).
+    """
+    from ..fileio import read_json, write_json
     from ..style.artifact import Style
     from ..style.events import load_label_file
 
     params = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
                            alpha, learn_emission, emission_prior, modes, mode_criterion)
-    tracks = [load_label_file(p) for p in labels]
-    style = Style.from_tracks(tracks, params)
-    write_json(out, style.to_dict())
-    log.info("wrote %s (%d events, model (b): %d modes)", out, int(style.action_counts.sum()),
-             style.model_b.n_modes_)
+    if dataset is None:
+        if not labels or out is None:
+            raise InputError("learn-style: give LABELS... --out FILE, or --dataset DIR --out-dir DIR")
+        jobs = [(out, list(labels))]
+    else:
+        if labels or out is not None or out_dir is None:
+            raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
+        manifest = read_json(Path(dataset) / "dataset.json")
+        wanted = None if views is None else {v.strip() for v in views.split(",") if v.strip()}
+        jobs = []
+        for performer in manifest.get("performers", []):
+            pid = performer["id"]
+            vids = [v for v in manifest.get("videos", []) if v.get("performer") == pid
+                    and v.get("kind") == "performance" and (wanted is None or v.get("view") in wanted)]
+            if not vids:
+                raise InputError(f"{dataset}: performer {pid} has no performance video"
+                                 + (f" in views {views}" if views else ""))
+            files = [Path(labels_dir) / f"{v['id']}.json" if labels_dir else Path(dataset) / v["labels"] for v in vids]
+            for f in files:
+                if not f.is_file():
+                    raise InputError(f"{f}: label file not found (performer {pid})")
+            jobs.append((Path(out_dir) / f"{pid}.json", files))
+    # learn everything first, write afterwards: a bad file leaves no partial set of outputs
+    styles = [(dest, Style.from_tracks([load_label_file(p) for p in files], params)) for dest, files in jobs]
+    for dest, style in styles:
+        write_json(dest, style.to_dict())
+        log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
+                 style.model_b.n_modes_)
 
 
 def generate(

@@ -1,0 +1,229 @@
+"""``vidstyle report``: one self-contained HTML page summarising a pipeline run.
+
+It reads the run directory written by the kickboxing pipeline (``pipelines/kickboxing/dvc.yaml``)::
+
+    RUN/dataset/dataset.json          demo dataset manifest (true chains, labels)
+    RUN/metrics/recognition.json      vidstyle evaluate recognition
+    RUN/recognized/<video id>.json    vidstyle recognize
+    RUN/style/<performer>.json        vidstyle learn-style
+    RUN/metrics/style.json            vidstyle evaluate style
+    RUN/generated/<performer>.json    vidstyle generate --format json
+    RUN/graph/graph.npz               vidstyle build-graph
+    RUN/motion/<performer>.mp4        vidstyle synthesize --preview
+    RUN/metrics/motion.json           vidstyle evaluate motion
+
+Every section whose inputs are missing says so on the page (the report is also useful on a partial
+run); none is silently skipped. Charts are inline SVG, the motion preview an inline animated GIF.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from . import svg
+from .page import Page, data_uri, esc, table
+
+log = logging.getLogger(__name__)
+
+
+def _load(path: Path) -> dict | None:
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except json.JSONDecodeError as e:
+        raise InputError(f"{path}: not valid JSON ({e.msg} at line {e.lineno})") from None
+
+
+def _missing(what: str, path: Path) -> str:
+    return f'<p class="missing">Not available: {esc(what)} ({esc(path)} is missing).</p>'
+
+
+def gif_from_video(path: Path, max_seconds: float = 10.0, fps: float = 10.0, width: int = 320) -> bytes:
+    """An animated GIF (bytes) of the first ``max_seconds`` of a video, at ``fps``, ``width`` pixels wide."""
+    import cv2
+    from PIL import Image
+
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        raise InputError(f"{path}: cannot be read as video")
+    src_fps = cap.get(cv2.CAP_PROP_FPS) or fps
+    step = max(1, int(round(src_fps / fps)))
+    frames = []
+    i = 0
+    while len(frames) < max_seconds * fps:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        if i % step == 0:
+            h, w = frame.shape[:2]
+            frame = cv2.resize(frame, (width, int(round(h * width / w))), interpolation=cv2.INTER_AREA)
+            frames.append(Image.fromarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)))
+        i += 1
+    cap.release()
+    if not frames:
+        raise InputError(f"{path}: no frames decoded")
+    buf = io.BytesIO()
+    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=int(1000 * step / src_fps),
+                   loop=0, optimize=True)
+    return buf.getvalue()
+
+
+def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
+    path = run / "metrics" / "recognition.json"
+    m = _load(path)
+    if m is None:
+        page.add("Action recognition", _missing("recognition metrics", path))
+        return
+    fa = m.get("frame_accuracy", {})
+    rows = [
+        ["frame accuracy, raw", fa.get("raw"), 0.64],
+        ["frame accuracy, smoothed", fa.get("smoothed"), 0.70],
+        ["video accuracy", m.get("video_accuracy"), 0.90],
+    ]
+    split = m.get("split", {})
+    body = [
+        f"<p>Split: <b>{esc(split.get('kind', '?'))}</b>; test performers "
+        f"{esc(', '.join(split.get('test_performers', [])) or '–')}; "
+        f"{m.get('n_test_videos', '?')} test videos, {m.get('n_test_frames', '?')} frames.</p>",
+        table([[r[0], r[1] if r[1] is not None else "–", r[2]] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
+    ]
+    conf = m.get("confusion", {})
+    if conf.get("smoothed"):
+        classes = conf["classes"]
+        body.append('<div class="row">')
+        body.append(svg.heatmap(np.array(conf["smoothed"], float), classes, classes, "Confusion (smoothed, row-normalised)",
+                                vmax=1.0, xlabel="predicted", ylabel="true"))
+        if conf.get("raw"):
+            body.append(svg.heatmap(np.array(conf["raw"], float), classes, classes, "Confusion (raw)", vmax=1.0,
+                                    xlabel="predicted", ylabel="true"))
+        body.append("</div>")
+    page.add("Action recognition", "".join(body))
+
+    # timeline of one performance video of a test performer
+    if dataset is None:
+        return
+    test = set(split.get("test", []))
+    perf = [v for v in dataset.get("videos", []) if v.get("kind") == "performance"]
+    perf.sort(key=lambda v: (v["id"] not in test, v["id"]))
+    for v in perf:
+        rec = _load(run / "recognized" / f"{v['id']}.json")
+        truth = _load(run / "dataset" / v["labels"])
+        if rec is None or truth is None:
+            continue
+        tracks = {"true": truth["labels"], "recognised (raw)": rec.get("raw", rec["labels"]),
+                  "recognised (smoothed)": rec["labels"]}
+        n = min(len(t) for t in tracks.values())
+        acc = float(np.mean(np.array(truth["labels"][:n]) == np.array(rec["labels"][:n])))
+        page.add(
+            f"Timeline: {v['id']}",
+            f"<p>Performance video of {esc(v['performer'])} ({esc(v['view'])} view), "
+            f"{'unseen' if v['id'] in test else 'seen'} performer; frame accuracy {acc:.3f}.</p>"
+            + svg.timeline(tracks, dataset["classes"], float(truth.get("fps", 20)), title="true vs recognised actions"),
+        )
+        return
+    page.add("Timeline", "<p class=\"missing\">Not available: no recognised performance video.</p>")
+
+
+def _style_section(page: Page, run: Path, dataset: dict | None) -> None:
+    styles = sorted((run / "style").glob("*.json")) if (run / "style").is_dir() else []
+    if not styles:
+        page.add("Behaviour style", _missing("learned styles", run / "style"))
+        return
+    chains = {p["id"]: p["chain"] for p in (dataset or {}).get("performers", [])}
+    body = ['<div class="row">']
+    for path in styles[:3]:
+        st = _load(path)
+        actions = st["actions"]
+        learned = np.array(st["model_a"]["transition"], float)
+        body.append(svg.heatmap(learned, actions, actions, f"{st.get('performer', path.stem)}: learned (HMM a)",
+                                vmax=1.0, xlabel="next action", ylabel="action"))
+        chain = chains.get(st.get("performer", path.stem))
+        if chain is not None:
+            order = [chain["actions"].index(a) for a in actions]
+            true = np.array(chain["transition"], float)[np.ix_(order, order)]
+            body.append(svg.heatmap(true, actions, actions, f"{st.get('performer', path.stem)}: true chain", vmax=1.0,
+                                    xlabel="next action", ylabel="action"))
+            body.append(f'<p class="note">mean |learned - true| = {np.abs(learned - true).mean():.3f}</p>')
+    body.append("</div>")
+    m = _load(run / "metrics" / "style.json")
+    if m is not None:
+        rows = []
+        for source, block in m.get("sources", {}).items():
+            s = block.get("summary", {})
+            ident = s.get("identification", {}).get("a", {})
+            fid = s.get("fidelity", {}).get("a", {})
+            ll = s.get("heldout_loglik_per_event", {})
+            rows.append([source, s.get("transition_mae", {}).get("a"), ident.get("accuracy_by_heldout_data"),
+                         fid.get("jsd_2gram_same"), fid.get("jsd_2gram_other"), ll.get("a"), ll.get("b"), ll.get("bigram")])
+        body.append(table(rows, ["labels", "transition MAE (a)", "identification (a)", "JSD 2-gram same",
+                                 "JSD 2-gram other", "loglik/event (a)", "(b)", "bigram"]))
+    page.add("Behaviour style: learned vs true transitions", "".join(body))
+
+    gens = sorted((run / "generated").glob("*.json")) if (run / "generated").is_dir() else []
+    if gens:
+        items = []
+        for g in gens:
+            seq = _load(g)
+            actions = " ".join(e["action"] for e in seq.get("events", []))
+            items.append(f"<p><b>{esc(g.stem)}</b> (seed {esc(seq.get('seed'))}, model {esc(seq.get('model'))}):</p>"
+                         f'<div class="seq">{esc(actions)}</div>')
+        page.add("Generated action sequences (thesis Table 4 style)", "".join(items))
+    else:
+        page.add("Generated action sequences", _missing("generated sequences", run / "generated"))
+
+
+def _motion_section(page: Page, run: Path) -> None:
+    gpath = run / "graph" / "graph.npz"
+    body = []
+    if gpath.is_file():
+        with np.load(gpath, allow_pickle=False) as z:
+            params = json.loads(str(z["params_json"]))
+            labels = [str(x) for x in z["label_names"]]
+        stats = params.get("stats", {})
+        rows = [[k.replace("_", " "), v] for k, v in stats.items() if isinstance(v, (int, float))]
+        body.append(table(rows, ["motion graph", "value"]))
+        body.append(f'<p class="note">labels: {esc(", ".join(labels))}; window {params.get("window")} frames at '
+                    f'{params.get("fps")} fps</p>')
+    else:
+        body.append(_missing("motion graph", gpath))
+    m = _load(run / "metrics" / "motion.json")
+    if m is not None:
+        body.append(f'<details><summary>evaluate motion (metrics/motion.json)</summary><pre class="seq">'
+                    f'{esc(json.dumps(m.get("summary", m), indent=1)[:4000])}</pre></details>')
+    page.add("Motion graph", "".join(body))
+
+    previews = sorted((run / "motion").glob("*.mp4")) if (run / "motion").is_dir() else []
+    if previews:
+        items = []
+        for p in previews[:2]:
+            gif = gif_from_video(p)
+            items.append(f'<figure><img class="anim" alt="synthesized motion {esc(p.stem)}" '
+                         f'src="{data_uri(gif, "image/gif")}"><figcaption>{esc(p.stem)}</figcaption></figure>')
+        page.add("Synthesized motion", '<div class="row">' + "".join(items) + "</div>")
+    else:
+        page.add("Synthesized motion", _missing("motion preview", run / "motion"))
+
+
+def build_report(run: Path) -> str:
+    """HTML text of the report of run directory ``run``."""
+    run = Path(run)
+    if not run.is_dir():
+        raise InputError(f"{run}: run directory not found")
+    dataset = _load(run / "dataset" / "dataset.json")
+    subtitle = "vidstyle pipeline run"
+    if dataset is not None:
+        n_perf = len(dataset.get("performers", []))
+        subtitle = (f"demo dataset: {n_perf} performers, {len(dataset.get('videos', []))} videos, seed "
+                    f"{dataset.get('seed')} — run directory {run}")
+    page = Page("vidstyle: learning a performer's action style from video", subtitle)
+    _recognition_section(page, run, dataset)
+    _style_section(page, run, dataset)
+    _motion_section(page, run)
+    return page.render()
