@@ -15,7 +15,8 @@ Rows, all on the same frames and the same points:
 - ``thesis, naive per-point loop``: the straightforward one-point-at-a-time implementation
   (``vidstyle.features._reference``), the baseline of the row above;
 - ``salient + thesis`` and ``salient + scovanner2007``: the whole per-frame work of ``vidstyle features``
-  for each variant (the goal applies to these).
+  for each variant (the goal applies to these);
+- ``2D SIFT (ablation)`` and ``salient + sift2d``: the 2D descriptor of the ablation, alone and whole.
 
 Prints a table and writes ``bench_results/bench_features.json``.
 """
@@ -134,6 +135,8 @@ def main(argv: list[str] | None = None) -> int:
             ("scovanner2007 3D SIFT", lambda: describe(clip, pts, "scovanner2007"), T),
             ("salient + thesis", lambda: describe(clip, salient_points(clip, sp), "thesis"), T),
             ("salient + scovanner2007", lambda: describe(clip, salient_points(clip, sp), "scovanner2007"), T),
+            ("2D SIFT (ablation)", lambda: describe(clip, pts, "sift2d"), T),
+            ("salient + sift2d", lambda: describe(clip, salient_points(clip, sp), "sift2d"), T),
         ]
         for (name, _, frames), (wall, cpu) in zip(cases, timed_interleaved(cases, args.runs)):
             med = statistics.median(wall)

@@ -87,7 +87,7 @@ def test_truncated_avi_is_reported(tmp_path):
 def test_cli_writes_the_documented_npz(video, tmp_path):
     p, frames = video
     out = tmp_path / "feat"
-    assert main(["features", str(p), "--out", str(out), "--jobs", "1"]) == 0
+    assert main(["features", str(p), "--out", str(out), "--jobs", "1", "--variant", "thesis"]) == 0
     d = load_features(out / "clip.npz")
     n = len(d["points"])
     assert n > 0 and d["points"].dtype == np.int32 and d["points"].shape == (n, 3)
@@ -111,13 +111,16 @@ def test_cli_parallel_equals_serial_and_scovanner_variant(video, tmp_path):
         a, b = load_features(tmp_path / "s" / name), load_features(tmp_path / "par" / name)
         assert np.array_equal(a["points"], b["points"])
         assert np.array_equal(a["descriptors"], b["descriptors"])
-    assert (
-        main(["features", str(p), "--out", str(tmp_path / "sc"), "--variant", "scovanner2007", "-j", "1"])
-        == 0
-    )
+    # the default variant is scovanner2007 (it recognises best on the demo; see the features command)
+    assert main(["features", str(p), "--out", str(tmp_path / "sc"), "-j", "1"]) == 0
     d = load_features(tmp_path / "sc" / "clip.npz")
     assert d["descriptors"].dtype == np.uint8 and d["descriptors"].shape[1] == 640
-    assert json.dumps(d["params"]).count("scovanner2007") >= 1
+    assert d["variant"] == "scovanner2007" and json.dumps(d["params"]).count("scovanner2007") >= 1
+    assert main(["features", str(p), "--out", str(tmp_path / "2d"), "--variant", "sift2d", "-j", "1"]) == 0
+    d2 = load_features(tmp_path / "2d" / "clip.npz")
+    assert d2["descriptors"].shape[1] == 128 and d2["variant"] == "sift2d"
+    assert np.array_equal(d2["points"], d["points"])  # same salient points, only the descriptor differs
+    assert main(["features", str(p), "--out", str(tmp_path / "x"), "--variant", "sift2d", "--subregions", "4"]) == 2
 
 
 def test_cli_errors_leave_no_output(tmp_path, video, capsys):

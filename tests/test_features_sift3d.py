@@ -257,6 +257,6 @@ def test_bad_input():
     with pytest.raises(InputError, match="points"):
         describe(vol, [[0, 0]])
     with pytest.raises(InputError, match="variant"):
-        describe(vol, [[0, 0, 0]], variant="sift2d")
+        describe(vol, [[0, 0, 0]], variant="sift4d")
     with pytest.raises(InputError, match="n_subregions"):
         Sift3DParams(n_subregions=0)

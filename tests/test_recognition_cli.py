@@ -128,3 +128,47 @@ def test_recognize_a_video_through_the_features_stage(tmp_path):
     assert main(["recognize", str(feats), "--model", str(tmp_path / "m.joblib"), "--out", str(tmp_path / "b.json")]) == 0
     a, b = (json.loads((tmp_path / f).read_text()) for f in ("a.json", "b.json"))
     assert a["raw"] == b["raw"] and len(a["labels"]) == n  # same features whether computed now or read
+
+
+def test_recognize_out_dir_then_score_labels_dir(ds, tmp_path, capsys):
+    """The DVC shape: train-recognizer, recognize --out-dir (many inputs, one start-up), then evaluate
+    recognition --labels-dir --model, which scores without retraining and matches scoring in memory."""
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--seed", str(SEED)]
+    assert main(["vocabulary", *common, "--words", "60", "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", "24",
+                 "--smoothing", "viterbi", "--out", str(tmp_path / "m.joblib")]) == 0
+    from vidstyle.recognition.recognizer import load_model
+
+    rec, header = load_model(tmp_path / "m.joblib")
+    test = header["split"]["test"]
+    inputs = [str(ds / "features" / f"{i}.npz") for i in test]
+    assert main(["recognize", *inputs, "--model", str(tmp_path / "m.joblib"), "--out-dir", str(tmp_path / "lab")]) == 0
+    assert sorted(p.stem for p in (tmp_path / "lab").glob("*.json")) == sorted(test)
+    doc = json.loads((tmp_path / "lab" / f"{test[0]}.json").read_text())
+    assert doc["smoothing"] == "viterbi"
+    out = tmp_path / "metrics.json"
+    assert main(["evaluate", "recognition", "--dataset", str(ds), "--labels-dir", str(tmp_path / "lab"),
+                 "--model", str(tmp_path / "m.joblib"), "--out", str(out)]) == 0
+    m = json.loads(out.read_text())
+    assert m["split"]["test"] == test and m["n_test_videos"] == len(test)
+    assert m["source"]["model"] == str(tmp_path / "m.joblib") and m["params"]["recognizer"]["smoothing"] == "viterbi"
+    # the same numbers as scoring the predictions in memory
+    from vidstyle.recognition.evaluate import score_videos
+    from vidstyle.recognition.io import load_dataset, load_labels
+
+    d = load_dataset(ds)
+    by = d.by_id()
+    outs = [rec.predict_video(p) for p in inputs]
+    truths = [load_labels(d.labels_path(by[i])).labels for i in test]
+    acts = [by[i].action if by[i].kind == "single" else None for i in test]
+    ref = score_videos(rec.classes_, truths, outs, test, acts)
+    assert m["frame_accuracy"] == pytest.approx(ref["frame_accuracy"])
+    assert m["video_accuracy"] == pytest.approx(ref["video_accuracy"])
+    # errors: both --out and --out-dir, several inputs with --out, a missing test labels file
+    assert main(["recognize", *inputs[:2], "--model", str(tmp_path / "m.joblib"), "--out", str(tmp_path / "x.json")]) == 2
+    assert main(["recognize", inputs[0], "--model", str(tmp_path / "m.joblib"), "--out", str(tmp_path / "x.json"),
+                 "--out-dir", str(tmp_path / "x")]) == 2
+    (tmp_path / "lab" / f"{test[0]}.json").unlink()
+    assert main(["evaluate", "recognition", "--dataset", str(ds), "--labels-dir", str(tmp_path / "lab"),
+                 "--model", str(tmp_path / "m.joblib"), "--out", str(out)]) == 2
+    assert f"{test[0]}.json" in capsys.readouterr().err

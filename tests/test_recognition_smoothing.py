@@ -48,3 +48,31 @@ def test_mean_of_scores():
     # frames 0 and 4 (windows 0..1 and 3..4, clipped) do not
     assert out.tolist() == [0, 1, 1, 1, 0]
     assert np.isclose(conf[2], (0.4 + 0.9 + 0.4) / 3)
+
+
+def test_viterbi_removes_short_runs_and_keeps_boundaries():
+    from vidstyle.recognition.smoothing import transition_matrix, viterbi
+
+    # training chain: long runs of 0 then 1 -> sticky transitions
+    T = transition_matrix([np.array([0] * 50 + [1] * 50)], 2)
+    assert T[0, 0] > 0.9 and np.allclose(T.sum(1), 1)
+    # scores favour 0 for 20 frames, then 1 for 20, with a 2-frame blip of 1 inside the 0 run
+    s = np.full((40, 2), 0.3)
+    s[:20, 0] = 0.7
+    s[20:, 1] = 0.7
+    s[5:7] = [0.4, 0.6]
+    raw = np.argmax(s, axis=1)
+    out, conf = smooth_labels(raw, 2, window=6, scores=s, method="viterbi", transitions=T)
+    assert (out[:20] == 0).all() and (out[20:] == 1).all()
+    assert conf.shape == (40,)
+    # brute force over every path of a tiny problem agrees with the dynamic programme
+    import itertools
+
+    rng = np.random.default_rng(0)
+    le, lt = np.log(rng.random((6, 3))), np.log(rng.random((3, 3)))
+    best = max(itertools.product(range(3), repeat=6),
+               key=lambda p: sum(le[t, p[t]] for t in range(6)) + sum(lt[p[t], p[t + 1]] for t in range(5)))
+    assert tuple(viterbi(le, lt)) == best
+    # window <= 1 is "no smoothing" for every method
+    same, _ = smooth_labels(raw, 2, window=1, scores=s, method="viterbi", transitions=T)
+    assert (same == raw).all()

@@ -98,10 +98,11 @@ def train_recognizer(
     normalize: str = typer.Option("sqrt", "--normalize", help="l1 | sqrt | l2 | none."),
     components: int = typer.Option(128, "--components", help="PCA dimensions."),
     classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo (thesis) | svc-ovr (baseline)."),
-    c: float = typer.Option(10.0, "--C", help="SVM cost."),
-    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    c: float = typer.Option(100.0, "--C", help="SVM cost (100: best on validation performers)."),
+    max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
     window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
-    smoothing: str = typer.Option("vote", "--smoothing", help="vote | mean."),
+    smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
+    emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores (3: best on validation)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
@@ -148,7 +149,7 @@ def train_recognizer(
         vocabulary=voc, context=context, grouping=grouping, grouping_threshold=grouping_threshold,
         normalize=normalize, n_components=components, classifier=classifier, C=c,
         max_frames_per_class=max_frames_per_class or None, smoothing_window=window, smoothing=smoothing,
-        n_jobs=jobs, random_state=seed,
+        emission_weight=emission_weight, n_jobs=jobs, random_state=seed,
     )
     t0 = time.perf_counter()
     rec.fit(feats, [t.labels for t in tracks], classes=classes)
@@ -208,25 +209,51 @@ def _video_features(path: Path, header: dict):
 
 
 def recognize(
-    input: Path = typer.Argument(..., help="Features .npz of a video (or the video itself)."),
+    inputs: list[Path] = typer.Argument(..., help="Features .npz of videos (or the videos themselves)."),
     model: Path = typer.Option(..., "--model", "-m", help="Model .joblib from train-recognizer."),
-    out: Path = typer.Option(..., "--out", "-o", help="Output labels JSON."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output labels JSON (one input)."),
+    out_dir: Optional[Path] = typer.Option(
+        None, "--out-dir", help="Output directory: <input stem>.json per input (any number of inputs)."
+    ),
     window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
-    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean (default: the model's)."),
+    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi (default: the model's)."),
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
 ) -> None:
-    """Per-frame action labels with confidence, raw and smoothed."""
-    from ..fileio import write_json
-    from ..recognition.io import load_features
+    """Per-frame action labels with confidence, raw and smoothed.
+
+    One input with --out FILE, or any number with --out-dir DIR (the model is loaded once, so a pipeline
+    stage pays the start-up once, not per video)."""
     from ..recognition.recognizer import load_model
 
+    if (out is None) == (out_dir is None):
+        raise InputError("recognize: give exactly one of --out FILE (one input) or --out-dir DIR")
+    if out is not None and len(inputs) != 1:
+        raise InputError(f"--out: {len(inputs)} inputs; use --out-dir DIR for several")
+    for p in inputs:
+        if not p.exists():
+            raise InputError(f"{p}: file not found")
+    if out_dir is not None:
+        stems: dict[str, Path] = {}
+        for p in inputs:
+            if p.stem in stems:
+                raise InputError(f"{p}: same output name {p.stem}.json as {stems[p.stem]}; rename one of them")
+            stems[p.stem] = p
     rec, header = load_model(model)
     if window is not None:
         rec.smoothing_window = window
     if smoothing is not None:
         rec.smoothing = smoothing
-    if not input.exists():
-        raise InputError(f"{input}: file not found")
+    targets = [out] if out is not None else [out_dir / f"{p.stem}.json" for p in inputs]
+    for p, target in zip(inputs, targets):
+        _recognize_one(rec, header, model, p, target, fps)
+    if out_dir is not None:
+        log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
+
+
+def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: Optional[float]) -> None:
+    from ..fileio import write_json
+    from ..recognition.io import load_features
+
     if input.suffix.lower() == ".npz":
         feats = load_features(input)
         video = feats.video or str(input)
@@ -259,7 +286,13 @@ def recognize(
 @evaluate_app.command("recognition")
 def evaluate_recognition(
     dataset: Path = typer.Option(..., "--dataset", help="dataset.json (or its directory)."),
-    features_dir: Path = typer.Option(..., "--features-dir", help="Directory of <video id>.npz."),
+    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz (train and test here)."),
+    labels_dir: Optional[Path] = typer.Option(
+        None, "--labels-dir", help="Score these <video id>.json from `vidstyle recognize` instead (no training)."
+    ),
+    model: Optional[Path] = typer.Option(
+        None, "--model", "-m", help="With --labels-dir: the model that made them (its split names the test videos)."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
     split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
@@ -270,25 +303,42 @@ def evaluate_recognition(
     baseline: bool = typer.Option(True, "--baseline/--no-baseline", help="Also score a plain SVC on the same features."),
     grouping_threshold: float = typer.Option(0.8, "--grouping-threshold", help="Word grouping correlation threshold."),
     components: int = typer.Option(128, "--components", help="PCA dimensions."),
-    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
     window: int = typer.Option(6, "--window", help="Smoothing window."),
+    smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
+    c: float = typer.Option(100.0, "--C", help="SVM cost (100: best on validation performers)."),
     seed: int = typer.Option(0, "--seed", help="Random seed (split, vocabulary, sampling)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
 ) -> None:
-    """Train vocabulary (set A) and recognizer (set B) on a split, test on held-out videos, write metrics."""
+    """Train vocabulary (set A) and recognizer (set B) on a split, test on held-out videos, write metrics.
+
+    With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
+    instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
     from ..fileio import write_json
-    from ..recognition.evaluate import confusion_png, evaluate_recognition as run
+    from ..recognition.evaluate import confusion_png, evaluate_recognition as run, score_labels_dir
     from ..recognition.io import load_dataset
 
     ds = load_dataset(dataset)
-    params = {
-        "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
-        "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
-    }
-    m = run(
-        ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
-        recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
-    )
+    if labels_dir is not None:
+        if features_dir is not None:
+            raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
+        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view)
+        ablation = "none" if model is None else "from model"
+        words = (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?")
+    else:
+        if features_dir is None:
+            raise InputError("evaluate recognition: give --features-dir (train and test) or --labels-dir (score)")
+        if model is not None:
+            raise InputError("--model: only used with --labels-dir")
+        params = {
+            "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
+            "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
+            "smoothing": smoothing, "C": c,
+        }
+        m = run(
+            ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
+            recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
+        )
     write_json(out, m)
     png = out.with_suffix(".png")
     cm = np.asarray(m["confusion"]["smoothed"])
@@ -309,6 +359,7 @@ def evaluate_recognition(
         b = m["baseline"]
         t.add_row("baseline svc-ovr raw / smoothed", f"{b['frame_accuracy']['raw']:.3f} / {b['frame_accuracy']['smoothed']:.3f}")
     t.add_row("test videos / frames", f"{m['n_test_videos']} / {m['n_test_frames']}")
-    t.add_row("time vocab / train / predict (s)", " / ".join(f"{m['timing_s'][k]:.1f}" for k in ("vocabulary", "train", "predict")))
+    if "timing_s" in m:
+        t.add_row("time vocab / train / predict (s)", " / ".join(f"{m['timing_s'][k]:.1f}" for k in ("vocabulary", "train", "predict")))
     Console().print(t)
     log.info("wrote %s, %s", out, png)

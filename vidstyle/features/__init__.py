@@ -11,6 +11,8 @@ Modules:
   :func:`~vidstyle.features.sift3d.describe` for both variants.
 - :mod:`~vidstyle.features.scovanner2007` — the descriptor as the authors' released code computes it
   (80 icosahedral bins, no rotation, 640-D uint8), bit-exact by its own definition.
+- :mod:`~vidstyle.features.sift2d` — the 2D SIFT ablation (``variant="sift2d"``): 4x4 cells x 8 bins of the
+  frame patch at the point, rotated to the dominant orientation, 128-D.
 - :mod:`~vidstyle.features.extract` — one video -> one ``.npz`` (schema in that module), many videos in
   parallel with joblib.
 """

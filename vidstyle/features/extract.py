@@ -7,11 +7,12 @@ key             dtype, shape   meaning
 =============== ============== =====================================================================
 ``points``      int32 (n, 3)   0-based (frame, row, column) of each salient point, sorted by frame
 ``descriptors`` (n, d)         float32, d = 256 by default (variant "thesis"), or uint8, d = 640
-                               (variant "scovanner2007"); row i describes ``points[i]``
+                               (variant "scovanner2007"), or float32, d = 128 (variant "sift2d",
+                               the 2D ablation); row i describes ``points[i]``
 ``frame_index`` int32 (n,)     frame of each point (``points[:, 0]``), for grouping by frame
 ``params``      str (0-d)      JSON: ``schema``, ``variant``, ``salient`` (N, thresholds, flow
                                method), ``descriptor`` (all descriptor parameters)
-``variant``     str (0-d)      "thesis" or "scovanner2007"
+``variant``     str (0-d)      "thesis", "scovanner2007" or "sift2d"
 ``n_frames``    int64 (0-d)    frames decoded
 ``height``      int64 (0-d)    frame height in pixels
 ``width``       int64 (0-d)    frame width in pixels
@@ -77,6 +78,9 @@ def extract_features(
     pts = salient_points(frames, salient)
     if variant == "thesis":
         desc = describe(frames, pts, "thesis", params=sift or Sift3DParams())
+    elif variant == "sift2d":
+        desc = describe(frames, pts, "sift2d")
+        sift = None  # params_json records the 2D defaults
     else:
         desc = describe(frames, pts, "scovanner2007")
     params = {

@@ -62,7 +62,7 @@ import numpy as np
 
 from ..errors import InputError
 
-VARIANTS = ("thesis", "scovanner2007")
+VARIANTS = ("thesis", "scovanner2007", "sift2d")
 
 #: Gaussian smoothing kernels are cut at this many standard deviations (scipy's default is 4; 3 keeps
 #: slab margins small and changes the weights by < 1 %).
@@ -380,6 +380,16 @@ def describe(
         from .scovanner2007 import describe as describe_scovanner
 
         return describe_scovanner(vol, pts)
+    if variant == "sift2d":
+        # the 2D ablation: one frame, no time axis (see vidstyle.features.sift2d)
+        from .sift2d import Sift2DParams, describe as describe_2d
+
+        if params is not None and not isinstance(params, Sift2DParams):
+            raise InputError("variant sift2d: params must be a Sift2DParams")
+        p2 = params if params is not None else Sift2DParams()
+        if overrides:
+            p2 = replace(p2, **overrides)
+        return describe_2d(vol, pts, p2)
     if variant != "thesis":
         raise InputError(f"variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
     p = params if params is not None else Sift3DParams()
@@ -525,4 +535,9 @@ def params_json(variant: str, params: Sift3DParams | None) -> str:
         from . import scovanner2007
 
         return json.dumps({"variant": variant, **scovanner2007.PARAMS}, sort_keys=True)
+    if variant == "sift2d":
+        from .sift2d import Sift2DParams
+
+        p2 = params if isinstance(params, Sift2DParams) else Sift2DParams()
+        return json.dumps({"variant": variant, **p2.to_dict()}, sort_keys=True)
     return json.dumps({"variant": variant, **(params or Sift3DParams()).to_dict()}, sort_keys=True)

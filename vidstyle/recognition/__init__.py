@@ -7,7 +7,8 @@ Modules:
 - :mod:`~vidstyle.recognition.vocabulary` — :class:`Vocabulary` (MiniBatch, hierarchical tree, full k-means).
 - :mod:`~vidstyle.recognition.histograms` — :class:`FrameFeaturizer`, :class:`WordGrouping`, normalisation.
 - :mod:`~vidstyle.recognition.classifier` — :class:`OvaOvoSVC` (thesis) and :class:`OvrSVC` (baseline).
-- :mod:`~vidstyle.recognition.smoothing` — :func:`smooth_labels` (window vote or mean score).
+- :mod:`~vidstyle.recognition.smoothing` — :func:`smooth_labels` (Viterbi over frame scores with the
+  training label chain, the default; window vote as the thesis; or mean score).
 - :mod:`~vidstyle.recognition.recognizer` — :class:`ActionRecognizer`, model files.
 - :mod:`~vidstyle.recognition.onnx_export` — ONNX graph + :class:`OnnxRecognizer`.
 - :mod:`~vidstyle.recognition.splits` — disjoint sets A / B / test by performer or view.

@@ -10,8 +10,12 @@
 
 Ablations (each switches one thesis choice off, everything else equal): ``no-grouping``, ``no-context``
 (histogram of frame n only), ``no-smoothing`` (window 1). Vocabulary size is ``--words``; 2D SIFT and the
-two 3D SIFT variants are different *features directories* (the features stage writes them), so they are
-measured by pointing ``--features-dir`` at each; the metrics record the features' ``params``.
+two 3D SIFT variants are different *features directories* (the features stage writes them, ``--variant
+thesis | scovanner2007 | sift2d``), so they are measured by pointing ``--features-dir`` at each; the metrics
+record the features' ``params``. ``scripts/ablation_recognition.py`` runs the whole table.
+
+:func:`score_labels_dir` scores label files already written by ``vidstyle recognize`` (``--labels-dir``),
+for pipelines that train, recognise and evaluate as separate stages.
 """
 
 from __future__ import annotations
@@ -271,3 +275,86 @@ def evaluate_recognition(
             "train_s": time.perf_counter() - t0,
         }
     return result
+
+
+def score_labels_dir(
+    dataset: Dataset,
+    labels_dir: str | Path,
+    model: str | Path | None = None,
+    split_kind: str = "unseen-performer",
+    seed: int = 0,
+    test_view: str | None = None,
+    ignore: Sequence[str] = IGNORE,
+) -> dict[str, Any]:
+    """Score ``<labels_dir>/<video id>.json`` (written by ``vidstyle recognize``: ``labels`` smoothed,
+    ``raw``) against the dataset's ground truth, without training anything.
+
+    The test videos are the ``split.test`` recorded in ``model``'s header when it has one (the model knows
+    which videos it must not have seen), else the ``split_kind``/``seed``/``test_view`` split of
+    ``dataset``. Every test video needs a labels file; a model whose training files include a test video
+    is refused (its scores would not be of unseen data)."""
+    from ..fileio import read_json
+    from .recognizer import read_header
+
+    labels_dir = Path(labels_dir)
+    if not labels_dir.is_dir():
+        raise InputError(f"{labels_dir}: labels directory not found")
+    header = read_header(model) if model is not None else None
+    split_doc = (header or {}).get("split") or None
+    if split_doc and split_doc.get("test"):
+        test = list(split_doc["test"])
+        split_info: dict[str, Any] = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
+                                      "params": split_doc.get("params"), "from": str(model)}
+    else:
+        sp = make_split(dataset, split_kind, seed=seed, test_view=test_view)
+        test = sp.test
+        split_info = sp.to_dict()
+        if header is not None:
+            log.warning("%s records no split; scoring the %s split (seed %d)", model, split_kind, seed)
+    by_id = dataset.by_id()
+    unknown = [i for i in test if i not in by_id]
+    if unknown:
+        raise InputError(f"{model}: test videos not in the dataset: {unknown[:5]}")
+    if header is not None:
+        trained = {Path(f.get("features", "")).stem for f in header.get("training_files", [])}
+        trained |= {Path(f).stem for f in header.get("vocabulary", {}).get("training_files", [])}
+        leak = sorted(trained & set(test))
+        if leak:
+            raise InputError(f"{model}: trained on test videos {leak[:5]}; its labels cannot be scored as unseen")
+    classes = list(dataset.classes) if dataset.classes else None
+    truths, outputs = [], []
+    for i in test:
+        path = labels_dir / f"{i}.json"
+        if not path.is_file():
+            raise InputError(f"{path}: labels file of test video {i} not found")
+        doc = read_json(path)
+        if not isinstance(doc, dict) or not isinstance(doc.get("labels"), list):
+            raise InputError(f"{path}: not a labels file of `vidstyle recognize` (no 'labels' list)")
+        truth = load_labels(dataset.labels_path(by_id[i])).labels
+        if classes is None:
+            classes = list(doc.get("classes") or sorted(set(truth)))
+        index = {c: k for k, c in enumerate(classes)}
+        pred = {}
+        for key, name in (("smoothed", "labels"), ("raw", "raw")):
+            seq = doc.get(name, doc["labels"])
+            if len(seq) != len(truth):
+                raise InputError(f"{path}: {len(seq)} '{name}' labels, the ground truth has {len(truth)} frames")
+            bad = sorted({c for c in seq if c not in index})
+            if bad:
+                raise InputError(f"{path}: labels not among the classes {classes}: {bad[:5]}")
+            pred[key] = np.array([index[c] for c in seq], np.int64)
+        outputs.append(pred)
+        truths.append(truth)
+    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in test]
+    metrics = score_videos(classes, truths, outputs, test, actions, ignore)
+    return {
+        "kind": "vidstyle.metrics.recognition",
+        "schema_version": 1,
+        "seed": (header or {}).get("seed", seed),
+        "split": split_info,
+        "ablation": "none",
+        "source": {"labels_dir": str(labels_dir), "model": None if model is None else str(model)},
+        "params": None if header is None else {"recognizer": header.get("params"), "features": header.get("features_params")},
+        "model_header": header,
+        **metrics,
+    }

@@ -117,6 +117,8 @@ def build_onnx(model) -> "onnx.ModelProto":  # noqa: F821
         "normalize": model.normalize,
         "smoothing_window": model.smoothing_window,
         "smoothing": model.smoothing,
+        "emission_weight": float(getattr(model, "emission_weight", 1.0)),
+        "transitions": None if getattr(model, "transitions_", None) is None else np.asarray(model.transitions_).tolist(),
         "rules": "claims = ova > claim_threshold; one claim -> that class; several -> the claimants, none -> the "
         "n_competitors best ova play one-vs-one (ovo[:, p] > 0 -> pairs[p][0]); most wins, draw -> higher ova",
     }
@@ -166,6 +168,8 @@ class OnnxRecognizer:
         raw = present[pred]
         conf = s[np.arange(len(pred)), pred]
         sm, sconf = smooth_labels(
-            raw, len(self.classes_), self.meta["smoothing_window"], conf, scores, self.meta["smoothing"]
+            raw, len(self.classes_), self.meta["smoothing_window"], conf, scores, self.meta["smoothing"],
+            transitions=None if self.meta.get("transitions") is None else np.asarray(self.meta["transitions"]),
+            emission_weight=self.meta.get("emission_weight", 1.0),
         )
         return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}
