@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -67,6 +66,9 @@ def synthesize(
     seconds: float = typer.Option(1.0, "--seconds", help="Duration of steps given without one."),
     mismatch_penalty: float = typer.Option(5.0, "--mismatch-penalty", help="Cost of one output frame with a wrong label."),
     transition_penalty: float = typer.Option(0.2, "--transition-penalty", help="Cost added to every transition (in threshold units)."),
+    strict: bool = typer.Option(False, "--strict/--lenient", help="Fail when a step gets no frame of its action within its duration (default: warn, naming the step)."),
+    foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Hold planted feet still across seams (two-bone leg IK)."),
+    max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
 ) -> None:
     """Walk the graph to realise an action sequence at minimum transition cost; write BVH (+ labels, preview)."""
     from ..fileio import write_json
@@ -76,8 +78,8 @@ def synthesize(
     graph = MotionGraph.load(graph_path)
     steps = read_sequence(sequence, graph.fps, seconds)
     t0 = time.perf_counter()
-    walk = plan_walk(graph, steps, mismatch_penalty, transition_penalty)
-    motion = render_walk(graph, walk)
+    walk = plan_walk(graph, steps, mismatch_penalty, transition_penalty, strict=strict, max_in_degree=max_in_degree)
+    motion = render_walk(graph, walk, foot_lock=foot_lock)
     elapsed = time.perf_counter() - t0
     write_bvh(motion, out)
     doc = walk_labels(graph, walk, out.name)
@@ -112,6 +114,9 @@ def evaluate_motion(
     min_seconds: float = typer.Option(1.0, "--min-seconds", help="Shortest random step."),
     max_seconds: float = typer.Option(3.0, "--max-seconds", help="Longest random step."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random sequences."),
+    foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Render random walks with foot locking (compare both)."),
+    sequence: Optional[Path] = typer.Option(None, "--sequence", "-s", help="Synthesise this sequence file (e.g. from vidstyle generate) instead of random ones."),
+    max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate planning (see synthesize); default exact."),
 ) -> None:
     """Seam quality, foot skid, label fidelity and transitions used of synthesised motion."""
     from rich.console import Console
@@ -130,6 +135,16 @@ def evaluate_motion(
         for m in motions:
             motion = read_bvh(m)
             results.append(evaluate_walk(motion, read_json(labels_path(m))))
+    elif sequence is not None:
+        from ..motiongraph import read_sequence
+
+        seq = read_sequence(sequence, graph.fps)
+        t0 = time.perf_counter()
+        walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
+        motion = render_walk(graph, walk, foot_lock=foot_lock)
+        synth_seconds += time.perf_counter() - t0
+        synth_frames += motion.n_frames
+        results.append(evaluate_walk(motion, walk_labels(graph, walk, sequence.stem + ".bvh")))
     else:
         rng = np.random.default_rng(seed)
         lab = graph.labels_[graph.scc_]
@@ -147,8 +162,8 @@ def evaluate_motion(
                 prev = str(rng.choice(choices))
                 seq.append(Step(prev, int(rng.integers(int(min_seconds * graph.fps), int(max_seconds * graph.fps) + 1))))
             t0 = time.perf_counter()
-            walk = plan_walk(graph, seq, strict=False)
-            motion = render_walk(graph, walk)
+            walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
+            motion = render_walk(graph, walk, foot_lock=foot_lock)
             synth_seconds += time.perf_counter() - t0
             synth_frames += motion.n_frames
             results.append(evaluate_walk(motion, walk_labels(graph, walk, f"walk{w}.bvh")))
@@ -159,7 +174,9 @@ def evaluate_motion(
         "graph": str(graph_path),
         "graph_stats": graph.stats_,
         "seed": seed,
-        "parameters": {"walks": walks, "steps": steps, "actions": actions, "min_seconds": min_seconds, "max_seconds": max_seconds},
+        "parameters": {"walks": walks, "steps": steps, "actions": actions, "min_seconds": min_seconds, "max_seconds": max_seconds,
+                       "foot_lock": foot_lock, "sequence": str(sequence) if sequence else None,
+                       "max_in_degree": max_in_degree},
         "summary": summary,
         "original": original,
         "walks": results,

@@ -118,6 +118,10 @@ def evaluate_walk(motion: Motion, labels_doc: dict, original: dict | None = None
     used = labels_doc.get("transitions_used", [])
     out["transitions_used"] = len(used)
     out["transitions_per_second"] = len(used) / max(motion.duration, 1e-9)
+    if labels_doc.get("cost") is not None:
+        out["cost"] = float(labels_doc["cost"])
+    if labels_doc.get("foot_lock"):
+        out["foot_lock"] = labels_doc["foot_lock"]
     if original is not None:
         out["original"] = original
     return out
@@ -137,6 +141,8 @@ def summarise(results: list[dict], original: dict) -> dict:
         "transitions_used": sum(r["transitions_used"] for r in results),
         "transitions_per_second": float(np.mean([r["transitions_per_second"] for r in results])) if results else 0.0,
     }
+    if results and all("cost" in r for r in results):
+        summary["walk_cost"] = float(sum(r["cost"] for r in results))
     for metric in ("velocity_jump", "jerk", "foot_skid"):
         if metric not in original:
             continue
