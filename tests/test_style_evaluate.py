@@ -90,3 +90,32 @@ def test_bad_evaluate_input(dataset, tmp_path, capsys):
     assert main(["evaluate", "style", "--dataset", str(dataset), "--heldout-fraction", "1.5",
                  "--out", str(out)]) != 0
     assert not out.exists()
+
+
+def _seq(starts, durations, source):
+    import numpy as np
+
+    from vidstyle.style.events import EventSequence
+
+    starts = np.asarray(starts)
+    return EventSequence(("A", "B"), np.arange(len(starts)) % 2, np.asarray(durations), starts, source)
+
+
+def test_split_never_holds_out_another_view_of_a_training_moment():
+    from vidstyle.style.evaluate import _split
+
+    # one take seen from two views: recognised events differ a little, the cut is one frame for both
+    front = _seq([0, 10, 20, 30, 40, 50], [10] * 6, "front")
+    left = _seq([0, 12, 19, 33, 41, 52], [12, 7, 14, 8, 11, 8], "left")
+    train, held = _split([front, left], 0.3, ["take0", "take0"])
+    assert len(train) == 2 and len(held) == 2
+    cut = 42  # (1 - 0.3) * 60
+    assert all(s.starts.max() < cut for s in train) and all(s.starts.min() >= cut for s in held)
+    assert sum(map(len, train)) + sum(map(len, held)) == 12
+
+    # three takes x two views: whole takes (both views) are held out, never one view of a train take
+    seqs = [_seq([0, 10, 20, 30], [10] * 4, f"t{t}_{v}") for t in range(3) for v in ("front", "left")]
+    takes = [f"t{t}" for t in range(3) for _ in ("front", "left")]
+    train, held = _split(seqs, 0.34, takes)
+    assert [s.source for s in held] == ["t2_front", "t2_left"]
+    assert {s.source[:2] for s in train} == {"t0", "t1"}

@@ -21,7 +21,6 @@ is the cost of recognition errors.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -103,16 +102,37 @@ def _reorder(chain: dict, actions: list[str]) -> tuple[np.ndarray, np.ndarray, n
     return start, trans, dur
 
 
-def _split(seqs: list[EventSequence], frac: float) -> tuple[list[EventSequence], list[EventSequence]]:
+def _split(seqs: list[EventSequence], frac: float, takes: list[str] | None = None
+           ) -> tuple[list[EventSequence], list[EventSequence]]:
+    """Train / held-out events that never share a moment of the same performance.
+
+    The views of one performance take are the same motion seen twice, so whole takes are held out
+    (every view of them). With a single take every view is cut at the same frame: the first
+    ``1 - frac`` of the take trains, the rest is held out.
+    """
+    takes = list(takes) if takes is not None else [str(i) for i in range(len(seqs))]
+    if len(takes) != len(seqs):
+        raise ValueError("one take name per sequence")
+    order = list(dict.fromkeys(t for t, s in zip(takes, seqs) if len(s)))
+    if len(order) >= 2:
+        n_held = min(len(order) - 1, max(1, round(frac * len(order))))
+        held_takes = set(order[-n_held:])
+        train = [s for t, s in zip(takes, seqs) if len(s) and t not in held_takes]
+        held = [s for t, s in zip(takes, seqs) if len(s) and t in held_takes]
+        return train, held
     seqs = [s for s in seqs if len(s)]
-    if len(seqs) >= 2:
-        n_held = min(len(seqs) - 1, max(1, round(frac * len(seqs))))
-        return seqs[:-n_held], seqs[-n_held:]
-    if not seqs or len(seqs[0]) < 4:
+    if not seqs or min(len(s) for s in seqs) < 4:
         return seqs, []
-    s = seqs[0]
-    cut = math.ceil((1 - frac) * len(s))
-    return [s.slice(0, cut)], [s.slice(cut, len(s))]
+    end = max(int(s.starts[-1] + s.durations[-1]) for s in seqs)
+    cut = (1 - frac) * end
+    train, held = [], []
+    for s in seqs:
+        k = int(np.searchsorted(s.starts, cut, side="left"))
+        if k > 0:
+            train.append(s.slice(0, k))
+        if k < len(s):
+            held.append(s.slice(k, len(s)))
+    return train, held
 
 
 def load_performers(
@@ -143,7 +163,10 @@ def load_performers(
         seqs = tracks_to_events(tracks, params.style.events, actions)
         for s in seqs:
             s.performer = p["id"]
-        train, held = _split(seqs, params.heldout_fraction)
+        if len(seqs) != len(vids):
+            raise ValueError("one event sequence per label track")
+        takes = [str(v.get("bvh") or v["id"]) for v in vids]
+        train, held = _split(seqs, params.heldout_fraction, takes)
         start, trans, dur = _reorder(p["chain"], actions)
         out.append(PerformerData(p["id"], train, held, start, trans, dur))
     return out

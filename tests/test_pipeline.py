@@ -1,0 +1,157 @@
+"""The kickboxing DVC pipeline end to end on a tiny dataset, with real DVC and real Chromium.
+
+One module-scoped run (a few minutes on 2 cores) is shared by the tests: outputs, the report in a
+browser, `dvc repro` rerunning only what changed, and recovery from an interrupted stage.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from browser import dump_dom, screenshot
+
+PIPELINE = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing"
+BIN = Path(sys.executable).parent
+
+TINY = {
+    "dataset": {"performers": 3, "views": "front,left", "single_seconds": 3, "performances": 1,
+                "performance_seconds": 40},
+    "recognition": {"words": 150},
+    "style": {"length": 10},
+    "graph": {"clips": "out/dataset/mocap/p00_*.bvh"},
+    "synthesize": {"performers": "p00"},
+}
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
+    env["DVC_NO_ANALYTICS"] = "1"
+    return env
+
+
+def _dvc(cwd: Path, *args: str, check: bool = True, timeout: float = 1200) -> subprocess.CompletedProcess:
+    res = subprocess.run([str(BIN / "dvc"), *args], cwd=cwd, env=_env(), capture_output=True, text=True,
+                         timeout=timeout)
+    if check and res.returncode != 0:
+        raise AssertionError(f"dvc {' '.join(args)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+    return res
+
+
+def _setup(root: Path) -> Path:
+    work = root / "kickboxing"
+    work.mkdir()
+    shutil.copy(PIPELINE / "dvc.yaml", work / "dvc.yaml")
+    params = yaml.safe_load((PIPELINE / "params.yaml").read_text())
+    for section, values in TINY.items():
+        params[section].update(values)
+    params["jobs"] = 2
+    (work / "params.yaml").write_text(yaml.safe_dump(params))
+    _dvc(work, "init", "--no-scm", "-q")
+    return work
+
+
+def _digest(directory: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(directory.iterdir())}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    work = _setup(tmp_path_factory.mktemp("pipeline"))
+    t0 = time.perf_counter()
+    _dvc(work, "repro")
+    print(f"tiny pipeline: {time.perf_counter() - t0:.1f} s")
+    return work
+
+
+@pytest.mark.slow
+def test_pipeline_outputs(run):
+    out = run / "out"
+    for rel in ("metrics/recognition.json", "metrics/style.json", "metrics/motion.json", "report.html",
+                "models/recognizer.onnx", "style/p00.json", "generated/p00.json", "motion/p00.bvh", "motion/p00.mp4"):
+        assert (out / rel).is_file(), rel
+    import json
+
+    rec = json.loads((out / "metrics/recognition.json").read_text())
+    assert 0.0 <= rec["frame_accuracy"]["smoothed"] <= 1.0 and rec["seed"] == 0
+    shown = _dvc(run, "metrics", "show").stdout
+    assert "recognition.json" in shown and "frame_accuracy" in shown
+
+
+@pytest.mark.slow
+def test_report_renders_in_chromium(run, tmp_path):
+    report = run / "out" / "report.html"
+    dom = dump_dom(report)
+    assert 'data-rendered="ok"' in dom and "data-errors" not in dom
+    for heading in ("Action recognition", "Timeline", "Behaviour style", "Generated action sequences",
+                    "Motion graph", "Synthesized motion"):
+        assert heading in dom, heading
+    assert 'class="missing"' not in dom  # every section had its inputs
+    assert "data:image/gif;base64," in dom
+    import cv2
+    import numpy as np
+
+    img = cv2.imread(str(screenshot(report, tmp_path / "report.png")))
+    assert img is not None and img.std() > 10  # not a blank page
+
+
+@pytest.mark.slow
+def test_repro_reruns_only_what_changed(run):
+    again = _dvc(run, "repro")
+    assert "Running stage" not in again.stdout
+    params = yaml.safe_load((run / "params.yaml").read_text())
+    params["style"]["length"] = 12
+    (run / "params.yaml").write_text(yaml.safe_dump(params))
+    changed = _dvc(run, "repro").stdout
+    assert "Running stage 'generate'" in changed
+    for untouched in ("make_dataset", "features", "train_recognizer", "build_graph"):
+        assert f"Running stage '{untouched}'" not in changed
+
+
+@pytest.mark.slow
+def test_interrupted_stage_leaves_no_corrupt_artifact(run):
+    features = run / "out" / "features"
+    before = _digest(features)
+    proc = subprocess.Popen([str(BIN / "dvc"), "repro", "--force", "-s", "features"], cwd=run, env=_env(),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    # kill the whole process group as soon as the rerun has written some, not all, of its outputs
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        done = list(features.glob("*.npz")) if features.exists() else []
+        if 0 < len(done) < len(before):
+            break
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    if features.exists():
+        for f in features.iterdir():  # whatever exists is complete: no temporary or truncated file
+            assert not f.name.startswith("."), f
+            import numpy as np
+
+            with np.load(f) as z:
+                z["descriptors"]
+    _dvc(run, "repro")
+    assert _digest(features) == before
+
+
+@pytest.mark.slow
+def test_stage_with_corrupt_input_fails_with_one_line(run, tmp_path):
+    video = next((run / "out" / "dataset" / "videos").glob("*.mp4"))
+    bad = tmp_path / video.name
+    bad.write_bytes(video.read_bytes()[:2000])
+    res = subprocess.run([str(BIN / "vidstyle"), "features", str(bad), "--out", str(tmp_path / "f")],
+                         env=_env(), capture_output=True, text=True)
+    assert res.returncode != 0
+    lines = [ln for ln in res.stderr.splitlines() if ln.startswith("vidstyle: error:")]
+    assert len(lines) == 1 and bad.name in lines[0]
+    assert not (tmp_path / "f" / f"{video.stem}.npz").exists()
