@@ -151,6 +151,23 @@ def test_learn_style_per_performer_from_a_dataset(dataset, tmp_path):
     assert main(["learn-style", *labels, "--out", str(single), "--n-init", "1", "--modes", "1-2"]) == 0
     a, b = json.loads((out_dir / "p01.json").read_text()), json.loads(single.read_text())
     assert a["model_a"]["transition"] == b["model_a"]["transition"] and a["n_events"] == b["n_events"]
+    assert a["performer"] == "p01"
+
+
+def test_learn_style_names_the_performer_of_recognised_labels(dataset, tmp_path):
+    # recognised label files carry no performer; the dataset's performer id goes into the style
+    rec = tmp_path / "rec"
+    rec.mkdir()
+    manifest = json.loads((dataset / "dataset.json").read_text())
+    for v in manifest["videos"]:
+        if v["kind"] == "performance":
+            doc = json.loads((dataset / v["labels"]).read_text())
+            doc.pop("performer", None)
+            (rec / f"{v['id']}.json").write_text(json.dumps(doc))
+    out_dir = tmp_path / "styles"
+    assert main(["learn-style", "--dataset", str(dataset), "--labels-dir", str(rec), "--out-dir", str(out_dir),
+                 "--n-init", "1", "--modes", "1-2"]) == 0
+    assert [json.loads((out_dir / f"{p}.json").read_text())["performer"] for p in ("p00", "p01")] == ["p00", "p01"]
 
 
 def test_learn_style_dataset_mode_errors_write_nothing(dataset, tmp_path, capsys):

@@ -44,26 +44,34 @@ def parallel_map(
     scheduler: str | None = None,
     description: str = "working",
 ) -> list[R]:
-    """Apply ``fn`` to every item, in parallel, preserving order. See the module docstring."""
+    """Apply ``fn`` to every item, in parallel, preserving order, with a progress bar. See the module
+    docstring. An exception raised by ``fn`` propagates unchanged (the first one, in item order)."""
+    from .logutil import progress
+
     items = list(items)
     if not items:
         return []
+    if jobs == 0:
+        raise InputError("--jobs: must be a positive number of workers or -1 for all cores")
     if scheduler:
         return _dask_map(fn, items, scheduler, description)
     n = os.cpu_count() or 1
-    workers = n if jobs is None or jobs < 0 else max(1, jobs)
+    workers = n if jobs is None or jobs < 0 else jobs
     workers = min(workers, len(items))
     if workers == 1:
-        from .logutil import progress
-
-        return [fn(x) for x in progress(items, description, total=len(items))]
+        return list(progress((fn(x) for x in items), description, total=len(items)))
     from joblib import Parallel, delayed
 
     log.info("%s: %d items on %d local workers", description, len(items), workers)
-    return list(Parallel(n_jobs=workers, backend="loky")(delayed(_single_threaded)(fn, x) for x in items))
+    it = Parallel(n_jobs=workers, backend="loky", return_as="generator")(
+        delayed(_single_threaded)(fn, x) for x in items
+    )
+    return list(progress(it, description, total=len(items)))
 
 
 def _dask_map(fn: Callable[[T], R], items: Sequence[T], scheduler: str, description: str) -> list[R]:
+    from .logutil import progress
+
     try:
         from dask.distributed import Client
     except ImportError:
@@ -75,6 +83,6 @@ def _dask_map(fn: Callable[[T], R], items: Sequence[T], scheduler: str, descript
     try:
         log.info("%s: %d items on Dask cluster %s", description, len(items), scheduler)
         futures = client.map(_single_threaded, [fn] * len(items), items, pure=False)
-        return client.gather(futures)
+        return [f.result() for f in progress(futures, description, total=len(futures))]
     finally:
         client.close()

@@ -18,12 +18,16 @@ def register(app: typer.Typer) -> None:
             ..., "--out", "-o", help="Output directory; writes <video stem>.npz per video."
         ),
         jobs: int = typer.Option(-1, "--jobs", "-j", help="Videos processed in parallel (-1: all cores)."),
+        scheduler: str = typer.Option(
+            None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): run the videos on that "
+            "cluster instead of local workers; its workers must see the same paths.",
+        ),
         variant: str = typer.Option(
             # scovanner2007 is the default because it recognises far better on the demo: on the validation
             # performers 88.0 % raw frame accuracy against 54.6 % for the rotation-invariant thesis variant
             # (test performers: 84 % against 51 %). Turning every neighbourhood to its dominant orientation
             # discards the direction of motion, which is what tells a jab from a hook; see
-            # bench_results/ablation_recognition.md
+            # scripts/ablation_recognition.py
             "scovanner2007",
             "--variant",
             help="Descriptor: 'scovanner2007' (default; the authors' released code: no rotation, 80 icosahedral "
@@ -70,7 +74,8 @@ def register(app: typer.Typer) -> None:
             else None
         )
         done = run_features(
-            [str(v) for v in videos], out, jobs=jobs, variant=variant, salient=salient, sift=sift
+            [str(v) for v in videos], out, jobs=jobs, variant=variant, salient=salient, sift=sift,
+            scheduler=scheduler,
         )
         total = sum(d["points"] for d in done)
         log.info("features: %d video(s), %d points -> %s", len(done), total, out)

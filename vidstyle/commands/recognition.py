@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 import typer
 
 from ..errors import InputError
+from ..parallel import parallel_map
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
@@ -108,7 +110,7 @@ def train_recognizer(
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
 ) -> None:
     """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on set B."""
-    from ..recognition.io import features_path, load_dataset, load_labels
+    from ..recognition.io import features_path, load_labels
     from ..recognition.recognizer import ActionRecognizer, load_many, save_model
     from ..recognition.vocabulary import Vocabulary
 
@@ -218,13 +220,15 @@ def recognize(
     window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
     smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi (default: the model's)."),
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
+    scheduler: Optional[str] = typer.Option(
+        None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): recognise on that cluster; its workers must see the same paths."
+    ),
 ) -> None:
     """Per-frame action labels with confidence, raw and smoothed.
 
-    One input with --out FILE, or any number with --out-dir DIR (the model is loaded once, so a pipeline
-    stage pays the start-up once, not per video)."""
-    from ..recognition.recognizer import load_model
-
+    One input with --out FILE, or any number with --out-dir DIR (the model is loaded once per worker, so
+    a pipeline stage pays the start-up once, not per video)."""
     if (out is None) == (out_dir is None):
         raise InputError("recognize: give exactly one of --out FILE (one input) or --out-dir DIR")
     if out is not None and len(inputs) != 1:
@@ -238,16 +242,33 @@ def recognize(
             if p.stem in stems:
                 raise InputError(f"{p}: same output name {p.stem}.json as {stems[p.stem]}; rename one of them")
             stems[p.stem] = p
-    rec, header = load_model(model)
+    _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
+    targets = [out] if out is not None else [out_dir / f"{p.stem}.json" for p in inputs]
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
+    parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
+    if out_dir is not None:
+        log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
+
+
+@functools.lru_cache(maxsize=2)
+def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str]):
+    from ..recognition.recognizer import load_model
+
+    rec, header = load_model(Path(model))
     if window is not None:
         rec.smoothing_window = window
     if smoothing is not None:
         rec.smoothing = smoothing
-    targets = [out] if out is not None else [out_dir / f"{p.stem}.json" for p in inputs]
-    for p, target in zip(inputs, targets):
-        _recognize_one(rec, header, model, p, target, fps)
-    if out_dir is not None:
-        log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
+    return rec, header
+
+
+def _recognize_task(item: tuple) -> None:
+    """One input of `vidstyle recognize` (module level, so joblib and Dask workers can run it)."""
+    model, window, smoothing, input, target, fps = item
+    rec, header = _load_model_for(model, window, smoothing)
+    _recognize_one(rec, header, Path(model), Path(input), Path(target), fps)
 
 
 def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: Optional[float]) -> None:

@@ -98,7 +98,7 @@ def learn_style(
     if dataset is None:
         if not labels or out is None:
             raise InputError("learn-style: give LABELS... --out FILE, or --dataset DIR --out-dir DIR")
-        jobs = [(out, list(labels))]
+        jobs = [(out, list(labels), None)]
     else:
         if labels or out is not None or out_dir is None:
             raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
@@ -116,9 +116,14 @@ def learn_style(
             for f in files:
                 if not f.is_file():
                     raise InputError(f"{f}: label file not found (performer {pid})")
-            jobs.append((Path(out_dir) / f"{pid}.json", files))
+            jobs.append((Path(out_dir) / f"{pid}.json", files, pid))
     # learn everything first, write afterwards: a bad file leaves no partial set of outputs
-    styles = [(dest, Style.from_tracks([load_label_file(p) for p in files], params)) for dest, files in jobs]
+    styles = []
+    for dest, files, pid in jobs:
+        style = Style.from_tracks([load_label_file(p) for p in files], params)
+        if pid is not None:  # recognised label files do not name their performer; the dataset does
+            style.performer = pid
+        styles.append((dest, style))
     for dest, style in styles:
         write_json(dest, style.to_dict())
         log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),

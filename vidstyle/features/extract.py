@@ -134,6 +134,10 @@ def output_paths(videos: Sequence[str | os.PathLike], out_dir: str | os.PathLike
     return paths
 
 
+def _process_item(item: tuple) -> dict[str, Any]:
+    return process_video(*item)
+
+
 def run_features(
     videos: Sequence[str | os.PathLike],
     out_dir: str | os.PathLike,
@@ -141,13 +145,12 @@ def run_features(
     variant: str = "thesis",
     salient: SalientParams | None = None,
     sift: Sift3DParams | None = None,
-    show_progress: bool = True,
+    scheduler: str | None = None,
 ) -> list[dict[str, Any]]:
-    """Extract features of every video into ``out_dir``, videos in parallel (joblib, ``jobs`` workers,
-    -1 = all cores). Each worker runs OpenCV and BLAS on one thread."""
-    from joblib import Parallel, delayed
-
-    from ..logutil import progress
+    """Extract features of every video into ``out_dir``, videos in parallel: joblib with ``jobs`` local
+    workers (-1 = all cores), or the Dask cluster at ``scheduler`` (its workers must see the same
+    paths). Each worker runs OpenCV and BLAS on one thread; every output is written atomically."""
+    from ..parallel import parallel_map
 
     if variant not in VARIANTS:
         raise InputError(f"--variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
@@ -158,16 +161,8 @@ def run_features(
             raise InputError(f"{v}: file not found")
     outs = output_paths(videos, out_dir)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
-    n_jobs = min(jobs if jobs > 0 else (os.cpu_count() or 1), len(videos)) or 1
-    if n_jobs == 1:
-        it = (process_video(v, o, variant, salient, sift) for v, o in zip(videos, outs))
-    else:
-        it = Parallel(n_jobs=n_jobs, return_as="generator")(
-            delayed(process_video)(v, o, variant, salient, sift) for v, o in zip(videos, outs)
-        )
-    if show_progress:
-        it = progress(it, "features", total=len(videos))
-    return list(it)
+    items = [(str(v), str(o), variant, salient, sift) for v, o in zip(videos, outs)]
+    return parallel_map(_process_item, items, jobs=jobs, scheduler=scheduler, description="features")
 
 
 def load_features(path: str | os.PathLike) -> dict[str, Any]:

@@ -88,9 +88,11 @@ def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
     split = m.get("split", {})
+    owner = {v["id"]: v.get("performer") for v in (dataset or {}).get("videos", [])}
+    test_performers = split.get("test_performers") or sorted({owner[v] for v in split.get("test", []) if owner.get(v)})
     body = [
         f"<p>Split: <b>{esc(split.get('kind', '?'))}</b>; test performers "
-        f"{esc(', '.join(split.get('test_performers', [])) or '–')}; "
+        f"{esc(', '.join(test_performers) or '–')}; "
         f"{m.get('n_test_videos', '?')} test videos, {m.get('n_test_frames', '?')} frames.</p>",
         table([[r[0], r[1] if r[1] is not None else "–", r[2]] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
     ]
@@ -142,13 +144,14 @@ def _style_section(page: Page, run: Path, dataset: dict | None) -> None:
         st = _load(path)
         actions = st["actions"]
         learned = np.array(st["model_a"]["transition"], float)
-        body.append(svg.heatmap(learned, actions, actions, f"{st.get('performer', path.stem)}: learned (HMM a)",
+        who = st.get("performer") or path.stem
+        body.append(svg.heatmap(learned, actions, actions, f"{who}: learned (HMM a)",
                                 vmax=1.0, xlabel="next action", ylabel="action"))
-        chain = chains.get(st.get("performer", path.stem))
+        chain = chains.get(who)
         if chain is not None:
             order = [chain["actions"].index(a) for a in actions]
             true = np.array(chain["transition"], float)[np.ix_(order, order)]
-            body.append(svg.heatmap(true, actions, actions, f"{st.get('performer', path.stem)}: true chain", vmax=1.0,
+            body.append(svg.heatmap(true, actions, actions, f"{who}: true chain", vmax=1.0,
                                     xlabel="next action", ylabel="action"))
             body.append(f'<p class="note">mean |learned - true| = {np.abs(learned - true).mean():.3f}</p>')
     body.append("</div>")
@@ -195,6 +198,14 @@ def _motion_section(page: Page, run: Path) -> None:
         body.append(_missing("motion graph", gpath))
     m = _load(run / "metrics" / "motion.json")
     if m is not None:
+        ms = m.get("summary", {})
+        rows = [["walks / frames", f"{ms.get('walks')} / {ms.get('frames')}"],
+                ["label fidelity (frames showing the requested action)", ms.get("label_fidelity")],
+                ["transitions per second", ms.get("transitions_per_second")]]
+        for key, name in (("velocity_jump", "velocity jump"), ("jerk", "jerk"), ("foot_skid", "foot skid")):
+            q = ms.get(key, {})
+            rows.append([f"{name} at seams / in the clips (median)", q.get("seam_over_original_median")])
+        body.append(table(rows, ["synthesized motion", "value"]))
         body.append(f'<details><summary>evaluate motion (metrics/motion.json)</summary><pre class="seq">'
                     f'{esc(json.dumps(m.get("summary", m), indent=1)[:4000])}</pre></details>')
     page.add("Motion graph", "".join(body))
@@ -209,6 +220,47 @@ def _motion_section(page: Page, run: Path) -> None:
         page.add("Synthesized motion", '<div class="row">' + "".join(items) + "</div>")
     else:
         page.add("Synthesized motion", _missing("motion preview", run / "motion"))
+
+
+def _get(doc: dict | None, *keys):
+    for k in keys:
+        if not isinstance(doc, dict) or k not in doc:
+            return None
+        doc = doc[k]
+    return doc
+
+
+def headline_metrics(run: Path) -> dict:
+    """The few numbers of a run worth a column in ``dvc metrics show`` (the full documents stay in
+    RUN/metrics/*.json). Missing inputs give ``None``."""
+    run = Path(run)
+    rec = _load(run / "metrics" / "recognition.json")
+    sty = _load(run / "metrics" / "style.json")
+    mot = _load(run / "metrics" / "motion.json")
+    out: dict = {"kind": "vidstyle.metrics.headline", "schema_version": 1,
+                 "seed": _get(rec, "seed") if rec else _get(sty, "seed")}
+    out["recognition"] = {
+        "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
+        "frame_accuracy_smoothed": _get(rec, "frame_accuracy", "smoothed"),
+        "video_accuracy": _get(rec, "video_accuracy"),
+        "test_frames": _get(rec, "n_test_frames"),
+    }
+    style = {}
+    for source, short in (("ground_truth", "truth"), ("recognised", "recognised")):
+        s = _get(sty, "sources", source, "summary")
+        style[f"transition_mae_{short}"] = _get(s, "transition_mae", "a")
+        style[f"identification_{short}"] = _get(s, "identification", "a", "accuracy_by_heldout_data")
+        style[f"heldout_loglik_{short}"] = _get(s, "heldout_loglik_per_event", "a")
+    out["style"] = style
+    ms = _get(mot, "summary")
+    out["motion"] = {
+        "graph_frames": _get(mot, "graph_stats", "frames"),
+        "transitions_in_scc": _get(mot, "graph_stats", "transitions_in_scc"),
+        "label_fidelity": _get(ms, "label_fidelity"),
+        "velocity_jump_seam_over_clip": _get(ms, "velocity_jump", "seam_over_original_median"),
+        "foot_skid_seam_over_clip": _get(ms, "foot_skid", "seam_over_original_median"),
+    }
+    return out
 
 
 def build_report(run: Path) -> str:
