@@ -40,12 +40,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..fileio import write_json
+from .dataset import VIEW_NAMES, validate_views
 
 log = logging.getLogger(__name__)
 
 SCHEMA_VERSION = 1
 DEFAULT_ACTIONS = "walk,run,jump,punch,dance,basketball"
-VIEW_NAMES = ("front", "left", "right", "back")
 _MIN_SUBJECTS = 3  # an unseen-subject split needs the action from a test subject and >= 2 training subjects
 
 
@@ -79,16 +79,7 @@ class CMUParams:
     def validate(self) -> CMUParams:
         if not self.classes:
             raise InputError("--actions: give at least one action")
-        if not self.views:
-            raise InputError("--views: give at least one view")
-        for v in self.views:
-            try:
-                float(v)
-            except ValueError:
-                if v not in VIEW_NAMES:
-                    raise InputError(f"--views: unknown view {v!r} (front, left, right, back or degrees)") from None
-        if len(set(self.views)) != len(self.views):
-            raise InputError(f"--views: repeated view in {','.join(self.views)}")
+        validate_views(self.views)
         if self.segment_seconds < 1.0:
             raise InputError(f"--segment-seconds: must be at least 1, got {self.segment_seconds}")
         if not 0.5 <= self.min_seconds <= self.segment_seconds:

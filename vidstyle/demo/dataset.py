@@ -69,16 +69,7 @@ class DatasetParams:
     def validate(self) -> DatasetParams:
         if self.performers < 1:
             raise InputError(f"--performers: must be at least 1, got {self.performers}")
-        if not self.views:
-            raise InputError("--views: give at least one view")
-        for v in self.views:
-            try:
-                float(v)
-            except ValueError:
-                if v not in VIEW_NAMES:
-                    raise InputError(f"--views: unknown view {v!r} (front, left, right, back or degrees)") from None
-        if len(set(self.views)) != len(self.views):
-            raise InputError(f"--views: repeated view in {','.join(self.views)}")
+        validate_views(self.views)
         if self.single_seconds < 1.5:
             raise InputError(f"--single-seconds: must be at least 1.5, got {self.single_seconds}")
         if self.performances < 0:
@@ -94,6 +85,20 @@ class DatasetParams:
         d["views"] = list(self.views)
         d["size"] = list(self.size)
         return d
+
+
+def validate_views(views) -> None:
+    """``--views``: at least one, each a view name or an azimuth in degrees, none repeated."""
+    if not views:
+        raise InputError("--views: give at least one view")
+    for v in views:
+        try:
+            float(v)
+        except ValueError:
+            if v not in VIEW_NAMES:
+                raise InputError(f"--views: unknown view {v!r} (front, left, right, back or degrees)") from None
+    if len(set(views)) != len(views):
+        raise InputError(f"--views: repeated view in {','.join(views)}")
 
 
 # --------------------------------------------------------------------------- performers and takes
