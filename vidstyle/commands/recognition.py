@@ -105,6 +105,7 @@ def train_recognizer(
     window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
     emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores (3: best on validation)."),
+    mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
@@ -151,7 +152,7 @@ def train_recognizer(
         vocabulary=voc, context=context, grouping=grouping, grouping_threshold=grouping_threshold,
         normalize=normalize, n_components=components, classifier=classifier, C=c,
         max_frames_per_class=max_frames_per_class or None, smoothing_window=window, smoothing=smoothing,
-        emission_weight=emission_weight, n_jobs=jobs, random_state=seed,
+        emission_weight=emission_weight, mirror=mirror, n_jobs=jobs, random_state=seed,
     )
     t0 = time.perf_counter()
     rec.fit(feats, [t.labels for t in tracks], classes=classes)
@@ -317,7 +318,7 @@ def evaluate_recognition(
     out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
     split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
-    ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing."),
+    ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing | no-mirror."),
     words: int = typer.Option(1000, "--words", help="Vocabulary size (ablation: 500/1000/1500)."),
     vocab_method: str = typer.Option("minibatch", "--vocab-method", help="minibatch | hierarchical | kmeans."),
     classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo | svc-ovr."),

@@ -328,3 +328,44 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
 def describe(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
     """uint8 descriptors (n, 640) of ``points`` (n, 3 ints: frame, row, column) in ``volume``."""
     return quantise(histograms(volume, points))
+
+
+# ------------------------------------------------------------------------------------------ mirror image
+@cache
+def _mirror_permutation() -> np.ndarray:
+    C = _bins()
+    flipped = C * np.array([-1.0, 1.0, 1.0])
+    match = np.argmax(flipped @ C.T, axis=1)  # bin k of the video is bin match[k] of its mirror image
+    if len(set(match.tolist())) != N_BINS:  # pragma: no cover - the icosahedron is symmetric in g1
+        raise AssertionError("icosahedral bins are not closed under g1 -> -g1")
+    perm = np.empty(DIM, dtype=np.int64)
+    for st in range(2):
+        for sr in range(2):
+            for sc in range(2):
+                src = ((st * 2 + sr) * 2 + sc) * N_BINS
+                dst = ((st * 2 + sr) * 2 + (1 - sc)) * N_BINS
+                perm[dst + match] = src + np.arange(N_BINS)
+    perm.setflags(write=False)
+    return perm
+
+
+def mirror_permutation() -> np.ndarray:
+    """Index array ``perm`` (640,): ``desc[:, perm]`` is (nearly) the descriptor of the left-right mirror
+    image of the video at the mirrored point.
+
+    Mirroring columns negates g1 and leaves g2, g3 alone; the icosahedral bins are closed under
+    g1 -> -g1, so every bin has a mirror bin, and the column sub-regions swap. It is exact except for the
+    column plane through the point (offset 0), which the hard sub-region split puts on the right side
+    in both images: on smooth random video the cosine to the true mirror descriptor has median 0.97
+    (0.52 without the permutation). Used to train on the mirror image of every video (a southpaw seen
+    from the mirrored view) without computing features twice.
+    """
+    return _mirror_permutation().copy()
+
+
+def mirror_descriptors(desc: np.ndarray) -> np.ndarray:
+    """Descriptors (n, 640) of the mirror image; see :func:`mirror_permutation`."""
+    desc = np.asarray(desc)
+    if desc.ndim != 2 or desc.shape[1] != DIM:
+        raise ValueError(f"scovanner2007 descriptors are (n, {DIM}), got {desc.shape}")
+    return desc[:, _mirror_permutation()]

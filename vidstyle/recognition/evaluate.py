@@ -9,7 +9,7 @@
   truth has a zero row), as JSON and as a PNG heatmap drawn with OpenCV.
 
 Ablations (each switches one thesis choice off, everything else equal): ``no-grouping``, ``no-context``
-(histogram of frame n only), ``no-smoothing`` (window 1). Vocabulary size is ``--words``; 2D SIFT and the
+(histogram of frame n only), ``no-smoothing`` (window 1), ``no-mirror`` (no mirror-image training videos). Vocabulary size is ``--words``; 2D SIFT and the
 two 3D SIFT variants are different *features directories* (the features stage writes them, ``--variant
 thesis | scovanner2007 | sift2d``), so they are measured by pointing ``--features-dir`` at each; the metrics
 record the features' ``params``. ``scripts/ablation_recognition.py`` runs the whole table.
@@ -34,7 +34,7 @@ from .splits import make_split
 
 log = logging.getLogger(__name__)
 
-ABLATIONS = ("none", "no-grouping", "no-context", "no-smoothing")
+ABLATIONS = ("none", "no-grouping", "no-context", "no-smoothing", "no-mirror")
 IGNORE = ("Guard", "Step")
 
 
@@ -166,6 +166,7 @@ def ablation_params(ablation: str) -> dict[str, Any]:
         "no-grouping": {"grouping": False},
         "no-context": {"context": 0},
         "no-smoothing": {"smoothing_window": 1},
+        "no-mirror": {"mirror": False},
     }[ablation]
 
 

@@ -42,6 +42,7 @@ class VideoFeatures:
     n_frames: int
     video: str = ""
     path: str = ""
+    variant: str = ""  # descriptor variant recorded by `vidstyle features` ("" when unknown)
 
     @property
     def dim(self) -> int:
@@ -98,7 +99,8 @@ def load_features(path: str | Path) -> VideoFeatures:
     except (TypeError, ValueError):
         raise InputError(f"{path}: 'n_frames' must be an integer") from None
     video = str(data["video"]) if "video" in data else ""
-    return VideoFeatures(desc, fi, n_frames, video=video, path=str(path))
+    variant = str(data["variant"]) if "variant" in data else ""
+    return VideoFeatures(desc, fi, n_frames, video=video, path=str(path), variant=variant)
 
 
 @dataclass

@@ -61,6 +61,9 @@ class ActionRecognizer(BaseEstimator):
     max_frames_per_class: training frames sampled per class (RBF SVM training is O(n^2)); None = all.
     smoothing_window, smoothing, emission_weight: see :func:`smooth_labels` (``viterbi`` decodes with the
         frame-to-frame label transitions counted in the training labels, ``transitions_``).
+    mirror: also train on the left-right mirror image of every training video (a southpaw seen from the
+        mirrored view), computed in descriptor space (:func:`~vidstyle.features.scovanner2007.mirror_descriptors`);
+        only scovanner2007 descriptors have an exact-enough mirror, other variants train without it (logged).
     n_jobs: joblib workers for per-video work and SVM training.
     random_state: seed of every random choice.
     """
@@ -86,6 +89,7 @@ class ActionRecognizer(BaseEstimator):
         smoothing_window: int = 6,
         smoothing: str = "viterbi",
         emission_weight: float = 3.0,
+        mirror: bool = True,
         n_jobs: int | None = None,
         random_state: int | None = 0,
     ):
@@ -104,6 +108,7 @@ class ActionRecognizer(BaseEstimator):
         self.smoothing_window = smoothing_window
         self.smoothing = smoothing
         self.emission_weight = emission_weight
+        self.mirror = mirror
         self.n_jobs = n_jobs
         self.random_state = random_state
 
@@ -159,6 +164,15 @@ class ActionRecognizer(BaseEstimator):
         for v, lab in zip(videos, y):
             if len(lab) != v.n_frames:
                 raise InputError(f"{v.path or v.video}: {len(lab)} labels for n_frames={v.n_frames}")
+        y = list(y)
+        self.n_mirrored_videos_ = 0
+        if self.mirror:
+            mirrored = [mirrored_features(v) for v in videos]
+            if all(m is not None for m in mirrored):
+                videos, y = videos + mirrored, y + y
+                self.n_mirrored_videos_ = len(mirrored)
+            else:
+                log.info("recognizer: no mirror images (they need scovanner2007 descriptors)")
         all_labels = np.concatenate([np.asarray(lab, dtype=object) for lab in y]).astype(str)
         self.classes_ = np.array(list(classes) if classes is not None else sorted(set(all_labels)))
         unknown = sorted(set(all_labels) - set(self.classes_))
@@ -244,6 +258,7 @@ class ActionRecognizer(BaseEstimator):
     def summary(self) -> dict[str, Any]:
         return {
             "n_train_frames": self.n_train_frames_,
+            "n_mirrored_videos": getattr(self, "n_mirrored_videos_", 0),
             "n_fit_frames": self.n_fit_frames_,
             "train_class_counts": self.train_class_counts_,
             "n_words": self.vocabulary.n_words_,
@@ -259,6 +274,17 @@ class ActionRecognizer(BaseEstimator):
         p = self.get_params(deep=False)
         p.pop("vocabulary")
         return p
+
+
+def mirrored_features(v: VideoFeatures) -> VideoFeatures | None:
+    """The features of the left-right mirror image of ``v``, or None when its descriptors are not
+    scovanner2007 (variant recorded in the file, or 640-D when the file does not say)."""
+    from ..features.scovanner2007 import DIM, mirror_descriptors
+
+    if v.variant not in ("scovanner2007", "") or v.dim != DIM:
+        return None
+    return VideoFeatures(mirror_descriptors(v.descriptors), v.frame_index, v.n_frames,
+                         video=f"mirror:{v.video}", path=f"mirror:{v.path}", variant=v.variant)
 
 
 def _sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) -> np.ndarray:
