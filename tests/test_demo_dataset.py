@@ -187,6 +187,21 @@ def test_cli_tiny_rendered_dataset_end_to_end(tmp_path):
             assert np.array_equal(frames, _video_frames(tmp_path / "b" / v["video"]))
 
 
+def test_performance_views_render_performances_only_there(tmp_path):
+    args = ["demo", "make-dataset", "--small", "--performers", "1", "--views", "front,left", "--single-seconds",
+            "2", "--performances", "2", "--performance-seconds", "3", "--seed", "2", "--no-video"]
+    assert main(args + ["--performance-views", "left", "--out", str(tmp_path / "a")]) == 0
+    d = json.loads((tmp_path / "a" / "dataset.json").read_text())
+    perf = sorted(v["id"] for v in d["videos"] if v["kind"] == "performance")
+    single_views = {v["view"] for v in d["videos"] if v["kind"] == "single"}
+    assert perf == ["p00_perf0_left", "p00_perf1_left"] and single_views == {"front", "left"}
+    # the same take and labels as when rendered in every view
+    assert main(args + ["--out", str(tmp_path / "b")]) == 0
+    for name in ("labels/p00_perf1_left.json", "mocap/p00_perf1.bvh"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+    assert main(args + ["--performance-views", "left,sideways", "--out", str(tmp_path / "c")]) == 2
+
+
 def test_cli_performer_writes_a_bvh_clip(tmp_path):
     out = tmp_path / "clip.bvh"
     assert main(["demo", "performer", "--seed", "3", "--action", "roundhousekick", "--seconds", "3", "--out", str(out)]) == 0

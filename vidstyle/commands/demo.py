@@ -32,6 +32,8 @@ def make_dataset_cmd(
     performances: int = typer.Option(None, "--performances", help="Performance takes per performer [2; --small: 1]."),
     performance_seconds: float = typer.Option(None, "--performance-seconds",
                                               help="Length of each performance [60; --small: 8]."),
+    performance_views: str = typer.Option(None, "--performance-views", help="Views the performances are "
+                                          "rendered in [same as --views]."),
     background: str = typer.Option(None, "--background", help="Video background: texture or plain [texture]."),
     no_video: bool = typer.Option(False, "--no-video", help="Write mocap and labels only (no rendering; the manifest's video and truth paths then do not exist)."),
     small: bool = typer.Option(False, "--small", help="A small dataset for tests and CI (explicit options still apply)."),
@@ -56,8 +58,12 @@ def make_dataset_cmd(
         view_list = tuple(v.strip() for v in views.split(",") if v.strip())
     if background is not None and background not in ("plain", "texture"):
         raise InputError(f"--background: must be plain or texture, got {background!r}")
+    perf_views = None
+    if performance_views is not None:
+        perf_views = tuple(v.strip() for v in performance_views.split(",") if v.strip())
     params = with_overrides(base, performers=performers, views=view_list, single_seconds=single_seconds,
                             performances=performances, performance_seconds=performance_seconds,
+                            performance_views=perf_views,
                             background=background, render=False if no_video else None)
     t0 = time.perf_counter()
     manifest = make_dataset(out, params, overwrite=overwrite, jobs=jobs, scheduler=scheduler)

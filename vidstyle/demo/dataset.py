@@ -51,6 +51,7 @@ class DatasetParams:
     single_seconds: float = 16.0
     performances: int = 2
     performance_seconds: float = 60.0
+    performance_views: tuple[str, ...] | None = None  # views of the performances (None: ``views``)
     fps: int = 20
     mocap_fps: int = 60
     size: tuple[int, int] = (160, 120)
@@ -70,6 +71,11 @@ class DatasetParams:
         if self.performers < 1:
             raise InputError(f"--performers: must be at least 1, got {self.performers}")
         validate_views(self.views)
+        if self.performance_views is not None:
+            try:
+                validate_views(self.performance_views)
+            except InputError as e:
+                raise InputError(str(e).replace("--views", "--performance-views")) from None
         if self.single_seconds < 1.5:
             raise InputError(f"--single-seconds: must be at least 1.5, got {self.single_seconds}")
         if self.performances < 0:
@@ -83,6 +89,7 @@ class DatasetParams:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["views"] = list(self.views)
+        d["performance_views"] = None if self.performance_views is None else list(self.performance_views)
         d["size"] = list(self.size)
         return d
 
@@ -171,7 +178,8 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
     is_transition = np.zeros(len(tk.labels), dtype=bool)
     is_transition[1:] = np.array(tk.labels[1:]) != np.array(tk.labels[:-1])
     entries = []
-    for vi, view in enumerate(params.views):
+    views = params.views if kind == "single" or params.performance_views is None else params.performance_views
+    for vi, view in enumerate(views):
         vid = f"{name}_{_view_slug(view)}"
         video_rel, labels_rel = f"videos/{vid}.mp4", f"labels/{vid}.json"
         truth_rel = f"videos/{vid}.truth.npz"
