@@ -55,14 +55,15 @@ def rows_spec(features: dict[str, str], reference: str = "thesis") -> list[dict]
          "kw": {"recognizer_params": {"smoothing": "vote", "smoothing_window": 6}}},
         {"name": "vocabulary 500", "variant": "thesis", "kw": {"n_words": 500}},
         {"name": "vocabulary 1500", "variant": "thesis", "kw": {"n_words": 1500}},
-        {"name": "scovanner2007 3D SIFT", "variant": "scovanner2007", "kw": {}},
-        {"name": "2D SIFT instead of 3D", "variant": "sift2d", "kw": {}},
+        {"name": "scovanner2007 3D SIFT", "variant": "scovanner2007", "kw": {}, "descriptor": True},
+        {"name": "2D SIFT instead of 3D", "variant": "sift2d", "kw": {}, "descriptor": True},
     ]
-    for r in rows[:8]:
-        r["variant"] = reference
+    for r in rows:
+        if not r.get("descriptor"):
+            r["variant"] = reference
     rows[0]["name"] = f"vidstyle defaults ({names.get(reference, reference)})"
     # the descriptor rows: every variant other than the reference
-    rows = rows[:7] + [r for r in rows[7:] if r["variant"] != reference]
+    rows = [r for r in rows if not r.get("descriptor") or r["variant"] != reference]
     if reference != "thesis":
         rows.append({"name": "thesis 3D SIFT instead", "variant": "thesis", "kw": {}})
     return [r for r in rows if r["variant"] in features]
