@@ -66,3 +66,17 @@ def test_usage_errors_are_short_not_tracebacks(capsys):
     assert main(["mocap", "info", "--no-such-option"]) == 2
     err = capsys.readouterr().err
     assert "No such option" in err and "Traceback" not in err
+
+
+def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
+    import re
+
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    listed = re.findall(r"^│ ([a-z][a-z-]+) ", out, flags=re.M)
+    stages = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
+              "synthesize"]
+    assert listed[: len(stages)] == stages
+    assert set(listed[len(stages):]) == {"demo", "render", "evaluate", "report", "mocap"}
+    for command in listed:  # every listed command answers --help
+        assert main([command, "--help"]) == 0

@@ -54,7 +54,27 @@ def _register_commands() -> None:
         module.register(app)
 
 
+#: --help lists the commands in pipeline order, stages apart from the tools
+_ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
+          "synthesize", "demo", "render", "evaluate", "report", "mocap"]
+_TOOLS = {"demo", "render", "mocap", "evaluate", "report"}
+
+
+def _arrange_help() -> None:
+    def name(info) -> str:
+        return info.name or (info.typer_instance.info.name if getattr(info, "typer_instance", None) else "") or ""
+
+    def rank(info) -> int:
+        return _ORDER.index(name(info)) if name(info) in _ORDER else len(_ORDER)
+
+    for info in [*app.registered_commands, *app.registered_groups]:
+        info.rich_help_panel = "Data, evaluation and tools" if name(info) in _TOOLS else "Pipeline stages, in order"
+    app.registered_commands.sort(key=rank)
+    app.registered_groups.sort(key=rank)
+
+
 _register_commands()
+_arrange_help()
 
 
 def main(argv: list[str] | None = None) -> int:
