@@ -172,3 +172,21 @@ def test_recognize_out_dir_then_score_labels_dir(ds, tmp_path, capsys):
     assert main(["evaluate", "recognition", "--dataset", str(ds), "--labels-dir", str(tmp_path / "lab"),
                  "--model", str(tmp_path / "m.joblib"), "--out", str(out)]) == 2
     assert f"{test[0]}.json" in capsys.readouterr().err
+
+
+def test_recognize_reloads_a_model_retrained_at_the_same_path(ds, tmp_path):
+    import os
+    import shutil
+
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--seed", str(SEED)]
+    assert main(["vocabulary", *common, "--words", "40", "--out", str(tmp_path / "v.npz")]) == 0
+    for w in (3, 7):
+        assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", "16",
+                     "--window", str(w), "--out", str(tmp_path / f"m{w}.joblib")]) == 0
+    feats = str(next((ds / "features").glob("*.npz")))
+    model = tmp_path / "m.joblib"
+    for k, w in enumerate((3, 7)):  # same process, same path, new file: the new model is used
+        shutil.copy(tmp_path / f"m{w}.joblib", model)
+        os.utime(model, ns=(10**18 + k, 10**18 + k))
+        assert main(["recognize", feats, "--model", str(model), "--out", str(tmp_path / f"l{w}.json")]) == 0
+        assert json.loads((tmp_path / f"l{w}.json").read_text())["smoothing_window"] == w

@@ -253,8 +253,17 @@ def recognize(
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 
 
-@functools.lru_cache(maxsize=2)
 def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str]):
+    """The model, loaded once per process and file version (a retrained file at the same path reloads)."""
+    try:
+        st = Path(model).stat()
+    except OSError:
+        raise InputError(f"{model}: model file not found") from None
+    return _load_model_cached(model, st.st_mtime_ns, st.st_size, window, smoothing)
+
+
+@functools.lru_cache(maxsize=2)
+def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str]):
     from ..recognition.recognizer import load_model
 
     rec, header = load_model(Path(model))
