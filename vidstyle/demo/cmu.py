@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import write_json
+from ..fileio import replace_dir, write_json
 from .dataset import VIEW_NAMES, validate_views
 
 log = logging.getLogger(__name__)
@@ -406,13 +406,7 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
             "videos": videos,
         }
         write_json(tmp / "dataset.json", manifest)
-        if out.exists():
-            old = out.parent / f".{out.name}.old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
+        replace_dir(tmp, out)
         log.info("wrote %s: %d subjects, %d windows, %d videos (%d frames) in %.1f s", out, len(performers),
                  len(segments), len(videos), sum(v["frames"] for v in videos), time.perf_counter() - t0)
     except BaseException:

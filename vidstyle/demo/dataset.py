@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import write_json
+from ..fileio import replace_dir, write_json
 from .actions import ACTIONS, CLASSES
 from .performer import Performer
 from .timeline import Take, build_take, performance_plan, single_action_plan
@@ -251,13 +251,7 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
             "videos": videos,
         }
         write_json(tmp / "dataset.json", manifest)
-        if out.exists():
-            old = out.parent / f".{out.name}.old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
+        replace_dir(tmp, out)
         log.info("wrote %s: %d performers, %d videos (%d frames) in %.1f s", out, len(performers), len(videos),
                  sum(v["frames"] for v in videos), time.perf_counter() - t0)
     except BaseException:
