@@ -43,6 +43,18 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         raise
 
 
+def staging_dir(out: str | os.PathLike, overwrite: bool = False) -> Path:
+    """A fresh hidden directory beside ``out`` to build it in (finish with :func:`replace_dir`). An ``out``
+    that is a file, or a non-empty directory without ``overwrite``, is an :class:`InputError`."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a directory")
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        raise InputError(f"{out}: directory is not empty (use --overwrite to replace it)")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+
+
 def replace_dir(tmp: str | os.PathLike, out: str | os.PathLike) -> None:
     """Put the finished directory ``tmp`` at ``out``, replacing an existing ``out`` only now (two renames on
     one filesystem: a reader sees the old or the new directory, never a mix)."""

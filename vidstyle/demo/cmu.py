@@ -30,7 +30,6 @@ import csv
 import logging
 import os
 import shutil
-import tempfile
 import time
 from collections import defaultdict
 from dataclasses import asdict, dataclass, field
@@ -39,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, write_json
+from ..fileio import replace_dir, staging_dir, write_json
 from .dataset import VIEW_NAMES, validate_views
 
 log = logging.getLogger(__name__)
@@ -370,12 +369,7 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
     log_stats(stats)
     if not segments:
         raise InputError(f"{cmu_dir}: no clip of the actions {', '.join(params.class_names)} is long enough")
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out}: exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise InputError(f"{out}: directory is not empty (use --overwrite to replace it)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    tmp = staging_dir(out, overwrite)
     try:
         for sub in ("videos", "labels"):
             (tmp / sub).mkdir()

@@ -23,7 +23,6 @@ from __future__ import annotations
 import logging
 import os
 import shutil
-import tempfile
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -31,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, write_json
+from ..fileio import replace_dir, staging_dir, write_json
 from .actions import ACTIONS, CLASSES
 from .performer import Performer
 from .timeline import Take, build_take, performance_plan, single_action_plan
@@ -224,12 +223,7 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
 
     params.validate()
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out}: exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise InputError(f"{out}: directory is not empty (use --overwrite to replace it)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    tmp = staging_dir(out, overwrite)
     try:
         for sub in ("videos", "labels", "mocap"):
             (tmp / sub).mkdir()
