@@ -43,6 +43,21 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         raise
 
 
+def outputs_by_stem(inputs, out_dir: str | os.PathLike, ext: str) -> list[Path]:
+    """``<out_dir>/<input stem><ext>`` per input; two inputs with the same stem are an :class:`InputError`
+    (one output would overwrite the other)."""
+    out_dir = Path(out_dir)
+    seen: dict[str, str] = {}
+    paths = []
+    for item in inputs:
+        stem = Path(item).stem
+        if stem in seen:
+            raise InputError(f"{item}: same output name {stem}{ext} as {seen[stem]}; rename one of them")
+        seen[stem] = str(item)
+        paths.append(out_dir / f"{stem}{ext}")
+    return paths
+
+
 def staging_dir(out: str | os.PathLike, overwrite: bool = False) -> Path:
     """A fresh hidden directory beside ``out`` to build it in (finish with :func:`replace_dir`). An ``out``
     that is a file, or a non-empty directory without ``overwrite``, is an :class:`InputError`."""

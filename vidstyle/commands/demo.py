@@ -20,6 +20,12 @@ def register(app: typer.Typer) -> None:
     app.add_typer(demo_app, name="demo")
 
 
+# options both dataset commands take
+_OVERWRITE = typer.Option(False, "--overwrite", help="Replace a non-empty --out (only once the new dataset is complete).")
+_JOBS = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores).")
+_SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
+
+
 @demo_app.command("make-dataset")
 def make_dataset_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
@@ -37,11 +43,9 @@ def make_dataset_cmd(
     background: str = typer.Option(None, "--background", help="Video background: texture or plain [texture]."),
     no_video: bool = typer.Option(False, "--no-video", help="Write mocap and labels only (no rendering; the manifest's video and truth paths then do not exist)."),
     small: bool = typer.Option(False, "--small", help="A small dataset for tests and CI (explicit options still apply)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a non-empty --out (only once the new dataset "
-                                   "is complete)."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
-    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of "
-                                  "local workers."),
+    overwrite: bool = _OVERWRITE,
+    jobs: int = _JOBS,
+    scheduler: str = _SCHEDULER,
 ) -> None:
     """Generate the demo dataset: single-action videos (every performer x action x view) and long
     performances of each performer following their own action chain, each with per-frame labels,
@@ -135,11 +139,9 @@ def make_cmu_dataset_cmd(
                                "remove the performer's horizontal drift (a panning camera), so walkers are not "
                                "drawn smaller than performers who stay on the spot."),
     seed: int = typer.Option(0, "--seed", help="Everything is drawn from this seed (same seed, same files)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a non-empty --out (only once the new dataset "
-                                   "is complete)."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
-    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of "
-                                  "local workers."),
+    overwrite: bool = _OVERWRITE,
+    jobs: int = _JOBS,
+    scheduler: str = _SCHEDULER,
 ) -> None:
     """Render CMU mocap clips into a recognition dataset with the demo's layout and schema, one performer
     per CMU subject (so an unseen-performer split tests on unseen subjects).

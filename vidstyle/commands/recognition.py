@@ -13,6 +13,7 @@ import numpy as np
 import typer
 
 from ..errors import InputError
+from ..fileio import outputs_by_stem
 from ..parallel import parallel_map
 from ._evaluate import evaluate_app
 
@@ -237,16 +238,8 @@ def recognize(
     for p in inputs:
         if not p.exists():
             raise InputError(f"{p}: file not found")
-    if out_dir is not None:
-        stems: dict[str, Path] = {}
-        for p in inputs:
-            if p.stem in stems:
-                raise InputError(f"{p}: same output name {p.stem}.json as {stems[p.stem]}; rename one of them")
-            stems[p.stem] = p
+    targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
     _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
-    targets = [out] if out is not None else [out_dir / f"{p.stem}.json" for p in inputs]
-    if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
     items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
     parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
     if out_dir is not None:

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import write_npz
+from ..fileio import outputs_by_stem, write_npz
 from .salient import SalientParams, salient_points
 from .sift3d import VARIANTS, Sift3DParams, describe, params_json
 from .videoio import read_gray
@@ -120,20 +120,6 @@ def process_video(
     return {"video": str(video), "out": str(out_path), "frames": int(v.frames.shape[0]), "points": n}
 
 
-def output_paths(videos: Sequence[str | os.PathLike], out_dir: str | os.PathLike) -> list[Path]:
-    """``<out_dir>/<stem>.npz`` per video; two videos with the same stem are an error."""
-    out_dir = Path(out_dir)
-    seen: dict[str, str] = {}
-    paths = []
-    for v in videos:
-        stem = Path(v).stem
-        if stem in seen:
-            raise InputError(f"{v}: same output name {stem}.npz as {seen[stem]}; rename one of them")
-        seen[stem] = str(v)
-        paths.append(out_dir / f"{stem}.npz")
-    return paths
-
-
 def _process_item(item: tuple) -> dict[str, Any]:
     return process_video(*item)
 
@@ -159,7 +145,7 @@ def run_features(
     for v in videos:
         if not Path(v).is_file():
             raise InputError(f"{v}: file not found")
-    outs = output_paths(videos, out_dir)
+    outs = outputs_by_stem(videos, out_dir, ".npz")
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     items = [(str(v), str(o), variant, salient, sift) for v, o in zip(videos, outs)]
     return parallel_map(_process_item, items, jobs=jobs, scheduler=scheduler, description="features")
