@@ -1,0 +1,267 @@
+"""What every artifact owner module shares: the error, the ``kind`` + ``schema_version`` header, strict JSON
+reading, and field checks that name the file and the field.
+
+An owner module (``vidstyle/formats/<artifact>.py``) defines a typed object and ``read_<artifact>`` /
+``write_<artifact>``. Its reader validates every field and raises :class:`FormatError`
+(``"<file>: <field>: <problem>"``), and nothing else, whatever the bytes; its writer validates the object
+first and writes atomically (temporary file + rename), so an invalid object never reaches disk.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..fileio import write_text
+
+
+class FormatError(InputError):
+    """A file that is not a valid artifact of its kind. The message names the file and the field."""
+
+    def __init__(self, path: str | os.PathLike | None, field: str | None, problem: str) -> None:
+        self.path = None if path is None else str(path)
+        self.field = field
+        self.problem = problem
+        where = f"{self.path}: " if self.path else ""
+        what = f"{field}: " if field else ""
+        super().__init__(f"{where}{what}{problem}")
+
+
+def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any:
+    """Parse ``path`` as UTF-8 JSON (a BOM is tolerated; UTF-16, binary, a directory are errors)."""
+    path = Path(path)
+    if path.is_dir():
+        raise FormatError(path, None, "is a directory, not a file")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise FormatError(path, None, "file not found") from None
+    except OSError as e:
+        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
+    if len(raw) > max_bytes:
+        raise FormatError(path, None, f"larger than {max_bytes} bytes")
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or (len(raw) > 1 and raw[1:2] == b"\x00"):
+        raise FormatError(path, None, "is UTF-16 text; save it as UTF-8")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise FormatError(path, None, f"not UTF-8 text (a binary file?) at byte {e.start}") from None
+    try:
+        return json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as e:
+        raise FormatError(path, None, f"not valid JSON ({e.msg} at line {e.lineno} column {e.colno})") from None
+    except (ValueError, RecursionError) as e:
+        raise FormatError(path, None, f"not valid JSON ({e})") from None
+
+
+def _reject_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def check_header(
+    doc: Any, path: str | os.PathLike | None, kind: str, versions: Iterable[int], legacy: bool = False
+) -> int:
+    """Check ``doc`` is an object of ``kind`` at a supported ``schema_version``; return the version.
+
+    ``legacy``: a document without ``kind`` and ``schema_version`` is schema 1 (files written before
+    headers existed)."""
+    versions = tuple(versions)
+    if not isinstance(doc, dict):
+        raise FormatError(path, None, f"expected a JSON object ({kind}), got {_type(doc)}")
+    if legacy and "kind" not in doc and "schema_version" not in doc:
+        return 1
+    got = doc.get("kind")
+    if got != kind:
+        raise FormatError(path, "kind", f"expected {kind!r}, got {got!r}")
+    v = doc.get("schema_version")
+    if not (isinstance(v, int) and not isinstance(v, bool)) or v not in versions:
+        raise FormatError(path, "schema_version", f"{v!r} is not supported (expected {', '.join(map(str, versions))})")
+    return v
+
+
+def header(kind: str, version: int) -> dict[str, Any]:
+    return {"kind": kind, "schema_version": version}
+
+
+def write_json_document(path: str | os.PathLike, doc: Any) -> None:
+    """Atomic, UTF-8, finite numbers only (``allow_nan=False``), newline at the end."""
+    write_text(path, json.dumps(doc, indent=2, allow_nan=False, default=_json_default) + "\n")
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def _type(x: Any) -> str:
+    return {dict: "an object", list: "a list", str: "a string", bool: "a boolean", type(None): "null",
+            int: "an integer", float: "a number"}.get(type(x), type(x).__name__)
+
+
+class Fields:
+    """Checks on one JSON object that raise :class:`FormatError` naming ``path`` and the dotted field."""
+
+    def __init__(self, obj: Any, path: str | os.PathLike | None, prefix: str = "") -> None:
+        self.path = path
+        self.prefix = prefix
+        if not isinstance(obj, dict):
+            raise FormatError(path, prefix or None, f"expected an object, got {_type(obj)}")
+        self.obj = obj
+
+    def name(self, key: str | int) -> str:
+        if isinstance(key, int):
+            return f"{self.prefix}[{key}]"
+        return f"{self.prefix}.{key}" if self.prefix else key
+
+    def fail(self, key: str | int | None, problem: str) -> FormatError:
+        return FormatError(self.path, self.prefix if key is None else self.name(key), problem)
+
+    def has(self, key: str) -> bool:
+        return key in self.obj
+
+    def get(self, key: str, required: bool = True) -> Any:
+        if key not in self.obj:
+            if required:
+                raise FormatError(self.path, self.name(key), "missing")
+            return None
+        return self.obj[key]
+
+    def str(self, key: str, required: bool = True, default: str | None = None, choices: Sequence[str] | None = None,
+            nonempty: bool = False) -> str | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return default
+        if not isinstance(v, str):
+            raise self.fail(key, f"expected a string, got {_type(v)}")
+        if nonempty and not v:
+            raise self.fail(key, "must not be empty")
+        if choices is not None and v not in choices:
+            raise self.fail(key, f"{v!r} is not one of {', '.join(map(repr, choices))}")
+        return v
+
+    def int(self, key: str, required: bool = True, default: int | None = None, min: int | None = None,
+            max: int | None = None) -> int | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return default
+        return check_int(v, self.path, self.name(key), min, max)
+
+    def number(self, key: str, required: bool = True, default: float | None = None, min: float | None = None,
+               max: float | None = None, positive: bool = False) -> float | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return default
+        return check_number(v, self.path, self.name(key), min, max, positive)
+
+    def bool(self, key: str, required: bool = True, default: bool | None = None) -> bool | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return default
+        if not isinstance(v, bool):
+            raise self.fail(key, f"expected true or false, got {_type(v)}")
+        return v
+
+    def list(self, key: str, required: bool = True, default: list | None = None, min_len: int = 0,
+             max_len: int | None = None) -> list | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return default
+        if not isinstance(v, list):
+            raise self.fail(key, f"expected a list, got {_type(v)}")
+        if len(v) < min_len:
+            raise self.fail(key, f"expected at least {min_len} item(s), got {len(v)}")
+        if max_len is not None and len(v) > max_len:
+            raise self.fail(key, f"expected at most {max_len} item(s), got {len(v)}")
+        return v
+
+    def str_list(self, key: str, required: bool = True, unique: bool = False, min_len: int = 0,
+                 nonempty_items: bool = True) -> list[str] | None:
+        v = self.list(key, required, min_len=min_len)
+        if v is None:
+            return None
+        for i, s in enumerate(v):
+            if not isinstance(s, str) or (nonempty_items and not s):
+                raise FormatError(self.path, f"{self.name(key)}[{i}]", f"expected a non-empty string, got {s!r}"[:200])
+        if unique and len(set(v)) != len(v):
+            dup = next(s for s in v if v.count(s) > 1)
+            raise self.fail(key, f"{dup!r} appears more than once")
+        return v
+
+    def sub(self, key: str, required: bool = True) -> "Fields | None":
+        v = self.get(key, required)
+        if v is None and not required:
+            return None
+        return Fields(v, self.path, self.name(key))
+
+    def array(self, key: str, shape: tuple[int | None, ...] | None = None, dtype=np.float64,
+              required: bool = True, finite: bool = True) -> np.ndarray | None:
+        v = self.get(key, required)
+        if v is None and not required:
+            return None
+        return check_array(v, self.path, self.name(key), shape, dtype, finite)
+
+
+def check_int(v: Any, path, field: str, min: int | None = None, max: int | None = None) -> int:
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        if isinstance(v, float) and v.is_integer() and abs(v) < 2**53:
+            v = int(v)
+        else:
+            raise FormatError(path, field, f"expected an integer, got {_type(v)} {v!r}"[:200])
+    v = int(v)
+    if min is not None and v < min:
+        raise FormatError(path, field, f"must be at least {min}, got {v}")
+    if max is not None and v > max:
+        raise FormatError(path, field, f"must be at most {max}, got {v}")
+    return v
+
+
+def check_number(v: Any, path, field: str, min: float | None = None, max: float | None = None,
+                 positive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.number)):
+        raise FormatError(path, field, f"expected a number, got {_type(v)}")
+    v = float(v)
+    if not math.isfinite(v):
+        raise FormatError(path, field, f"must be a finite number, got {v}")
+    if positive and not v > 0:
+        raise FormatError(path, field, f"must be positive, got {v}")
+    if min is not None and v < min:
+        raise FormatError(path, field, f"must be at least {min}, got {v}")
+    if max is not None and v > max:
+        raise FormatError(path, field, f"must be at most {max}, got {v}")
+    return v
+
+
+def check_array(v: Any, path, field: str, shape: tuple[int | None, ...] | None = None, dtype=np.float64,
+                finite: bool = True) -> np.ndarray:
+    """``v`` (a nested list, or an array read from an .npz) as an array of ``shape`` (``None`` = any
+    length on that axis), all finite when ``finite``."""
+    try:
+        a = np.asarray(v)
+        if a.dtype == object or a.dtype.kind in "USV":
+            raise ValueError("not numeric")
+        a = a.astype(dtype, copy=False)
+    except (ValueError, TypeError, OverflowError):
+        raise FormatError(path, field, "expected a numeric array (ragged, or not numbers)") from None
+    if shape is not None:
+        if a.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, a.shape)):
+            want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+            raise FormatError(path, field, f"expected shape {want}, got {tuple(a.shape)}")
+    if finite and a.dtype.kind == "f" and a.size and not np.isfinite(a).all():
+        bad = int(np.flatnonzero(~np.isfinite(a.ravel()))[0])
+        raise FormatError(path, field, f"contains a non-finite value (NaN or inf) at flat index {bad}")
+    return a
