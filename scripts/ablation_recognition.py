@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _benchutil import RESULTS, machine, write_results
 
 from vidstyle.recognition.evaluate import evaluate_recognition
-from vidstyle.recognition.io import load_dataset
+from vidstyle.formats.dataset import read_dataset as load_dataset
 
 log = logging.getLogger("ablation")
 

@@ -72,7 +72,7 @@ def main_real(args) -> None:
     from threadpoolctl import threadpool_limits
 
     from vidstyle.recognition.evaluate import _load_set
-    from vidstyle.recognition.io import load_dataset
+    from vidstyle.formats.dataset import read_dataset as load_dataset
     from vidstyle.recognition.splits import make_split
 
     ds = load_dataset(args.dataset)

@@ -86,7 +86,7 @@ def test_manifest_schema(cmu_small):
         per[(v["performer"], v["action"])] = per.get((v["performer"], v["action"]), 0) + 1
     assert max(per.values()) <= 2
     # the loader of the recognition stage accepts it
-    from vidstyle.recognition.io import load_dataset
+    from vidstyle.formats.dataset import read_dataset as load_dataset
 
     ds = load_dataset(cmu_small[0])
     assert len(ds.videos) == len(doc["videos"]) and ds.classes == ["walk", "basketball"]

@@ -90,7 +90,7 @@ def mocap_dataset(tmp_path_factory):
 def test_dataset_manifest_schema(mocap_dataset):
     root, _ = mocap_dataset
     d = json.loads((root / "a" / "dataset.json").read_text())
-    assert d["schema_version"] == 1 and d["seed"] == 5 and d["fps"] == 20 and d["mocap_fps"] == 60
+    assert d["kind"] == "vidstyle.dataset" and d["schema_version"] == 2 and d["seed"] == 5 and d["fps"] == 20 and d["mocap_fps"] == 60
     assert d["size"] == [160, 120] and d["actions"] == list(ACTIONS) and d["classes"] == list(CLASSES)
     assert d["params"]["performers"] == 2 and d["params"]["views"] == ["front", "left"]
     assert [p["id"] for p in d["performers"]] == ["p00", "p01"]

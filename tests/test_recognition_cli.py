@@ -154,7 +154,8 @@ def test_recognize_out_dir_then_score_labels_dir(ds, tmp_path, capsys):
     assert m["source"]["model"] == str(tmp_path / "m.joblib") and m["params"]["recognizer"]["smoothing"] == "viterbi"
     # the same numbers as scoring the predictions in memory
     from vidstyle.recognition.evaluate import score_videos
-    from vidstyle.recognition.io import load_dataset, load_labels
+    from vidstyle.formats.dataset import read_dataset as load_dataset
+    from vidstyle.formats.labels import read_labels as load_labels
 
     d = load_dataset(ds)
     by = d.by_id()

@@ -10,7 +10,9 @@ import pytest
 
 from tests.conftest import SEED
 from vidstyle.features import scovanner2007 as S
-from vidstyle.recognition import ActionRecognizer, Vocabulary, load_dataset, load_features, load_labels
+from vidstyle.formats.dataset import read_dataset as load_dataset
+from vidstyle.formats.labels import read_labels as load_labels
+from vidstyle.recognition import ActionRecognizer, Vocabulary, load_features
 from vidstyle.recognition.io import VideoFeatures
 from vidstyle.recognition.recognizer import mirrored_features
 from vidstyle.recognition.splits import make_split

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from vidstyle.errors import InputError
-from vidstyle.recognition.io import Dataset, DatasetVideo
+from vidstyle.formats.dataset import Dataset, PerformerEntry, VideoEntry
 from vidstyle.recognition.splits import make_split
 
 
@@ -17,8 +17,10 @@ def dataset(n_perf=10, views=("front", "left", "right"), actions=("Jab", "Hook")
         for v in views:
             for a in list(actions) + [None]:
                 vid = f"p{p:02d}_{a or 'perf'}_{v}"
-                videos.append(DatasetVideo(vid, f"p{p:02d}", "single" if a else "performance", a, v, 0, "", "", {}))
-    return Dataset(Path("."), list(actions), list(actions), 20, 0, videos)
+                videos.append(VideoEntry(vid, f"p{p:02d}", f"labels/{vid}.json", "single" if a else "performance",
+                                         a, v, 0.0))
+    performers = [PerformerEntry(f"p{p:02d}") for p in range(n_perf)]
+    return Dataset(Path("."), 20.0, list(actions), list(actions), performers, videos, seed=0)
 
 
 @pytest.mark.parametrize("ab_by", ["performer", "video"])

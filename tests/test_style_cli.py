@@ -110,7 +110,7 @@ def test_bad_generate_input(style_file, tmp_path, capsys):
     _fails(capsys, g + ["--start", "Jab", "--model", "c"], out, "--model")
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"kind": "something"}))
-    _fails(capsys, ["generate", "--style", str(bad), "--start", "Jab", "--out", str(out)], out, "not a vidstyle style")
+    _fails(capsys, ["generate", "--style", str(bad), "--start", "Jab", "--out", str(out)], out, "kind: expected 'vidstyle.style'")
     _fails(capsys, ["generate", "--style", str(tmp_path / "none.json"), "--out", str(out)], out, "not found")
 
 
@@ -122,14 +122,14 @@ def test_bad_learn_input(tmp_path, capsys):
         good += [CLASSES[a]] * 8 + ["Guard"] * 4
     ok = _label_file(tmp_path / "ok.json", good)
     learn = ["learn-style", "--out", str(out), "--n-init", "1", "--modes", "1-2"]
-    _fails(capsys, learn + [_label_file(tmp_path / "empty.json", [])], out, "empty label file")
+    _fails(capsys, learn + [_label_file(tmp_path / "empty.json", [])], out, "labels: expected at least 1 item(s), got 0")
     _fails(capsys, learn + [_label_file(tmp_path / "one.json", ["Jab"] * 40)], out, "at least 2 events")
     single = (["Jab"] * 8 + ["Guard"] * 4) * 10
     _fails(capsys, learn + [_label_file(tmp_path / "single.json", single)], out, "2 different actions")
     _fails(capsys, learn + [_label_file(tmp_path / "idle.json", ["Guard"] * 50)], out, "no action events")
     other = _label_file(tmp_path / "other.json", ["Jab", "Kick"] * 5, classes=["Jab", "Kick", "Guard"])
     _fails(capsys, learn + [ok, other], out, "differ from")
-    _fails(capsys, learn + [_label_file(tmp_path / "x.json", ["Jab", "Kick"])], out, "not in 'classes'")
+    _fails(capsys, learn + [_label_file(tmp_path / "x.json", ["Jab", "Kick"])], out, "labels[1]: 'Kick' is not one of the classes")
     _fails(capsys, learn + [ok, "--min-run", "0"], out, "--min-run")
     _fails(capsys, learn + [ok, "--modes", "x"], out, "--modes")
     _fails(capsys, learn + [str(tmp_path / "missing.json")], out, "file not found")
@@ -175,7 +175,7 @@ def test_learn_style_dataset_mode_errors_write_nothing(dataset, tmp_path, capsys
     # recognised labels requested but missing: nothing written
     assert main(["learn-style", "--dataset", str(dataset), "--out-dir", str(out_dir),
                  "--labels-dir", str(tmp_path / "none")]) == 2
-    assert "label file not found" in capsys.readouterr().err
+    assert "recognised labels of video p00_perf0 (performer p00) not found" in capsys.readouterr().err
     assert not out_dir.exists()
     assert main(["learn-style", "--dataset", str(dataset), "--out", str(tmp_path / "x.json")]) == 2
     assert main(["learn-style"]) == 2

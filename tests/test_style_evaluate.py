@@ -86,7 +86,7 @@ def test_bad_evaluate_input(dataset, tmp_path, capsys):
     partial.mkdir()
     assert main(["evaluate", "style", "--dataset", str(dataset), "--labels-dir", str(partial),
                  "--out", str(out), *FAST]) != 0
-    assert "recognised labels for video" in capsys.readouterr().err
+    assert "recognised labels of video p00_perf0 (performer p00) not found" in capsys.readouterr().err
     assert main(["evaluate", "style", "--dataset", str(dataset), "--heldout-fraction", "1.5",
                  "--out", str(out)]) != 0
     assert not out.exists()

@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 
 from vidstyle.errors import InputError
+from vidstyle.formats.labels import FrameLabels, read_labels
 from vidstyle.style.events import (
     EventParams,
-    LabelTrack,
-    load_label_file,
     runs,
     track_to_events,
     tracks_to_events,
@@ -21,9 +20,8 @@ CLASSES = ("Jab", "Hook", "Uppercut", "Guard", "Step")
 
 
 def _track(labels, confidence=None, classes=CLASSES, path="t.json"):
-    idx = {c: i for i, c in enumerate(classes)}
-    return LabelTrack(path, tuple(classes), np.array([idx[x] for x in labels]),
-                      None if confidence is None else np.asarray(confidence, float), 20.0)
+    return FrameLabels(list(labels), tuple(classes), 20.0,
+                       confidence=None if confidence is None else np.asarray(confidence, float), path=path)
 
 
 def _events(labels, confidence=None, **kw):
@@ -96,21 +94,23 @@ def _write(tmp_path, doc, name="l.json"):
 @pytest.mark.parametrize(
     "doc, message",
     [
-        ({"classes": ["Jab", "Hook"], "labels": []}, "empty label file"),
-        ({"classes": ["Jab", "Hook"], "labels": ["Jab", "Kick"]}, "not in 'classes'"),
-        ({"classes": ["Jab", "Hook"], "labels": ["Jab"], "confidence": [0.1, 0.2]}, "confidence"),
-        ({"labels": ["Jab"]}, "'classes'"),
+        ({"classes": ["Jab", "Hook"], "labels": []}, "labels: expected at least 1"),
+        ({"classes": ["Jab", "Hook"], "labels": ["Jab", "Kick"]}, r"labels\[1\]: 'Kick' is not one of the classes"),
+        ({"classes": ["Jab", "Hook"], "labels": ["Jab"], "confidence": [0.1, 0.2]}, "confidence: expected shape"),
+        ({"kind": "vidstyle.labels", "schema_version": 2, "video": "v.mp4", "fps": 20, "labels": ["Jab"]},
+         "classes: missing"),
+        ({"classes": ["Jab", "Hook"], "labels": ["Jab"], "confidence": [float("nan")]}, "confidence: must be a finite|not valid JSON"),
         ([1, 2], "JSON object"),
     ],
 )
 def test_bad_label_files(tmp_path, doc, message):
     with pytest.raises(InputError, match=message):
-        load_label_file(_write(tmp_path, doc))
+        read_labels(_write(tmp_path, doc))
 
 
 def test_label_file_roundtrip(tmp_path):
     doc = {"video": "v.mp4", "fps": 25, "classes": list(CLASSES), "labels": ["Jab", "Guard"],
            "confidence": [0.9, 0.4], "performer": "p01"}
-    t = load_label_file(_write(tmp_path, doc))
-    assert t.labels.tolist() == [0, 3] and t.fps == 25 and t.performer == "p01"
+    t = read_labels(_write(tmp_path, doc))
+    assert t.indices().tolist() == [0, 3] and t.fps == 25 and t.performer == "p01"
     assert t.confidence.tolist() == [0.9, 0.4]

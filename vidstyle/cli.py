@@ -77,12 +77,34 @@ _register_commands()
 _arrange_help()
 
 
+def _as_flags(error: VidstyleError, argv: list[str]) -> str:
+    """The message of ``error``, with a library parameter name (:class:`ParameterError`) shown as the flag
+    of the running command that sets it (``window: ...`` -> ``--window: ...``)."""
+    from .errors import ParameterError
+
+    if not isinstance(error, ParameterError):
+        return str(error)
+    try:
+        cmd = typer.main.get_command(app)
+        for tok in argv:
+            sub = getattr(cmd, "commands", None)
+            if sub is not None and tok in sub:
+                cmd = sub[tok]
+        for p in getattr(cmd, "params", []):
+            flags = [o for o in getattr(p, "opts", []) if o.startswith("--")]
+            if p.name == error.param and flags:
+                return f"{flags[0]}: {error.problem}"
+    except Exception:  # the plain message is still right
+        pass
+    return str(error)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Console-script entry point. Returns the exit status instead of raising SystemExit."""
     try:
         app(args=argv, standalone_mode=False)
     except VidstyleError as e:
-        msg = " ".join(str(e).split())  # one line, always
+        msg = " ".join(_as_flags(e, sys.argv[1:] if argv is None else argv).split())  # one line, always
         print(f"vidstyle: error: {msg}", file=sys.stderr)
         return e.exit_code
     except typer.Exit as e:

@@ -12,3 +12,13 @@ class VidstyleError(Exception):
 
 class InputError(VidstyleError):
     """A file or argument that cannot be used (missing, unreadable, wrong shape, wrong schema)."""
+
+
+class ParameterError(InputError):
+    """A library parameter with a value it cannot take. The message names the parameter as the library
+    calls it (``"window: must be >= 1"``); the CLI shows the flag that set it (``--window``)."""
+
+    def __init__(self, param: str, problem: str) -> None:
+        self.param = param
+        self.problem = problem
+        super().__init__(f"{param}: {problem}")

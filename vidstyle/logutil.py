@@ -8,6 +8,13 @@ from typing import Iterable, Iterator, TypeVar
 T = TypeVar("T")
 
 
+def stderr_console():
+    """The console of logs, progress bars and errors: stderr (stdout carries only a command's data)."""
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
 def configure(verbosity: int = 0) -> None:
     from rich.logging import RichHandler
 
@@ -16,7 +23,7 @@ def configure(verbosity: int = 0) -> None:
         level=level,
         format="%(message)s",
         datefmt="[%X]",
-        handlers=[RichHandler(show_path=False, rich_tracebacks=False)],
+        handlers=[RichHandler(console=stderr_console(), show_path=False, rich_tracebacks=False)],
         force=True,
     )
 
@@ -25,4 +32,4 @@ def progress(items: Iterable[T], description: str, total: int | None = None) -> 
     """Iterate with a rich progress bar (on stderr; hidden when stderr is not a terminal)."""
     from rich.progress import track
 
-    yield from track(items, description=description, total=total, transient=True)
+    yield from track(items, description=description, total=total, transient=True, console=stderr_console())

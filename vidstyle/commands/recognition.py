@@ -27,10 +27,10 @@ def register(app: typer.Typer) -> None:
 
 
 def _dataset_split(dataset: Path, split: str, seed: int, test_view: Optional[str]):
-    from ..recognition.io import load_dataset
+    from ..formats.dataset import read_dataset
     from ..recognition.splits import make_split
 
-    ds = load_dataset(dataset)
+    ds = read_dataset(dataset)
     return ds, make_split(ds, split, seed=seed, test_view=test_view)
 
 
@@ -112,7 +112,8 @@ def train_recognizer(
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
 ) -> None:
     """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on set B."""
-    from ..recognition.io import features_path, load_labels
+    from ..formats.labels import check_length, read_labels
+    from ..recognition.io import features_path
     from ..recognition.recognizer import ActionRecognizer, load_many, save_model
     from ..recognition.vocabulary import Vocabulary
 
@@ -139,11 +140,10 @@ def train_recognizer(
             f"{vocab}: {len(overlap)} training file(s) also built the vocabulary (e.g. {sorted(overlap)[0]});"
             " sets A and B must be disjoint (or pass --allow-overlap)"
         )
-    tracks = [load_labels(p) for p in labels]
+    tracks = [read_labels(p) for p in labels]
     feats = load_many(features, n_jobs=jobs)
     for f, t in zip(feats, tracks):
-        if len(t.labels) != f.n_frames:
-            raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
+        check_length(t, f.n_frames, f"the features file {f.path}")
     if classes is None:
         classes = tracks[0].classes
         for t in tracks[1:]:
@@ -275,7 +275,7 @@ def _recognize_task(item: tuple) -> None:
 
 
 def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: Optional[float]) -> None:
-    from ..fileio import write_json
+    from ..formats.recognised import RecognisedLabels, write_recognised
     from ..recognition.io import load_features
 
     if input.suffix.lower() == ".npz":
@@ -289,22 +289,16 @@ def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: 
         video = str(input)
     res = rec.predict_video(feats)
     classes = [str(c) for c in rec.classes_]
-    doc = {
-        "video": video,
-        "fps": fps if fps else 20,
-        "classes": classes,
-        "labels": [classes[i] for i in res["smoothed"]],
-        "confidence": np.round(res["smoothed_confidence"], 4).tolist(),
-        "raw": [classes[i] for i in res["raw"]],
-        "raw_confidence": np.round(res["confidence"], 4).tolist(),
-        "smoothing_window": rec.smoothing_window,
-        "smoothing": rec.smoothing,
-        "model": str(model),
-        "features": str(input),
-    }
-    write_json(out, doc)
-    n = len(doc["labels"])
-    log.info("wrote %s: %d frames, %s", out, n, ", ".join(f"{c} {doc['labels'].count(c)}" for c in classes if c in doc["labels"]))
+    track = RecognisedLabels(
+        labels=[classes[i] for i in res["smoothed"]], classes=tuple(classes), fps=float(fps) if fps else 20.0,
+        video=video, confidence=np.clip(np.round(res["smoothed_confidence"], 4), 0, 1),
+        raw=[classes[i] for i in res["raw"]], raw_confidence=np.clip(np.round(res["confidence"], 4), 0, 1),
+        smoothing=str(rec.smoothing), smoothing_window=int(rec.smoothing_window), model=str(model),
+        features=str(input),
+    )
+    write_recognised(out, track)
+    n = track.n_frames
+    log.info("wrote %s: %d frames, %s", out, n, ", ".join(f"{c} {track.labels.count(c)}" for c in classes if c in track.labels))
 
 
 @evaluate_app.command("recognition")
@@ -340,9 +334,9 @@ def evaluate_recognition(
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
     from ..fileio import write_json
     from ..recognition.evaluate import confusion_png, evaluate_recognition as run, score_labels_dir
-    from ..recognition.io import load_dataset
+    from ..formats.dataset import read_dataset
 
-    ds = load_dataset(dataset)
+    ds = read_dataset(dataset)
     if labels_dir is not None:
         if features_dir is not None:
             raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")

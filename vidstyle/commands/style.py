@@ -7,9 +7,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import logging
 from pathlib import Path
 
@@ -89,43 +86,26 @@ def learn_style(
     Either LABELS... --out style.json (one performer), or --dataset DIR --out-dir DIR [--labels-dir REC]
     (one <performer>.json per performer of the dataset, from its performance videos).
     """
-    from ..fileio import read_json, write_json
-    from ..style.artifact import Style
-    from ..style.events import load_label_file
+    from ..formats.dataset import read_dataset
+    from ..formats.labels import read_labels
+    from ..formats.style import write_style
+    from ..style.artifact import Style, dataset_styles
 
     params = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
                            alpha, learn_emission, emission_prior, modes, mode_criterion)
+    # learn everything first, write afterwards: a bad file leaves no partial set of outputs
     if dataset is None:
         if not labels or out is None:
             raise InputError("learn-style: give LABELS... --out FILE, or --dataset DIR --out-dir DIR")
-        jobs = [(out, list(labels), None)]
+        styles = [(out, Style.from_tracks([read_labels(p) for p in labels], params))]
     else:
         if labels or out is not None or out_dir is None:
             raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
-        manifest = read_json(Path(dataset) / "dataset.json")
-        wanted = None if views is None else {v.strip() for v in views.split(",") if v.strip()}
-        jobs = []
-        for performer in manifest.get("performers", []):
-            pid = performer["id"]
-            vids = [v for v in manifest.get("videos", []) if v.get("performer") == pid
-                    and v.get("kind") == "performance" and (wanted is None or v.get("view") in wanted)]
-            if not vids:
-                raise InputError(f"{dataset}: performer {pid} has no performance video"
-                                 + (f" in views {views}" if views else ""))
-            files = [Path(labels_dir) / f"{v['id']}.json" if labels_dir else Path(dataset) / v["labels"] for v in vids]
-            for f in files:
-                if not f.is_file():
-                    raise InputError(f"{f}: label file not found (performer {pid})")
-            jobs.append((Path(out_dir) / f"{pid}.json", files, pid))
-    # learn everything first, write afterwards: a bad file leaves no partial set of outputs
-    styles = []
-    for dest, files, pid in jobs:
-        style = Style.from_tracks([load_label_file(p) for p in files], params)
-        if pid is not None:  # recognised label files do not name their performer; the dataset does
-            style.performer = pid
-        styles.append((dest, style))
+        wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
+        styles = [(Path(out_dir) / f"{pid}.json", style)
+                  for pid, style in dataset_styles(read_dataset(dataset), params, labels_dir, wanted)]
     for dest, style in styles:
-        write_json(dest, style.to_dict())
+        write_style(dest, style)
         log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
                  style.model_b.n_modes_)
 
@@ -140,30 +120,16 @@ def generate(
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
 ) -> None:
     """Generate a new action sequence (with durations) in a learned style."""
-    from ..fileio import write_json, write_text
-    from ..style.artifact import Style
+    from ..fileio import write_text
+    from ..formats.sequence import ActionSequence, format_sequence
+    from ..formats.style import read_style
 
     if fmt not in FORMATS:
         raise InputError(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
-    style = Style.load(style_path)
+    style = read_style(style_path)
     events = style.generate(length, start=start, seed=seed, model=model)
-    if fmt == "json":
-        doc = {"kind": "vidstyle.sequence", "schema_version": 1, "style": str(style_path), "model": model,
-               "start": events[0]["action"], "length": length, "seed": seed, "fps": style.fps,
-               "events": events}
-        if out is not None:
-            write_json(out, doc)
-            return
-        text = json.dumps(doc, indent=2) + "\n"
-    elif fmt == "csv":
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(["index", "action", "duration_frames", "start_frame"])
-        for i, e in enumerate(events):
-            w.writerow([i, e["action"], e["duration_frames"], e["start_frame"]])
-        text = buf.getvalue()
-    else:
-        text = " ".join(e["action"] for e in events) + "\n"
+    seq = ActionSequence.from_events(events, style.fps, style=str(style_path), model=model, seed=seed)
+    text = format_sequence(seq, fmt)
     if out is not None:
         write_text(out, text)
     else:
@@ -194,7 +160,7 @@ def evaluate_style(
     mode_criterion: str = _CRIT,
 ) -> None:
     """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
-    from ..fileio import write_json
+    from ..formats.metrics import write_metrics
     from ..style.evaluate import EvalParams, evaluate_dataset
 
     if labels_dir is not None and not labels_dir.is_dir():
@@ -205,7 +171,7 @@ def evaluate_style(
                         generate_length=generate_length)
     metrics = evaluate_dataset(dataset, params, labels_dir)
     if out is not None:
-        write_json(out, metrics)
+        write_metrics(out, metrics)
     _print_table(metrics)
 
 

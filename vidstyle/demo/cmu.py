@@ -4,7 +4,7 @@ Same layout and manifest schema as the demo dataset (:mod:`vidstyle.demo.dataset
 features`` and ``vidstyle evaluate recognition`` run on it unchanged; the "performer" of a video is its
 CMU subject (``s05`` = subject 05), so an unseen-performer split tests on unseen subjects::
 
-    dataset.json                  manifest (schema_version 1)
+    dataset.json                  manifest (vidstyle.formats.dataset)
     videos/<id>.mp4 (+ .truth.npz) 160x120 at 20 fps; <id> = s<subject>_<trial>_w<window>_<view>
     labels/<id>.json              one label per video frame (the whole window is its clip's action)
 
@@ -38,12 +38,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, staging_dir, write_json
+from ..fileio import replace_dir, staging_dir
+from ..formats.dataset import write_dataset
+from ..formats.labels import write_labels
 from .dataset import VIEW_NAMES, validate_views
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 DEFAULT_ACTIONS = "walk,run,jump,punch,dance,basketball"
 _MIN_SUBJECTS = 3  # an unseen-subject split needs the action from a test subject and >= 2 training subjects
 
@@ -346,7 +347,7 @@ def render_segment(job: _Job) -> list[dict]:
                   "source_action": seg.clip.source_action,
                   # BVH frame numbers (frame 0 = the T-pose) of the first and one past the last shown frame
                   "bvh_start": 1 + int(round(seg.start * ratio)), "bvh_end": 1 + int(round((seg.end - 1) * ratio)) + 1}
-        write_json(root / labels_rel, label_document(seg.label, n, float(p.fps), job.classes, video=video_rel,
+        write_labels(root / labels_rel, label_document(seg.label, n, float(p.fps), job.classes, video=video_rel,
                                                      performer=seg.performer, view=view, **source))
         entries.append({"id": vid, "performer": seg.performer, "kind": "single", "action": seg.label,
                         "view": view, "azimuth_deg": azimuth, "video": video_rel, "labels": labels_rel,
@@ -387,7 +388,6 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
                                "actions": sorted({s.label for s in mine}),
                                "clips": sorted({s.clip.file for s in mine}), "segments": len(mine)})
         manifest = {
-            "schema_version": SCHEMA_VERSION,
             "source": "cmu",
             "seed": params.seed,
             "fps": params.fps,
@@ -399,7 +399,7 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
             "stats": stats,
             "videos": videos,
         }
-        write_json(tmp / "dataset.json", manifest)
+        write_dataset(tmp / "dataset.json", manifest)
         replace_dir(tmp, out)
         log.info("wrote %s: %d subjects, %d windows, %d videos (%d frames) in %.1f s", out, len(performers),
                  len(segments), len(videos), sum(v["frames"] for v in videos), time.perf_counter() - t0)

@@ -2,11 +2,11 @@
 
 Layout of ``DIR`` (paths in the manifest are relative to ``DIR``)::
 
-    dataset.json                      manifest (schema_version 1): params, performers with their true
+    dataset.json                      manifest (vidstyle.formats.dataset): params, performers with their true
                                       chains, one entry per video
     videos/<id>.mp4                   160x120 at 20 fps; <id> = <performer>_<take>_<view>
     videos/<id>.truth.npz             renderer sidecar (2D/3D joints, camera, labels per frame)
-    labels/<id>.json                  per video frame: labels, transitions, events, chain
+    labels/<id>.json                  (vidstyle.formats.labels) per video frame: labels, transitions, events, chain
     mocap/<take>.bvh                  the motion the take's videos were rendered from (60 fps)
     mocap/<take>.labels.json          the same labels per mocap frame
 
@@ -30,14 +30,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, staging_dir, write_json
+from ..fileio import replace_dir, staging_dir
+from ..formats.dataset import write_dataset
+from ..formats.labels import write_labels
 from .actions import ACTIONS, CLASSES
 from .performer import Performer
 from .timeline import Take, build_take, performance_plan, single_action_plan
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 VIEW_NAMES = ("front", "left", "right", "back")
 _PERF_TAKE_BASE = 100  # take numbers of performances (single-action takes are 0..5)
 
@@ -171,7 +172,7 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
     bvh_rel = f"mocap/{name}.bvh"
     bvh_labels_rel = f"mocap/{name}.labels.json"
     write_bvh(tk.motion, root / bvh_rel)
-    write_json(root / bvh_labels_rel, label_document(tk.labels, float(params.mocap_fps), tk.chain,
+    write_labels(root / bvh_labels_rel, label_document(tk.labels, float(params.mocap_fps), tk.chain,
                                                     bvh=bvh_rel, performer=performer.id))
     video_labels = tk.video_labels
     is_transition = np.zeros(len(tk.labels), dtype=bool)
@@ -190,7 +191,7 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
                            elevation_deg=params.elevation_deg, appearance=Appearance.random(_appearance_seed(params, index)),
                            background=params.background, noise_sigma=params.noise_sigma,
                            seed=_render_seed(params, index, take, vi), labels=tk.labels, transitions=is_transition)
-        write_json(root / labels_rel, label_document(video_labels, float(params.fps), tk.chain, video=video_rel,
+        write_labels(root / labels_rel, label_document(video_labels, float(params.fps), tk.chain, video=video_rel,
                                                      performer=performer.id, view=view))
         entry = {"id": vid, "performer": performer.id, "kind": kind}
         if kind == "single":
@@ -233,7 +234,6 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
                                description="demo takes")
         videos = sorted((e for entries in results for e in entries), key=lambda e: e["id"])
         manifest = {
-            "schema_version": SCHEMA_VERSION,
             "seed": params.seed,
             "fps": params.fps,
             "mocap_fps": params.mocap_fps,
@@ -244,7 +244,7 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
             "performers": [p.to_dict() for p in performers],
             "videos": videos,
         }
-        write_json(tmp / "dataset.json", manifest)
+        write_dataset(tmp / "dataset.json", manifest)
         replace_dir(tmp, out)
         log.info("wrote %s: %d performers, %d videos (%d frames) in %.1f s", out, len(performers), len(videos),
                  sum(v["frames"] for v in videos), time.perf_counter() - t0)

@@ -3,7 +3,7 @@ PCA, one-vs-all + one-vs-one SVMs, smoothing; splits, metrics and ONNX export.
 
 Modules:
 
-- :mod:`~vidstyle.recognition.io` — features / labels / dataset manifest readers (schemas there).
+- :mod:`~vidstyle.recognition.io` — the features reader (labels and manifest: :mod:`vidstyle.formats`).
 - :mod:`~vidstyle.recognition.vocabulary` — :class:`Vocabulary` (MiniBatch, hierarchical tree, full k-means).
 - :mod:`~vidstyle.recognition.histograms` — :class:`FrameFeaturizer`, :class:`WordGrouping`, normalisation.
 - :mod:`~vidstyle.recognition.classifier` — :class:`OvaOvoSVC` (thesis) and :class:`OvrSVC` (baseline).
@@ -18,7 +18,7 @@ Modules:
 
 from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
 from .histograms import FrameFeaturizer, WordGrouping, normalize_rows
-from .io import VideoFeatures, load_dataset, load_features, load_labels
+from .io import VideoFeatures, load_features
 from .recognizer import ActionRecognizer, load_model, save_model
 from .smoothing import smooth_labels
 from .splits import Split, make_split
@@ -34,9 +34,7 @@ __all__ = [
     "Vocabulary",
     "WordGrouping",
     "combine_ova_ovo",
-    "load_dataset",
     "load_features",
-    "load_labels",
     "load_model",
     "make_split",
     "normalize_rows",

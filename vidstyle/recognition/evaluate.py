@@ -29,7 +29,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError
-from .io import Dataset, features_path, load_features, load_labels
+from ..formats.dataset import Dataset
+from ..formats.labels import check_length, read_labels
+from ..formats.recognised import read_recognised
+from .io import features_path, load_features
 from .splits import make_split
 
 log = logging.getLogger(__name__)
@@ -177,9 +180,8 @@ def _load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: 
 
     def one(i):
         f = load_features(features_path(features_dir, i))
-        t = load_labels(dataset.labels_path(by_id[i]))
-        if len(t.labels) != f.n_frames:
-            raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
+        t = read_labels(dataset.labels_path(by_id[i]))
+        check_length(t, f.n_frames, f"the features file {f.path}")
         return f, t
 
     pairs = Parallel(n_jobs=n_jobs or 1, prefer="threads")(delayed(one)(i) for i in ids)
@@ -294,7 +296,7 @@ def score_labels_dir(
     which videos it must not have seen), else the ``split_kind``/``seed``/``test_view`` split of
     ``dataset``. Every test video needs a labels file; a model whose training files include a test video
     is refused (its scores would not be of unseen data)."""
-    from ..fileio import read_json
+    from ..formats import FormatError
     from .recognizer import read_header
 
     labels_dir = Path(labels_dir)
@@ -328,21 +330,16 @@ def score_labels_dir(
         path = labels_dir / f"{i}.json"
         if not path.is_file():
             raise InputError(f"{path}: labels file of test video {i} not found")
-        doc = read_json(path)
-        if not isinstance(doc, dict) or not isinstance(doc.get("labels"), list):
-            raise InputError(f"{path}: not a labels file of `vidstyle recognize` (no 'labels' list)")
-        truth = load_labels(dataset.labels_path(by_id[i])).labels
+        truth = read_labels(dataset.labels_path(by_id[i])).labels
+        rec = read_recognised(path, n_frames=len(truth))
         if classes is None:
-            classes = list(doc.get("classes") or sorted(set(truth)))
+            classes = list(rec.classes)
         index = {c: k for k, c in enumerate(classes)}
         pred = {}
-        for key, name in (("smoothed", "labels"), ("raw", "raw")):
-            seq = doc.get(name, doc["labels"])
-            if len(seq) != len(truth):
-                raise InputError(f"{path}: {len(seq)} '{name}' labels, the ground truth has {len(truth)} frames")
+        for key, seq in (("smoothed", rec.labels), ("raw", rec.raw if rec.raw is not None else rec.labels)):
             bad = sorted({c for c in seq if c not in index})
             if bad:
-                raise InputError(f"{path}: labels not among the classes {classes}: {bad[:5]}")
+                raise FormatError(path, "labels", f"classes {bad[:5]} are not among the dataset's classes {classes}")
             pred[key] = np.array([index[c] for c in seq], np.int64)
         outputs.append(pred)
         truths.append(truth)

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from .io import Dataset
+from ..formats.dataset import Dataset
 
 log = logging.getLogger(__name__)
 

@@ -1,34 +1,6 @@
 """The learned style of a performer (``style.json``) and generation of new action sequences.
 
-``style.json`` schema (``schema_version`` 1; matrices are row-stochastic lists of lists, rows and
-columns in the order of ``actions``; modes of model (b) are rows of its matrices)::
-
-    {
-      "schema_version": 1, "kind": "vidstyle.style",
-      "seed": 0,
-      "params": {"events": {ignore, min_confidence, min_run, max_gap, split_repeats, repeat_factor},
-                 "alpha", "learn_emission", "emission_prior", "emission_eps", "n_init", "n_iter", "tol",
-                 "k_range", "mode_criterion", "mode_alpha", "mode_emission_alpha"},
-      "classes": [...],                # the label files' classes
-      "actions": [...],                # the chain's actions = classes minus params.events.ignore
-      "fps": 20.0,
-      "performer": "p03" | null,       # when every label file names the same performer
-      "sources": [{"labels": path, "video", "performer", "n_frames", "n_events"}],
-      "n_sequences": int, "n_events": int,
-      "action_counts": {action: events},
-      "model_a": {"type": "action-hmm", "start": [A], "transition": [A][A], "emission": [A][A],
-                  "log_likelihood": float, "restart_log_likelihoods": [...], "converged": bool,
-                  "n_iter": int},
-      "model_b": {"type": "mode-hmm", "n_modes": K, "start": [K], "transition": [K][K],
-                  "emission": [K][A], "log_likelihood", "bic", "selection": {"criterion",
-                  "scores": {"K": score}}, "restart_log_likelihoods", "converged", "n_iter",
-                  "action_transition": [A][A]},
-      "bigram": {"type": "bigram", "start": [A], "transition": [A][A], "log_likelihood": float},
-      "durations": {action: {"distribution": "lognormal", "mu", "sigma", "n", "mean_frames",
-                             "sd_frames"}}
-    }
-
-Log-likelihoods are natural logs over the training events.
+The file schema is owned by :mod:`vidstyle.formats.style` (``read_style`` / ``write_style``).
 """
 
 from __future__ import annotations
@@ -42,12 +14,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .events import EventParams, EventSequence, LabelTrack, action_names_of, tracks_to_events
+from ..formats.labels import FrameLabels
+from .events import EventParams, EventSequence, action_names_of, tracks_to_events
 from .models import ActionHMM, BigramModel, DurationModel, ModeHMM, require_transitions
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 MODELS = ("a", "b", "bigram")
 
 
@@ -191,7 +163,7 @@ class Style:
         )
 
     @classmethod
-    def from_tracks(cls, tracks: Sequence[LabelTrack], params: StyleParams) -> Style:
+    def from_tracks(cls, tracks: Sequence[FrameLabels], params: StyleParams) -> Style:
         """Label tracks -> events -> style; every track must share one class list."""
         if not tracks:
             raise InputError("LABELS: no label files given")
@@ -199,8 +171,10 @@ class Style:
         seqs = tracks_to_events(tracks, params.events, names)
         for t, s in zip(tracks, seqs):
             s.meta.update(video=t.video, n_frames=len(t.labels))
-            if not len(s):
-                log.warning("%s: no action events after filtering", t.path)
+        if any(len(s) for s in seqs):  # (with no events at all, fit's error says it, once)
+            for t, s in zip(tracks, seqs):
+                if not len(s):
+                    log.warning("%s: no action events after filtering", t.path)
         what = tracks[0].path if len(tracks) == 1 else f"{len(tracks)} label files"
         return cls.fit(seqs, params, classes=tracks[0].classes, what=what)
 
@@ -246,125 +220,45 @@ class Style:
             for a, d, f in zip(acts.tolist(), durs.tolist(), starts.tolist())
         ]
 
-    # -- serialisation -------------------------------------------------------------------------------
+    # -- serialisation (the schema is owned by vidstyle.formats.style) ---------------------------------
 
     def to_dict(self) -> dict[str, Any]:
-        a, b, g, d = self.model_a, self.model_b, self.bigram, self.durations
-        return {
-            "schema_version": SCHEMA_VERSION,
-            "kind": "vidstyle.style",
-            "seed": self.params.seed,
-            "params": self.params.to_dict(),
-            "classes": list(self.classes),
-            "actions": list(self.actions),
-            "fps": self.fps,
-            "performer": self.performer,
-            "sources": self.sources,
-            "n_sequences": self.n_sequences,
-            "n_events": int(self.action_counts.sum()),
-            "action_counts": {n: int(c) for n, c in zip(self.actions, self.action_counts)},
-            "model_a": {
-                "type": "action-hmm",
-                "start": a.start_, "transition": a.transition_, "emission": a.emission_,
-                "log_likelihood": a.log_likelihood_,
-                "restart_log_likelihoods": a.restart_log_likelihoods_,
-                "converged": a.converged_, "n_iter": a.n_iter_,
-            },
-            "model_b": {
-                "type": "mode-hmm",
-                "n_modes": b.n_modes_,
-                "start": b.start_, "transition": b.transition_, "emission": b.emission_,
-                "log_likelihood": b.log_likelihood_, "bic": b.bic_,
-                "selection": {"criterion": b.criterion,
-                              "scores": {str(k): v for k, v in b.selection_scores_.items()}},
-                "restart_log_likelihoods": b.restart_log_likelihoods_,
-                "converged": b.converged_, "n_iter": b.n_iter_,
-                "action_transition": b.action_transition(),
-            },
-            "bigram": {"type": "bigram", "start": g.start_, "transition": g.transition_,
-                       "log_likelihood": g.log_likelihood_},
-            "durations": {
-                n: {"distribution": "lognormal", "mu": float(d.mu_[i]), "sigma": float(d.sigma_[i]),
-                    "n": int(d.count_[i]),
-                    "mean_frames": None if np.isnan(d.mean_frames_[i]) else float(d.mean_frames_[i]),
-                    "sd_frames": None if np.isnan(d.sd_frames_[i]) else float(d.sd_frames_[i])}
-                for i, n in enumerate(self.actions)
-            },
-        }
+        from ..formats.style import style_to_dict
+
+        return style_to_dict(self)
 
     @classmethod
     def from_dict(cls, doc: Any, path: str = "style.json") -> Style:
-        """Rebuild a style from its JSON document (validated: an :class:`InputError` names the field)."""
-        if not isinstance(doc, dict) or doc.get("kind") != "vidstyle.style":
-            raise InputError(f"{path}: not a vidstyle style file (missing \"kind\": \"vidstyle.style\")")
-        if doc.get("schema_version") != SCHEMA_VERSION:
-            raise InputError(f"{path}: schema_version {doc.get('schema_version')!r} is not supported "
-                             f"(expected {SCHEMA_VERSION})")
-        try:
-            actions = [str(x) for x in doc["actions"]]
-            A = len(actions)
-            p = doc["params"]
-            ev = EventParams(**{**p["events"], "ignore": tuple(p["events"]["ignore"])})
-            params = StyleParams(**{**p, "events": ev, "k_range": tuple(p["k_range"])})
+        """Rebuild a style from its JSON document (validated: a FormatError names the file and field)."""
+        from ..formats.style import parse_style
 
-            def mat(section: str, key: str, shape: tuple[int, ...]) -> np.ndarray:
-                m = np.asarray(doc[section][key], dtype=float)
-                if m.shape != shape or not np.all(np.isfinite(m)) or np.any(m < 0):
-                    raise InputError(f"{path}: {section}.{key} must be a {shape} non-negative array")
-                if not np.allclose(m.sum(axis=-1), 1.0, atol=1e-6):
-                    raise InputError(f"{path}: {section}.{key} rows must sum to 1")
-                return m
-
-            a = ActionHMM(n_actions=A, random_state=params.seed)
-            a.n_actions_ = A
-            a.start_ = mat("model_a", "start", (A,))
-            a.transition_ = mat("model_a", "transition", (A, A))
-            a.emission_ = mat("model_a", "emission", (A, A))
-            a.log_likelihood_ = float(doc["model_a"]["log_likelihood"])
-            a.restart_log_likelihoods_ = list(doc["model_a"].get("restart_log_likelihoods", []))
-            a.converged_ = bool(doc["model_a"].get("converged", True))
-            a.n_iter_ = int(doc["model_a"].get("n_iter", 0))
-            K = int(doc["model_b"]["n_modes"])
-            b = ModeHMM(n_modes=K, n_actions=A, random_state=params.seed + 1)
-            b.n_actions_, b.n_modes_ = A, K
-            b.start_ = mat("model_b", "start", (K,))
-            b.transition_ = mat("model_b", "transition", (K, K))
-            b.emission_ = mat("model_b", "emission", (K, A))
-            b.log_likelihood_ = float(doc["model_b"]["log_likelihood"])
-            b.restart_log_likelihoods_ = list(doc["model_b"].get("restart_log_likelihoods", []))
-            b.converged_ = bool(doc["model_b"].get("converged", True))
-            b.n_iter_ = int(doc["model_b"].get("n_iter", 0))
-            b.bic_ = float(doc["model_b"].get("bic", float("nan")))
-            sel = doc["model_b"].get("selection", {})
-            b.criterion = sel.get("criterion", params.mode_criterion)
-            b.selection_scores_ = {int(k): float(v) for k, v in sel.get("scores", {}).items()}
-            g = BigramModel(n_actions=A, alpha=params.alpha)
-            g.n_actions_ = A
-            g.start_ = mat("bigram", "start", (A,))
-            g.transition_ = mat("bigram", "transition", (A, A))
-            g.log_likelihood_ = float(doc["bigram"]["log_likelihood"])
-            d = DurationModel(n_actions=A)
-            d.n_actions_ = A
-            d.mu_ = np.array([float(doc["durations"][n]["mu"]) for n in actions])
-            d.sigma_ = np.array([float(doc["durations"][n]["sigma"]) for n in actions])
-            d.count_ = np.array([int(doc["durations"][n]["n"]) for n in actions])
-            d.mean_frames_ = np.array([np.nan if doc["durations"][n].get("mean_frames") is None
-                                       else float(doc["durations"][n]["mean_frames"]) for n in actions])
-            d.sd_frames_ = np.array([np.nan if doc["durations"][n].get("sd_frames") is None
-                                     else float(doc["durations"][n]["sd_frames"]) for n in actions])
-            counts = np.array([int(doc["action_counts"][n]) for n in actions])
-        except InputError:
-            raise
-        except (KeyError, TypeError, ValueError) as e:
-            raise InputError(f"{path}: malformed style file ({type(e).__name__}: {e})") from None
-        return cls(
-            actions, doc.get("classes", actions), params, a, b, g, d, fps=float(doc.get("fps", 20.0)),
-            sources=doc.get("sources", []), performer=doc.get("performer"), action_counts=counts,
-            n_sequences=int(doc.get("n_sequences", 0)),
-        )
+        return parse_style(doc, path)
 
     @classmethod
     def load(cls, path: str | Path) -> Style:
-        from ..fileio import read_json
+        from ..formats.style import read_style
 
-        return cls.from_dict(read_json(path), str(path))
+        return read_style(path)
+
+    def save(self, path: str | Path) -> None:
+        from ..formats.style import write_style
+
+        write_style(path, self)
+
+
+def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None) -> list[tuple[str, Style]]:
+    """One style per performer of ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`), learned from
+    the labels of its performance videos: ground truth, or with ``labels_dir`` the recognised labels.
+    ``views``: only these views. Every performer needs at least one performance video."""
+    from ..formats.labels import read_labels
+
+    out = []
+    for pid in dataset.performer_ids():
+        files = dataset.performer_label_files(pid, labels_dir, views)
+        if not files:
+            raise InputError(f"{dataset.path or dataset.root}: performer {pid} has no performance video"
+                             + (f" in views {','.join(views)}" if views else ""))
+        style = Style.from_tracks([read_labels(p) for _, p in files], params)
+        style.performer = pid  # recognised label files do not name their performer; the dataset does
+        out.append((pid, style))
+    return out

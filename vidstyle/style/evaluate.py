@@ -27,10 +27,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import read_json
+from ..errors import InputError, ParameterError
+from ..formats import FormatError
+from ..formats.dataset import Dataset, read_dataset
+from ..formats.labels import read_labels
 from .artifact import Style, StyleParams
-from .events import EventSequence, load_label_file, tracks_to_events
+from .events import EventSequence, tracks_to_events
 from .models import BigramModel, normalise_rows
 from .ngram import ngram_jsd
 
@@ -48,9 +50,11 @@ class EvalParams:
 
     def __post_init__(self) -> None:
         if not 0.0 < self.heldout_fraction < 1.0:
-            raise InputError(f"--heldout-fraction: must be in (0, 1), got {self.heldout_fraction}")
-        if self.n_generate < 1 or self.generate_length < 3:
-            raise InputError("--n-generate must be >= 1 and --generate-length >= 3")
+            raise ParameterError("heldout_fraction", f"must be in (0, 1), got {self.heldout_fraction}")
+        if self.n_generate < 1:
+            raise ParameterError("n_generate", f"must be >= 1, got {self.n_generate}")
+        if self.generate_length < 3:
+            raise ParameterError("generate_length", f"must be >= 3, got {self.generate_length}")
 
     def to_dict(self) -> dict:
         return {"style": self.style.to_dict(), "heldout_fraction": self.heldout_fraction,
@@ -67,39 +71,16 @@ class PerformerData:
     true_duration_mean: np.ndarray  # (A,) frames, NaN if unknown
 
 
-def load_manifest(dataset_dir: str | Path) -> dict:
-    """Read and check the parts of ``DIR/dataset.json`` used here."""
-    path = Path(dataset_dir) / "dataset.json"
-    doc = read_json(path)
-    try:
-        actions = [str(a) for a in doc["actions"]]
-        performers = doc["performers"]
-        videos = doc["videos"]
-        for p in performers:
-            ch = p["chain"]
-            A = len(ch["actions"])
-            if set(ch["actions"]) != set(actions):
-                raise InputError(f"{path}: performer {p['id']}: chain actions differ from 'actions'")
-            if np.asarray(ch["transition"], dtype=float).shape != (A, A):
-                raise InputError(f"{path}: performer {p['id']}: transition is not {A}x{A}")
-        for v in videos:
-            v["id"], v["performer"], v["kind"], v["labels"]
-    except InputError:
-        raise
-    except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f"{path}: malformed manifest ({type(e).__name__}: {e})") from None
-    if len(actions) < 2:
-        raise InputError(f"{path}: need at least 2 actions")
-    return doc
-
-
-def _reorder(chain: dict, actions: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    idx = [chain["actions"].index(a) for a in actions]
-    start = np.asarray(chain.get("start", np.full(len(idx), 1.0 / len(idx))), dtype=float)[idx]
-    trans = np.asarray(chain["transition"], dtype=float)[np.ix_(idx, idx)]
-    dm = chain.get("duration_frames") or {}
-    dur = np.array([float(dm[a][0]) if a in dm else np.nan for a in actions])
-    return start, trans, dur
+def load_manifest(dataset_dir: str | Path) -> Dataset:
+    """``DIR/dataset.json`` with what style evaluation needs: >= 2 actions, every performer's true chain."""
+    ds = read_dataset(dataset_dir)
+    if len(ds.actions) < 2:
+        raise FormatError(ds.path, "actions", f"need at least 2 actions, got {len(ds.actions)}")
+    for i, p in enumerate(ds.performers):
+        if p.chain is None:
+            raise FormatError(ds.path, f"performers[{i}].chain", f"missing (performer {p.id}: style evaluation "
+                              "compares against the true chain)")
+    return ds
 
 
 def _split(seqs: list[EventSequence], frac: float, takes: list[str] | None = None
@@ -136,39 +117,24 @@ def _split(seqs: list[EventSequence], frac: float, takes: list[str] | None = Non
 
 
 def load_performers(
-    dataset_dir: str | Path, manifest: dict, params: EvalParams, labels_dir: str | Path | None = None
+    dataset: Dataset, params: EvalParams, labels_dir: str | Path | None = None
 ) -> list[PerformerData]:
     """Events of every performer's performance videos, split into train / held-out."""
-    root = Path(dataset_dir)
-    actions = [str(a) for a in manifest["actions"]]
+    actions = list(dataset.actions)
     out = []
-    for p in manifest["performers"]:
-        vids = sorted(
-            (v for v in manifest["videos"] if v["performer"] == p["id"] and v["kind"] == "performance"),
-            key=lambda v: v["id"],
-        )
-        if not vids:
-            log.warning("performer %s has no performance videos; skipped", p["id"])
+    for p in dataset.performers:
+        files = dataset.performer_label_files(p.id, labels_dir)
+        if not files:
+            log.warning("performer %s has no performance videos; skipped", p.id)
             continue
-        tracks = []
-        for v in vids:
-            if labels_dir is None:
-                path = root / v["labels"]
-            else:
-                cands = [Path(labels_dir) / f"{v['id']}.json", Path(labels_dir) / Path(v["labels"]).name]
-                path = next((c for c in cands if c.exists()), cands[0])
-                if not path.exists():
-                    raise InputError(f"{path}: recognised labels for video {v['id']} not found")
-            tracks.append(load_label_file(path))
+        tracks = [read_labels(path) for _, path in files]
         seqs = tracks_to_events(tracks, params.style.events, actions)
         for s in seqs:
-            s.performer = p["id"]
-        if len(seqs) != len(vids):
-            raise ValueError("one event sequence per label track")
-        takes = [str(v.get("bvh") or v["id"]) for v in vids]
+            s.performer = p.id
+        takes = [v.take for v, _ in files]
         train, held = _split(seqs, params.heldout_fraction, takes)
-        start, trans, dur = _reorder(p["chain"], actions)
-        out.append(PerformerData(p["id"], train, held, start, trans, dur))
+        start, trans, dur = p.chain.reordered(actions)
+        out.append(PerformerData(p.id, train, held, start, trans, dur))
     return out
 
 
@@ -310,9 +276,9 @@ def evaluate_dataset(
     """Metrics document: ground-truth labels, and recognised labels when ``labels_dir`` is given."""
     manifest = load_manifest(dataset_dir)
     # load every label file before any fitting, so a missing or bad file fails fast
-    inputs = {"ground_truth": load_performers(dataset_dir, manifest, params)}
+    inputs = {"ground_truth": load_performers(manifest, params)}
     if labels_dir is not None:
-        inputs["recognised"] = load_performers(dataset_dir, manifest, params, labels_dir)
+        inputs["recognised"] = load_performers(manifest, params, labels_dir)
     sources = {name: evaluate_performers(perfs, params) for name, perfs in inputs.items()}
     return {
         "kind": "vidstyle.metrics.style",
@@ -320,7 +286,7 @@ def evaluate_dataset(
         "seed": params.style.seed,
         "params": params.to_dict(),
         "dataset": str(dataset_dir),
-        "dataset_seed": manifest.get("seed"),
+        "dataset_seed": manifest.seed,
         "labels_dir": None if labels_dir is None else str(labels_dir),
         "targets": TARGETS,
         "sources": sources,

@@ -1,10 +1,7 @@
 """Frame labels -> action events.
 
-A label file (one per video, schema fixed by the lead)::
-
-    {"video": "videos/p03_perf.mp4", "fps": 20, "classes": ["Jab", ..., "Guard", "Step"],
-     "labels": ["Guard", "Guard", "Jab", ...], "confidence": [0.9, ...],   # optional, one per frame
-     "performer": "p03"}                                                    # optional
+Label files (one per video) are :class:`vidstyle.formats.labels.FrameLabels` (read them with
+:func:`vidstyle.formats.labels.read_labels`; ``confidence`` is optional, one value per frame).
 
 The thesis (Chen 2012, sec. 6.1.3) feeds the HMM "only the actions classified with certainty"; here that
 is made explicit: frames below ``min_confidence`` become unknown, runs shorter than ``min_run`` frames
@@ -20,32 +17,17 @@ of a single occurrence of that action, estimated from the shortest cluster of it
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import read_json
+from ..errors import InputError, ParameterError
+from ..formats.labels import FrameLabels
 
 log = logging.getLogger(__name__)
 
 DEFAULT_IGNORE: tuple[str, ...] = ("Guard", "Step")
-
-
-@dataclass(frozen=True)
-class LabelTrack:
-    """One label file. ``labels``: (frames,) int indices into ``classes``; ``confidence``: (frames,) or None."""
-
-    path: str
-    classes: tuple[str, ...]
-    labels: np.ndarray
-    confidence: np.ndarray | None
-    fps: float
-    video: str | None = None
-    performer: str | None = None
 
 
 @dataclass(frozen=True)
@@ -61,13 +43,13 @@ class EventParams:
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_confidence <= 1.0:
-            raise InputError(f"--min-confidence: must be in [0, 1], got {self.min_confidence}")
+            raise ParameterError("min_confidence", f"must be in [0, 1], got {self.min_confidence}")
         if self.min_run < 1:
-            raise InputError(f"--min-run: must be >= 1 frame, got {self.min_run}")
+            raise ParameterError("min_run", f"must be >= 1 frame, got {self.min_run}")
         if self.max_gap < 0:
-            raise InputError(f"--max-gap: must be >= 0 frames, got {self.max_gap}")
+            raise ParameterError("max_gap", f"must be >= 0 frames, got {self.max_gap}")
         if self.repeat_factor <= 1.0:
-            raise InputError(f"repeat_factor: must be > 1, got {self.repeat_factor}")
+            raise ParameterError("repeat_factor", f"must be > 1, got {self.repeat_factor}")
 
     def to_dict(self) -> dict:
         return {
@@ -107,53 +89,6 @@ class EventSequence:
         )
 
 
-def load_label_file(path: str | os.PathLike) -> LabelTrack:
-    """Read and validate one label file; every problem is an :class:`InputError` naming the file."""
-    path = Path(path)
-    doc = read_json(path)
-    if not isinstance(doc, dict):
-        raise InputError(f"{path}: expected a JSON object with 'classes' and 'labels'")
-    classes = doc.get("classes")
-    labels = doc.get("labels")
-    if not isinstance(classes, list) or not classes or not all(isinstance(c, str) for c in classes):
-        raise InputError(f"{path}: 'classes' must be a non-empty list of class names")
-    if len(set(classes)) != len(classes):
-        raise InputError(f"{path}: 'classes' has duplicate names")
-    if not isinstance(labels, list):
-        raise InputError(f"{path}: 'labels' must be a list of class names, one per frame")
-    if not labels:
-        raise InputError(f"{path}: empty label file (no frames in 'labels')")
-    index = {c: i for i, c in enumerate(classes)}
-    unknown = sorted({str(x) for x in labels if x not in index})
-    if unknown:
-        raise InputError(f"{path}: labels not in 'classes': {', '.join(unknown[:5])}")
-    conf = doc.get("confidence")
-    confidence = None
-    if conf is not None:
-        try:
-            confidence = np.asarray(conf, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"{path}: 'confidence' must be a list of numbers") from None
-        if confidence.shape != (len(labels),):
-            raise InputError(
-                f"{path}: 'confidence' has {confidence.size} values for {len(labels)} frames"
-            )
-        if not np.all(np.isfinite(confidence)):
-            raise InputError(f"{path}: 'confidence' has non-finite values")
-    fps = doc.get("fps", 20)
-    if not isinstance(fps, (int, float)) or fps <= 0:
-        raise InputError(f"{path}: 'fps' must be a positive number")
-    return LabelTrack(
-        path=str(path),
-        classes=tuple(classes),
-        labels=np.fromiter((index[x] for x in labels), dtype=np.int64, count=len(labels)),
-        confidence=confidence,
-        fps=float(fps),
-        video=doc.get("video"),
-        performer=doc.get("performer"),
-    )
-
-
 def runs(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Run-length encoding of a 1-D array: (values, starts, lengths) of maximal constant runs."""
     values = np.asarray(values)
@@ -167,7 +102,7 @@ def runs(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def track_to_events(
-    track: LabelTrack, params: EventParams, action_names: Sequence[str] | None = None
+    track: FrameLabels, params: EventParams, action_names: Sequence[str] | None = None
 ) -> EventSequence:
     """Collapse a label track into action events (see the module docstring for the rules).
 
@@ -185,7 +120,7 @@ def track_to_events(
     # per-frame code: action index >= 0, FILLER for ignored classes, UNKNOWN for low confidence
     FILLER, UNKNOWN = -1, -2
     lut = np.array([act_index.get(c, FILLER) for c in track.classes], dtype=np.int64)
-    code = lut[track.labels]
+    code = lut[track.indices()]
     if track.confidence is not None:
         code = np.where(track.confidence < params.min_confidence, UNKNOWN, code)
 
@@ -288,7 +223,7 @@ def split_repeated_runs(
 
 
 def tracks_to_events(
-    tracks: Sequence[LabelTrack], params: EventParams, action_names: Sequence[str] | None = None
+    tracks: Sequence[FrameLabels], params: EventParams, action_names: Sequence[str] | None = None
 ) -> list[EventSequence]:
     """Events of several tracks with one shared action list (repeat splitting pools all tracks)."""
     if not tracks:
@@ -299,7 +234,7 @@ def tracks_to_events(
     return split_repeated_runs(seqs, params)
 
 
-def action_names_of(tracks: Sequence[LabelTrack], params: EventParams) -> tuple[str, ...]:
+def action_names_of(tracks: Sequence[FrameLabels], params: EventParams) -> tuple[str, ...]:
     """The chain's actions: classes of the first track minus the ignored ones; all tracks must agree."""
     first = tracks[0]
     for t in tracks[1:]:

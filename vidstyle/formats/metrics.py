@@ -1,0 +1,172 @@
+"""Metrics files (DVC metrics; what ``vidstyle report`` reads): the owner of their headers and of the
+fields the report relies on.
+
+Every metrics file is a JSON object with a header and its seed::
+
+    {"kind": "vidstyle.metrics.<what>", "schema_version": 1, "seed": 0, ...}
+
+Kinds and the fields checked (others are carried along; ``null`` marks a figure that could not be
+computed, e.g. video accuracy without single-action test videos):
+
+* ``vidstyle.metrics.recognition`` (``vidstyle evaluate recognition``): ``frame_accuracy.raw`` and
+  ``.smoothed`` in [0, 1]; ``video_accuracy`` in [0, 1] or null; ``n_test_videos``, ``n_test_frames``
+  >= 0; ``split`` an object (``kind`` a string, ``test`` a list of video ids); ``confusion.classes`` unique
+  names and ``confusion.smoothed`` / ``.raw`` (K, K) in [0, 1].
+* ``vidstyle.metrics.style`` (``vidstyle evaluate style``): ``sources`` an object of label sources, each
+  with ``summary.transition_mae`` (numbers or null), ``summary.identification``, ``summary.fidelity`` and
+  ``summary.heldout_loglik_per_event`` (objects of numbers or null per model).
+* ``vidstyle.metrics.motion`` (``vidstyle evaluate motion``; files without ``kind`` are schema 1):
+  ``summary`` with ``label_fidelity`` in [0, 1] or null, ``transitions_per_second`` >= 0 or null, and
+  per seam metric (``velocity_jump``, ``jerk``, ``foot_skid``) an object of numbers or null;
+  ``graph_stats`` an object.
+* ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
+  flat objects of numbers or null.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+from ._base import FormatError, Fields, check_array, check_number, check_header, read_json_document, write_json_document
+
+RECOGNITION = "vidstyle.metrics.recognition"
+STYLE = "vidstyle.metrics.style"
+MOTION = "vidstyle.metrics.motion"
+HEADLINE = "vidstyle.metrics.headline"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE)
+SCHEMA_VERSION = 1
+
+
+@dataclass
+class Metrics:
+    """A validated metrics document: ``doc`` is the whole JSON object (fields as documented above)."""
+
+    kind: str
+    schema_version: int
+    seed: Any
+    doc: dict[str, Any] = field(default_factory=dict)
+    path: str = ""
+
+    def get(self, *keys, default=None):
+        d: Any = self.doc
+        for k in keys:
+            if not isinstance(d, dict) or k not in d:
+                return default
+            d = d[k]
+        return d
+
+
+def _opt_number(f: Fields, key: str, lo: float | None = None, hi: float | None = None) -> float | None:
+    if f.obj.get(key) is None:
+        return None
+    return f.number(key, min=lo, max=hi)
+
+
+def _numbers_or_null(f: Fields, key: str, required: bool = True) -> None:
+    """``key`` is an object whose leaves are finite numbers, null, booleans or strings (nested objects and
+    lists allowed)."""
+    sub = f.sub(key, required=required)
+    if sub is not None:
+        _leaves(sub.obj, f.path, sub.prefix)
+
+
+def _leaves(v: Any, path, name: str, depth: int = 0) -> None:
+    if depth > 20:
+        raise FormatError(path, name, "nested too deeply")
+    if isinstance(v, dict):
+        for k, x in v.items():
+            _leaves(x, path, f"{name}.{k}", depth + 1)
+    elif isinstance(v, list):
+        for i, x in enumerate(v):
+            _leaves(x, path, f"{name}[{i}]", depth + 1)
+    elif v is not None and not isinstance(v, (bool, str)):
+        check_number(v, path, name)
+
+
+def _recognition(f: Fields) -> None:
+    fa = f.sub("frame_accuracy")
+    fa.number("raw", min=0, max=1)
+    fa.number("smoothed", min=0, max=1)
+    _opt_number(f, "video_accuracy", 0, 1)
+    f.int("n_test_videos", min=0)
+    f.int("n_test_frames", min=0)
+    sp = f.sub("split")
+    if sp.obj.get("kind") is not None:
+        sp.str("kind")
+    if sp.obj.get("test") is not None:
+        sp.str_list("test")
+    if f.obj.get("test_performers") is not None:
+        f.str_list("test_performers")
+    c = f.sub("confusion")
+    classes = c.str_list("classes", unique=True, min_len=1)
+    K = len(classes)
+    for key in ("smoothed", "raw"):
+        if c.obj.get(key) is not None:
+            m = c.array(key, shape=(K, K))
+            if m.size and (m.min() < 0 or m.max() > 1 + 1e-9):
+                raise c.fail(key, "row-normalised values must lie in [0, 1]")
+
+
+def _style(f: Fields) -> None:
+    srcs = f.sub("sources")
+    if not srcs.obj:
+        raise srcs.fail(None, "no label source")
+    for name in srcs.obj:
+        s = srcs.sub(name).sub("summary")
+        for key in ("transition_mae", "heldout_loglik_per_event", "identification", "fidelity"):
+            _numbers_or_null(s, key)
+
+
+def _motion(f: Fields) -> None:
+    s = f.sub("summary")
+    _opt_number(s, "label_fidelity", 0, 1)
+    _opt_number(s, "transitions_per_second", 0)
+    for key in ("velocity_jump", "jerk", "foot_skid"):
+        if s.obj.get(key) is not None:
+            _numbers_or_null(s, key)
+    f.sub("graph_stats", required=False)
+
+
+def _headline(f: Fields) -> None:
+    for key in ("recognition", "style", "motion"):
+        _numbers_or_null(f, key)
+
+
+_CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline}
+
+
+def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
+    """Validate a metrics document of ``kind`` (default: the kind it declares, one of :data:`KINDS`)."""
+    if kind is None:
+        kind = doc.get("kind") if isinstance(doc, dict) and doc.get("kind") in KINDS else None
+        if kind is None:
+            raise FormatError(path, "kind", f"expected one of {', '.join(KINDS)}, got "
+                              f"{doc.get('kind') if isinstance(doc, dict) else None!r}")
+    version = check_header(doc, path, kind, (SCHEMA_VERSION,), legacy=kind == MOTION)
+    f = Fields(doc, path)
+    _CHECKS[kind](f)
+    return Metrics(kind, version, doc.get("seed"), doc, "" if path is None else str(path))
+
+
+def read_metrics(path: str | os.PathLike, kind: str | None = None) -> Metrics:
+    return parse_metrics(read_json_document(path), path, kind)
+
+
+def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: str | None = None) -> None:
+    """Validate ``doc`` (of the kind it declares, or ``kind``, which is then set) and write it atomically."""
+    import json
+
+    from ._base import _json_default
+
+    d = dict(doc.doc if isinstance(doc, Metrics) else doc)
+    if kind is not None:
+        d = {"kind": kind, "schema_version": SCHEMA_VERSION, **{k: v for k, v in d.items() if k not in ("kind", "schema_version")}}
+    d = json.loads(json.dumps(d, default=_json_default, allow_nan=True), parse_constant=lambda c: None)
+    parse_metrics(d, path)
+    write_json_document(path, d)
+
+
+__all__ = ["HEADLINE", "KINDS", "MOTION", "Metrics", "RECOGNITION", "STYLE", "check_array", "parse_metrics",
+           "read_metrics", "write_metrics"]
