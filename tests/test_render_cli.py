@@ -90,9 +90,10 @@ def test_bad_labels_file(tmp_path, bvh, capsys):
     labels.write_text(json.dumps({"labels": ["jab"] * 3}))
     out = tmp_path / "o.mp4"
     assert main(["render", str(bvh), "--out", str(out), "--labels", str(labels)]) == 2
-    assert "3 labels" in capsys.readouterr().err
-    labels.write_text(json.dumps({"transitions": [99]}))
+    assert "labels: 3 labels but the motion has 30 frames" in capsys.readouterr().err
+    labels.write_text(json.dumps({"labels": ["jab"] * 30, "transitions": [99]}))
     assert main(["render", str(bvh), "--out", str(out), "--labels", str(labels)]) == 2
+    assert "transitions[0]: must be at most 29, got 99" in capsys.readouterr().err
     assert not out.exists()
 
 

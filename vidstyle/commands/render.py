@@ -29,31 +29,17 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def load_labels(path: Path, n_frames: int) -> tuple[list[str] | None, np.ndarray | None]:
-    """Read ``{"labels": [...one per mocap frame...], "transitions": [frame indices]}`` (both optional)."""
-    from ..fileio import read_json
+def load_labels(path: Path, n_frames: int) -> tuple[list[str], np.ndarray | None]:
+    """Labels (one per mocap frame) and transition flags of a labels file (:mod:`vidstyle.formats.labels`)."""
+    from ..formats.labels import check_length, read_labels
 
-    data = read_json(path)
-    if not isinstance(data, dict):
-        raise InputError(f"{path}: expected a JSON object with 'labels' and/or 'transitions'")
-    labels = data.get("labels")
-    if labels is not None:
-        if not isinstance(labels, list) or not all(isinstance(x, str) or x is None for x in labels):
-            raise InputError(f"{path}: 'labels' must be a list of strings")
-        if len(labels) != n_frames:
-            raise InputError(f"{path}: {len(labels)} labels for a motion of {n_frames} frames")
-        labels = ["" if x is None else x for x in labels]
-    trans = data.get("transitions")
+    track = read_labels(path)
+    check_length(track, n_frames, "the motion")
     flags = None
-    if trans is not None:
-        if not isinstance(trans, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in trans):
-            raise InputError(f"{path}: 'transitions' must be a list of frame indices")
-        bad = [x for x in trans if not 0 <= x < n_frames]
-        if bad:
-            raise InputError(f"{path}: transition frame {bad[0]} outside 0..{n_frames - 1}")
+    if track.transitions is not None:
         flags = np.zeros(n_frames, dtype=bool)
-        flags[trans] = True
-    return labels, flags
+        flags[track.transitions] = True
+    return track.labels, flags
 
 
 def _appearance(spec: str):
@@ -90,8 +76,9 @@ def render(
                                    "seed for a random look, or an appearance .json."),
     noise: float = typer.Option(2.0, "--noise", help="Sensor noise sigma (grey levels)."),
     seed: int = typer.Option(0, "--seed", help="Seed of background choice and noise."),
-    labels: Path = typer.Option(None, "--labels", help='JSON {"labels": [one per mocap frame], '
-                                '"transitions": [mocap frame indices]}.'),
+    labels: Path = typer.Option(None, "--labels", help='Labels JSON of the motion (vidstyle.formats.labels: '
+                                '"labels" one per mocap frame, optional "transitions" frame indices), e.g. a '
+                                'demo mocap/<take>.labels.json.'),
 ) -> None:
     """Render a BVH motion to video with per-frame ground truth (2D/3D joints, visibility, camera, labels)."""
     from ..mocap import read_bvh

@@ -21,7 +21,6 @@ Frame numbers always refer to the BVH file as written (frame 0 = first MOTION li
 from __future__ import annotations
 
 import csv
-import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,6 +76,13 @@ class LabelSpec:
         return out
 
 
+class _AnyClass:
+    """Every label is a class (event lists without a class list)."""
+
+    def __contains__(self, item) -> bool:
+        return True
+
+
 def _key(path: str | Path) -> str:
     return Path(str(path)).name.lower().removesuffix(".bvh")
 
@@ -106,27 +112,33 @@ class LabelBook:
         return self
 
     def _load_json(self, path: Path) -> None:
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as e:
-            raise InputError(f"{path}: not valid JSON ({e.msg} at line {e.lineno})") from None
+        from ..formats import FormatError, read_json_document
+        from ..formats.labels import parse_labels
+
+        data = read_json_document(path)
         items = data if isinstance(data, list) else [data]
-        for item in items:
-            if not isinstance(item, dict) or "bvh" not in item:
-                raise InputError(f"{path}: expected an object with 'bvh' and 'labels' or 'events'")
+        for i, item in enumerate(items):
+            where = f"[{i}]" if isinstance(data, list) else None
+            if not isinstance(item, dict) or not isinstance(item.get("bvh"), str):
+                raise FormatError(path, where, "expected an object with 'bvh' and 'labels' or 'events'")
             spec = self.spec(item["bvh"])
             if "label" in item:
-                spec.whole = str(item["label"])
-            if item.get("labels") is not None:
-                labels = item["labels"]
-                if not isinstance(labels, list):
-                    raise InputError(f"{path}: 'labels' must be a list of class names, one per frame")
-                spec.per_frame = [str(x) for x in labels]
-            for ev in item.get("events") or []:
-                try:
-                    spec.ranges.append((int(ev["start"]), int(ev["end"]), str(ev["label"])))
-                except (KeyError, TypeError, ValueError):
-                    raise InputError(f"{path}: every event needs label, start and end, got {ev!r}") from None
+                if not isinstance(item["label"], str):
+                    raise FormatError(path, f"{where or ''}label", "expected a class name")
+                spec.whole = item["label"]
+            if item.get("labels") is not None:  # a labels file (vidstyle.formats.labels) of the take
+                track = parse_labels(item, path)
+                spec.per_frame = track.labels
+                events = track.events or []
+            else:
+                from ..formats.labels import _segment
+
+                raw = item.get("events") or []
+                if not isinstance(raw, list):
+                    raise FormatError(path, "events", "expected a list")
+                events = [_segment(ev, path, f"events[{k}]", 1 << 62, _AnyClass()) for k, ev in enumerate(raw)]
+            for ev in events:
+                spec.ranges.append((ev.start, ev.end, ev.label))
 
     def _load_csv(self, path: Path) -> None:
         with open(path, newline="", encoding="utf-8") as f:

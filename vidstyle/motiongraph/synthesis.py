@@ -46,9 +46,13 @@ class Step:
 
 def read_sequence(path: str | Path, fps: float, default_seconds: float = 1.0) -> list[Step]:
     """Steps of a sequence file (see the module docstring), durations converted to ``fps`` frames."""
-    from ..fileio import read_json
+    from ..formats import read_json_document
+    from ..formats.sequence import parse_sequence as parse_generated
 
-    data = read_json(path)
+    data = read_json_document(path)
+    if isinstance(data, dict) and "kind" in data:  # vidstyle generate --format json: its owner validates it
+        seq = parse_generated(data, path)
+        data = {"fps": seq.fps, "events": [e.to_dict() for e in seq.events]}
     return parse_sequence(data, fps, default_seconds, source=str(path))
 
 
