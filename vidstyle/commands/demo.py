@@ -91,7 +91,7 @@ def performer_cmd(
     from ..demo.actions import ACTIONS
     from ..demo.dataset import DatasetParams, label_document, make_performer
     from ..demo.timeline import build_take, performance_plan, single_action_plan
-    from ..fileio import write_json
+    from ..formats.labels import write_labels
     from ..mocap import write_bvh
 
     if action is not None:
@@ -113,7 +113,7 @@ def performer_cmd(
     take = build_take(performer, plan, rng, video_fps=20, ratio=fps // 20)
     write_bvh(take.motion, out)
     labels_path = out.with_name(out.stem + ".labels.json")
-    write_json(labels_path, label_document(take.labels, float(fps), take.chain, bvh=out.name, performer=performer.id))
+    write_labels(labels_path, label_document(take.labels, float(fps), take.chain, bvh=out.name, performer=performer.id))
     log.info("wrote %s (%d frames at %d fps, %s) and %s", out, take.motion.n_frames, fps,
              performer.style.lead, labels_path)
 

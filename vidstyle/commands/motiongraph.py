@@ -122,7 +122,7 @@ def evaluate_motion(
     from rich.console import Console
     from rich.table import Table
 
-    from ..fileio import read_json, write_json
+    from ..fileio import read_json
     from ..mocap import read_bvh
     from ..motiongraph import MotionGraph, Step, plan_walk, render_walk, walk_labels
     from ..motiongraph.evaluate import evaluate_walk, original_stats, summarise
@@ -181,7 +181,9 @@ def evaluate_motion(
         "original": original,
         "walks": results,
     }
-    write_json(out, metrics)
+    from ..formats.metrics import MOTION, write_metrics
+
+    write_metrics(out, metrics, kind=MOTION)
     table = Table(title=f"motion graph: {graph_path.name}")
     for col in ("metric", "seam", "inside output", "original clips", "seam / original"):
         table.add_column(col)

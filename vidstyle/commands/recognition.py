@@ -332,7 +332,7 @@ def evaluate_recognition(
 
     With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
-    from ..fileio import write_json
+    from ..formats.metrics import write_metrics
     from ..recognition.evaluate import confusion_png, evaluate_recognition as run, score_labels_dir
     from ..formats.dataset import read_dataset
 
@@ -357,7 +357,7 @@ def evaluate_recognition(
             ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
             recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
         )
-    write_json(out, m)
+    write_metrics(out, m)
     png = out.with_suffix(".png")
     cm = np.asarray(m["confusion"]["smoothed"])
     confusion_png(png, cm, m["confusion"]["classes"], f"{split}, {ablation}: smoothed frame acc {m['frame_accuracy']['smoothed']:.3f}")

@@ -23,13 +23,14 @@ def report(
 ) -> None:
     """Write one self-contained HTML page: confusion matrix, recognised vs true timeline, learned vs true
     transition matrices, generated sequences, motion-graph statistics and the synthesized motion."""
-    from ..fileio import write_json, write_text
+    from ..fileio import write_text
+    from ..formats.metrics import write_metrics
     from ..report.build import build_report, headline_metrics
 
     out = out or run_dir / "report.html"
     html = build_report(run_dir)
     if metrics is not None:
-        write_json(metrics, headline_metrics(run_dir))
+        write_metrics(metrics, headline_metrics(run_dir))
     write_text(out, html)
     log.info("report written to %s", out)
     typer.echo(str(out.resolve()))

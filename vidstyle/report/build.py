@@ -26,19 +26,29 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..formats.dataset import Dataset, read_dataset
+from ..formats.labels import read_labels
+from ..formats.metrics import HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
+from ..formats.recognised import read_recognised
+from ..formats.sequence import read_sequence
+from ..formats.style import read_style
 from . import svg
 from .page import Page, data_uri, esc, table
 
 log = logging.getLogger(__name__)
 
 
-def _load(path: Path) -> dict | None:
-    if not path.is_file():
+def _load(path: Path, reader, *args):
+    """``reader(path)`` (a :mod:`vidstyle.formats` reader: a malformed file is a FormatError), or None
+    when the file does not exist."""
+    if not path.exists():
         return None
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as e:
-        raise InputError(f"{path}: not valid JSON ({e.msg} at line {e.lineno})") from None
+    return reader(path, *args)
+
+
+def _metrics(path: Path, kind: str) -> dict | None:
+    m = _load(path, read_metrics, kind)
+    return None if m is None else m.doc
 
 
 def _missing(what: str, path: Path) -> str:
@@ -75,9 +85,9 @@ def gif_from_video(path: Path, max_seconds: float = 10.0, fps: float = 10.0, wid
     return buf.getvalue()
 
 
-def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
+def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None:
     path = run / "metrics" / "recognition.json"
-    m = _load(path)
+    m = _metrics(path, RECOGNITION)
     if m is None:
         page.add("Action recognition", _missing("recognition metrics", path))
         return
@@ -88,7 +98,7 @@ def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
     split = m.get("split", {})
-    owner = {v["id"]: v.get("performer") for v in (dataset or {}).get("videos", [])}
+    owner = {v.id: v.performer for v in (dataset.videos if dataset else [])}
     test_performers = split.get("test_performers") or sorted({owner[v] for v in split.get("test", []) if owner.get(v)})
     body = [
         f"<p>Split: <b>{esc(split.get('kind', '?'))}</b>; test performers "
@@ -112,50 +122,48 @@ def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
     if dataset is None:
         return
     test = set(split.get("test", []))
-    perf = [v for v in dataset.get("videos", []) if v.get("kind") == "performance"]
-    perf.sort(key=lambda v: (v["id"] not in test, v["id"]))
+    perf = [v for v in dataset.videos if v.kind == "performance"]
+    perf.sort(key=lambda v: (v.id not in test, v.id))
     for v in perf:
-        rec = _load(run / "recognized" / f"{v['id']}.json")
-        truth = _load(run / "dataset" / v["labels"])
+        truth = _load(dataset.labels_path(v), read_labels)
+        rec = _load(run / "recognized" / f"{v.id}.json", read_recognised, None if truth is None else truth.n_frames)
         if rec is None or truth is None:
             continue
-        tracks = {"true": truth["labels"], "recognised (raw)": rec.get("raw", rec["labels"]),
-                  "recognised (smoothed)": rec["labels"]}
-        n = min(len(t) for t in tracks.values())
-        acc = float(np.mean(np.array(truth["labels"][:n]) == np.array(rec["labels"][:n])))
+        tracks = {"true": truth.labels, "recognised (raw)": rec.raw if rec.raw is not None else rec.labels,
+                  "recognised (smoothed)": rec.labels}
+        acc = float(np.mean(np.array(truth.labels) == np.array(rec.labels)))
         page.add(
-            f"Timeline: {v['id']}",
-            f"<p>Performance video of {esc(v['performer'])} ({esc(v['view'])} view), "
-            f"{'unseen' if v['id'] in test else 'seen'} performer; frame accuracy {acc:.3f}.</p>"
-            + svg.timeline(tracks, dataset["classes"], float(truth.get("fps", 20)), title="true vs recognised actions"),
+            f"Timeline: {v.id}",
+            f"<p>Performance video of {esc(v.performer)} ({esc(v.view)} view), "
+            f"{'unseen' if v.id in test else 'seen'} performer; frame accuracy {acc:.3f}.</p>"
+            + svg.timeline(tracks, dataset.classes, truth.fps, title="true vs recognised actions"),
         )
         return
     page.add("Timeline", "<p class=\"missing\">Not available: no recognised performance video.</p>")
 
 
-def _style_section(page: Page, run: Path, dataset: dict | None) -> None:
+def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
     styles = sorted((run / "style").glob("*.json")) if (run / "style").is_dir() else []
     if not styles:
         page.add("Behaviour style", _missing("learned styles", run / "style"))
         return
-    chains = {p["id"]: p["chain"] for p in (dataset or {}).get("performers", [])}
+    chains = {p.id: p.chain for p in (dataset.performers if dataset else []) if p.chain is not None}
     body = ['<div class="row">']
     for path in styles[:3]:
-        st = _load(path)
-        actions = st["actions"]
-        learned = np.array(st["model_a"]["transition"], float)
-        who = st.get("performer") or path.stem
+        st = read_style(path)
+        actions = list(st.actions)
+        learned = np.asarray(st.model_a.transition_, float)
+        who = st.performer or path.stem
         body.append(svg.heatmap(learned, actions, actions, f"{who}: learned (HMM a)",
                                 vmax=1.0, xlabel="next action", ylabel="action"))
         chain = chains.get(who)
         if chain is not None:
-            order = [chain["actions"].index(a) for a in actions]
-            true = np.array(chain["transition"], float)[np.ix_(order, order)]
+            true = chain.reordered(actions)[1]
             body.append(svg.heatmap(true, actions, actions, f"{who}: true chain", vmax=1.0,
                                     xlabel="next action", ylabel="action"))
             body.append(f'<p class="note">mean |learned - true| = {np.abs(learned - true).mean():.3f}</p>')
     body.append("</div>")
-    m = _load(run / "metrics" / "style.json")
+    m = _metrics(run / "metrics" / "style.json", STYLE)
     if m is not None:
         rows = []
         for source, block in m.get("sources", {}).items():
@@ -173,9 +181,9 @@ def _style_section(page: Page, run: Path, dataset: dict | None) -> None:
     if gens:
         items = []
         for g in gens:
-            seq = _load(g)
-            actions = " ".join(e["action"] for e in seq.get("events", []))
-            items.append(f"<p><b>{esc(g.stem)}</b> (seed {esc(seq.get('seed'))}, model {esc(seq.get('model'))}):</p>"
+            seq = read_sequence(g)
+            actions = " ".join(seq.actions())
+            items.append(f"<p><b>{esc(g.stem)}</b> (seed {esc(seq.seed)}, model {esc(seq.model)}):</p>"
                          f'<div class="seq">{esc(actions)}</div>')
         page.add("Generated action sequences (thesis Table 4 style)", "".join(items))
     else:
@@ -196,7 +204,7 @@ def _motion_section(page: Page, run: Path) -> None:
                     f'{params.get("fps")} fps</p>')
     else:
         body.append(_missing("motion graph", gpath))
-    m = _load(run / "metrics" / "motion.json")
+    m = _metrics(run / "metrics" / "motion.json", MOTION)
     if m is not None:
         ms = m.get("summary", {})
         rows = [["walks / frames", f"{ms.get('walks')} / {ms.get('frames')}"],
@@ -234,10 +242,10 @@ def headline_metrics(run: Path) -> dict:
     """The few numbers of a run worth a column in ``dvc metrics show`` (the full documents stay in
     RUN/metrics/*.json). Missing inputs give ``None``."""
     run = Path(run)
-    rec = _load(run / "metrics" / "recognition.json")
-    sty = _load(run / "metrics" / "style.json")
-    mot = _load(run / "metrics" / "motion.json")
-    out: dict = {"kind": "vidstyle.metrics.headline", "schema_version": 1,
+    rec = _metrics(run / "metrics" / "recognition.json", RECOGNITION)
+    sty = _metrics(run / "metrics" / "style.json", STYLE)
+    mot = _metrics(run / "metrics" / "motion.json", MOTION)
+    out: dict = {"kind": HEADLINE, "schema_version": 1,
                  "seed": _get(rec, "seed") if rec else _get(sty, "seed")}
     out["recognition"] = {
         "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
@@ -268,12 +276,11 @@ def build_report(run: Path) -> str:
     run = Path(run)
     if not run.is_dir():
         raise InputError(f"{run}: run directory not found")
-    dataset = _load(run / "dataset" / "dataset.json")
+    dataset = _load(run / "dataset" / "dataset.json", read_dataset)
     subtitle = "vidstyle pipeline run"
     if dataset is not None:
-        n_perf = len(dataset.get("performers", []))
-        subtitle = (f"demo dataset: {n_perf} performers, {len(dataset.get('videos', []))} videos, seed "
-                    f"{dataset.get('seed')} — run directory {run}")
+        subtitle = (f"demo dataset: {len(dataset.performers)} performers, {len(dataset.videos)} videos, seed "
+                    f"{dataset.seed} — run directory {run}")
     page = Page("vidstyle: learning a performer's action style from video", subtitle)
     _recognition_section(page, run, dataset)
     _style_section(page, run, dataset)
