@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fileio import atomic_path
+from ..formats.truth import truth_arrays
 from ..mocap import Motion, facing_directions, forward_kinematics
 from .appearance import Appearance
 from .background import NoiseBank, make_background
@@ -305,17 +306,12 @@ def render_to_file(
         truth = job.truth()
         truth["seed"] = np.int64(seed)
         truth["noise_sigma"] = np.float64(noise_sigma)
-        np.savez_compressed(tmp_side, **truth)
+        np.savez_compressed(tmp_side, **truth_arrays(truth, side))
     return side
 
 
 def load_truth(path: str | os.PathLike) -> dict[str, np.ndarray]:
     """Read a sidecar (``.truth.npz``, or the video path beside which it lies) into a dict."""
-    path = Path(path)
-    if not path.name.endswith(SIDECAR_SUFFIX):
-        path = sidecar_path(path)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise InputError(f"{path}: ground-truth sidecar not found") from None
+    from ..formats.truth import read_truth
+
+    return read_truth(path).to_arrays()
