@@ -130,6 +130,7 @@ def generate(
     events = style.generate(length, start=start, seed=seed, model=model)
     seq = ActionSequence.from_events(events, style.fps, style=str(style_path), model=model, seed=seed)
     text = format_sequence(seq, fmt)
+    log.info("generated %d events with model %s (seed %d) from %s", len(seq.events), model, seed, style_path)
     if out is not None:
         write_text(out, text)
     else:

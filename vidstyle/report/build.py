@@ -143,6 +143,7 @@ def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None
 
 
 def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
+    m = _metrics(run / "metrics" / "style.json", STYLE)  # read first: a malformed file is an error, always
     styles = sorted((run / "style").glob("*.json")) if (run / "style").is_dir() else []
     if not styles:
         page.add("Behaviour style", _missing("learned styles", run / "style"))
@@ -163,7 +164,6 @@ def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
                                     xlabel="next action", ylabel="action"))
             body.append(f'<p class="note">mean |learned - true| = {np.abs(learned - true).mean():.3f}</p>')
     body.append("</div>")
-    m = _metrics(run / "metrics" / "style.json", STYLE)
     if m is not None:
         rows = []
         for source, block in m.get("sources", {}).items():
