@@ -70,7 +70,7 @@ def cmu_small(cmu_dir, tmp_path_factory):
 @pytest.mark.shared
 def test_manifest_schema(cmu_small):
     doc = json.loads(cmu_small[0].read_text())
-    assert doc["schema_version"] == 1 and doc["seed"] == 5 and doc["fps"] == 20 and doc["size"] == [160, 120]
+    assert doc["kind"] == "vidstyle.dataset" and doc["schema_version"] == 2 and doc["seed"] == 5 and doc["fps"] == 20 and doc["size"] == [160, 120]
     assert doc["actions"] == doc["classes"] == ["walk", "basketball"]
     assert doc["params"]["segment_seconds"] == 1.5 and doc["params"]["views"] == ["left"]
     keys = {"id", "performer", "kind", "action", "view", "azimuth_deg", "video", "labels", "truth", "bvh", "frames"}

@@ -145,7 +145,7 @@ def test_dataset_refuses_a_non_empty_directory_and_overwrites_on_request(tmp_pat
     make_dataset(tmp_path / "out", params, overwrite=True)
     assert not (tmp_path / "out" / "keep.txt").exists() and (tmp_path / "out" / "dataset.json").is_file()
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary directory left behind
-    with pytest.raises(InputError, match="--views"):
+    with pytest.raises(InputError, match="^views: unknown view"):
         make_dataset(tmp_path / "x", DatasetParams(views=("top",)))
 
 

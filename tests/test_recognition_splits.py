@@ -59,5 +59,5 @@ def test_deterministic_from_seed():
 def test_too_few_performers():
     with pytest.raises(InputError, match=">= 3 performers"):
         make_split(dataset(n_perf=2))
-    with pytest.raises(InputError, match="--split"):
+    with pytest.raises(InputError, match="^kind: must be one of"):
         make_split(dataset(), "random")

@@ -77,6 +77,11 @@ _register_commands()
 _arrange_help()
 
 
+#: library parameter -> the command parameter that sets it, where the names differ
+_PARAM_ALIASES = {"k_range": "modes", "n_components": "components", "n_words": "words", "kind": "split",
+                  "method": "smoothing", "smoothing_window": "window"}
+
+
 def _as_flags(error: VidstyleError, argv: list[str]) -> str:
     """The message of ``error``, with a library parameter name (:class:`ParameterError`) shown as the flag
     of the running command that sets it (``window: ...`` -> ``--window: ...``)."""
@@ -90,10 +95,11 @@ def _as_flags(error: VidstyleError, argv: list[str]) -> str:
             sub = getattr(cmd, "commands", None)
             if sub is not None and tok in sub:
                 cmd = sub[tok]
-        for p in getattr(cmd, "params", []):
-            flags = [o for o in getattr(p, "opts", []) if o.startswith("--")]
-            if p.name == error.param and flags:
-                return f"{flags[0]}: {error.problem}"
+        params = {p.name: p for p in getattr(cmd, "params", [])}
+        p = params.get(error.param) or params.get(_PARAM_ALIASES.get(error.param, ""))
+        flags = [o for o in getattr(p, "opts", []) if o.startswith("--")]
+        if flags:
+            return f"{flags[0]}: {error.problem}"
     except Exception:  # the plain message is still right
         pass
     return str(error)

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..fileio import replace_dir, staging_dir
 from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels
@@ -78,18 +78,18 @@ class CMUParams:
 
     def validate(self) -> CMUParams:
         if not self.classes:
-            raise InputError("--actions: give at least one action")
+            raise ParameterError("actions", "give at least one action")
         validate_views(self.views)
         if self.segment_seconds < 1.0:
-            raise InputError(f"--segment-seconds: must be at least 1, got {self.segment_seconds}")
+            raise ParameterError("segment_seconds", f"must be at least 1, got {self.segment_seconds}")
         if not 0.5 <= self.min_seconds <= self.segment_seconds:
-            raise InputError(f"--min-seconds: must be between 0.5 and --segment-seconds, got {self.min_seconds}")
+            raise ParameterError("min_seconds", f"must be between 0.5 and --segment-seconds, got {self.min_seconds}")
         if self.max_per_subject < 0:
-            raise InputError(f"--max-per-subject: must be >= 0 (0 = no cap), got {self.max_per_subject}")
+            raise ParameterError("max_per_subject", f"must be >= 0 (0 = no cap), got {self.max_per_subject}")
         if self.camera not in ("fit", "follow"):
-            raise InputError(f"--camera: must be fit or follow, got {self.camera!r}")
+            raise ParameterError("camera", f"must be fit or follow, got {self.camera!r}")
         if self.background not in ("plain", "texture"):
-            raise InputError(f"--background: must be plain or texture, got {self.background!r}")
+            raise ParameterError("background", f"must be plain or texture, got {self.background!r}")
         return self
 
     def to_dict(self) -> dict:
@@ -117,21 +117,21 @@ def parse_actions(spec: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
         name = name.strip().lower()
         sources = [s.strip().lower() for s in (rhs.split("+") if rhs else [name])]
         if not name or not all(sources):
-            raise InputError(f"--actions: malformed item {item!r} (use ACTION or CLASS=ACTION+ACTION)")
+            raise ParameterError("actions", f"malformed item {item!r} (use ACTION or CLASS=ACTION+ACTION)")
         resolved = []
         for s in sources:
             if s not in alias:
-                raise InputError(f"--actions: unknown action {s!r} (one of {', '.join(CMU_KEYWORDS)})")
+                raise ParameterError("actions", f"unknown action {s!r} (one of {', '.join(CMU_KEYWORDS)})")
             a = alias[s]
             if a in seen:
-                raise InputError(f"--actions: action {a!r} given twice (in {seen[a]!r} and {name!r})")
+                raise ParameterError("actions", f"action {a!r} given twice (in {seen[a]!r} and {name!r})")
             seen[a] = name
             resolved.append(a)
         if name in (c for c, _ in out):
-            raise InputError(f"--actions: class {name!r} given twice")
+            raise ParameterError("actions", f"class {name!r} given twice")
         out.append((name, tuple(resolved)))
     if not out:
-        raise InputError("--actions: give at least one action")
+        raise ParameterError("actions", "give at least one action")
     return tuple(out)
 
 

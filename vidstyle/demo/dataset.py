@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..fileio import replace_dir, staging_dir
 from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels
@@ -69,21 +69,21 @@ class DatasetParams:
 
     def validate(self) -> DatasetParams:
         if self.performers < 1:
-            raise InputError(f"--performers: must be at least 1, got {self.performers}")
+            raise ParameterError("performers", f"must be at least 1, got {self.performers}")
         validate_views(self.views)
         if self.performance_views is not None:
             try:
                 validate_views(self.performance_views)
-            except InputError as e:
-                raise InputError(str(e).replace("--views", "--performance-views")) from None
+            except ParameterError as e:
+                raise ParameterError("performance_views", e.problem) from None
         if self.single_seconds < 1.5:
-            raise InputError(f"--single-seconds: must be at least 1.5, got {self.single_seconds}")
+            raise ParameterError("single_seconds", f"must be at least 1.5, got {self.single_seconds}")
         if self.performances < 0:
-            raise InputError(f"--performances: must be >= 0, got {self.performances}")
+            raise ParameterError("performances", f"must be >= 0, got {self.performances}")
         if self.performances and self.performance_seconds < 3:
-            raise InputError(f"--performance-seconds: must be at least 3, got {self.performance_seconds}")
+            raise ParameterError("performance_seconds", f"must be at least 3, got {self.performance_seconds}")
         if self.fps <= 0 or self.mocap_fps % self.fps:
-            raise InputError(f"--fps: the mocap rate {self.mocap_fps} must be a multiple of the video rate {self.fps}")
+            raise ParameterError("fps", f"the mocap rate {self.mocap_fps} must be a multiple of the video rate {self.fps}")
         return self
 
     def to_dict(self) -> dict:
@@ -97,15 +97,15 @@ class DatasetParams:
 def validate_views(views) -> None:
     """``--views``: at least one, each a view name or an azimuth in degrees, none repeated."""
     if not views:
-        raise InputError("--views: give at least one view")
+        raise ParameterError("views", "give at least one view")
     for v in views:
         try:
             float(v)
         except ValueError:
             if v not in VIEW_NAMES:
-                raise InputError(f"--views: unknown view {v!r} (front, left, right, back or degrees)") from None
+                raise ParameterError("views", f"unknown view {v!r} (front, left, right, back or degrees)") from None
     if len(set(views)) != len(views):
-        raise InputError(f"--views: repeated view in {','.join(views)}")
+        raise ParameterError("views", f"repeated view in {','.join(views)}")
 
 
 # --------------------------------------------------------------------------- performers and takes

@@ -28,7 +28,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.dataset import Dataset
 from ..formats.labels import check_length, read_labels
 from ..formats.recognised import read_recognised
@@ -163,7 +163,7 @@ def score_videos(
 
 def ablation_params(ablation: str) -> dict[str, Any]:
     if ablation not in ABLATIONS:
-        raise InputError(f"--ablation: must be one of {', '.join(ABLATIONS)}, got {ablation!r}")
+        raise ParameterError("ablation", f"must be one of {', '.join(ABLATIONS)}, got {ablation!r}")
     return {
         "none": {},
         "no-grouping": {"grouping": False},

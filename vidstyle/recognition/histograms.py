@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +78,7 @@ class FrameFeaturizer(TransformerMixin, BaseEstimator):
 
     def transform_video(self, words: np.ndarray, frame_index: np.ndarray, n_frames: int) -> sp.csr_matrix:
         if self.context < 0:
-            raise InputError(f"--context: must be >= 0, got {self.context}")
+            raise ParameterError("context", f"must be >= 0, got {self.context}")
         counts = frame_word_counts(words, frame_index, n_frames, self.n_words)
         return context_sum(counts, self.context)
 

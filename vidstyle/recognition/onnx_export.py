@@ -40,7 +40,7 @@ def build_onnx(model) -> "onnx.ModelProto":  # noqa: F821
 
     clf = model.clf_
     if not isinstance(clf, OvaOvoSVC):
-        raise InputError("--onnx: only the 'ova-ovo' classifier can be exported")
+        raise InputError("onnx export: only the 'ova-ovo' classifier can be exported")
     V = model.vocabulary.n_words_
     G = model.grouping_.matrix_.toarray().astype(np.float64)
     pca = model.pca_

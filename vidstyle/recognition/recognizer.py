@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from .classifier import OvaOvoSVC, OvrSVC
 from .histograms import NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, normalize_rows
 from .io import VideoFeatures, load_features
@@ -117,13 +117,13 @@ class ActionRecognizer(BaseEstimator):
         if self.vocabulary is None or not hasattr(self.vocabulary, "cluster_centers_"):
             raise InputError("recognizer: needs a fitted vocabulary (vidstyle vocabulary ... --out vocab.npz)")
         if self.classifier not in CLASSIFIERS:
-            raise InputError(f"--classifier: must be one of {', '.join(CLASSIFIERS)}, got {self.classifier!r}")
+            raise ParameterError("classifier", f"must be one of {', '.join(CLASSIFIERS)}, got {self.classifier!r}")
         if self.normalize not in NORMS:
-            raise InputError(f"--normalize: must be one of {', '.join(NORMS)}, got {self.normalize!r}")
+            raise ParameterError("normalize", f"must be one of {', '.join(NORMS)}, got {self.normalize!r}")
         if self.context < 0:
-            raise InputError(f"--context: must be >= 0, got {self.context}")
+            raise ParameterError("context", f"must be >= 0, got {self.context}")
         if self.n_components < 1:
-            raise InputError(f"--components: must be >= 1, got {self.n_components}")
+            raise ParameterError("n_components", f"must be >= 1, got {self.n_components}")
 
     def histograms(self, video: VideoFeatures | str | Path) -> sp.csr_matrix:
         """(n_frames, n_words) context word counts of one video (the ONNX model's input)."""

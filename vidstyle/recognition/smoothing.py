@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 
 METHODS = ("vote", "mean", "viterbi")
 
@@ -53,7 +53,7 @@ def smooth_labels(
     n = labels.shape[0]
     conf = np.ones(n) if confidence is None else np.asarray(confidence, np.float64)
     if method not in METHODS:
-        raise InputError(f"--smoothing: must be one of {', '.join(METHODS)}, got {method!r}")
+        raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {method!r}")
     if window <= 1 or n == 0:
         return labels.copy(), conf.copy()
     if method == "viterbi":

@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.dataset import Dataset
 
 log = logging.getLogger(__name__)
@@ -55,7 +55,7 @@ def make_split(
     ab_by: str = "performer",
 ) -> Split:
     if kind not in KINDS:
-        raise InputError(f"--split: must be one of {', '.join(KINDS)}, got {kind!r}")
+        raise ParameterError("kind", f"must be one of {', '.join(KINDS)}, got {kind!r}")
     if ab_by not in ("performer", "video"):
         raise InputError(f"ab_by: must be performer or video, got {ab_by!r}")
     if not 0 < test_fraction < 1 or not 0 < vocab_fraction < 1:
@@ -80,7 +80,7 @@ def make_split(
         if test_view is None:
             test_view = str(rng.choice(views))
         elif test_view not in views:
-            raise InputError(f"--test-view: {test_view!r} is not one of the dataset's views {views}")
+            raise ParameterError("test_view", f"{test_view!r} is not one of the dataset's views {views}")
         test_views = [test_view]
         test = [v for v in videos if v.view == test_view]
         rest = [v for v in videos if v.view != test_view]

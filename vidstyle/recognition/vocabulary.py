@@ -26,7 +26,7 @@ from typing import Sequence
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 
 log = logging.getLogger(__name__)
 
@@ -84,7 +84,7 @@ class Vocabulary(TransformerMixin, BaseEstimator):
     # ------------------------------------------------------------------ fit
     def fit(self, X, y=None):
         if self.method not in METHODS:
-            raise InputError(f"--method: must be one of {', '.join(METHODS)}, got {self.method!r}")
+            raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
         if self.assign not in ("tree", "exact"):
             raise InputError(f"assign: must be 'tree' or 'exact', got {self.assign!r}")
         X = np.asarray(X)
@@ -97,7 +97,7 @@ class Vocabulary(TransformerMixin, BaseEstimator):
         X = np.ascontiguousarray(X, dtype=np.float32)
         n_words = int(self.n_words)
         if n_words < 2:
-            raise InputError(f"--words: need at least 2 words, got {n_words}")
+            raise ParameterError("n_words", f"need at least 2 words, got {n_words}")
         if X.shape[0] < n_words:
             raise InputError(f"descriptors: {X.shape[0]} descriptors cannot make {n_words} words")
         self.n_fit_descriptors_ = int(X.shape[0])
@@ -127,7 +127,7 @@ class Vocabulary(TransformerMixin, BaseEstimator):
             self.tree_ = None
         else:
             if self.branching < 2:
-                raise InputError(f"--branching: must be >= 2, got {self.branching}")
+                raise ParameterError("branching", f"must be >= 2, got {self.branching}")
             self.tree_ = _build_tree(X, n_words, self.branching, self.max_iter, np.random.default_rng(seed))
             leaves = self.tree_["word"] >= 0
             centres = np.empty((int(leaves.sum()), X.shape[1]), np.float32)

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.labels import FrameLabels
 from .events import EventParams, EventSequence, action_names_of, tracks_to_events
 from .models import ActionHMM, BigramModel, DurationModel, ModeHMM, require_transitions
@@ -43,15 +43,15 @@ class StyleParams:
 
     def __post_init__(self) -> None:
         if self.n_init < 1:
-            raise InputError(f"--n-init: must be >= 1, got {self.n_init}")
+            raise ParameterError("n_init", f"must be >= 1, got {self.n_init}")
         if self.n_iter < 1:
-            raise InputError(f"--n-iter: must be >= 1, got {self.n_iter}")
+            raise ParameterError("n_iter", f"must be >= 1, got {self.n_iter}")
         if min(self.alpha, self.mode_alpha, self.mode_emission_alpha) <= 0:
-            raise InputError("--alpha: smoothing pseudo-counts must be > 0")
+            raise ParameterError("alpha", "smoothing pseudo-counts must be > 0")
         if not self.k_range or min(self.k_range) < 1:
-            raise InputError(f"--modes: need positive mode counts, got {list(self.k_range)}")
+            raise ParameterError("k_range", f"need positive mode counts, got {list(self.k_range)}")
         if self.mode_criterion not in ("heldout", "bic"):
-            raise InputError(f"--mode-criterion: 'heldout' or 'bic', got {self.mode_criterion!r}")
+            raise ParameterError("mode_criterion", f"'heldout' or 'bic', got {self.mode_criterion!r}")
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -72,9 +72,9 @@ def parse_k_range(text: str) -> tuple[int, ...]:
             elif part:
                 out.append(int(part))
     except ValueError:
-        raise InputError(f"--modes: expected e.g. '1-6' or '1,2,4', got {text!r}") from None
+        raise ParameterError("k_range", f"expected e.g. '1-6' or '1,2,4', got {text!r}") from None
     if not out or min(out) < 1:
-        raise InputError(f"--modes: expected positive mode counts, got {text!r}")
+        raise ParameterError("k_range", f"expected positive mode counts, got {text!r}")
     return tuple(sorted(set(out)))
 
 
@@ -124,8 +124,8 @@ class Style:
         """Fit all models on event sequences that share one action list."""
         sequences = [s for s in sequences if len(s)]
         if not sequences:
-            raise InputError(f"{what}: no action events left after filtering (check --ignore, "
-                             f"--min-confidence, --min-run)")
+            raise InputError(f"{what}: no action events left after filtering (check the ignored "
+                             f"classes, min_confidence, min_run)")
         actions = sequences[0].action_names
         ints = [s.actions for s in sequences]
         require_transitions(ints, what)
@@ -184,17 +184,17 @@ class Style:
         try:
             return {"a": self.model_a, "b": self.model_b, "bigram": self.bigram}[which]
         except KeyError:
-            raise InputError(f"--model: one of {', '.join(MODELS)}, got {which!r}") from None
+            raise ParameterError("model", f"one of {', '.join(MODELS)}, got {which!r}") from None
 
-    def action_index(self, name: str, option: str = "--start") -> int:
+    def action_index(self, name: str, option: str = "start") -> int:
         if name not in self.actions:
             hint = (f"'{name}' is ignored filler, not an action of the chain; "
                     if name in self.params.events.ignore else f"unknown action '{name}'; ")
-            raise InputError(f"{option}: {hint}known actions: {', '.join(self.actions)}")
+            raise ParameterError(option, f"{hint}known actions: {', '.join(self.actions)}")
         i = self.actions.index(name)
         if self.action_counts[i] == 0:
-            raise InputError(
-                f"{option}: action '{name}' never occurs in the training events, so its transitions "
+            raise ParameterError(
+                option, f"action '{name}' never occurs in the training events, so its transitions "
                 f"are unknown; seen actions: "
                 f"{', '.join(a for a, c in zip(self.actions, self.action_counts) if c)}"
             )
@@ -208,7 +208,7 @@ class Style:
         The first event is ``start`` (default: drawn from the model's start distribution).
         """
         if length < 1:
-            raise InputError(f"--length: must be >= 1, got {length}")
+            raise ParameterError("length", f"must be >= 1, got {length}")
         m = self.model(model)
         s = None if start is None else self.action_index(start)
         rng = np.random.default_rng(seed)
