@@ -25,7 +25,7 @@ demo: $(STAMP)
 SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 sysdeps:
 	@command -v chromium >/dev/null || command -v chromium-browser >/dev/null || \
-	  { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq chromium; }
+	  { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq --no-install-recommends chromium; }
 
 test: $(STAMP) sysdeps
 	$(BIN)/python -m pytest -n 2 -q

@@ -73,8 +73,53 @@ def _arrange_help() -> None:
     app.registered_groups.sort(key=rank)
 
 
+def _literal_help(typer_app: typer.Typer) -> None:
+    """Help texts are shown as written: Rich markup would swallow bracketed text such as the defaults
+    ``[10; --small: 3]``, so every command's, group's and option's help is escaped (recursively)."""
+    import inspect
+
+    from rich.markup import escape
+    from typer.models import ArgumentInfo, OptionInfo
+
+    for info in typer_app.registered_commands:
+        cb = info.callback
+        if cb is None:
+            continue
+        if info.help is None and cb.__doc__:
+            info.help = escape(inspect.getdoc(cb))
+        for p in inspect.signature(cb).parameters.values():
+            if isinstance(p.default, (OptionInfo, ArgumentInfo)) and p.default.help:
+                p.default.help = escape(p.default.help)
+    for group in typer_app.registered_groups:
+        sub = group.typer_instance
+        if sub is None:
+            continue
+        if sub.info.help and isinstance(sub.info.help, str):
+            sub.info.help = escape(sub.info.help)
+        _literal_help(sub)
+
+
+def _flags_take_no_value() -> None:
+    """An on/off flag (``--small``, ``--help``) takes no value, so --help shows no type for it (Typer's
+    rich help prints ``<bool>`` as if it took one)."""
+    option = getattr(typer.core, "TyperOption", None)
+    show = getattr(option, "display_type_rich", None)
+    if show is None or getattr(show, "_vidstyle", False):
+        return
+
+    def display_type_rich(self, ctx):
+        if getattr(self, "is_flag", False) and not getattr(self, "count", False):
+            return None
+        return show(self, ctx)
+
+    display_type_rich._vidstyle = True
+    option.display_type_rich = display_type_rich
+
+
 _register_commands()
 _arrange_help()
+_literal_help(app)
+_flags_take_no_value()
 
 
 #: library parameter -> the command parameter that sets it, where the names differ
