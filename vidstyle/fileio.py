@@ -101,14 +101,12 @@ def write_json(path: str | os.PathLike, obj: Any) -> None:
 
 
 def read_json(path: str | os.PathLike) -> Any:
-    path = Path(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except json.JSONDecodeError as e:
-        raise InputError(f"{path}: not valid JSON ({e.msg} at line {e.lineno})") from None
+    """Strict UTF-8 JSON (see :func:`vidstyle.formats.read_json_document`): every problem is one
+    :class:`~vidstyle.formats.FormatError` naming the file. Artifacts have owner readers in
+    :mod:`vidstyle.formats`; this is for the few inputs without one (e.g. an appearance)."""
+    from .formats import read_json_document
+
+    return read_json_document(path)
 
 
 def write_npz(path: str | os.PathLike, **arrays: Any) -> None:

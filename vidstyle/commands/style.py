@@ -121,7 +121,7 @@ def generate(
 ) -> None:
     """Generate a new action sequence (with durations) in a learned style."""
     from ..fileio import write_text
-    from ..formats.sequence import ActionSequence, format_sequence
+    from ..formats.sequence import ActionSequence, format_sequence, write_sequence
     from ..formats.style import read_style
 
     if fmt not in FORMATS:
@@ -131,7 +131,9 @@ def generate(
     seq = ActionSequence.from_events(events, style.fps, style=str(style_path), model=model, seed=seed)
     text = format_sequence(seq, fmt)
     log.info("generated %d events with model %s (seed %d) from %s", len(seq.events), model, seed, style_path)
-    if out is not None:
+    if out is not None and fmt == "json":
+        write_sequence(out, seq)
+    elif out is not None:
         write_text(out, text)
     else:
         typer.echo(text, nl=False)

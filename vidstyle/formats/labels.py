@@ -210,14 +210,3 @@ def write_labels(path: str | os.PathLike, track: FrameLabels | dict) -> None:
     parse_labels(doc, path)
     write_json_document(path, doc)
 
-
-def labels_from_runs(labels: list[str], classes, fps: float, actions=None, **meta) -> FrameLabels:
-    """A :class:`FrameLabels` with ``transitions`` (frames whose label differs from the previous one's),
-    ``segments`` (runs) and ``events`` (runs of ``actions``; all runs when ``actions`` is None)."""
-    transitions = [i for i in range(1, len(labels)) if labels[i] != labels[i - 1]]
-    bounds = [0] + transitions + [len(labels)]
-    segments = [Segment(labels[s], s, e) for s, e in zip(bounds[:-1], bounds[1:]) if e > s]
-    events = [s for s in segments if actions is None or s.label in actions]
-    fields = {k: meta.pop(k) for k in ("video", "bvh", "performer", "view", "chain") if k in meta}
-    return FrameLabels(list(labels), tuple(classes), float(fps), transitions=transitions, events=events,
-                       segments=segments, extra=meta, **fields)

@@ -122,22 +122,3 @@ def timeline(
     parts.append("</svg>")
     return "".join(parts)
 
-
-def bar_chart(values: dict[str, float], title: str = "", width: int = 420, fmt: str = "{:.3f}") -> str:
-    """Horizontal bars, one per key."""
-    keys = list(values)
-    vmax = max((abs(v) for v in values.values()), default=1.0) or 1.0
-    left, top, bar_h = 150, 30 if title else 8, 20
-    height = top + len(keys) * (bar_h + 6) + 10
-    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
-             f'viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="11" role="img">']
-    if title:
-        parts.append(f'<text x="{left}" y="18" font-size="13" font-weight="bold">{_esc(title)}</text>')
-    for k, key in enumerate(keys):
-        y = top + k * (bar_h + 6)
-        w = (width - left - 70) * abs(values[key]) / vmax
-        parts.append(f'<text x="{left - 6}" y="{y + 14}" text-anchor="end">{_esc(key)}</text>')
-        parts.append(f'<rect x="{left}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{PALETTE[4]}"/>')
-        parts.append(f'<text x="{left + w + 4:.1f}" y="{y + 14}">{_esc(fmt.format(values[key]))}</text>')
-    parts.append("</svg>")
-    return "".join(parts)
