@@ -1,5 +1,22 @@
 """One owner module per artifact: a typed object, ``read_*`` / ``write_*``, a ``kind`` + ``schema_version``
-header, and validation of every field that raises :class:`FormatError` naming the file and the field."""
+header, and validation of every field that raises :class:`FormatError` naming the file and the field.
+
+=========================================  ===============================  ==================================
+file                                       kind (schema_version)            owner
+=========================================  ===============================  ==================================
+labels ``<video id>.json``, mocap          ``vidstyle.labels`` (2; 1 = no   :mod:`vidstyle.formats.labels`
+``<take>.labels.json``                     header)
+recognised labels (``vidstyle recognize``) ``vidstyle.recognised_labels``   :mod:`vidstyle.formats.recognised`
+                                           (2; 1 = no header)
+dataset manifest ``dataset.json``          ``vidstyle.dataset`` (2; 1)      :mod:`vidstyle.formats.dataset`
+action sequence (``generate --format       ``vidstyle.sequence`` (1)        :mod:`vidstyle.formats.sequence`
+json``)
+style ``style.json``                       ``vidstyle.style`` (1)           :mod:`vidstyle.formats.style`
+render ground truth ``<video>.truth.npz``  ``vidstyle.render_truth`` (2; 1) :mod:`vidstyle.formats.truth`
+metrics (recognition, style, motion,       ``vidstyle.metrics.<what>`` (1)  :mod:`vidstyle.formats.metrics`
+headline)
+=========================================  ===============================  ==================================
+"""
 
 from ._base import FormatError, Fields, check_array, check_header, header, read_json_document, write_json_document
 

@@ -26,12 +26,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..formats import FormatError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
 from ..formats.metrics import HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
+from ..formats.truth import read_npz
 from . import svg
 from .page import Page, data_uri, esc, table
 
@@ -194,10 +196,15 @@ def _motion_section(page: Page, run: Path) -> None:
     gpath = run / "graph" / "graph.npz"
     body = []
     if gpath.is_file():
-        with np.load(gpath, allow_pickle=False) as z:
+        z = read_npz(gpath)  # (the graph's owner is vidstyle.motiongraph.graph; the page needs two fields)
+        try:
             params = json.loads(str(z["params_json"]))
             labels = [str(x) for x in z["label_names"]]
-        stats = params.get("stats", {})
+        except (KeyError, ValueError):
+            raise FormatError(gpath, "params_json", "missing or not JSON (not a motion graph?)") from None
+        if not isinstance(params, dict):
+            raise FormatError(gpath, "params_json", "expected a JSON object")
+        stats = params.get("stats") if isinstance(params.get("stats"), dict) else {}
         rows = [[k.replace("_", " "), v] for k, v in stats.items() if isinstance(v, (int, float))]
         body.append(table(rows, ["motion graph", "value"]))
         body.append(f'<p class="note">labels: {esc(", ".join(labels))}; window {params.get("window")} frames at '
