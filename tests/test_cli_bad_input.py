@@ -196,14 +196,14 @@ def test_generate_text_stdout_is_data_and_logs_go_to_stderr(world):
     style = json.loads(world["style"].read_text())
     p = subprocess.run(_console_script() + ["generate", "--style", str(world["style"]), "--length", "12",
                                             "--seed", "4", "--format", "text"],
-                       capture_output=True, text=True, env=_env(), timeout=300)
+                       capture_output=True, text=True, env=_env(), timeout=300, check=False)
     assert p.returncode == 0, p.stderr
     words = p.stdout.split()
     assert p.stdout.count("\n") == 1 and len(words) == 12 and set(words) <= set(style["actions"])
     assert "generated 12 events" in p.stderr  # the log line, on stderr only
     p = subprocess.run(_console_script() + ["generate", "--style", str(world["style"]), "--length", "12",
                                             "--seed", "4", "--format", "csv"],
-                       capture_output=True, text=True, env=_env(), timeout=300)
+                       capture_output=True, text=True, env=_env(), timeout=300, check=False)
     rows = [r.split(",") for r in p.stdout.splitlines()]
     assert rows[0] == ["index", "action", "duration_frames", "start_frame"] and len(rows) == 13
     assert [r[1] for r in rows[1:]] == words  # same seed, same sequence

@@ -13,7 +13,13 @@ from vidstyle.formats.dataset import read_dataset, write_dataset
 from vidstyle.formats.labels import FrameLabels, read_labels, write_labels
 from vidstyle.formats.metrics import read_metrics, write_metrics
 from vidstyle.formats.recognised import read_recognised
-from vidstyle.formats.sequence import ActionSequence, format_sequence, parse_sequence, read_sequence, write_sequence
+from vidstyle.formats.sequence import (
+    ActionSequence,
+    format_sequence,
+    parse_sequence,
+    read_sequence,
+    write_sequence,
+)
 from vidstyle.style.synthetic import write_fake_dataset
 
 

@@ -22,7 +22,7 @@ from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
 from vidstyle.formats.style import parse_style, read_style, style_to_dict, write_style
-from vidstyle.formats.truth import parse_truth, read_truth, truth_arrays, write_truth
+from vidstyle.formats.truth import parse_truth, read_truth, write_truth
 
 CLASSES = ["Jab", "Hook", "Guard"]
 

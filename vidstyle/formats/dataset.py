@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ._base import FormatError, Fields, check_header, header, read_json_document, write_json_document
+from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 KIND = "vidstyle.dataset"
 SCHEMA_VERSION = 2
@@ -176,7 +176,7 @@ def _chain(obj: Any, path, name: str) -> Chain:
     dur: dict[str, tuple[float, float]] = {}
     if obj.get("duration_frames") is not None:
         d = c.sub("duration_frames")
-        for a, v in d.obj.items():
+        for a in d.obj:
             if a not in actions:
                 raise FormatError(path, d.name(a), "not one of the chain's actions")
             arr = d.array(a, shape=(2,))

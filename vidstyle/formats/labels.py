@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ._base import FormatError, Fields, check_header, header, read_json_document, write_json_document
+from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 KIND = "vidstyle.labels"
 SCHEMA_VERSION = 2
@@ -178,7 +178,8 @@ def _segment(obj: Any, path, name: str, n: int, classes: set[str]) -> Segment:
 
 def parse_labels(doc: Any, path: str | os.PathLike | None = None) -> FrameLabels:
     """Validate a labels document (ground truth or recognised); see the module docstring."""
-    from .recognised import KIND as RKIND, parse_recognised
+    from .recognised import KIND as RKIND
+    from .recognised import parse_recognised
 
     if isinstance(doc, dict) and doc.get("kind") == RKIND:
         return parse_recognised(doc, path)

@@ -29,7 +29,15 @@ import os
 from dataclasses import dataclass, field
 from typing import Any
 
-from ._base import FormatError, Fields, check_array, check_number, check_header, read_json_document, write_json_document
+from ._base import (
+    Fields,
+    FormatError,
+    check_array,
+    check_header,
+    check_number,
+    read_json_document,
+    write_json_document,
+)
 
 RECOGNITION = "vidstyle.metrics.recognition"
 STYLE = "vidstyle.metrics.style"
@@ -168,5 +176,15 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
     write_json_document(path, d)
 
 
-__all__ = ["HEADLINE", "KINDS", "MOTION", "Metrics", "RECOGNITION", "STYLE", "check_array", "parse_metrics",
-           "read_metrics", "write_metrics"]
+__all__ = [
+    "HEADLINE",
+    "KINDS",
+    "MOTION",
+    "RECOGNITION",
+    "STYLE",
+    "Metrics",
+    "check_array",
+    "parse_metrics",
+    "read_metrics",
+    "write_metrics",
+]

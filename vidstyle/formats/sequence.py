@@ -23,7 +23,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Any
 
-from ._base import FormatError, Fields, check_header, header, read_json_document, write_json_document
+from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 KIND = "vidstyle.sequence"
 SCHEMA_VERSION = 1
@@ -53,7 +53,7 @@ class ActionSequence:
     kind = KIND
 
     @classmethod
-    def from_events(cls, events: list[dict], fps: float, **meta) -> "ActionSequence":
+    def from_events(cls, events: list[dict], fps: float, **meta) -> ActionSequence:
         """From ``{"action", "duration_frames"[, "start_frame"]}`` dicts; start frames are back to back."""
         out, t = [], 0
         for e in events:

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError
-from ._base import FormatError, Fields, check_header, header, read_json_document, write_json_document
+from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 if TYPE_CHECKING:
     from ..style.artifact import Style
@@ -55,7 +55,7 @@ def _finite_or_none(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def style_to_dict(style: "Style") -> dict[str, Any]:
+def style_to_dict(style: Style) -> dict[str, Any]:
     a, b, g, d = style.model_a, style.model_b, style.bigram, style.durations
     return {
         **header(KIND, SCHEMA_VERSION),
@@ -159,7 +159,7 @@ def _int_item(p: Fields, key: str, i: int, x: Any) -> int:
     return check_int(x, p.path, f"{p.name(key)}[{i}]", 1)
 
 
-def parse_style(doc: Any, path: str | os.PathLike | None = None) -> "Style":
+def parse_style(doc: Any, path: str | os.PathLike | None = None) -> Style:
     """Validate a style document and build the :class:`~vidstyle.style.artifact.Style` it describes."""
     from ..style.artifact import Style
     from ..style.models import ActionHMM, BigramModel, DurationModel, ModeHMM
@@ -237,11 +237,11 @@ def parse_style(doc: Any, path: str | os.PathLike | None = None) -> "Style":
                  action_counts=counts, n_sequences=n_sequences)
 
 
-def read_style(path: str | os.PathLike) -> "Style":
+def read_style(path: str | os.PathLike) -> Style:
     return parse_style(read_json_document(path), path)
 
 
-def write_style(path: str | os.PathLike, style: "Style") -> None:
+def write_style(path: str | os.PathLike, style: Style) -> None:
     import json
 
     from ._base import _json_default

@@ -169,7 +169,7 @@ def read_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
         raise FormatError(path, None, "file not found") from None
     except (zipfile.BadZipFile, zipfile.LargeZipFile):
         raise FormatError(path, None, "not a readable .npz (damaged or truncated zip)") from None
-    except Exception as e:  # zlib.error, ValueError (pickled object arrays, bad header), EOFError, OSError...
+    except Exception as e:  # noqa: BLE001 - zlib.error, ValueError (pickled object arrays, bad header), EOFError, OSError...
         raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {e})"[:300]) from None
 
 
