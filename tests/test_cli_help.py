@@ -56,3 +56,24 @@ def test_demo_make_dataset_help_shows_its_defaults(capsys, monkeypatch):
         assert shown in text, shown
     small = next(ln for ln in text.splitlines() if "--small" in ln and "A small dataset" in ln)
     assert "<" not in small.split("A small dataset")[0]
+
+
+def test_option_declarations_shared_by_two_commands_are_escaped_once(capsys, monkeypatch):
+    from vidstyle.commands import style as style_cmd
+
+    shared = style_cmd._MIN_CONF
+    original = shared.help
+    try:
+        shared.help = "Frames below this confidence are dropped [0.5]."
+        shared._vidstyle_literal = False
+        from vidstyle import cli
+
+        cli._literal_help(cli.app)
+        cli._literal_help(cli.app)  # idempotent
+        for args in (["learn-style"], ["evaluate", "style"]):
+            text = _help(capsys, monkeypatch, args)
+            assert "dropped [0.5]." in text and "\\[" not in text, args
+        for args in (["demo", "make-dataset"],):
+            assert "[10; --small: 3]" in _help(capsys, monkeypatch, args)  # others not escaped twice
+    finally:
+        shared.help = original

@@ -75,27 +75,32 @@ def _arrange_help() -> None:
 
 def _literal_help(typer_app: typer.Typer) -> None:
     """Help texts are shown as written: Rich markup would swallow bracketed text such as the defaults
-    ``[10; --small: 3]``, so every command's, group's and option's help is escaped (recursively)."""
+    ``[10; --small: 3]``, so every command's, group's and option's help is escaped (recursively, once per
+    declaration: option declarations shared by several commands are escaped once)."""
     import inspect
 
     from rich.markup import escape
     from typer.models import ArgumentInfo, OptionInfo
 
+    def literal(obj, attr: str, text: str | None) -> None:
+        if text and not getattr(obj, "_vidstyle_literal", False):
+            setattr(obj, attr, escape(text))
+            obj._vidstyle_literal = True
+
     for info in typer_app.registered_commands:
         cb = info.callback
         if cb is None:
             continue
-        if info.help is None and cb.__doc__:
-            info.help = escape(inspect.getdoc(cb))
+        literal(info, "help", info.help if info.help is not None else inspect.getdoc(cb))
         for p in inspect.signature(cb).parameters.values():
-            if isinstance(p.default, (OptionInfo, ArgumentInfo)) and p.default.help:
-                p.default.help = escape(p.default.help)
+            if isinstance(p.default, (OptionInfo, ArgumentInfo)):
+                literal(p.default, "help", p.default.help)
     for group in typer_app.registered_groups:
         sub = group.typer_instance
         if sub is None:
             continue
-        if sub.info.help and isinstance(sub.info.help, str):
-            sub.info.help = escape(sub.info.help)
+        if isinstance(sub.info.help, str):
+            literal(sub.info, "help", sub.info.help)
         _literal_help(sub)
 
 
