@@ -8,12 +8,19 @@ import numpy as np
 import pytest
 from scipy.sparse.csgraph import shortest_path
 from scipy.spatial.transform import Rotation
+from test_motiongraph_graph import _clips, _gait
 
 from vidstyle.mocap import global_positions
-from vidstyle.motiongraph import EdgeKind, MotionGraph, Step, align_windows, edge_frames, plan_walk, render_walk
-
-from test_motiongraph_graph import _clips, _gait
-from vidstyle.motiongraph import Clip
+from vidstyle.motiongraph import (
+    Clip,
+    EdgeKind,
+    MotionGraph,
+    Step,
+    align_windows,
+    edge_frames,
+    plan_walk,
+    render_walk,
+)
 
 
 @pytest.fixture(scope="module")
@@ -230,7 +237,7 @@ def test_costs_choose_the_brute_force_minimal_path(rng):
     seen = set()
     for trial in range(6):
         walk = plan_walk(graph, [Step("walk", 5), Step("run", 4), Step("walk", 4)], strict=False)
-        ref, ref_used = _brute_force(graph, req)
+        ref, _ = _brute_force(graph, req)
         assert walk.cost == pytest.approx(ref, abs=1e-9)
         seen.add(tuple(walk.transitions_used))
         # make the edges the walk used dearer: the DP must follow the brute force to another path

@@ -76,7 +76,7 @@ _V1 = ("trans_from", "trans_to", "trans_cost", "trans_theta", "trans_x0", "trans
 
 
 # ---------------------------------------------------------------------------------------------- write
-def write_graph(path: str | os.PathLike, graph: "MotionGraph") -> None:
+def write_graph(path: str | os.PathLike, graph: MotionGraph) -> None:
     """Write ``graph`` (schema version 2) atomically; the arrays are checked first, so an invalid graph
     never reaches disk (``ValueError``)."""
     from ..fileio import write_npz
@@ -139,7 +139,7 @@ def write_graph(path: str | os.PathLike, graph: "MotionGraph") -> None:
 
 
 # ---------------------------------------------------------------------------------------------- read
-def read_graph(path: str | os.PathLike) -> "MotionGraph":
+def read_graph(path: str | os.PathLike) -> MotionGraph:
     """Read a graph file (schema version 1 or 2) into a fitted :class:`~vidstyle.motiongraph.MotionGraph`."""
     path = Path(path)
     d = _load_arrays(path)
@@ -169,7 +169,7 @@ def _load_arrays(path: Path) -> dict[str, np.ndarray]:
             return out
     except MemoryError:
         raise FormatError(path, None, "not a motion graph .npz (an array header claims more memory than there is)") from None
-    except Exception as e:  # noqa: BLE001 - zipfile/zlib/numpy raise many types on damaged bytes
+    except Exception as e:
         if isinstance(e, FormatError):
             raise
         reason = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
@@ -364,7 +364,7 @@ def _validate(d: dict, path, version: int) -> dict[str, Any]:
     return out
 
 
-def _build(c: dict[str, Any], path: Path) -> "MotionGraph":
+def _build(c: dict[str, Any], path: Path) -> MotionGraph:
     from ..mocap import Skeleton
     from ..motiongraph.graph import MotionGraph, Segment
 

@@ -40,7 +40,7 @@ class Placement:
     z0: float = 0.0
 
     @classmethod
-    def from_array(cls, a) -> "Placement":
+    def from_array(cls, a) -> Placement:
         """From ``(theta, x0, z0)``."""
         a = np.asarray(a, dtype=np.float64).reshape(3)
         return cls(float(a[0]), float(a[1]), float(a[2]))
@@ -68,17 +68,17 @@ class Placement:
         rot[:, root] = qmul(np.broadcast_to(yaw_quat(self.theta), rot[:, root].shape), rot[:, root])
         return rot, self.apply_points(root_positions)
 
-    def then(self, other: "Placement") -> "Placement":
+    def then(self, other: Placement) -> Placement:
         """``self o other``: apply ``other`` first, then ``self``."""
         x, z = self.apply_points(np.array([other.x0, 0.0, other.z0]))[[0, 2]]
         return Placement(self.theta + other.theta, float(x), float(z))
 
-    def inverse(self) -> "Placement":
+    def inverse(self) -> Placement:
         c, s = math.cos(-self.theta), math.sin(-self.theta)
         return Placement(-self.theta, -(c * self.x0 + s * self.z0), -(-s * self.x0 + c * self.z0))
 
     @classmethod
-    def facing(cls, facing_angle: float, root_position: np.ndarray, angle: float = 0.0, origin: bool = True) -> "Placement":
+    def facing(cls, facing_angle: float, root_position: np.ndarray, angle: float = 0.0, origin: bool = True) -> Placement:
         """The placement that turns a character facing ``facing_angle`` (radians) to face ``angle``
         about the vertical through its root, and (``origin``) moves that root above the world origin."""
         r = np.asarray(root_position, dtype=np.float64)

@@ -11,7 +11,7 @@ keypoints instead (:mod:`vidstyle.mocap.keypoints`).
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

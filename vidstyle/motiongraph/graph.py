@@ -60,10 +60,10 @@ from __future__ import annotations
 import hashlib
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -231,7 +231,7 @@ class MotionGraph:
         return {k: getattr(self, k) for k in self.PARAMS}
 
     # ------------------------------------------------------------------------------------------ fit
-    def fit(self, clips: Sequence[Clip]) -> "MotionGraph":
+    def fit(self, clips: Sequence[Clip]) -> MotionGraph:
         from ..mocap.retarget import retarget_clips
 
         k = int(self.window)
@@ -305,7 +305,7 @@ class MotionGraph:
             "pairs": int(cand.n_pairs),
             "pairs_below_threshold": int(cand.n_below),
             "fraction_below_threshold": cand.n_below / max(cand.n_pairs, 1),
-            "candidates": int(len(cand.a)),
+            "candidates": len(cand.a),
             "transitions": n_blend,
             "transitions_in_scc": int((self.edge_in_scc_ & (self.edge_kind_ == EdgeKind.BLEND)).sum()),
             "scc_frames": int(self.scc_.sum()),
@@ -453,7 +453,7 @@ class MotionGraph:
         for name in ("src", "dst", "kind", "cost", "segment", "align", "align_segment", "in_scc"):
             setattr(self, f"edge_{name}_", getattr(self, f"edge_{name}_")[keep])
 
-    def prune(self) -> "MotionGraph":
+    def prune(self) -> MotionGraph:
         """Recompute ``scc_`` (the largest strongly connected component over every edge of the table,
         scipy.sparse.csgraph) and ``edge_in_scc_``."""
         from scipy.sparse import coo_matrix
@@ -526,7 +526,7 @@ class MotionGraph:
         write_graph(path, self)
 
     @classmethod
-    def load(cls, path: str | Path) -> "MotionGraph":
+    def load(cls, path: str | Path) -> MotionGraph:
         """Read a graph file (schema version 1 or 2); malformed files raise ``FormatError``."""
         from ..formats.motiongraph import read_graph
 
