@@ -42,7 +42,11 @@ def leg_length(skeleton: Skeleton) -> float:
     Site; a foot): the sum of the bone lengths along it. 0 when the skeleton is a single point."""
     pos, ends = rest_positions(skeleton)
     pts = [(pos[j, 1], j, None) for j in range(skeleton.n_joints)] + [(e[1], j, e) for j, e in ends.items()]
-    _, j, end = min(pts, key=lambda t: (t[0], t[1]))
+    ys = np.array([p[0] for p in pts])
+    # the first of the (near-)lowest points, with a tolerance relative to the body's extent, so the same
+    # point is chosen whatever the unit (float rounding must not flip a tie between a toe and its End Site)
+    tol = 1e-6 * max(float(ys.max() - ys.min()), 1e-300)
+    _, j, end = next(p for p in pts if p[0] <= ys.min() + tol)
     total = float(np.linalg.norm(end - pos[j])) if end is not None else 0.0
     while skeleton.parents[j] >= 0:
         total += float(np.linalg.norm(skeleton.offsets[j]))
@@ -77,3 +81,12 @@ def retarget_clips(motions: Sequence[Motion], reference: Skeleton, sources: Sequ
     """:func:`retarget` of every motion (``sources`` name them in errors)."""
     sources = list(sources) if sources is not None else [f"clip {i}" for i in range(len(motions))]
     return [retarget(m, reference, s) for m, s in zip(motions, sources)]
+
+
+def rescale(motion: Motion, factor: float) -> Motion:
+    """The same motion in another length unit: offsets, End Sites and every translation times
+    ``factor`` (e.g. 0.0564 turns CMU's units into metres); rotations unchanged."""
+    sk = motion.skeleton
+    skeleton = Skeleton(list(sk.names), sk.parents.copy(), sk.offsets * factor, list(sk.channels),
+                        {j: v * factor for j, v in sk.end_sites.items()})
+    return Motion(skeleton, motion.rotations.copy(), motion.translations * factor, motion.fps)
