@@ -258,3 +258,19 @@ def test_checkpointed_history_with_two_block_edges_gives_the_same_walk(base):
     assert any(graph.edge_kind_[e] == EdgeKind.ENHANCEMENT for e in full.transitions_used)
     assert tiny.cost == full.cost and tiny.transitions_used == full.transitions_used
     np.testing.assert_array_equal(tiny.frames, full.frames)
+
+
+def test_segment_from_a_library_motion_in_another_unit_and_rate(base):
+    from vidstyle.mocap.retarget import rescale
+
+    graph = _copy(base)
+    k = graph.window
+    m = _gait(120, 1.0, 30, 4.0, fps=60.0)  # the base clips' skeleton, at 60 fps, in other units
+    sid = graph.add_segment_from(rescale(m, 0.01), 1.0, source="lib.bvh@1s")
+    S = graph.segments_[sid]
+    ref = m.resample(30.0)
+    assert S.n_frames == 2 * k and S.centre == k - 1
+    np.testing.assert_allclose(S.root_positions, ref.root_positions[30 - k + 1 : 30 + k + 1], atol=1e-9)
+    np.testing.assert_allclose(np.abs(np.sum(S.rotations * ref.rotations[30 - k + 1 : 30 + k + 1], -1)), 1, atol=1e-9)
+    with pytest.raises(ValueError, match="closer than"):
+        graph.add_segment_from(m, 0.05)

@@ -37,7 +37,10 @@ def build_graph(
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the threshold sample."),
 ) -> None:
-    """Build a motion graph from labelled clips (see vidstyle.motiongraph.graph for the .npz schema)."""
+    """Build a motion graph from labelled clips (see vidstyle.formats.motiongraph for the .npz schema, version 2).
+
+    Clips of one joint layout in other units or bone lengths are retargeted onto the first clip's skeleton
+    (rotations kept, root path scaled by leg length)."""
     from ..motiongraph import MotionGraph, load_clips
 
     if dtype not in ("float32", "float64"):
