@@ -274,3 +274,24 @@ def test_segment_from_a_library_motion_in_another_unit_and_rate(base):
     np.testing.assert_allclose(np.abs(np.sum(S.rotations * ref.rotations[30 - k + 1 : 30 + k + 1], -1)), 1, atol=1e-9)
     with pytest.raises(ValueError, match="closer than"):
         graph.add_segment_from(m, 0.05)
+
+
+def test_library_errors_name_parameters_and_the_cli_its_flags(base, tmp_path, capsys):
+    from vidstyle.cli import main
+    from vidstyle.errors import InputError
+    from vidstyle.mocap import write_bvh
+
+    with pytest.raises(InputError, match=r"^window: must be at least 2"):
+        MotionGraph(window=1).fit(_clips())
+    with pytest.raises(InputError, match=r"^steps: step 0 \('jump'"):
+        plan_walk(base, [Step("jump", 10)])
+    clip = tmp_path / "a.bvh"
+    write_bvh(_gait(40, 1.0, 30, 4.0), clip)
+    assert main(["build-graph", str(clip), "--window", "1", "--out", str(tmp_path / "g.npz")]) == 2
+    assert "--window: must be at least 2" in capsys.readouterr().err
+    graph = tmp_path / "g2.npz"
+    base.save(graph)
+    seq = tmp_path / "s.json"
+    seq.write_text('["jump"]')
+    assert main(["synthesize", "--graph", str(graph), "--sequence", str(seq), "--out", str(tmp_path / "o.bvh")]) == 2
+    assert "--sequence: step 0 ('jump'" in capsys.readouterr().err

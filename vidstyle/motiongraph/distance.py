@@ -358,11 +358,11 @@ def _dask_blocks(ws, blocks, threshold_sq, min_gap, dtype, scheduler) -> list[Ti
     try:
         from dask.distributed import Client
     except ImportError:  # pragma: no cover
-        raise InputError("--scheduler: dask[distributed] is not installed") from None
+        raise InputError("scheduler: dask[distributed] is not installed") from None
     try:
         client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as e:
-        raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+        raise InputError(f"scheduler {scheduler}: cannot connect ({e})") from None
     try:
         log.info("%d distance tiles on Dask cluster %s", len(blocks), scheduler)
         [ws_future] = client.scatter([ws], broadcast=True)
