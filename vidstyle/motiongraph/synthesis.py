@@ -581,6 +581,7 @@ def walk_labels(graph: MotionGraph, walk: Walk, bvh_name: str) -> dict:
         "transition": walk.transition.tolist(),
         "transitions_used": walk.transitions_used,
         "transition_kinds": [EdgeKind(int(graph.edge_kind_[e])).name for e in walk.transitions_used],
+        "transition_segments": [int(graph.edge_segment_[e]) for e in walk.transitions_used],
         "events": events,
         "cost": walk.cost,
         "foot_lock": walk.foot_lock,
