@@ -92,6 +92,9 @@ def test_enhancement_edge_is_taken_and_passes_through_the_segment_middle(base):
     pos = global_positions(motion)
     orig = np.linalg.norm(np.diff(global_positions(graph.motion()), axis=0), axis=-1).max(1)
     assert np.linalg.norm(np.diff(pos, axis=0), axis=-1).max() < 3 * orig.max()
+    # foot locking runs over the enhancement's frames too (contacts from the departing/arriving frames)
+    locked = render_walk(graph, walk)
+    assert np.isfinite(locked.rotations).all() and walk.foot_lock["enabled"]
     # removing (discarding) the edge leaves the plain walk
     graph.remove_edges([e])
     graph.prune()
