@@ -18,10 +18,10 @@ from vidstyle.motiongraph import MotionGraph, load_clips
 from test_motiongraph_graph import _gait, _skeleton
 
 
-def test_leg_length_is_the_chain_to_the_lowest_point():
-    # Hips -> LeftUpLeg (1, -1, 0) -> LeftFoot (0, -4, 0) -> End Site (0, -1, 1)
-    assert leg_length(_skeleton()) == pytest.approx(np.sqrt(2) + 4 + np.sqrt(2))
-    assert leg_length(rescale(_gait(3, 1, 30, 4), 0.25).skeleton) == pytest.approx(0.25 * (2 * np.sqrt(2) + 4))
+def test_leg_length_is_the_rest_height_of_the_root_above_the_soles():
+    # Hips -> LeftUpLeg (1, -1, 0) -> LeftFoot (0, -4, 0) -> End Site (0, -1, 1): the sole 6 below the root
+    assert leg_length(_skeleton()) == pytest.approx(6.0)
+    assert leg_length(rescale(_gait(3, 1, 30, 4), 0.25).skeleton) == pytest.approx(0.25 * 6.0)
 
 
 def test_retarget_across_units_recovers_the_motion_exactly():
@@ -38,11 +38,11 @@ def test_retarget_other_bone_lengths_keeps_rotations_and_scales_the_root_by_leg_
     m = _gait(40, 1.0, 30, 4.0)
     sk = m.skeleton
     long_legs = sk.offsets.copy()
-    long_legs[[2, 4]] *= 1.5  # shins 1.5x: leg 2*sqrt(2)+6 instead of 2*sqrt(2)+4
+    long_legs[[2, 4]] *= 1.5  # shins 1.5x: soles 8 below the root instead of 6
     other = Motion(Skeleton(sk.names, sk.parents, long_legs, sk.channels, sk.end_sites), m.rotations,
                    None, m.fps, root_positions=m.root_positions * 1.3)
     out, scale = retarget(other, sk, "other.bvh")
-    assert scale == pytest.approx((2 * np.sqrt(2) + 4) / (2 * np.sqrt(2) + 6))
+    assert scale == pytest.approx(6 / 8)
     np.testing.assert_array_equal(out.rotations, m.rotations)
     np.testing.assert_allclose(out.root_positions, m.root_positions * 1.3 * scale)
     np.testing.assert_array_equal(out.skeleton.offsets, sk.offsets)
@@ -134,7 +134,7 @@ def test_mocap_info_shows_the_keypoint_mapping_of_a_22_joint_skeleton(tmp_path, 
     assert got == EXPECTED
     assert info["keypoints"]["head_top"]["end_site"] is True
     assert {v["how"] for v in info["keypoints"].values()} == ({"name"} if style == "mixamo" else {"topology"})
-    assert info["leg_length"] == pytest.approx(np.hypot(9, 5) + 42 + 40 + np.hypot(6, 12), rel=1e-6)  # hip .. toe
+    assert info["leg_length"] == pytest.approx(100 - 7, rel=1e-6)  # root at 100, toes 7 above the origin
     assert main(["mocap", "info", str(p)]) == 0
     table = capsys.readouterr().out
     assert "keypoint left_elbow" in table and names[8] in table

@@ -4,8 +4,8 @@ Clips from several sources share a joint layout (the same joint names, after dro
 such as ``mixamorig:``, and the same parents) but not bone lengths or length units (CMU's ~5.64 cm units,
 metres, centimetres). :func:`retarget` puts such a clip on the reference skeleton: local joint
 rotations are kept as they are, the rest offsets become the reference's, and the root translation is
-scaled by ``leg_length(reference) / leg_length(clip)`` so steps and jumps keep their size relative to
-the body. Clips with another joint layout cannot be retargeted this way; they map onto the named body
+scaled by ``leg_length(reference) / leg_length(clip)`` (hip height above the soles in the rest pose)
+so the feet stay on the floor and steps and jumps keep their size relative to the body. Clips with another joint layout cannot be retargeted this way; they map onto the named body
 keypoints instead (:mod:`vidstyle.mocap.keypoints`).
 """
 
@@ -38,20 +38,13 @@ def rest_positions(skeleton: Skeleton) -> tuple[np.ndarray, dict[int, np.ndarray
 
 
 def leg_length(skeleton: Skeleton) -> float:
-    """Length of the bone chain from the root down to the lowest point of the rest pose (a joint or End
-    Site; a foot): the sum of the bone lengths along it. 0 when the skeleton is a single point."""
+    """Leg length in the rest pose: the height of the root above the lowest joint or End Site (a sole),
+    i.e. hip height when standing. This is the ratio that keeps retargeted feet on the floor: a root
+    path scaled by it puts the new, shorter or longer legs' soles where the old ones were. 0 for a
+    skeleton without anything below its root."""
     pos, ends = rest_positions(skeleton)
-    pts = [(pos[j, 1], j, None) for j in range(skeleton.n_joints)] + [(e[1], j, e) for j, e in ends.items()]
-    ys = np.array([p[0] for p in pts])
-    # the first of the (near-)lowest points, with a tolerance relative to the body's extent, so the same
-    # point is chosen whatever the unit (float rounding must not flip a tie between a toe and its End Site)
-    tol = 1e-6 * max(float(ys.max() - ys.min()), 1e-300)
-    _, j, end = next(p for p in pts if p[0] <= ys.min() + tol)
-    total = float(np.linalg.norm(end - pos[j])) if end is not None else 0.0
-    while skeleton.parents[j] >= 0:
-        total += float(np.linalg.norm(skeleton.offsets[j]))
-        j = int(skeleton.parents[j])
-    return total
+    ys = np.concatenate([pos[:, 1], [e[1] for e in ends.values()]]) if ends else pos[:, 1]
+    return float(max(pos[0, 1] - ys.min(), 0.0))
 
 
 def retarget(motion: Motion, reference: Skeleton, source: str = "motion") -> tuple[Motion, float]:

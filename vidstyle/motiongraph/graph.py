@@ -124,13 +124,11 @@ def has_tpose_first_frame(motion: Motion, degrees: float = 10.0) -> bool:
 
 
 def rest_height(skeleton: Skeleton) -> float:
-    """Height of the root above the lowest joint or End Site in the rest pose."""
-    pos = np.zeros((skeleton.n_joints, 3))
-    for j, p in enumerate(skeleton.parents):
-        pos[j] = skeleton.offsets[j] + (pos[p] if p >= 0 else 0.0)
-    ends = [pos[j] + off for j, off in skeleton.end_sites.items()]
-    ys = np.concatenate([pos[:, 1], [e[1] for e in ends]]) if ends else pos[:, 1]
-    return float(pos[0, 1] - ys.min())
+    """Height of the root above the lowest joint or End Site in the rest pose (the leg length used to
+    retarget, :func:`vidstyle.mocap.retarget.leg_length`)."""
+    from ..mocap.retarget import leg_length
+
+    return leg_length(skeleton)
 
 
 def load_clips(paths: Sequence[str | Path], label_files: Sequence[str | Path] = ()) -> list[Clip]:
