@@ -196,19 +196,13 @@ def _motion_section(page: Page, run: Path) -> None:
     gpath = run / "graph" / "graph.npz"
     body = []
     if gpath.is_file():
-        z = read_npz(gpath)  # (the graph's owner is vidstyle.motiongraph.graph; the page needs two fields)
-        try:
-            params = json.loads(str(z["params_json"]))
-            labels = [str(x) for x in z["label_names"]]
-        except (KeyError, ValueError):
-            raise FormatError(gpath, "params_json", "missing or not JSON (not a motion graph?)") from None
-        if not isinstance(params, dict):
-            raise FormatError(gpath, "params_json", "expected a JSON object")
-        stats = params.get("stats") if isinstance(params.get("stats"), dict) else {}
-        rows = [[k.replace("_", " "), v] for k, v in stats.items() if isinstance(v, (int, float))]
+        from ..formats.motiongraph import read_graph
+
+        g = read_graph(gpath)
+        rows = [[k.replace("_", " "), v] for k, v in g.stats_.items() if isinstance(v, (int, float))]
         body.append(table(rows, ["motion graph", "value"]))
-        body.append(f'<p class="note">labels: {esc(", ".join(labels))}; window {params.get("window")} frames at '
-                    f'{params.get("fps")} fps</p>')
+        body.append(f'<p class="note">labels: {esc(", ".join(g.label_names_))}; window {g.window} frames at '
+                    f'{g.fps:g} fps</p>')
     else:
         body.append(_missing("motion graph", gpath))
     m = _metrics(run / "metrics" / "motion.json", MOTION)
