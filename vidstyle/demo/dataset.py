@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, ParameterError
+from ..errors import ParameterError
 from ..fileio import replace_dir, staging_dir
 from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels

@@ -26,14 +26,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..formats import FormatError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
 from ..formats.metrics import HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
-from ..formats.truth import read_npz
 from . import svg
 from .page import Page, data_uri, esc, table
 
