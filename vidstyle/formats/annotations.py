@@ -309,7 +309,7 @@ def write_annotations(path: str | os.PathLike, ann: Annotations) -> None:
 def resolve_video_path(annotations_path: str | os.PathLike, video: VideoAnnotations) -> Path:
     """The video file of ``video``: a relative ``path`` is relative to the annotations file's directory."""
     p = Path(video.path)
-    return p if p.is_absolute() else Path(annotations_path).resolve().parent / p
+    return (p if p.is_absolute() else Path(annotations_path).resolve().parent / p).resolve()
 
 
 def stored_path(annotations_path: str | os.PathLike, video_path: str | os.PathLike) -> str:
