@@ -80,6 +80,7 @@ $("frame").addEventListener("load", () => {
   const m = img.src.match(/\/videos\/([^/]+)\/frames\/(\d+)/);
   img.dataset.video = m[1];
   img.dataset.frame = m[2];
+  fitFrame();
   drawOverlay();
   renderInfo();
   if (S.playing) schedulePlay();
@@ -425,11 +426,23 @@ function drawTimeline() {
     g.beginPath(); g.moveTo(x(t.frame + 0.5), 44); g.lineTo(x(t.frame + 0.5) - 5, 56); g.lineTo(x(t.frame + 0.5) + 5, 56); g.fill();
     g.fillRect(x(t.frame + 0.5) - 0.5, 18, 1, 26);
   }
-  g.fillStyle = "#ff4d4d";                   // the current frame
-  g.fillRect(x(S.frame), 0, Math.max(2, x(S.frame + 1) - x(S.frame)), h);
+  const step = [1, 2, 5, 10, 25, 50, 100, 250, 500, 1000, 2500, 5000, 10000].find((k) => (k / n) * w >= 60) || 25000;
+  g.fillStyle = "#aaa"; g.font = "10px sans-serif";   // frame ticks (0-based decoded indices)
+  for (let f = 0; f < n; f += step) { g.fillRect(x(f), h - 6, 1, 6); g.fillText(String(f), x(f) + 2, h - 1); }
+  g.fillStyle = "#ff4d4d"; g.globalAlpha = 0.7;  // the current frame
+  g.fillRect(x(S.frame), 0, Math.max(2, x(S.frame + 1) - x(S.frame)), h - 8);
+  g.globalAlpha = 1;
   const leg = $("legend");
   leg.textContent = `timeline: ${ov.recognized ? "top row recognised (" + ov.recognized.file + "), " : ""}` +
     "middle row your segments, ▲ transition marks (grey: discarded), red line: this frame";
+}
+
+function fitFrame() {            // scale the frame to the stage, keeping its aspect ratio
+  const img = $("frame"), st = $("stage");
+  if (!img.naturalWidth) return;
+  const s = Math.min(st.clientWidth / img.naturalWidth, st.clientHeight / img.naturalHeight);
+  img.style.width = `${Math.floor(img.naturalWidth * s)}px`;
+  img.style.height = `${Math.floor(img.naturalHeight * s)}px`;
 }
 
 function drawOverlay() {
@@ -457,6 +470,6 @@ $("timeline").addEventListener("click", (e) => {
   const r = $("timeline").getBoundingClientRect();
   go(Math.floor(((e.clientX - r.left) / r.width) * S.vid.frames));
 });
-window.addEventListener("resize", () => { if (S.vid) { drawTimeline(); drawOverlay(); } });
+window.addEventListener("resize", () => { if (S.vid) { fitFrame(); drawTimeline(); drawOverlay(); } });
 
 load().catch((e) => { $("info").textContent = `cannot load: ${e}`; });
