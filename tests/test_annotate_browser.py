@@ -83,6 +83,7 @@ def wait_saved(page):
     page.wait_for_function("() => window.vidstyle.changes === window.vidstyle.savedChanges && !window.vidstyle.saving")
 
 
+@pytest.mark.slow
 def test_page_end_to_end(browser, app):
     url, ann, tmp = app
     page = browser.new_page(viewport={"width": 1280, "height": 800}, accept_downloads=True)

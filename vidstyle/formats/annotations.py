@@ -333,6 +333,18 @@ def frame_labels(video: VideoAnnotations, classes: list[str]) -> np.ndarray:
     return y
 
 
+def labelled_runs(video: VideoAnnotations) -> list[tuple[int, int]]:
+    """Maximal half-open runs ``[a, b)`` of frames inside segments (touching segments join one run): the
+    pieces of a partly labelled video a frame-wise learner can train on."""
+    runs: list[list[int]] = []
+    for s in sorted(video.segments, key=lambda s: s.start):
+        if runs and runs[-1][1] == s.start:
+            runs[-1][1] = s.end
+        else:
+            runs.append([s.start, s.end])
+    return [(a, b) for a, b in runs]
+
+
 def check_video(video: VideoAnnotations, video_path: str | os.PathLike, frames: int,
                 where: str | os.PathLike | None = None) -> None:
     """Refuse annotations of another video: the file's sha256 and decoded frame count must match."""
