@@ -149,3 +149,42 @@ def test_annotations_never_land_on_another_video(videos, tmp_path):
     ann.write_text(json.dumps(doc))
     with pytest.raises(FormatError, match="decodes to 81"):
         running([moved], ann)
+
+
+def test_overlays_map_onto_decoded_frames(videos, tmp_path):
+    from vidstyle.annotate.overlays import load_overlays
+    from vidstyle.annotate.session import open_videos
+    from vidstyle.video import working_indices
+
+    vids = open_videos(videos)
+    try:
+        # recognize labels at a working rate of 12.5 fps on the 25 fps video: each label covers 2 frames
+        src = working_indices(vids[0].reader.info.timestamps, 12.5)
+        labels = ["Jab"] * 10 + ["Hook"] * (len(src) - 10)
+        lab = tmp_path / "lab.json"
+        lab.write_text(json.dumps({"video": str(videos[0]), "fps": 12.5, "classes": CLASSES, "labels": labels}))
+        poses = tmp_path / "p.json"
+        poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 1, "video": videos[1].name,
+                                     "keypoints": ["neck", "pelvis"],
+                                     "frames": [{"frame": 3, "viewpoint": "left", "points": [[1, 2, 0.5], [3, 4, 0.9]]}]}))
+        ov = load_overlays(vids, labels=[lab], poses=[poses])
+        spans = ov["0"]["recognized"]["spans"]
+        assert spans == [{"start": 0, "end": int(src[10]), "action": "Jab"}, {"start": int(src[10]), "end": 80, "action": "Hook"}]
+        assert int(src[10]) == 20
+        assert ov["1"]["poses"]["frames"]["3"]["points"] == [[1, 2, 0.5], [3, 4, 0.9]]
+        assert ov["1"]["poses"]["edges"] == [[0, 1]]
+        # wrong label count, frame outside the video, a video not in the session: errors naming the file
+        lab.write_text(json.dumps({"video": str(videos[0]), "fps": 12.5, "labels": labels[:-1]}))
+        with pytest.raises(FormatError, match="lab.json"):
+            load_overlays(vids, labels=[lab])
+        poses.write_text(json.dumps({"video": videos[1].name, "keypoints": ["neck"],
+                                     "frames": [{"frame": 70, "points": [[1, 2, 1]]}]}))
+        with pytest.raises(FormatError, match=r"frames\[0\].frame"):
+            load_overlays(vids, poses=[poses])
+        m = tmp_path / "m.json"
+        m.write_text(json.dumps({"kind": "vidstyle.matches", "video": "other.mp4", "frames": []}))
+        with pytest.raises(FormatError, match="none of the videos"):
+            load_overlays(vids, matches=[m])
+    finally:
+        for v in vids:
+            v.close()
