@@ -12,9 +12,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from annotate_util import numbered_video, session
 
-from annotate_util import CLASSES, numbered_video, session
-from vidstyle.annotate import exchange
 from vidstyle.annotate.overlays import load_overlays
 from vidstyle.annotate.server import Running
 from vidstyle.formats.annotations import read_annotations

@@ -14,8 +14,20 @@ from hypothesis import strategies as st
 
 from vidstyle.formats import FormatError
 from vidstyle.formats.annotations import (
-    JSON_SCHEMA, Annotations, Candidate, Segment, Transition, VideoAnnotations, file_sha256, frame_labels,
-    from_document, read_annotations, resolve_video_path, stored_path, to_document, write_annotations,
+    JSON_SCHEMA,
+    Annotations,
+    Candidate,
+    Segment,
+    Transition,
+    VideoAnnotations,
+    file_sha256,
+    frame_labels,
+    from_document,
+    read_annotations,
+    resolve_video_path,
+    stored_path,
+    to_document,
+    write_annotations,
 )
 
 ROOT = Path(__file__).resolve().parents[1]

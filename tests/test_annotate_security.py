@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import httpx
 import pytest
-from typer.testing import CliRunner
-
 from annotate_util import numbered_video, running
+from typer.testing import CliRunner
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,8 @@ import cv2
 import httpx
 import numpy as np
 import pytest
-
 from annotate_util import CLASSES, numbered_video, running
+
 from vidstyle.formats import FormatError
 from vidstyle.formats.annotations import file_sha256, read_annotations, resolve_video_path
 from vidstyle.video import VideoReader
@@ -94,7 +94,7 @@ def test_save_reload_conflict_and_validation(videos, tmp_path):
         bad["videos"][0]["transitions"][0]["to_action"] = "Cartwheel"
         r = c.put("/api/annotations", json=bad, headers=tok)
         assert r.status_code == 422 and "not in classes" in r.json()["error"]
-        for junk in (b"{not json", b"[1, 2", "{\"revision\": NaN}".encode(), b"\xff\xfe"):
+        for junk in (b"{not json", b"[1, 2", b"{\"revision\": NaN}", b"\xff\xfe"):
             r = c.put("/api/annotations", content=junk, headers={**tok, "Content-Type": "application/json"})
             assert r.status_code == 400 and "JSON" in r.json()["error"]
         r = c.put("/api/annotations", json={"revision": 1, "videos": [{"id": "../../etc/passwd"}]}, headers=tok)

@@ -12,7 +12,12 @@ import pytest
 from tests.conftest import SEED
 from vidstyle.cli import main
 from vidstyle.formats.annotations import (
-    Annotations, Segment, VideoAnnotations, frame_labels, labelled_runs, write_annotations,
+    Annotations,
+    Segment,
+    VideoAnnotations,
+    frame_labels,
+    labelled_runs,
+    write_annotations,
 )
 from vidstyle.recognition.io import crop_features, load_features
 from vidstyle.recognition.synthetic import make_dataset
@@ -75,7 +80,7 @@ def _predict(model, feats, out):
 @pytest.mark.slow
 def test_full_segments_train_the_same_model_as_labels_files(ds, tmp_path):
     voc, train, test = _split(ds)
-    f = lambda ids: [ds / "features" / f"{i}.npz" for i in ids]  # noqa: E731
+    f = lambda ids: [ds / "features" / f"{i}.npz" for i in ids]
     assert main(["vocabulary", *map(str, f(voc)), "--words", "50", "--out", str(tmp_path / "v.npz")]) == 0
     common = ["--vocab", str(tmp_path / "v.npz"), "--components", "16", "--seed", str(SEED), "-j", "1"]
     labels = [x for i in train for x in ("--labels", str(ds / "labels" / f"{i}.json"))]
@@ -99,7 +104,7 @@ def test_full_segments_train_the_same_model_as_labels_files(ds, tmp_path):
                  "--out", str(tmp_path / "d.joblib")]) == 0
     pd = _predict(tmp_path / "d.joblib", f(test), tmp_path / "pd")
     truth = {i: json.loads((ds / "labels" / f"{i}.json").read_text())["labels"] for i in test}
-    acc = lambda p: np.mean([a == b for i in test for a, b in zip(p[i], truth[i])])  # noqa: E731
+    acc = lambda p: np.mean([a == b for i in test for a, b in zip(p[i], truth[i])])
     assert acc(pd) > 0.6 and acc(pd) > acc(pa) - 0.15, (acc(pd), acc(pa))
 
 

@@ -46,7 +46,14 @@ import numpy as np
 
 from ..formats import FormatError
 from ..formats.annotations import (
-    STATUSES, Annotations, Candidate, Segment, Transition, VideoAnnotations, from_document, to_document,
+    STATUSES,
+    Annotations,
+    Candidate,
+    Segment,
+    Transition,
+    VideoAnnotations,
+    from_document,
+    to_document,
 )
 
 FORMATS = ("native", "labelstudio", "cvat", "via")

@@ -30,7 +30,6 @@ import socket
 import threading
 from dataclasses import dataclass, field
 from importlib import resources
-from pathlib import Path
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -360,4 +359,4 @@ def new_session(videos: list[Video], store: Store, overlays: dict | None = None,
     return Session(videos, store, overlays or {}, max_body=max_body)
 
 
-__all__ = ["Running", "Session", "create_app", "new_session", "serve", "bind"]
+__all__ = ["Running", "Session", "bind", "create_app", "new_session", "serve"]

@@ -19,8 +19,15 @@ import numpy as np
 from ..errors import InputError
 from ..formats import FormatError
 from ..formats.annotations import (
-    Annotations, VideoAnnotations, file_sha256, from_document, read_annotations, resolve_video_path,
-    stored_path, to_document, write_annotations,
+    Annotations,
+    VideoAnnotations,
+    file_sha256,
+    from_document,
+    read_annotations,
+    resolve_video_path,
+    stored_path,
+    to_document,
+    write_annotations,
 )
 from ..video import VideoReader
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -29,7 +28,7 @@ def annotate(
     labels: list[Path] = typer.Option([], "--labels", help="Recognised labels JSON from `recognize` (repeatable)."),
     poses: list[Path] = typer.Option([], "--poses", help="poses.json from `pose` (repeatable)."),
     matches: list[Path] = typer.Option([], "--matches", help="matches.json from `match-pose` (repeatable)."),
-    classes: Optional[str] = typer.Option(
+    classes: str | None = typer.Option(
         None, "--classes",
         help="Comma-separated action classes (keys 1-9 pick the first nine). Default: the file's, else the "
              "recognised labels', else the demo's kickboxing classes."),

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ._base import FormatError, Fields, check_header, header, read_json_document, write_json_document
+from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 KIND = "vidstyle.annotations"
 SCHEMA_VERSION = 1
