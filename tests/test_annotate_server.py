@@ -188,3 +188,16 @@ def test_overlays_map_onto_decoded_frames(videos, tmp_path):
     finally:
         for v in vids:
             v.close()
+
+
+def test_cli_bad_inputs_exit_2(videos, tmp_path, capsys):
+    from vidstyle.cli import main
+
+    assert main(["annotate", str(tmp_path / "missing.mp4"), "--no-browser"]) == 2
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"kind": "vidstyle.annotations", "schema_version": 1, "revision": -3, "classes": [], "videos": []}')
+    assert main(["annotate", str(videos[0]), "-a", str(bad), "--no-browser"]) == 2
+    assert main(["annotate", str(videos[0]), str(videos[0]), "-a", str(tmp_path / "a.json"), "--no-browser"]) == 2
+    assert main(["annotate", str(videos[0]), "--port", "70000", "--no-browser"]) == 2
+    err = capsys.readouterr().err
+    assert "missing.mp4" in err and "bad.json: revision" in err and "identical content" in err
