@@ -201,3 +201,17 @@ def test_cli_bad_inputs_exit_2(videos, tmp_path, capsys):
     assert main(["annotate", str(videos[0]), "--port", "70000", "--no-browser"]) == 2
     err = capsys.readouterr().err
     assert "missing.mp4" in err and "bad.json: revision" in err and "identical content" in err
+
+
+def test_concurrent_requests_stay_frame_exact(videos, tmp_path, rng):
+    from concurrent.futures import ThreadPoolExecutor
+
+    idx = [int(i) for i in rng.integers(0, 70, 40)] + list(range(20, 40))
+    with running(videos[1:], tmp_path / "a.json") as url:
+        def fetch(i):
+            with httpx.Client(base_url=url, timeout=60) as c:
+                r = c.get(f"/api/videos/0/frames/{i}")
+                return read_number(cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR))
+
+        with ThreadPoolExecutor(6) as ex:
+            assert list(ex.map(fetch, idx)) == idx
