@@ -56,7 +56,7 @@ def _register_commands() -> None:
 
 #: --help lists the commands in pipeline order, stages apart from the tools
 _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
-          "synthesize", "demo", "render", "evaluate", "report", "mocap"]
+          "synthesize", "train-pose", "pose", "demo", "render", "evaluate", "report", "mocap"]
 _TOOLS = {"demo", "render", "mocap", "evaluate", "report"}
 
 
