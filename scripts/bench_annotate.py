@@ -79,7 +79,6 @@ def bench_http(video: Path, requests: int, plan: dict, read_ahead: bool, tmp: Pa
     sess.READ_AHEAD = sess.READ_AHEAD if read_ahead else 0
     try:
         vids = open_videos([video])
-        n = vids[0].frames
         s = new_session(vids, Store(tmp / "ann.json", vids, ["a"]))
         with Running(s) as url, httpx.Client(base_url=url, timeout=60) as c:
             def get(i):
@@ -115,7 +114,6 @@ def bench_http(video: Path, requests: int, plan: dict, read_ahead: bool, tmp: Pa
 
 def bench_inproc(video: Path, requests: int, plan: dict) -> dict:
     with VideoReader(video) as r:
-        n = len(r)
 
         def get(i):
             t0 = time.perf_counter()
