@@ -140,11 +140,14 @@ def test_page_end_to_end(browser, app):
     ov = cv2.imdecode(np.frombuffer(overlay, np.uint8), cv2.IMREAD_COLOR)
     green = (ov[..., 1] > 180) & (ov[..., 0] < 120) & (ov[..., 2] < 120)
     assert green.sum() > 50  # the skeleton is drawn
-    # T on a marked frame toggles its status; 3 changes the action of the segment under the cursor
+    # a digit picks the next segment's action only; Shift+digit relabels the segment under the cursor
     goto(page, 40)
     page.keyboard.press("3")
+    assert state(page)["segments"][1]["action"] == "Hook"
+    page.keyboard.press("Shift+Digit3")
     assert state(page)["segments"][1]["action"] == "Guard"
     page.keyboard.press("Control+z")
+    assert state(page)["segments"][1]["action"] == "Hook"
     # Delete removes the segment here
     goto(page, 12)
     page.keyboard.press("Delete")
