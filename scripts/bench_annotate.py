@@ -210,8 +210,9 @@ def main() -> None:
                           int(args.long_minutes * 60 * 25), 25.0, texture=False)
         opened = bench_open(long, 5)
     goals = {"640x480": (10, 50), "1080p": (10, 100)}
-    print("| size | measure | HTTP (read-ahead) | HTTP (no read-ahead) | in-process baseline | goal |")
-    print("|---|---|---|---|---|---|")
+    if rows:
+        print("| size | measure | HTTP (read-ahead) | HTTP (no read-ahead) | in-process baseline | goal |")
+        print("|---|---|---|---|---|---|")
     for name, r in rows.items():
         for m, g in zip(("step", "seek"), goals[name]):
             print(f"| {name} | {m} median ms | {r['http'][m]['median_ms']:.1f} | {r['http_no_read_ahead'][m]['median_ms']:.1f} "
