@@ -163,7 +163,7 @@ def _camera(q: Query, motion, manifest: dict):
 
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 5,
-                   seed: int = 0, jobs: int = 1) -> dict:
+                   segment_scale: float = 1.0, seed: int = 0, jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}."""
     from ..mocap import Motion, read_bvh
     from ..logutil import progress
@@ -191,7 +191,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         oracle = int(np.argmin(err_lib))
         scale = _leg(motion.skeleton) / _leg(lib.motion(0).skeleton)
         L = e - s
-        h = L // 2
+        h = max(1, int(round(segment_scale * (L // 2))))  # library half-segment, time-warped to L // 2
         truth_seg = pts3d[s:e]
 
         def transition_error(cand: int | None) -> float:
@@ -242,7 +242,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             })
     return summarise(rows, dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                                 library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
-                                enh_window=enh_window, sources=list(sources), index=idx_all.get_params(),
+                                enh_window=enh_window, segment_scale=segment_scale, sources=list(sources), index=idx_all.get_params(),
                                 queries=len(queries), annotations=annotations is not None))
 
 
