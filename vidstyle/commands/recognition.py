@@ -88,6 +88,10 @@ def vocabulary(
 def train_recognizer(
     features: list[Path] = typer.Argument(None, help="Features .npz files of set B (with --labels)."),
     labels: list[Path] = typer.Option(None, "--labels", help="Labels JSON per FEATURES file, same order."),
+    annotations: list[Path] = typer.Option(
+        None, "--annotations",
+        help="Annotations file(s) from `vidstyle annotate`: train on the action segments of your own videos "
+             "(with their FEATURES files, or --features-dir holding <video stem>.npz). Unlabelled frames are left out."),
     vocab: Path = typer.Option(..., "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
@@ -118,9 +122,19 @@ def train_recognizer(
 
     features = list(features or [])
     labels = list(labels or [])
-    _features_files(features, features_dir, dataset, "train-recognizer")
+    annotations = list(annotations or [])
     split_info = None
     classes = None
+    if annotations:
+        if dataset or labels:
+            raise InputError("--annotations: give it with FEATURES files or --features-dir, not with --dataset or --labels")
+        if bool(features) == bool(features_dir):
+            raise InputError("--annotations: give FEATURES files or --features-dir (one of them)")
+        feats, ylists, classes, training = _annotated_training(annotations, features, features_dir)
+        features = [Path(t["features"]) for t in training]
+        labels = [Path(t["labels"]) for t in training]
+    else:
+        _features_files(features, features_dir, dataset, "train-recognizer")
     if dataset:
         if labels:
             raise InputError("--labels: not used with --dataset (the manifest names the labels)")
@@ -139,16 +153,18 @@ def train_recognizer(
             f"{vocab}: {len(overlap)} training file(s) also built the vocabulary (e.g. {sorted(overlap)[0]});"
             " sets A and B must be disjoint (or pass --allow-overlap)"
         )
-    tracks = [load_labels(p) for p in labels]
-    feats = load_many(features, n_jobs=jobs)
-    for f, t in zip(feats, tracks):
-        if len(t.labels) != f.n_frames:
-            raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
-    if classes is None:
-        classes = tracks[0].classes
-        for t in tracks[1:]:
-            if t.classes != classes:
-                classes = sorted(set(classes) | set(t.classes))
+    if not annotations:
+        tracks = [load_labels(p) for p in labels]
+        feats = load_many(features, n_jobs=jobs)
+        for f, t in zip(feats, tracks):
+            if len(t.labels) != f.n_frames:
+                raise InputError(f"{t.path}: {len(t.labels)} labels but {f.path} has n_frames={f.n_frames}")
+        ylists = [t.labels for t in tracks]
+        if classes is None:
+            classes = tracks[0].classes
+            for t in tracks[1:]:
+                if t.classes != classes:
+                    classes = sorted(set(classes) | set(t.classes))
     rec = ActionRecognizer(
         vocabulary=voc, context=context, grouping=grouping, grouping_threshold=grouping_threshold,
         normalize=normalize, n_components=components, classifier=classifier, C=c,
@@ -156,7 +172,7 @@ def train_recognizer(
         emission_weight=emission_weight, mirror=mirror, n_jobs=jobs, random_state=seed,
     )
     t0 = time.perf_counter()
-    rec.fit(feats, [t.labels for t in tracks], classes=classes)
+    rec.fit(feats, ylists, classes=classes)
     feature_params = _feature_params(features)
     header = save_model(
         out,
@@ -171,6 +187,66 @@ def train_recognizer(
         onnx_path = out.with_suffix(".onnx")
         export_onnx(rec, onnx_path)
         log.info("wrote %s", onnx_path)
+
+
+def _annotated_training(annotations: list[Path], features: list[Path], features_dir: Optional[Path]):
+    """Training pieces from annotation files: for every annotated video with segments, its features file
+    (the FEATURES file whose recorded video is that video, or ``<features-dir>/<video stem>.npz``) cut
+    into the runs of labelled frames, with the per-frame labels of its segments."""
+    from ..formats import FormatError
+    from ..formats.annotations import frame_labels, labelled_runs, read_annotations, resolve_video_path
+    from ..recognition.io import crop_features, load_features
+
+    loaded = {}
+    if features:
+        for p in features:
+            f = load_features(p)
+            loaded[p] = f
+    feats, ylists, training, used = [], [], [], []
+    for a in annotations:
+        ann = read_annotations(a)
+        for k, v in enumerate(ann.videos):
+            if not v.segments:
+                continue
+            vpath = resolve_video_path(a, v)
+            if features_dir is not None:
+                fp = Path(features_dir) / f"{Path(v.path).stem}.npz"
+                if not fp.exists():
+                    raise InputError(f"{a}: videos[{k}] ({v.path}) has segments but {fp} does not exist "
+                                     f"(run `vidstyle features` on it)")
+                f = load_features(fp)
+            else:
+                match = [p for p, f in loaded.items() if f.video and _same_video(f.video, vpath)]
+                if not match:
+                    match = [p for p, f in loaded.items() if Path(f.video or p).stem == vpath.stem]
+                if len(match) != 1:
+                    raise InputError(f"{a}: videos[{k}] ({v.path}): {len(match)} of the FEATURES files are of "
+                                     f"this video (need exactly one)")
+                fp, f = match[0], loaded[match[0]]
+            if f.n_frames != v.frames:
+                raise FormatError(a, f"videos[{k}].frames", f"{v.frames} decoded frames, but {fp} has "
+                                                              f"n_frames={f.n_frames} (features of another video?)")
+            y = frame_labels(v, ann.classes)
+            for s, e in labelled_runs(v):
+                feats.append(crop_features(f, s, e))
+                ylists.append([ann.classes[i] for i in y[s:e]])
+            training.append({"features": str(fp), "labels": f"{a}#videos[{k}]"})
+            for c in ann.classes:
+                if c not in used and any(seg.action == c for seg in v.segments):
+                    used.append(c)
+    if not feats:
+        raise InputError(f"--annotations: no action segments in {', '.join(map(str, annotations))}")
+    n = sum(len(y) for y in ylists)
+    log.info("train-recognizer: %d labelled frames in %d runs of %d annotated videos, %d classes",
+             n, len(feats), len(training), len(used))
+    return feats, ylists, used, training
+
+
+def _same_video(recorded: str, path: Path) -> bool:
+    try:
+        return Path(recorded).resolve() == path.resolve()
+    except OSError:
+        return False
 
 
 def _feature_params(paths) -> dict | None:

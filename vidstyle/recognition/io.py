@@ -103,6 +103,16 @@ def load_features(path: str | Path) -> VideoFeatures:
     return VideoFeatures(desc, fi, n_frames, video=video, path=str(path), variant=variant)
 
 
+def crop_features(f: VideoFeatures, start: int, end: int) -> VideoFeatures:
+    """The features of frames ``start <= i < end`` only, renumbered from 0 (a labelled stretch of a
+    partly annotated video)."""
+    if not 0 <= start < end <= f.n_frames:
+        raise InputError(f"{f.path or f.video}: frames {start}..{end} outside 0..{f.n_frames}")
+    keep = (f.frame_index >= start) & (f.frame_index < end)
+    return VideoFeatures(f.descriptors[keep], f.frame_index[keep] - start, end - start,
+                         video=f"{f.video}[{start}:{end}]", path=f"{f.path}[{start}:{end}]", variant=f.variant)
+
+
 @dataclass
 class LabelTrack:
     """Per-frame ground truth of one video."""

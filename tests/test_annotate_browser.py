@@ -1,0 +1,231 @@
+"""The annotation page in a real browser (Playwright driving Debian's chromium): keyboard navigation with the
+shown frame read back from its own pixels, marking segments and transitions, undo/redo, save, reload,
+export and import, accepting library poses, and a screenshot checked by the test."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from annotate_util import numbered_video, session
+
+from vidstyle.annotate.overlays import load_overlays
+from vidstyle.annotate.server import Running
+from vidstyle.formats.annotations import read_annotations
+from vidstyle.video.numbered import read_number
+
+sync_api = pytest.importorskip("playwright.sync_api")
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
+        "--disable-sync", "--no-first-run"]
+N = 120
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not Path(CHROMIUM).exists():
+        pytest.skip("chromium is not installed (apt-get install chromium)")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def app(tmp_path):
+    video = numbered_video(tmp_path / "clip.mp4", N, 25.0, size=(320, 240))
+    poses = tmp_path / "poses.json"
+    names = ["head_top", "neck", "pelvis", "left_shoulder", "right_shoulder", "left_elbow", "right_elbow",
+             "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle",
+             "right_ankle"]
+    pts = [[160 + 20 * np.sin(k), 60 + 10 * k, 0.9] for k in range(15)]
+    poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 1, "video": str(video), "backend": "ps",
+                                 "keypoints": names, "frames": [{"frame": 32, "viewpoint": "front", "points": pts}]}))
+    matches = tmp_path / "matches.json"
+    matches.write_text(json.dumps({"kind": "vidstyle.matches", "schema_version": 1, "video": str(video),
+                                   "frames": [{"frame": 32, "candidates": [
+                                       {"clip": "lib/01_01.bvh", "time": 1.25, "cost": 0.1},
+                                       {"clip": "lib/02_03.bvh", "time": 0.5, "cost": 0.2}]}]}))
+    ann = tmp_path / "annotations.json"
+    s = session([video], ann)
+    s.overlays = load_overlays(s.videos, poses=[poses], matches=[matches])
+    with Running(s) as url:
+        yield url, ann, tmp_path
+
+
+def shown_number(page) -> int:
+    """The frame the page shows, read from the pixels of the displayed image (after it has loaded)."""
+    page.wait_for_function("() => { const i = document.getElementById('frame');"
+                           " return i.complete && i.dataset.frame === String(window.vidstyle.frame); }")
+    png = page.locator("#frame").screenshot()
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
+    return read_number(img)
+
+
+def state(page):
+    return page.evaluate("() => JSON.parse(JSON.stringify(window.vidstyle.marks['0']))")
+
+
+def goto(page, n):
+    page.keyboard.press("`")
+    page.fill("#goto", str(n))
+    page.keyboard.press("Enter")
+    assert shown_number(page) == n
+
+
+def wait_saved(page):
+    page.wait_for_function("() => window.vidstyle.changes === window.vidstyle.savedChanges && !window.vidstyle.saving")
+
+
+@pytest.mark.slow
+def test_page_end_to_end(browser, app):
+    url, ann, tmp = app
+    page = browser.new_page(viewport={"width": 1280, "height": 800}, accept_downloads=True)
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url + "/")
+    assert shown_number(page) == 0
+    # keyboard navigation: frame shown == frame index
+    expect = 0
+    for key, step in [("f", 1), ("ArrowRight", 1), ("v", 10), ("v", 10), ("c", -10), ("d", -1), ("ArrowLeft", -1),
+                      ("End", None), ("Home", None), ("ArrowLeft", 0)]:
+        page.keyboard.press(key)
+        expect = {"End": N - 1, "Home": 0}.get(key, max(0, expect + (step or 0)))
+        assert shown_number(page) == expect, key
+        assert page.evaluate("window.vidstyle.frame") == expect
+        assert f"frame {expect} /" in page.inner_text("#info")
+    goto(page, 57)
+    for _ in range(3):  # quick repeated steps: the last one wins, every frame exact
+        page.keyboard.press("f")
+    assert shown_number(page) == 60
+    # play at the video's rate, then pause: still exact
+    page.keyboard.press(" ")
+    page.wait_for_function("() => window.vidstyle.frame >= 64")
+    page.keyboard.press(" ")
+    f = page.evaluate("window.vidstyle.frame")
+    assert shown_number(page) == f and not page.evaluate("window.vidstyle.playing")
+
+    # segments: [ ... ] inclusive, action by number key
+    goto(page, 10)
+    page.keyboard.press("1")
+    page.keyboard.press("[")
+    goto(page, 29)
+    page.keyboard.press("]")
+    goto(page, 35)
+    page.keyboard.press("2")
+    page.keyboard.press("[")
+    goto(page, 50)
+    page.keyboard.press("]")
+    assert state(page)["segments"] == [{"start": 10, "end": 30, "action": "Jab"},
+                                       {"start": 35, "end": 51, "action": "Hook"}]
+    # a transition between them takes its actions from the neighbouring segments
+    goto(page, 32)
+    page.keyboard.press("t")
+    assert state(page)["transitions"] == [{"frame": 32, "from_action": "Jab", "to_action": "Hook", "status": "accepted"}]
+    # undo / redo
+    page.keyboard.press("Control+z")
+    assert state(page)["transitions"] == []
+    page.keyboard.press("Control+z")
+    assert len(state(page)["segments"]) == 1
+    page.keyboard.press("Control+Shift+z")
+    page.keyboard.press("Control+Shift+z")
+    assert len(state(page)["segments"]) == 2 and len(state(page)["transitions"]) == 1
+    # the pose overlay and the library poses of this frame; accept one, discard the other
+    assert page.locator("#candidates li").count() == 2
+    page.locator("#candidates li").nth(0).get_by_role("button", name="accept").click()
+    page.locator("#candidates li").nth(1).get_by_role("button", name="discard").click()
+    overlay = page.locator("#overlay").screenshot()
+    ov = cv2.imdecode(np.frombuffer(overlay, np.uint8), cv2.IMREAD_COLOR)
+    green = (ov[..., 1] > 180) & (ov[..., 0] < 120) & (ov[..., 2] < 120)
+    assert green.sum() > 50  # the skeleton is drawn
+    # T on a marked frame toggles its status; 3 changes the action of the segment under the cursor
+    goto(page, 40)
+    page.keyboard.press("3")
+    assert state(page)["segments"][1]["action"] == "Guard"
+    page.keyboard.press("Control+z")
+    # Delete removes the segment here
+    goto(page, 12)
+    page.keyboard.press("Delete")
+    assert [s["start"] for s in state(page)["segments"]] == [35]
+    page.keyboard.press("Control+z")
+    page.keyboard.press("Control+s")
+    wait_saved(page)
+    saved = read_annotations(ann)
+    v = saved.videos[0]
+    assert [(s.start, s.end, s.action) for s in v.segments] == [(10, 30, "Jab"), (35, 51, "Hook")]
+    assert [(t.frame, t.from_action, t.to_action, t.status) for t in v.transitions] == [(32, "Jab", "Hook", "accepted")]
+    assert [(c.clip, c.time, c.status) for c in v.transitions[0].candidates] == [
+        ("lib/01_01.bvh", 1.25, "accepted"), ("lib/02_03.bvh", 0.5, "discarded")]
+    assert "saved" in page.inner_text("#status")
+
+    # screenshot, checked: the frame is readable and the timeline shows the segments in their colours
+    goto(page, 32)
+    shot = tmp / "annotate.png"
+    page.screenshot(path=str(shot))
+    if os.environ.get("VIDSTYLE_SCREENSHOT"):
+        shutil.copy(shot, os.environ["VIDSTYLE_SCREENSHOT"])
+    tl = page.locator("#timeline")
+    box = tl.bounding_box()
+    img = cv2.imread(str(shot))
+    y = int(box["y"] + 31)
+    seg_px = img[y, int(box["x"] + box["width"] * 20 / N)].astype(int)
+    gap_px = img[y, int(box["x"] + box["width"] * 80 / N)].astype(int)
+    assert np.ptp(seg_px) > 40 and np.ptp(gap_px) < 10  # coloured over the Jab segment, grey elsewhere
+    assert read_number(cv2.imdecode(np.frombuffer(page.locator("#frame").screenshot(), np.uint8), cv2.IMREAD_COLOR)) == 32
+
+    # reload restores everything
+    page.reload()
+    assert shown_number(page) == 0
+    assert state(page)["segments"] == [{"start": 10, "end": 30, "action": "Jab"}, {"start": 35, "end": 51, "action": "Hook"}]
+    assert state(page)["transitions"][0]["candidates"][0]["status"] == "accepted"
+
+    # export (CVAT) -> the file imports to the same marks
+    page.select_option("#export-format", "cvat")
+    with page.expect_download() as dl:
+        page.click("#export")
+    data = Path(dl.value.path()).read_bytes()
+    assert data.startswith(b"<?xml") and b"<track" in data
+    # import a Label Studio file into the page: one undoable step, then saved
+    page.select_option("#export-format", "labelstudio")
+    with page.expect_download() as dl:
+        page.click("#export")
+    ls = json.loads(Path(dl.value.path()).read_text())
+    ls[0]["annotations"][0]["result"] = [r for r in ls[0]["annotations"][0]["result"] if r["from_name"] != "actions"]
+    f = tmp / "edited.labelstudio.json"
+    f.write_text(json.dumps(ls))
+    page.select_option("#import-format", "labelstudio")
+    page.set_input_files("#import-file", str(f))
+    page.wait_for_function("() => window.vidstyle.marks['0'].segments.length === 0")
+    wait_saved(page)
+    assert read_annotations(ann).videos[0].segments == []
+    page.keyboard.press("Control+z")
+    wait_saved(page)
+    assert len(read_annotations(ann).videos[0].segments) == 2
+    # help overlay on ?
+    page.keyboard.press("?")
+    assert page.locator("#help").is_visible() and "Ctrl+Shift+Z" in page.inner_text("#help")
+    page.keyboard.press("Escape")
+    assert not page.locator("#help").is_visible()
+    assert errors == []
+    page.close()
+
+
+def test_stale_tab_gets_a_conflict(browser, app):
+    url, ann, tmp = app
+    a, b = browser.new_page(), browser.new_page()
+    for p in (a, b):
+        p.goto(url + "/")
+        assert shown_number(p) == 0
+    a.keyboard.press("t")
+    wait_saved(a)
+    b.keyboard.press("f")
+    b.keyboard.press("t")
+    b.wait_for_function("() => window.vidstyle.conflict")
+    assert "conflict" in b.inner_text("#status")
+    assert [t.frame for t in read_annotations(ann).videos[0].transitions] == [0]
+    a.close(), b.close()

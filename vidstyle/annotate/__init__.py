@@ -1,0 +1,9 @@
+"""``vidstyle annotate``: a local web page to mark transition frames and action segments on videos,
+frame-exact (frames are decoded on the server by index; the page never derives a frame from a time).
+
+* :mod:`.session` - the videos a server was started with (one locked reader each) and the annotations
+  store (atomic, schema-validated saves, revision check against stale pages);
+* :mod:`.overlays` - recognised labels, 2D poses and pose matches shown over the frames;
+* :mod:`.exchange` - export / import: native, Label Studio (TimelineLabels), CVAT for video 1.1, VIA 3;
+* :mod:`.server` - the Starlette app (JSON API, security checks) and ``serve``.
+"""

@@ -1,0 +1,132 @@
+"""What the page draws over a video besides the user's own marks: the actions ``recognize`` found, the 2D
+poses of ``pose`` and the library poses ``match-pose`` matched to them. Each is mapped onto the video's
+decoded frame indices here, once, so the page only ever deals in decoded indices.
+
+Schemas read (small readers of their own until the owner modules exist on this branch):
+
+* recognised labels (``vidstyle recognize``): ``{"video", "fps", "classes", "labels": [one per working
+  frame]}``; working frame ``k`` is decoded frame ``working_indices(timestamps, fps)[k]`` and covers the
+  decoded frames up to the next working frame;
+* poses (issue 13): ``{"kind": "vidstyle.poses", "schema_version", "video", "backend", "keypoints": [15
+  names], "frames": [{"frame", "viewpoint", "viewpoint_scores", "points": [[x, y, score], ...]}]}``, x =
+  column and y = row in the video's pixels;
+* matches (issue 14): ``{"kind": "vidstyle.matches", "schema_version", "video", "frames": [{"frame",
+  "candidates": [{"clip", "time", "cost"}]}]}``.
+
+A file applies to the session video whose path (resolved, else file name) equals its ``video`` field; with
+a single video in the session it applies to that one.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..formats import FormatError
+from ..formats._base import Fields, check_array, read_json_document
+from ..video import working_indices
+
+#: skeleton drawn for the 15 keypoints of the pose stage (pairs of names)
+EDGES = [("head_top", "neck"), ("neck", "pelvis"), ("neck", "left_shoulder"), ("neck", "right_shoulder"),
+         ("left_shoulder", "left_elbow"), ("left_elbow", "left_wrist"), ("right_shoulder", "right_elbow"),
+         ("right_elbow", "right_wrist"), ("pelvis", "left_hip"), ("pelvis", "right_hip"),
+         ("left_hip", "left_knee"), ("left_knee", "left_ankle"), ("right_hip", "right_knee"),
+         ("right_knee", "right_ankle")]
+
+
+def _match_video(doc_video: str | None, videos, path) -> Any:
+    if len(videos) == 1 and not doc_video:
+        return videos[0]
+    if doc_video:
+        dv = Path(doc_video)
+        for v in videos:
+            try:
+                if dv.resolve() == v.path:
+                    return v
+            except OSError:
+                pass
+        named = [v for v in videos if v.path.name == dv.name]
+        if len(named) == 1:
+            return named[0]
+    if len(videos) == 1:
+        return videos[0]
+    raise FormatError(path, "video", f"{doc_video!r} is none of the videos given to annotate")
+
+
+def read_labels_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
+    """(video id, {"classes", "spans": [{start, end, action}] in decoded frames, half-open})."""
+    doc = read_json_document(path)
+    f = Fields(doc, path)
+    labels = f.str_list("labels", min_len=1)
+    classes = f.str_list("classes", required=False) or sorted(set(labels))
+    fps = f.number("fps", required=False, default=None, positive=True)
+    v = _match_video(f.str("video", required=False), videos, path)
+    src = working_indices(v.reader.info.timestamps, fps)
+    if len(src) != len(labels):
+        # recognize labels its features' frames; a features file at another rate than the video's
+        raise FormatError(path, "labels", f"{len(labels)} labels, but {v.path.name} has {len(src)} frames at "
+                                          f"{fps} fps")
+    bounds = np.append(src, v.frames)
+    spans: list[dict] = []
+    for k, lab in enumerate(labels):
+        s, e = int(bounds[k]), int(bounds[k + 1])
+        if spans and spans[-1]["action"] == lab and spans[-1]["end"] == s:
+            spans[-1]["end"] = e
+        else:
+            spans.append({"start": s, "end": e, "action": lab})
+    return v.id, {"classes": classes, "spans": spans, "file": Path(path).name}
+
+
+def read_poses_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
+    """(video id, {"keypoints", "edges", "frames": {index: {"viewpoint", "points"}}})."""
+    doc = read_json_document(path)
+    f = Fields(doc, path)
+    if f.has("kind") and doc["kind"] != "vidstyle.poses":
+        raise FormatError(path, "kind", f"expected 'vidstyle.poses', got {doc['kind']!r}")
+    names = f.str_list("keypoints", unique=True, min_len=1)
+    v = _match_video(f.str("video", required=False), videos, path)
+    frames = {}
+    for i, fr in enumerate(f.list("frames")):
+        ff = Fields(fr, path, f"frames[{i}]")
+        idx = ff.int("frame", min=0, max=v.frames - 1)
+        pts = check_array(ff.get("points"), path, f"frames[{i}].points", (len(names), 3))
+        frames[str(idx)] = {"viewpoint": ff.str("viewpoint", required=False, default=""),
+                            "points": np.round(pts, 2).tolist()}
+    edges = [[names.index(a), names.index(b)] for a, b in EDGES if a in names and b in names]
+    return v.id, {"keypoints": names, "edges": edges, "frames": frames, "file": Path(path).name}
+
+
+def read_matches_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
+    """(video id, {"frames": {index: [{"clip", "time", "cost"}, ...]}})."""
+    doc = read_json_document(path)
+    f = Fields(doc, path)
+    if f.has("kind") and doc["kind"] != "vidstyle.matches":
+        raise FormatError(path, "kind", f"expected 'vidstyle.matches', got {doc['kind']!r}")
+    v = _match_video(f.str("video", required=False), videos, path)
+    frames = {}
+    for i, fr in enumerate(f.list("frames")):
+        ff = Fields(fr, path, f"frames[{i}]")
+        idx = ff.int("frame", min=0, max=v.frames - 1)
+        cands = []
+        for k, c in enumerate(ff.list("candidates")):
+            cf = Fields(c, path, f"frames[{i}].candidates[{k}]")
+            cands.append({"clip": cf.str("clip", nonempty=True), "time": cf.number("time", min=0),
+                          "cost": cf.number("cost", required=False, default=None)})
+        frames[str(idx)] = cands
+    return v.id, {"frames": frames, "file": Path(path).name}
+
+
+def load_overlays(videos, labels=(), poses=(), matches=()) -> dict[str, dict]:
+    """Per video id: {"recognized"?, "poses"?, "matches"?}."""
+    out: dict[str, dict] = {v.id: {} for v in videos}
+    for key, reader, files in (("recognized", read_labels_overlay, labels), ("poses", read_poses_overlay, poses),
+                               ("matches", read_matches_overlay, matches)):
+        for p in files:
+            vid, data = reader(p, videos)
+            if key in out[vid]:
+                raise FormatError(p, None, f"a second {key} file for video {vid}")
+            out[vid][key] = data
+    return out

@@ -1,0 +1,362 @@
+"""The annotation server: a Starlette app on uvicorn serving one page and a JSON API.
+
+API (the page and the tests use it; ``{id}`` is a video's position on the command line, 0, 1, ...):
+
+* ``GET /api/videos`` - ``[{id, name, frames, fps, width, height, sha256, duration, constant_rate}]``
+* ``GET /api/videos/{id}/frames/{index}[?format=png]`` - the image of decoded frame ``index`` (JPEG by
+  default, PNG lossless), headers ``X-Frame-Index`` and ``X-Frame-Time`` (seconds, decoded timestamp)
+* ``GET /api/videos/{id}/timestamps`` - decoded timestamps (seconds) of every frame
+* ``GET /api/videos/{id}/overlays`` - recognised actions, 2D poses, pose matches (see :mod:`.overlays`)
+* ``GET /api/annotations`` / ``PUT /api/annotations`` - ``{revision, classes, videos: [{id, transitions,
+  segments}]}``; a PUT names the revision it was made from: 200 ``{revision}`` (the new one), 409 on a
+  stale revision, 400/422 on bad JSON or content (nothing changes)
+* ``GET /api/export/{format}?video={id}`` - a download (native | labelstudio | cvat | via)
+* ``POST /api/import/{format}?video={id}`` - body: the exported file; answers the marks in the API's
+  shape, for the page to apply (and save) as one undoable step; nothing is saved by the import itself
+
+Security (each rule is tested): binds 127.0.0.1 unless told otherwise; a request whose ``Host`` header is
+not this server's address is refused (DNS rebinding); a state-changing request (PUT, POST, ...) needs the
+page's session token (``X-Vidstyle-Token``, written into the served page) and an ``Origin`` of this server;
+videos are addressed by id only and static files by a fixed table - nothing from a request becomes a file
+path; bodies over ``max_body`` bytes get 413.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import secrets
+import socket
+import threading
+from dataclasses import dataclass, field
+from importlib import resources
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response
+from starlette.routing import Route
+
+from ..errors import InputError
+from ..formats import FormatError
+from . import exchange
+from .session import Conflict, Store, Video
+
+log = logging.getLogger(__name__)
+
+MAX_BODY = 16 << 20
+STATIC = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8"}
+CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
+       "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
+SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
+
+
+@dataclass
+class Session:
+    videos: list[Video]
+    store: Store
+    overlays: dict[str, dict] = field(default_factory=dict)
+    token: str = field(default_factory=lambda: secrets.token_urlsafe(32))
+    allowed_hosts: set[str] = field(default_factory=set)
+    max_body: int = MAX_BODY
+
+    def allow(self, host: str, port: int) -> None:
+        """Accept ``Host: host:port`` (and the loopback names when ``host`` is a loopback address)."""
+        names = {host}
+        if host in ("127.0.0.1", "localhost", "::1", "[::1]"):
+            names |= {"127.0.0.1", "localhost", "[::1]"}
+        for n in names:
+            n = f"[{n}]" if ":" in n and not n.startswith("[") else n
+            self.allowed_hosts |= {f"{n}:{port}"} | ({n} if port == 80 else set())
+
+    @property
+    def origins(self) -> set[str]:
+        return {f"http://{h}" for h in self.allowed_hosts}
+
+
+def _err(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status)
+
+
+class Guard:
+    """ASGI middleware: Host check, body size limit, token + Origin on state-changing requests."""
+
+    def __init__(self, app, session: Session) -> None:
+        self.app = app
+        self.session = session
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope["headers"]}
+        s = self.session
+        host = headers.get("host", "")
+        if host not in s.allowed_hosts:
+            return await _err(400, f"Host {host!r} is not this server (DNS rebinding?)")(scope, receive, send)
+        if scope["method"] not in SAFE_METHODS:
+            origin = headers.get("origin")
+            if origin not in s.origins:
+                return await _err(403, f"Origin {origin!r} is not this server")(scope, receive, send)
+            token = headers.get("x-vidstyle-token", "")
+            if not secrets.compare_digest(token.encode(), s.token.encode()):
+                return await _err(403, "missing or wrong session token (reload the page)")(scope, receive, send)
+        try:
+            length = int(headers.get("content-length", "0"))
+        except ValueError:
+            return await _err(400, "bad Content-Length")(scope, receive, send)
+        if length > s.max_body:
+            return await _err(413, f"request body over {s.max_body} bytes")(scope, receive, send)
+        seen = 0
+
+        async def limited():
+            nonlocal seen
+            msg = await receive()
+            if msg["type"] == "http.request":
+                seen += len(msg.get("body", b""))
+                if seen > s.max_body:
+                    raise _TooLarge()
+            return msg
+
+        try:
+            await self.app(scope, limited, send)
+        except _TooLarge:
+            await _err(413, f"request body over {s.max_body} bytes")(scope, receive, send)
+
+
+class _TooLarge(Exception):
+    pass
+
+
+def _page(token: str) -> bytes:
+    html = resources.files("vidstyle.annotate").joinpath("static/index.html").read_text("utf-8")
+    return html.replace("__VIDSTYLE_TOKEN__", token).encode()
+
+
+def create_app(session: Session) -> Starlette:
+    videos = {v.id: v for v in session.videos}
+    store = session.store
+    static = {name: resources.files("vidstyle.annotate").joinpath(f"static/{name}").read_bytes() for name in STATIC}
+    page = _page(session.token)
+    nocache = {"Cache-Control": "no-store"}
+
+    def video_of(request: Request) -> Video | None:
+        return videos.get(request.path_params["vid"])
+
+    async def index(request: Request):
+        return Response(page, media_type="text/html; charset=utf-8",
+                        headers={"Content-Security-Policy": CSP, "X-Content-Type-Options": "nosniff",
+                                 "Referrer-Policy": "no-referrer", **nocache})
+
+    async def static_file(request: Request):
+        name = request.path_params["name"]
+        if name not in static:
+            return _err(404, "no such file")
+        return Response(static[name], media_type=STATIC[name], headers={"X-Content-Type-Options": "nosniff", **nocache})
+
+    async def list_videos(request: Request):
+        return JSONResponse([v.describe() for v in session.videos])
+
+    def frame(request: Request):  # sync: runs in the thread pool (decoding blocks)
+        v = video_of(request)
+        if v is None:
+            return _err(404, "no such video")
+        raw = request.path_params["index"]
+        if not raw.isdigit() or len(raw) > 9:
+            return _err(400, f"frame index must be a non-negative integer, got {raw[:20]!r}")
+        index = int(raw)
+        if index >= v.frames:
+            return _err(404, f"frame {index} out of range (0..{v.frames - 1})")
+        fmt = request.query_params.get("format", "jpeg")
+        if fmt not in ("jpeg", "png"):
+            return _err(400, "format must be jpeg or png")
+        want = request.query_params.get("v")
+        if want is not None and not v.sha256.startswith(want):
+            return _err(404, "the video changed (reload the page)")
+        try:
+            data = v.image(index, fmt)
+        except InputError as e:
+            return _err(500, str(e))
+        return Response(data, media_type=f"image/{fmt}",
+                        headers={"X-Frame-Index": str(index), "X-Frame-Time": f"{float(v.timestamps[index]):.6f}",
+                                 "Cache-Control": "private, max-age=3600" if want else "no-store"})
+
+    async def timestamps(request: Request):
+        v = video_of(request)
+        if v is None:
+            return _err(404, "no such video")
+        return JSONResponse([round(float(t), 6) for t in v.timestamps])
+
+    async def overlays(request: Request):
+        v = video_of(request)
+        if v is None:
+            return _err(404, "no such video")
+        return JSONResponse(session.overlays.get(v.id, {}))
+
+    async def get_annotations(request: Request):
+        return JSONResponse(store.state(), headers=nocache)
+
+    async def body_json(request: Request):
+        raw = await request.body()
+        try:
+            return json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
+        except (UnicodeDecodeError, ValueError) as e:
+            raise _BadRequest(f"request body is not valid JSON ({e})"[:300]) from None
+
+    async def put_annotations(request: Request):
+        try:
+            body = await body_json(request)
+            rev = store.save(body)
+        except _BadRequest as e:
+            return _err(400, str(e))
+        except Conflict as e:
+            return JSONResponse({"error": str(e), "revision": e.current}, status_code=409)
+        except FormatError as e:
+            return _err(422, str(e))
+        return JSONResponse({"revision": rev})
+
+    def target(v: Video) -> exchange.Target:
+        return exchange.Target(store.entry(v.id), v.reader.info.timestamps, float(v.reader.info.duration),
+                               v.reader.width, v.reader.height)
+
+    def _fmt_video(request: Request):
+        fmt = request.path_params["fmt"]
+        if fmt not in exchange.FORMATS:
+            raise _BadRequest(f"format must be one of {', '.join(exchange.FORMATS)}")
+        v = videos.get(request.query_params.get("video", "0" if len(videos) == 1 else ""))
+        if v is None:
+            raise _NotFound("no such video (give ?video=ID)")
+        return fmt, v
+
+    async def export(request: Request):
+        try:
+            fmt, v = _fmt_video(request)
+        except _BadRequest as e:
+            return _err(400, str(e))
+        except _NotFound as e:
+            return _err(404, str(e))
+        with store.lock:
+            data = exchange.export(fmt, store.ann.classes, target(v))
+            name = exchange.default_filename(fmt, target(v))
+        safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
+        return Response(data, media_type=exchange.MEDIA[fmt][0],
+                        headers={"Content-Disposition": f'attachment; filename="{safe}"', **nocache})
+
+    async def import_(request: Request):
+        try:
+            fmt, v = _fmt_video(request)
+        except _BadRequest as e:
+            return _err(400, str(e))
+        except _NotFound as e:
+            return _err(404, str(e))
+        raw = await request.body()
+        try:
+            with store.lock:
+                marks = exchange.import_(fmt, raw, store.ann.classes, target(v), name=f"imported {fmt}")
+        except FormatError as e:
+            return _err(422, str(e))
+        doc = exchange.to_document_unchecked(marks, store.entry(v.id))
+        return JSONResponse({"classes": marks.classes, "video": v.id,
+                             "transitions": doc["videos"][0]["transitions"], "segments": doc["videos"][0]["segments"]})
+
+    routes = [
+        Route("/", index, methods=["GET"]),
+        Route("/static/{name}", static_file, methods=["GET"]),
+        Route("/api/videos", list_videos, methods=["GET"]),
+        Route("/api/videos/{vid}/frames/{index}", frame, methods=["GET"]),
+        Route("/api/videos/{vid}/timestamps", timestamps, methods=["GET"]),
+        Route("/api/videos/{vid}/overlays", overlays, methods=["GET"]),
+        Route("/api/annotations", get_annotations, methods=["GET"]),
+        Route("/api/annotations", put_annotations, methods=["PUT"]),
+        Route("/api/export/{fmt}", export, methods=["GET"]),
+        Route("/api/import/{fmt}", import_, methods=["POST"]),
+    ]
+    app = Starlette(routes=routes)
+    app.add_middleware(Guard, session=session)
+    return app
+
+
+class _BadRequest(Exception):
+    pass
+
+
+class _NotFound(Exception):
+    pass
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening socket on ``host:port`` (port 0: any free port)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as e:
+        sock.close()
+        raise InputError(f"--port: cannot listen on {host}:{port} ({e.strerror or e})") from None
+    sock.listen(128)
+    sock.set_inheritable(True)
+    return sock
+
+
+class Running:
+    """A server running in a background thread (tests, benchmarks): ``with Running(session) as url:``."""
+
+    def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 0) -> None:
+        import uvicorn
+
+        self.sock = bind(host, port)
+        self.port = self.sock.getsockname()[1]
+        session.allow(host, self.port)
+        self.url = f"http://{host}:{self.port}"
+        self.server = uvicorn.Server(uvicorn.Config(create_app(session), log_level="warning", lifespan="off",
+                                                    access_log=False))
+        self.thread = threading.Thread(target=self.server.run, kwargs={"sockets": [self.sock]}, daemon=True)
+
+    def __enter__(self) -> str:
+        import time
+
+        self.thread.start()
+        t0 = time.monotonic()
+        while not self.server.started:
+            if time.monotonic() - t0 > 20 or not self.thread.is_alive():
+                raise RuntimeError("annotation server did not start")
+            time.sleep(0.01)
+        return self.url
+
+    def __exit__(self, *exc) -> None:
+        self.server.should_exit = True
+        self.thread.join(10)
+        self.sock.close()
+
+
+def serve(session: Session, host: str, port: int, open_browser: bool = True) -> None:
+    """Serve until interrupted (Ctrl+C)."""
+    import uvicorn
+
+    sock = bind(host, port)
+    port = sock.getsockname()[1]
+    session.allow(host, port)
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{port}/"
+    log.info("annotate: %s (Ctrl+C to stop); annotations -> %s", url, session.store.path)
+    if open_browser:
+        import webbrowser
+
+        threading.Timer(0.5, webbrowser.open, args=(url,)).start()
+    server = uvicorn.Server(uvicorn.Config(create_app(session), log_level="warning", lifespan="off", access_log=False))
+    try:
+        server.run(sockets=[sock])
+    finally:
+        sock.close()
+        for v in session.videos:
+            v.close()
+
+
+def new_session(videos: list[Video], store: Store, overlays: dict | None = None, max_body: int = MAX_BODY) -> Session:
+    return Session(videos, store, overlays or {}, max_body=max_body)
+
+
+__all__ = ["Running", "Session", "bind", "create_app", "new_session", "serve"]
