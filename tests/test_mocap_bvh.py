@@ -164,7 +164,7 @@ MALFORMED = {
     "missing_brace": (lambda t: t.replace("}\nMOTION", "MOTION"), r"never closed", None),
     "nan": (lambda t: t.replace("2 10 0 0 90", "2 10 nan 0 90"), r"not finite", "2 10 nan"),
     "no_motion": (lambda t: t.split("MOTION")[0], r"no MOTION section", None),
-    "extra_frame": (lambda t: t + "7 10 0 0 0 0 0 0 0 0 0 0 0 0 0\n", r"more frame lines", "7 10 0 0"),
+    "bad_extra_frame": (lambda t: t + "7 10 0 0 0 0 0 0 0 0 0 0 0 0\n", r"frame 3 has 14 values, expected 15", "7 10 0 0"),
     "bad_offset": (lambda t: t.replace("OFFSET 0 2 0", "OFFSET 0 two 0"), r"OFFSET of 'Chest'.*not a number", "two"),
     "bad_frames": (lambda t: t.replace("Frames: 3", "Frames: three"), r"Frames: 'three'", "Frames: three"),
 }
@@ -184,6 +184,28 @@ def test_malformed_input_names_file_and_line(case):
     if marker is not None:
         expected = next(i for i, ln in enumerate(text.split("\n"), 1) if marker in ln)
         assert err.value.line == expected, msg
+
+
+def test_more_frame_lines_than_the_header_are_read_with_a_warning(tmp_path, caplog):
+    """As Blender reads such a file: every frame line is kept (assimp would drop the extra one)."""
+    extra = "7 10 0 0 0 0 0 0 0 0 0 0 0 0 0\n"
+    p = tmp_path / "extra.bvh"
+    p.write_text(TWO_JOINT + extra + "\n")
+    with caplog.at_level("WARNING", logger="vidstyle.mocap.bvh"):
+        m = read_bvh(p)
+    ref = parse_bvh(TWO_JOINT.replace("Frames: 3", "Frames: 4") + extra)
+    assert m.n_frames == 4 == ref.n_frames
+    np.testing.assert_array_equal(m.translations, ref.translations)
+    np.testing.assert_array_equal(m.rotations, ref.rotations)
+    assert m.root_positions[3, 0] == 7.0
+    [rec] = [r for r in caplog.records if r.levelname == "WARNING"]
+    assert str(p) in rec.getMessage() and "4 frame lines" in rec.getMessage() and "Frames: 3" in rec.getMessage()
+
+
+def test_fewer_frame_lines_than_the_header_stay_an_error():
+    text = TWO_JOINT.replace("Frames: 3", "Frames: 5")
+    with pytest.raises(BVHError, match=r"truncated MOTION block: 3 of 5 frames"):
+        parse_bvh(text, path="short.bvh")
 
 
 def test_binary_and_missing_files(tmp_path):

@@ -13,6 +13,7 @@ from vidstyle.errors import InputError
 from vidstyle.mocap import Motion, Skeleton, global_positions, write_bvh
 from vidstyle.motiongraph import (
     Clip,
+    EdgeKind,
     LabelBook,
     MotionGraph,
     Step,
@@ -25,7 +26,8 @@ from vidstyle.motiongraph import (
     render_walk,
     slerp,
 )
-from vidstyle.motiongraph.blend import blend_frames, compose, place
+from vidstyle.mocap.placement import Placement
+from vidstyle.motiongraph.blend import blend_frames
 
 
 # ------------------------------------------------------------------------------------------ blend
@@ -51,15 +53,20 @@ def test_slerp_endpoints_and_midpoint(rng):
     assert np.allclose(d0, d1)
 
 
-def test_place_and_compose_are_rigid_floor_transforms(rng):
+def test_placement_frames_and_composition_are_rigid_floor_transforms(rng):
     rot = Rotation.random(4, random_state=3).as_quat()[:, None, :]
     root = rng.normal(size=(4, 3))
-    r1, p1 = place(rot, root, 0.3, np.array([1.0, 2.0]))
-    r2, p2 = place(r1, p1, -0.5, np.array([-3.0, 0.5]))
-    th, off = compose(-0.5, np.array([-3.0, 0.5]), 0.3, np.array([1.0, 2.0]))
-    r3, p3 = place(rot, root, th, off)
+    P1, P2 = Placement(0.3, 1.0, 2.0), Placement(-0.5, -3.0, 0.5)
+    r1, p1 = P1.apply_frames(rot, root)
+    r2, p2 = P2.apply_frames(r1, p1)
+    r3, p3 = P2.then(P1).apply_frames(rot, root)
     assert np.allclose(p2, p3) and np.allclose(np.abs(np.sum(r2 * r3, -1)), 1)
     assert np.allclose(p1[:, 1], root[:, 1])
+    # the root rotation turns by exactly theta about +Y (scipy as the reference)
+    ref = (Rotation.from_rotvec([0, 0.3, 0]) * Rotation.from_quat(rot[:, 0])).as_quat()
+    assert np.allclose(np.abs(np.sum(r1[:, 0] * ref, -1)), 1)
+    assert np.allclose(P1.inverse().apply_points(p1), root)
+    assert np.allclose(Rotation.from_rotvec([0, 0.3, 0]).apply(root) + [1.0, 0, 2.0], p1)
 
 
 def test_blend_frames_start_near_a_end_at_b(rng):
@@ -115,8 +122,11 @@ def test_graph_scc_every_frame_reaches_every_other(graph):
     for f in range(N - 1):
         if graph.frame_clip_[f] == graph.frame_clip_[f + 1]:
             adj[f, f + 1] = 1
-    for i, j in zip(graph.trans_from_[graph.trans_in_scc_], graph.trans_to_[graph.trans_in_scc_]):
-        adj[i - 1, j] = 1
+    # the table holds exactly those playback edges, plus the blends
+    play = graph.edges(EdgeKind.PLAYBACK)
+    assert int(adj.sum()) == len(play) and adj[graph.edge_src_[play], graph.edge_dst_[play]].all()
+    for e in graph.edges(EdgeKind.BLEND, in_scc=True):
+        adj[graph.edge_src_[e], graph.edge_dst_[e]] = 1
     sub = adj[np.ix_(keep, keep)]
     dist = shortest_path(sub, unweighted=True)
     assert np.isfinite(dist).all()
@@ -126,18 +136,19 @@ def test_graph_scc_every_frame_reaches_every_other(graph):
 
 def test_transitions_are_local_minima_with_consistent_alignment(graph):
     k = graph.window
-    assert graph.stats_["transitions"] > 0 and np.all(graph.trans_cost_ <= graph.threshold_ + 1e-9)
+    blends = graph.edges(EdgeKind.BLEND)
+    assert graph.stats_["transitions"] == len(blends) > 0 and np.all(graph.edge_cost_[blends] <= graph.threshold_ + 1e-9)
     pos = global_positions(graph.motion())
     from vidstyle.motiongraph import align_windows
 
-    for e in range(0, len(graph.trans_from_), max(1, len(graph.trans_from_) // 15)):
-        i, j = graph.trans_from_[e], graph.trans_to_[e]
+    for e in blends[:: max(1, len(blends) // 15)]:
+        i, j = graph.edge_src_[e] + 1, graph.edge_dst_[e]
         p, q = pos[i : i + k], pos[j - k + 1 : j + 1]
         d, th, x0, z0 = align_windows(p, q, graph.joint_weights_)
         W = graph.joint_weights_.sum() * k
-        assert np.isclose(np.sqrt(d / W), graph.trans_cost_[e], rtol=1e-6, atol=1e-6)
-        assert np.isclose(np.cos(th - graph.trans_theta_[e]), 1.0)
-        assert np.allclose([x0, z0], [graph.trans_x0_[e], graph.trans_z0_[e]], atol=1e-6)
+        assert np.isclose(np.sqrt(d / W), graph.edge_cost_[e], rtol=1e-6, atol=1e-6)
+        assert np.isclose(np.cos(th - graph.edge_align_[e, 0]), 1.0)
+        assert np.allclose([x0, z0], graph.edge_align_[e, 1:], atol=1e-6)
         # transitions never jump within a window of themselves
         same = graph.frame_clip_[i] == graph.frame_clip_[j]
         assert not same or abs((j - k + 1) - i) >= 2 * k
@@ -147,12 +158,14 @@ def test_save_load_roundtrip(graph, tmp_path):
     path = tmp_path / "g.npz"
     graph.save(path)
     g2 = MotionGraph.load(path)
-    for name in ("rotations_", "root_positions_", "labels_", "scc_", "trans_from_", "trans_to_", "trans_cost_"):
+    for name in ("rotations_", "root_positions_", "labels_", "scc_", "edge_src_", "edge_dst_", "edge_kind_", "edge_cost_",
+                 "edge_segment_", "edge_align_", "edge_in_scc_"):
         assert np.allclose(getattr(g2, name), getattr(graph, name), atol=1e-6)
     assert g2.label_names_ == graph.label_names_ and g2.get_params() == graph.get_params()
     z = np.load(path)
     assert json.loads(str(z["params_json"]))["random_state"] == 0
-    with pytest.raises(InputError, match="schema"):
+    assert str(z["kind"]) == "vidstyle.motiongraph" and int(z["schema_version"]) == 2
+    with pytest.raises(InputError, match="kind"):
         np.savez(tmp_path / "x.npz", a=np.zeros(2))
         MotionGraph.load(tmp_path / "x.npz")
 
@@ -174,7 +187,7 @@ def test_walk_realises_sequence_and_is_continuous(graph):
     for t in range(1, len(walk.frames)):
         if walk.transition[t] < 0 and walk.transition[t - 1] < 0:
             assert walk.frames[t] == walk.frames[t - 1] + 1
-    assert all(graph.trans_in_scc_[e] for e in walk.transitions_used)
+    assert all(graph.edge_in_scc_[e] and graph.edge_kind_[e] == EdgeKind.BLEND for e in walk.transitions_used)
 
 
 def test_walk_cost_is_minimal_among_alternatives(graph):

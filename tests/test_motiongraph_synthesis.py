@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vidstyle.motiongraph import MotionGraph, Step, parse_sequence, plan_walk
+from vidstyle.motiongraph import EdgeKind, MotionGraph, Step, parse_sequence, plan_walk
 from vidstyle.motiongraph.blend import blend_weight
 
 from test_motiongraph_graph import _clips
@@ -26,10 +26,10 @@ def reference_cost(graph, steps, mismatch=5.0, penalty=0.2) -> float:
     lab = [names[graph.labels_[f]] for f in scc]
     from_side = blend_weight(np.arange(k), k) >= 0.5
     trans = []
-    for e in np.flatnonzero(graph.trans_in_scc_):
-        a, b = int(graph.trans_from_[e]), int(graph.trans_to_[e])
+    for e in graph.edges(EdgeKind.BLEND, in_scc=True):
+        a, b = int(graph.edge_src_[e]) + 1, int(graph.edge_dst_[e])
         blend = [names[graph.labels_[a + p] if from_side[p] else graph.labels_[b - k + 1 + p]] for p in range(k)]
-        trans.append((index[a - 1], index[b], graph.trans_cost_[e] / graph.threshold_ + penalty, blend))
+        trans.append((index[a - 1], index[b], graph.edge_cost_[e] / graph.threshold_ + penalty, blend))
     V = [[0.0 if lab[i] == req[0] else mismatch for i in range(len(scc))]]
     for t in range(1, len(req)):
         row = []
@@ -49,7 +49,7 @@ def walk_cost(graph, walk, mismatch=5.0, penalty=0.2) -> float:
     names = graph.label_names_
     got = [names[x] for x in graph.labels_[walk.frames]]
     miss = sum(a != b for a, b in zip(got, walk.requested))
-    return sum(graph.trans_cost_[e] / graph.threshold_ + penalty for e in walk.transitions_used) + mismatch * miss
+    return sum(graph.edge_cost_[e] / graph.threshold_ + penalty for e in walk.transitions_used) + mismatch * miss
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -25,14 +25,24 @@ def info(
     file: Path = typer.Argument(..., help="BVH file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ) -> None:
-    """Joints, frames, fps, duration and bounding box (joints and End Sites, all frames) of a BVH file."""
+    """Joints, frames, fps, duration, bounding box (joints and End Sites, all frames), leg length, and
+    where the 15 body keypoints sit on the skeleton (by name or by topology)."""
     from ..mocap import end_site_positions, forward_kinematics, read_bvh
+    from ..mocap.keypoints import KeypointMappingError, keypoint_joints
+    from ..mocap.retarget import leg_length
 
     motion = read_bvh(file)
     pos, mats = forward_kinematics(motion)
     pos = np.concatenate([pos, end_site_positions(motion, mats, pos)[1]], axis=1)
     lo = pos.reshape(-1, 3).min(axis=0) if motion.n_frames else np.zeros(3)
     hi = pos.reshape(-1, 3).max(axis=0) if motion.n_frames else np.zeros(3)
+    try:
+        mapping = keypoint_joints(motion.skeleton)
+        keypoints = {k: {"joint": m.joint_name, "index": m.joint, "end_site": m.end_site, "how": m.how}
+                     for k, m in mapping.items()}
+        keypoint_error = None
+    except KeypointMappingError as e:
+        keypoints, keypoint_error = None, str(e)
     summary = {
         "file": str(file),
         "joints": motion.n_joints,
@@ -44,17 +54,27 @@ def info(
         "bbox_max": hi.round(4).tolist(),
         "channels": int(sum(len(c) for c in motion.skeleton.channels)),
         "end_sites": len(motion.skeleton.end_sites),
+        "leg_length": round(leg_length(motion.skeleton), 6),
+        "keypoints": keypoints,
+        "keypoint_error": keypoint_error,
     }
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=str(file), show_header=False)
-    for key in ("joints", "frames", "fps", "duration_s", "channels", "end_sites", "bbox_min", "bbox_max"):
+    table = Table(title=escape(str(file)), show_header=False)
+    for key in ("joints", "frames", "fps", "duration_s", "channels", "end_sites", "leg_length", "bbox_min", "bbox_max"):
         val = summary[key]
         table.add_row(key, f"{val:g}" if isinstance(val, float) else str(val))
+    if keypoints is None:
+        table.add_row("keypoints", escape(f"not mapped: {keypoint_error}"))
+    else:
+        for k, m in keypoints.items():
+            where = f"{m['joint']} End Site" if m["end_site"] else m["joint"]
+            table.add_row(f"keypoint {k}", escape(f"{where} (by {m['how']})"))
     Console().print(table)
 
 

@@ -6,6 +6,12 @@ intrinsic rotations in the order listed (``Zrotation Yrotation Xrotation`` means
 is scipy's upper-case Euler sequence. Position channels replace the joint's OFFSET (the convention of
 most readers; for the usual root with a zero OFFSET the two conventions agree).
 
+A MOTION block with more frame lines than its ``Frames:`` header is read whole, with a warning naming
+the file and both counts: Blender's importer (``io_anim_bvh/import_bvh.py``) reads every frame line to
+the end of the file and ignores the count, so files it writes or accepts with a stale header keep all
+their frames here too (assimp instead stops after ``Frames:`` lines and drops the rest). Fewer lines
+than the header promises is an error (a truncated file).
+
 Every problem with the file raises :class:`BVHError` naming the file and line. The MOTION block is
 parsed with ``numpy.loadtxt`` (C speed); only when that fails is it rescanned line by line to name the
 offending line precisely.
@@ -14,6 +20,7 @@ offending line precisely.
 from __future__ import annotations
 
 import io
+import logging
 import math
 import os
 import re
@@ -30,6 +37,7 @@ from .quat import from_intrinsic_euler
 from .skeleton import ALL_CHANNELS, POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
+log = logging.getLogger(__name__)
 
 
 class BVHError(VidstyleError):
@@ -266,6 +274,11 @@ def _parse_motion(lines: list[str], motion_line: int, skeleton: Skeleton, path) 
 def _parse_values(data_lines: list[str], first_line: int, n_frames: int, n_channels: int, path) -> np.ndarray:
     """(n_frames, n_channels) float array; ``first_line`` is the 0-based index of data_lines[0]."""
     body = [ln for ln in data_lines if ln.strip()]
+    if len(body) > n_frames and n_channels > 0:
+        # as Blender reads it: every frame line counts, the header's count does not (module docstring)
+        log.warning("%s: %d frame lines but 'Frames: %d'; reading all %d frames (as Blender does)",
+                    path if path is not None else "<bvh>", len(body), n_frames, len(body))
+        n_frames = len(body)
     if n_channels == 0:
         if body:
             raise BVHError(path, first_line + 1, "frame values given but the hierarchy has no channels")

@@ -1,5 +1,6 @@
 """Motion graphs (Kovar, Gleicher, Pighin 2002): windowed point-cloud frame distance computed for all
-pairs by tiled GEMMs, transitions at local minima, C^1 blends, pruning to the largest strongly connected
+pairs by tiled GEMMs, transitions at local minima, C^1 blends, an open edge table (playback, blend, enhancement) with
+per-edge costs, pruning to the largest strongly connected
 component, and walks that realise an action sequence at minimum transition cost.
 
 >>> from vidstyle.motiongraph import MotionGraph, load_clips, plan_walk, render_walk   # doctest: +SKIP
@@ -8,16 +9,18 @@ component, and walks that realise an action sequence at minimum transition cost.
 
 from .blend import blend_frames, blend_weight, slerp
 from .distance import WindowSet, align_windows, all_pair_candidates, compute_tile, joint_weights
-from .graph import SCHEMA, Clip, MotionGraph, has_tpose_first_frame, load_clips
+from .graph import SCHEMA, Clip, EdgeKind, MotionGraph, Segment, has_tpose_first_frame, load_clips
 from .labels import CMU_KEYWORDS, LabelBook, cmu_action
-from .synthesis import Step, Walk, parse_sequence, plan_walk, read_sequence, render_walk, walk_labels
+from .synthesis import Step, Walk, edge_frames, parse_sequence, plan_walk, read_sequence, render_walk, walk_labels
 
 __all__ = [
     "CMU_KEYWORDS",
     "Clip",
+    "EdgeKind",
     "LabelBook",
     "MotionGraph",
     "SCHEMA",
+    "Segment",
     "Step",
     "Walk",
     "WindowSet",
@@ -27,6 +30,7 @@ __all__ = [
     "blend_weight",
     "cmu_action",
     "compute_tile",
+    "edge_frames",
     "has_tpose_first_frame",
     "joint_weights",
     "load_clips",

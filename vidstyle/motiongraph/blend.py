@@ -1,10 +1,8 @@
-"""Transition clips: alignment, linear root interpolation, slerp of joint rotations, C^1 blend weight."""
+"""Transition clips (placement: :mod:`vidstyle.mocap.placement`): linear root interpolation, slerp of joint rotations, C^1 blend weight."""
 
 from __future__ import annotations
 
 import numpy as np
-
-from ..mocap.quat import qmul
 
 
 def blend_weight(p: np.ndarray | float, k: int) -> np.ndarray:
@@ -18,15 +16,6 @@ def blend_weight(p: np.ndarray | float, k: int) -> np.ndarray:
     """
     u = (np.asarray(p, dtype=np.float64) + 1.0) / k
     return 2.0 * u**3 - 3.0 * u**2 + 1.0
-
-
-def yaw_quat(theta: np.ndarray | float) -> np.ndarray:
-    """Quaternion(s) (x, y, z, w) of a rotation by ``theta`` about +Y."""
-    theta = np.asarray(theta, dtype=np.float64)
-    out = np.zeros(theta.shape + (4,))
-    out[..., 1] = np.sin(theta / 2)
-    out[..., 3] = np.cos(theta / 2)
-    return out
 
 
 def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -46,25 +35,6 @@ def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
     b = np.where(small, t, np.sin(t * omega) / safe)
     out = a * q0 + b * q1
     return out / np.linalg.norm(out, axis=-1, keepdims=True)
-
-
-def place(rotations: np.ndarray, root: np.ndarray, theta: float, offset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Frames (rotations (F, J, 4), root positions (F, 3)) moved by ``R_y(theta)`` then ``offset`` (x, z):
-    only the root rotation and the root position change."""
-    c, s = np.cos(theta), np.sin(theta)
-    rot = rotations.copy()
-    rot[:, 0] = qmul(np.broadcast_to(yaw_quat(theta), rot[:, 0].shape), rot[:, 0])
-    out = root.copy()
-    out[:, 0] = c * root[:, 0] + s * root[:, 2] + offset[0]
-    out[:, 2] = -s * root[:, 0] + c * root[:, 2] + offset[1]
-    return rot, out
-
-
-def compose(theta1: float, off1: np.ndarray, theta2: float, off2: np.ndarray) -> tuple[float, np.ndarray]:
-    """The transform ``T1 o T2`` (apply T2 first) of two yaw + floor-translation transforms."""
-    c, s = np.cos(theta1), np.sin(theta1)
-    x, z = off2
-    return theta1 + theta2, np.array([c * x + s * z + off1[0], -s * x + c * z + off1[1]])
 
 
 def blend_frames(

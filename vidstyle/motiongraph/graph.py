@@ -1,63 +1,104 @@
-"""The motion graph: clips at one frame rate, transitions at local distance minima, pruned to its
+"""The motion graph: clips at one frame rate, an open table of edges between their frames, pruned to its
 largest strongly connected component.
 
-Frames of all clips are numbered globally, clip after clip. A transition ``(from=i, to=j)`` means:
-play the departing clip up to frame ``i - 1``, then ``k`` blended frames (``i .. i+k-1`` against the
-aligned ``j-k+1 .. j``), then continue at ``j + 1``. As a graph edge it goes from node ``i - 1`` to node
-``j``; playback edges go from every frame to the next of its clip. Pruning keeps the largest strongly
-connected component of that frame graph, so every kept frame can reach every other: a walk never
-dead-ends at the end of a clip.
+Frames of all clips are numbered globally, clip after clip (``N`` frames, ``J`` joints, ``k`` =
+``window``). The graph's **nodes are frames**; its **edges** are one table (``E`` rows, all ``(E,)`` unless
+noted) with a ``kind`` column:
 
-Graph file (``.npz``, schema ``vidstyle.motiongraph/1``):
+========================  ==========  =========================================================================
+attribute                 shape       meaning
+========================  ==========  =========================================================================
+``edge_src_``             (E,) int    graph frame shown just before the edge's frames
+``edge_dst_``             (E,) int    graph frame the edge arrives at (its last output frame, a pure frame)
+``edge_kind_``            (E,) int8   :class:`EdgeKind`: ``PLAYBACK`` 0, ``BLEND`` 1, ``ENHANCEMENT`` 2
+``edge_cost_``            (E,) float  cost the planner charges (RMS point-cloud distance, length unit); 0 for
+                                      playback
+``edge_segment_``         (E,) int    id of the stored motion segment an enhancement passes through, else -1
+``edge_align_``           (E, 3)      ``(theta, x0, z0)``: the :class:`~vidstyle.mocap.placement.Placement`
+                                      that puts the arriving clip (``dst``'s) into the departing clip's
+                                      (``src``'s) coordinates; zeros for playback
+``edge_align_segment_``   (E, 3)      for an enhancement, the placement of the segment into ``src``'s
+                                      coordinates; NaN for other kinds
+``edge_in_scc_``          (E,) bool   both ends in the kept component (only those are walked)
+``scc_``                  (N,) bool   frame is in the largest strongly connected component
+========================  ==========  =========================================================================
 
-========================  =============  ==========================================================
-key                       shape / type   meaning
-========================  =============  ==========================================================
-schema                    str            ``vidstyle.motiongraph/1``
-params_json               str            JSON: every parameter, the seed, the threshold used, stats
-fps                       float          frame rate of the graph
-clip_names, clip_paths    (C,) str       clip name (file stem) and source BVH path
-clip_sha256               (C,) str       SHA-256 of each source BVH
-clip_start, clip_frames   (C,) int       first global frame and frame count of each clip
-clip_src_first            (C,) int       first source-file frame used (1 when a T-pose frame 0 was dropped)
-clip_src_fps, clip_scale  (C,) float     source frame rate; root-translation scale of the retargeting
-joint_names, parents      (J,)           hierarchy shared by all clips (that of the first clip)
-offsets                   (J, 3)         rest offsets of the first clip (every clip is retargeted onto it)
-channels_json             str            BVH channels per joint; end_sites (J, 3), NaN where a joint has none
-rotations                 (N, J, 4) f32  local joint rotations (x, y, z, w)
-root_positions            (N, 3)         root translation (retargeted)
-frame_clip                (N,) int       clip index of every frame
-label_names, labels       (L,), (N,)     action names; label index of every frame
-joint_weights             (J,)           weights of the frame distance
-scc                       (N,) bool      frame is in the largest strongly connected component
-trans_from, trans_to      (E,) int       transition i -> j as above (global frames)
-trans_cost                (E,)           RMS point-cloud distance of the aligned windows (length unit)
-trans_theta, trans_x0,    (E,)           alignment T(q) = R_y(theta) q + (x0, 0, z0) of the arriving
-trans_z0                                 window onto the departing one
-trans_in_scc              (E,) bool      both ends in the component (only those are walked)
-========================  =============  ==========================================================
+What an edge ``src -> dst`` puts into a walk (the walk has just shown frame ``src``):
+
+- ``PLAYBACK``: ``dst = src + 1`` inside one clip; 1 output frame, ``dst``.
+- ``BLEND`` (Kovar): ``k`` output frames ``p = 0..k-1`` blending ``src+1+p`` (departing) with
+  ``dst-k+1+p`` (arriving, placed by ``edge_align``) with weight ``1 - alpha(p)`` on the arriving frame
+  (:func:`.blend.blend_weight`); the last is exactly ``dst``. Both windows lie inside one clip each.
+  (The transition ``i -> j`` of Kovar's paper, blend frames ``i..i+k-1`` against ``j-k+1..j``, is the
+  edge ``src = i - 1``, ``dst = j``.) Default cost: RMS distance of those two aligned windows.
+- ``ENHANCEMENT`` (AugMG, the thesis' two-half blend through a segment ``W`` centred on ``w_z``): ``2k``
+  output frames. ``p = 0..k-1`` blend ``a_{src+1+p}`` with ``w_{z-k+1+p}`` (``W`` placed onto A by
+  ``edge_align_segment``), so output frame ``k-1`` is exactly ``w_z``; then ``q = 0..k-1`` blend
+  ``w_{z+1+q}`` with ``b_{dst-k+1+q}`` (B placed onto ``W``; ``edge_align`` is the composite B -> A), the
+  last being exactly ``dst``. In the thesis' indices (``a_i = src``, ``b_j = dst``): ``a_i..a_{i+k}``
+  blended with ``w_{z-k}..w_z``, then ``w_z..w_{z+k}`` with ``b_{j-k}..b_j``, where the end frames of each
+  half carry weight 0 or 1. ``W`` therefore needs frames ``w_{z-k+1}..w_{z+k-1}`` (``2k - 1``; ``w_{z+k}``,
+  when stored, has weight 0 and only refines the alignment). For labels (planner mismatches, walk
+  labels) the first ``k`` frames count as the departing frames ``src+1..src+k``, the last ``k`` as the
+  arriving ``dst-k+1..dst``. Default cost: the sum of the RMS distances of the two halves' aligned windows.
+
+A **segment** (:class:`Segment`, ``segments_``) is a short motion on the graph's skeleton:
+``rotations`` (L, J, 4) local quaternions (x, y, z, w), ``root_positions`` (L, 3), ``centre`` (its ``w_z``,
+``k-1 <= centre <= L-k``), a ``source`` string and a ``label``.
+
+Open API: :meth:`MotionGraph.add_segment`, :meth:`MotionGraph.add_edges`, :meth:`MotionGraph.remove_edges`,
+:meth:`MotionGraph.prune` (the largest-SCC pruning over all edges, re-run after edits; scipy.sparse.csgraph).
+Pruning keeps the largest strongly connected component of the frame graph, so every kept frame can reach
+every other and has an edge in and out: a walk never dead-ends at the end of a clip. Edges whose ends are
+outside the component stay in the table (``edge_in_scc_`` False).
+
+The graph file (``.npz``, schema version 2) is owned by :mod:`vidstyle.formats.motiongraph`.
 """
 
 from __future__ import annotations
 
 import hashlib
-import json
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import IntEnum
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from ..errors import InputError
 from ..mocap import Motion, Skeleton, global_positions
-from .distance import WindowSet, all_pair_candidates, joint_weights, sample_distances
+from .distance import WindowSet, align_windows, all_pair_candidates, joint_weights, sample_distances
 from .labels import UNLABELLED, LabelBook, resample_labels
 
 log = logging.getLogger(__name__)
 
-SCHEMA = "vidstyle.motiongraph/1"
+SCHEMA = "vidstyle.motiongraph/2"
+
+
+class EdgeKind(IntEnum):
+    """The ``kind`` column of the edge table (see the module docstring)."""
+
+    PLAYBACK = 0
+    BLEND = 1
+    ENHANCEMENT = 2
+
+
+@dataclass
+class Segment:
+    """A short motion stored in the graph, on the graph's skeleton: ``rotations`` (L, J, 4),
+    ``root_positions`` (L, 3), ``centre`` the index of its middle pose ``w_z``."""
+
+    rotations: np.ndarray
+    root_positions: np.ndarray
+    centre: int
+    source: str = ""
+    label: str = ""
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.rotations)
 
 
 @dataclass
@@ -105,7 +146,7 @@ def load_clips(paths: Sequence[str | Path], label_files: Sequence[str | Path] = 
         else:
             raise InputError(f"{p}: no such clip file or directory")
     if not files:
-        raise InputError("CLIPS: no .bvh files given")
+        raise InputError("clips: no .bvh files given")
     book = LabelBook()
     for lf in label_files:
         book.load(lf)
@@ -118,6 +159,13 @@ def load_clips(paths: Sequence[str | Path], label_files: Sequence[str | Path] = 
         motion = read_bvh(f)
         clips.append(Clip(f.stem, motion, book.frame_labels(f, motion.n_frames), str(f), hashlib.sha256(data).hexdigest()))
     return clips
+
+
+def _as_index_array(x, name: str) -> np.ndarray:
+    a = np.atleast_1d(np.asarray(x))
+    if a.ndim != 1 or (a.size and a.dtype.kind not in "iu"):
+        raise ValueError(f"{name}: expected integer frame indices, got {a.dtype} array of shape {a.shape}")
+    return a.astype(np.int64)
 
 
 class MotionGraph:
@@ -140,6 +188,10 @@ class MotionGraph:
     random_state : seed of that sample.
     mirror : also add the left/right mirror image of every clip (named ``<clip>~mirror``), which doubles
         the data and the transitions between rare actions.
+
+    Learned attributes: the frame database (``skeleton_``, ``rotations_`` (N, J, 4), ``root_positions_``
+    (N, 3), ``frame_clip_`` (N,), ``labels_`` (N,) into ``label_names_``, ``clips_``), the edge table and
+    ``scc_`` (module docstring), ``segments_``, ``joint_weights_`` (J,), ``threshold_``, ``stats_``.
     """
 
     def __init__(
@@ -172,43 +224,39 @@ class MotionGraph:
         self.random_state = random_state
         self.mirror = mirror
 
+    PARAMS = ("window", "fps", "threshold", "threshold_quantile", "min_gap", "drop_tpose", "tile", "dtype",
+              "n_jobs", "scheduler", "n_samples", "random_state", "mirror")
+
     def get_params(self) -> dict:
-        keys = ("window", "fps", "threshold", "threshold_quantile", "min_gap", "drop_tpose", "tile", "dtype",
-                "n_jobs", "scheduler", "n_samples", "random_state", "mirror")
-        return {k: getattr(self, k) for k in keys}
+        return {k: getattr(self, k) for k in self.PARAMS}
 
     # ------------------------------------------------------------------------------------------ fit
-    def fit(self, clips: Sequence[Clip]) -> "MotionGraph":
+    def fit(self, clips: Sequence[Clip]) -> MotionGraph:
+        from ..mocap.retarget import retarget_clips
+
         k = int(self.window)
         if k < 2:
-            raise InputError(f"--window: must be at least 2 frames, got {k}")
+            raise InputError(f"window: must be at least 2 frames, got {k}")
         if not self.fps > 0:
-            raise InputError(f"--fps: must be positive, got {self.fps}")
+            raise InputError(f"fps: must be positive, got {self.fps}")
         if not clips:
-            raise InputError("CLIPS: no clips")
+            raise InputError("clips: no clips")
         t_start = time.perf_counter()
         if self.mirror:
             try:
                 clips = list(clips) + [Clip(c.name + "~mirror", c.motion.mirror(), c.labels, c.path, c.sha256) for c in clips]
             except ValueError as e:
-                raise InputError(f"--mirror: cannot mirror the skeleton ({e})") from None
+                raise InputError(f"mirror: cannot mirror the skeleton ({e})") from None
         ref = clips[0].motion.skeleton
-        h_ref = rest_height(ref)
         rots, roots, frame_clip, labels = [], [], [], []
         meta = {"names": [], "paths": [], "sha": [], "start": [], "frames": [], "first": [], "src_fps": [], "scale": []}
         n = 0
-        for c, clip in enumerate(clips):
-            m = clip.motion
-            if not m.skeleton.same_hierarchy(ref):
-                raise InputError(f"{clip.path or clip.name}: skeleton differs from {clips[0].path or clips[0].name}")
+        # retarget onto the first clip's skeleton: keep local rotations, scale the root path by leg length
+        targeted = retarget_clips([c.motion for c in clips], ref, [c.path or c.name for c in clips])
+        for c, (clip, (m, scale)) in enumerate(zip(clips, targeted)):
             first = 1 if self.drop_tpose and has_tpose_first_frame(m) else 0
             src_fps = m.fps
             m = m[first:]
-            h = rest_height(m.skeleton)
-            scale = h_ref / h if h > 1e-9 and h_ref > 1e-9 else 1.0
-            # retarget onto the first clip's skeleton: keep local rotations, scale the root path
-            m = Motion(ref, m.rotations, np.broadcast_to(ref.offsets, m.translations.shape).copy(), m.fps,
-                       root_positions=m.root_positions * scale)
             if abs(m.fps - self.fps) > 1e-9:
                 m = m.resample(self.fps)
             lab = resample_labels(clip.labels, src_fps, self.fps, m.n_frames, first=first) if clip.labels else [UNLABELLED] * m.n_frames
@@ -228,16 +276,16 @@ class MotionGraph:
         self.labels_ = np.array([lookup[x] for x in labels], dtype=np.int64)
         self.clips_ = meta
         self.joint_weights_ = joint_weights(ref.parents)
+        self.segments_: list[Segment] = []
         min_gap = int(self.min_gap) if self.min_gap is not None else 2 * k
 
-        motion = Motion(ref, self.rotations_, None, self.fps, root_positions=self.root_positions_)
-        positions = global_positions(motion)
+        positions = global_positions(self.motion())
         ws = WindowSet.from_clips(positions, self.frame_clip_, self.joint_weights_, k)
         W = ws.total_weight
         sample = sample_distances(ws, self.n_samples, min_gap, self.random_state)
         if self.threshold is None:
             if not len(sample):
-                raise InputError("CLIPS: too few frames for any window pair")
+                raise InputError("clips: too few frames for any window pair")
             thr = float(np.sqrt(np.quantile(sample, self.threshold_quantile) / W))
         else:
             thr = float(self.threshold)
@@ -248,155 +296,259 @@ class MotionGraph:
             scheduler=self.scheduler,
         )
         self.distance_seconds_ = time.perf_counter() - t_dist
-        self._make_transitions(ws, cand)
-        self._prune()
+        self._init_edges(ws, cand)
+        self.prune()
+        n_blend = int((self.edge_kind_ == EdgeKind.BLEND).sum())
         self.stats_ = {
             "frames": int(n),
             "windows": int(ws.n_windows),
             "pairs": int(cand.n_pairs),
             "pairs_below_threshold": int(cand.n_below),
             "fraction_below_threshold": cand.n_below / max(cand.n_pairs, 1),
-            "candidates": int(len(cand.a)),
-            "transitions": int(len(self.trans_from_)),
-            "transitions_in_scc": int(self.trans_in_scc_.sum()),
+            "candidates": len(cand.a),
+            "transitions": n_blend,
+            "transitions_in_scc": int((self.edge_in_scc_ & (self.edge_kind_ == EdgeKind.BLEND)).sum()),
             "scc_frames": int(self.scc_.sum()),
             "threshold": thr,
             "distance_seconds": self.distance_seconds_,
             "build_seconds": time.perf_counter() - t_start,
         }
         log.info("motion graph: %d frames, %d transitions (%d in the largest SCC of %d frames), threshold %.4g",
-                 n, len(self.trans_from_), self.trans_in_scc_.sum(), self.scc_.sum(), thr)
+                 n, n_blend, self.stats_["transitions_in_scc"], self.scc_.sum(), thr)
         return self
 
-    def _make_transitions(self, ws: WindowSet, cand) -> None:
+    def _init_edges(self, ws: WindowSet, cand) -> None:
+        """Playback edges and the Kovar blends of the candidate window pairs (both directions)."""
+        from ..mocap.placement import Placement
+
         k = ws.k
         W = ws.total_weight
         a_f, b_f = ws.starts[cand.a], ws.starts[cand.b]
         cost = np.sqrt(np.maximum(cand.D, 0) / W)
-        # a -> b with T aligning b onto a; b -> a with the inverse transform
-        c, s = np.cos(cand.theta), np.sin(cand.theta)
-        inv_x0 = -(c * cand.x0 - s * cand.z0)
-        inv_z0 = -(s * cand.x0 + c * cand.z0)
-        frm = np.concatenate([a_f, b_f])
-        to = np.concatenate([b_f, a_f]) + k - 1
-        theta = np.concatenate([cand.theta, -cand.theta])
-        x0 = np.concatenate([cand.x0, inv_x0])
-        z0 = np.concatenate([cand.z0, inv_z0])
+        inv = np.array([Placement(t, x, z).inverse().as_array() for t, x, z in zip(cand.theta, cand.x0, cand.z0)]).reshape(-1, 3)
+        # window a (frames a_f..a_f+k-1) blends into window b (b_f..b_f+k-1) and vice versa
+        src = np.concatenate([a_f, b_f]) - 1
+        dst = np.concatenate([b_f, a_f]) + k - 1
+        align = np.concatenate([np.stack([cand.theta, cand.x0, cand.z0], 1).reshape(-1, 3), inv])
         cost = np.concatenate([cost, cost])
         # the departing clip must have a frame before the blend
-        ok = (frm > 0) & (self.frame_clip_[np.maximum(frm - 1, 0)] == self.frame_clip_[frm])
-        order = np.lexsort((to[ok], frm[ok]))
-        self.trans_from_ = frm[ok][order]
-        self.trans_to_ = to[ok][order]
-        self.trans_cost_ = cost[ok][order]
-        self.trans_theta_ = theta[ok][order]
-        self.trans_x0_ = x0[ok][order]
-        self.trans_z0_ = z0[ok][order]
+        ok = (src >= 0) & (self.frame_clip_[np.maximum(src, 0)] == self.frame_clip_[src + 1])
+        order = np.lexsort((dst[ok], src[ok]))
+        f = np.arange(self.n_frames - 1)
+        play = f[self.frame_clip_[f] == self.frame_clip_[f + 1]]
+        P = len(play)
+        self.edge_src_ = np.concatenate([play, src[ok][order]]).astype(np.int64)
+        self.edge_dst_ = np.concatenate([play + 1, dst[ok][order]]).astype(np.int64)
+        kinds = np.full(len(self.edge_src_), EdgeKind.BLEND, np.int8)
+        kinds[:P] = EdgeKind.PLAYBACK
+        self.edge_kind_ = kinds
+        self.edge_cost_ = np.concatenate([np.zeros(P), cost[ok][order]])
+        self.edge_segment_ = np.full(len(self.edge_src_), -1, np.int64)
+        self.edge_align_ = np.concatenate([np.zeros((P, 3)), align[ok][order]])
+        self.edge_align_segment_ = np.full((len(self.edge_src_), 3), np.nan)
+        self.edge_in_scc_ = np.zeros(len(self.edge_src_), bool)
 
-    def _prune(self) -> None:
+    # ------------------------------------------------------------------------------------------ open API
+    def add_segment(self, rotations: np.ndarray, root_positions: np.ndarray, centre: int | None = None,
+                    source: str = "", label: str = "") -> int:
+        """Store a short motion ``W`` on the graph's skeleton and return its id (for ``add_edges``).
+
+        ``rotations`` (L, J, 4) local joint quaternions (x, y, z, w; normalised here), ``root_positions``
+        (L, 3) in the graph's length unit, ``centre`` the index of the middle pose ``w_z`` (default
+        ``L // 2``); an enhancement needs ``window - 1`` frames on each side of it
+        (``w_{z-k+1}..w_{z+k-1}``). ``source`` (e.g. ``"clip.bvh@3.25s"``) and ``label`` are kept as metadata.
+        """
+        k = int(self.window)
+        J = self.skeleton_.n_joints
+        rot = np.array(rotations, dtype=np.float64)
+        root = np.array(root_positions, dtype=np.float64)
+        if rot.ndim != 3 or rot.shape[1:] != (J, 4):
+            raise ValueError(f"rotations: expected shape (L, {J}, 4) on the graph's skeleton, got {rot.shape}")
+        L = len(rot)
+        if root.shape != (L, 3):
+            raise ValueError(f"root_positions: expected shape ({L}, 3), got {root.shape}")
+        if not (np.isfinite(rot).all() and np.isfinite(root).all()):
+            raise ValueError("rotations / root_positions: contain NaN or inf")
+        norm = np.linalg.norm(rot, axis=-1, keepdims=True)
+        if not (norm > 1e-9).all():
+            raise ValueError("rotations: contain a zero quaternion")
+        c = L // 2 if centre is None else int(centre)
+        if not (k - 1 <= c <= L - k):
+            raise ValueError(f"centre: {c} leaves fewer than window - 1 = {k - 1} frames on one side of a "
+                             f"{L}-frame segment (needs {k - 1} <= centre <= {L - k})")
+        self.segments_.append(Segment(rot / norm, root, c, str(source), str(label)))
+        return len(self.segments_) - 1
+
+    def add_edges(self, src, dst, kind: EdgeKind | int, cost=None, segment=None) -> np.ndarray:
+        """Append edges ``src -> dst`` (graph frames, scalars or (n,) arrays) of one ``kind`` and return
+        their row indices in the edge table.
+
+        ``cost`` (scalar or (n,)): the planner's cost; ``None`` computes the default (the Kovar window
+        distance, see the module docstring; 0 for playback). ``segment``: the segment id(s) of
+        ``ENHANCEMENT`` edges (required for them, not allowed for the others). Alignments are computed
+        here. New edges count as walkable when both ends are in the current component; call
+        :meth:`prune` to recompute the component itself.
+        """
+        kind = EdgeKind(int(kind))
+        src = _as_index_array(src, "src")
+        dst = _as_index_array(dst, "dst")
+        n = max(len(src), len(dst))
+        src, dst = np.broadcast_to(src, (n,)).copy(), np.broadcast_to(dst, (n,)).copy()
+        N, k = self.n_frames, int(self.window)
+        if n and (src.min() < 0 or dst.min() < 0 or src.max() >= N or dst.max() >= N):
+            raise ValueError(f"src/dst: frame indices must be in [0, {N})")
+        clip = self.frame_clip_
+        seg = np.full(n, -1, np.int64)
+        if kind == EdgeKind.ENHANCEMENT:
+            if segment is None:
+                raise ValueError("segment: required for ENHANCEMENT edges")
+            seg = np.broadcast_to(_as_index_array(segment, "segment"), (n,)).copy()
+            if n and (seg.min() < 0 or seg.max() >= len(self.segments_)):
+                raise ValueError(f"segment: ids must be in [0, {len(self.segments_)}) (add_segment first)")
+        elif segment is not None and np.any(np.asarray(segment) >= 0):
+            raise ValueError(f"segment: only ENHANCEMENT edges pass through a segment, not {kind.name}")
+        if kind == EdgeKind.PLAYBACK:
+            bad = (dst != src + 1) | (clip[src] != clip[np.minimum(src + 1, N - 1)]) | (src + 1 >= N)
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise ValueError(f"PLAYBACK edge {src[i]} -> {dst[i]}: must go to the next frame of the same clip")
+        else:
+            hi = np.minimum(src + k, N - 1)
+            lo = np.maximum(dst - k + 1, 0)
+            bad = (src + k >= N) | (clip[hi] != clip[src]) | (dst - k + 1 < 0) | (clip[lo] != clip[dst])
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise ValueError(f"{kind.name} edge {src[i]} -> {dst[i]}: frames src+1..src+{k} and dst-{k - 1}..dst "
+                                 "must each lie inside one clip")
+        align = np.zeros((n, 3))
+        align_seg = np.full((n, 3), np.nan)
+        dist = np.zeros(n)
+        if kind != EdgeKind.PLAYBACK and n:
+            if kind == EdgeKind.BLEND:
+                dist, align = self._blend_alignment(src, dst)
+            else:
+                dist, align, align_seg = self._enhancement_alignment(src, dst, seg)
+        if cost is None:
+            c = dist
+        else:
+            c = np.broadcast_to(np.asarray(cost, dtype=np.float64), (n,)).copy()
+            if not np.isfinite(c).all() or (c < 0).any():
+                raise ValueError("cost: must be finite and non-negative")
+        self.edge_src_ = np.concatenate([self.edge_src_, src])
+        self.edge_dst_ = np.concatenate([self.edge_dst_, dst])
+        self.edge_kind_ = np.concatenate([self.edge_kind_, np.full(n, int(kind), np.int8)])
+        self.edge_cost_ = np.concatenate([self.edge_cost_, c])
+        self.edge_segment_ = np.concatenate([self.edge_segment_, seg])
+        self.edge_align_ = np.concatenate([self.edge_align_, align])
+        self.edge_align_segment_ = np.concatenate([self.edge_align_segment_, align_seg])
+        self.edge_in_scc_ = np.concatenate([self.edge_in_scc_, self.scc_[src] & self.scc_[dst]])
+        return np.arange(len(self.edge_src_) - n, len(self.edge_src_))
+
+    def remove_edges(self, edges) -> None:
+        """Delete rows ``edges`` (indices or a (E,) bool mask) of the edge table; later rows move up.
+        Call :meth:`prune` afterwards to recompute the component."""
+        e = np.asarray(edges)
+        keep = np.ones(self.n_edges, bool)
+        keep[e] = False
+        for name in ("src", "dst", "kind", "cost", "segment", "align", "align_segment", "in_scc"):
+            setattr(self, f"edge_{name}_", getattr(self, f"edge_{name}_")[keep])
+
+    def prune(self) -> MotionGraph:
+        """Recompute ``scc_`` (the largest strongly connected component over every edge of the table,
+        scipy.sparse.csgraph) and ``edge_in_scc_``."""
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
 
-        N = len(self.frame_clip_)
-        f = np.arange(N - 1)
-        play = self.frame_clip_[f] == self.frame_clip_[f + 1]
-        src = np.concatenate([f[play], self.trans_from_ - 1])
-        dst = np.concatenate([f[play] + 1, self.trans_to_])
-        g = coo_matrix((np.ones(len(src)), (src, dst)), shape=(N, N)).tocsr()
+        N = self.n_frames
+        g = coo_matrix((np.ones(self.n_edges), (self.edge_src_, self.edge_dst_)), shape=(N, N)).tocsr()
         n_comp, comp = connected_components(g, directed=True, connection="strong")
         sizes = np.bincount(comp, minlength=n_comp)
         big = int(np.argmax(sizes))
         # a component of one frame with no self-loop is not a cycle: no walk can stay in it
         self.scc_ = comp == big if sizes[big] > 1 else np.zeros(N, bool)
-        self.trans_in_scc_ = self.scc_[self.trans_from_ - 1] & self.scc_[self.trans_to_] if len(self.trans_from_) else np.zeros(0, bool)
+        self.edge_in_scc_ = self.scc_[self.edge_src_] & self.scc_[self.edge_dst_]
+        return self
+
+    # ------------------------------------------------------------------------------------------ alignment
+    def _positions(self, rotations: np.ndarray, root_positions: np.ndarray) -> np.ndarray:
+        sh = rotations.shape
+        m = Motion(self.skeleton_, rotations.reshape(-1, *sh[-2:]), None, self.fps,
+                   root_positions=root_positions.reshape(-1, 3))
+        return global_positions(m).reshape(*sh[:-2], self.skeleton_.n_joints, 3)
+
+    def _frame_positions(self, frames: np.ndarray) -> np.ndarray:
+        return self._positions(self.rotations_[frames], self.root_positions_[frames])
+
+    def _rms(self, D: np.ndarray, k: int) -> np.ndarray:
+        return np.sqrt(np.maximum(D, 0) / (self.joint_weights_.sum() * k))
+
+    def _blend_alignment(self, src: np.ndarray, dst: np.ndarray):
+        k = int(self.window)
+        p = np.arange(k)
+        pa = self._frame_positions(src[:, None] + 1 + p)
+        pb = self._frame_positions(dst[:, None] - k + 1 + p)
+        D, th, x0, z0 = align_windows(pa, pb, self.joint_weights_)
+        return self._rms(D, k), np.stack([th, x0, z0], 1)
+
+    def _enhancement_alignment(self, src: np.ndarray, dst: np.ndarray, seg: np.ndarray):
+        from ..mocap.placement import Placement
+
+        k = int(self.window)
+        p = np.arange(k)
+        n = len(src)
+        dist = np.zeros(n)
+        align = np.zeros((n, 3))
+        align_seg = np.zeros((n, 3))
+        for s in np.unique(seg):
+            sel = np.flatnonzero(seg == s)
+            S = self.segments_[int(s)]
+            c = S.centre
+            wpos = self._positions(S.rotations, S.root_positions)
+            # first half: W (w_{z-k+1}..w_z) onto A (src+1..src+k)
+            pa = self._frame_positions(src[sel, None] + 1 + p)
+            D1, t1, x1, z1 = align_windows(pa, np.broadcast_to(wpos[c - k + 1 : c + 1], pa.shape), self.joint_weights_)
+            # second half: B (dst-k+1..) onto W (w_{z+1}..), over the frames W has (k or k-1)
+            m = min(k, S.n_frames - 1 - c)
+            pb = self._frame_positions(dst[sel, None] - k + 1 + np.arange(m))
+            D2, t2, x2, z2 = align_windows(np.broadcast_to(wpos[c + 1 : c + 1 + m], pb.shape), pb, self.joint_weights_)
+            dist[sel] = self._rms(D1, k) + self._rms(D2, m)
+            for r, i in enumerate(sel):
+                ws = Placement(t1[r], x1[r], z1[r])
+                align_seg[i] = ws.as_array()
+                align[i] = ws.then(Placement(t2[r], x2[r], z2[r])).as_array()
+        return dist, align, align_seg
 
     # ------------------------------------------------------------------------------------------ I/O
     def save(self, path: str | Path) -> None:
-        from ..fileio import write_npz
+        """Write the graph file (:mod:`vidstyle.formats.motiongraph`, schema version 2)."""
+        from ..formats.motiongraph import write_graph
 
-        sk = self.skeleton_
-        end_sites = np.full((sk.n_joints, 3), np.nan)
-        for j, off in sk.end_sites.items():
-            end_sites[j] = off
-        params = dict(self.get_params(), threshold_used=self.threshold_, stats=self.stats_)
-        write_npz(
-            path,
-            schema=np.array(SCHEMA),
-            params_json=np.array(json.dumps(params, default=str)),
-            fps=np.array(float(self.fps)),
-            window=np.array(int(self.window)),
-            clip_names=np.array(self.clips_["names"], dtype=str),
-            clip_paths=np.array(self.clips_["paths"], dtype=str),
-            clip_sha256=np.array(self.clips_["sha"], dtype=str),
-            clip_start=np.array(self.clips_["start"], dtype=np.int64),
-            clip_frames=np.array(self.clips_["frames"], dtype=np.int64),
-            clip_src_first=np.array(self.clips_["first"], dtype=np.int64),
-            clip_src_fps=np.array(self.clips_["src_fps"], dtype=np.float64),
-            clip_scale=np.array(self.clips_["scale"], dtype=np.float64),
-            joint_names=np.array(sk.names, dtype=str),
-            parents=sk.parents,
-            offsets=sk.offsets,
-            channels_json=np.array(json.dumps([list(c) for c in sk.channels])),
-            end_sites=end_sites,
-            rotations=self.rotations_.astype(np.float32),
-            root_positions=self.root_positions_,
-            frame_clip=self.frame_clip_,
-            label_names=np.array(self.label_names_, dtype=str),
-            labels=self.labels_,
-            joint_weights=self.joint_weights_,
-            scc=self.scc_,
-            trans_from=self.trans_from_,
-            trans_to=self.trans_to_,
-            trans_cost=self.trans_cost_,
-            trans_theta=self.trans_theta_,
-            trans_x0=self.trans_x0_,
-            trans_z0=self.trans_z0_,
-            trans_in_scc=self.trans_in_scc_,
-        )
+        write_graph(path, self)
 
     @classmethod
-    def load(cls, path: str | Path) -> "MotionGraph":
-        path = Path(path)
-        try:
-            z = np.load(path, allow_pickle=False)
-        except FileNotFoundError:
-            raise InputError(f"{path}: graph file not found") from None
-        except (OSError, ValueError) as e:
-            raise InputError(f"{path}: not a motion graph .npz ({e})") from None
-        with z:
-            if "schema" not in z.files or str(z["schema"]) != SCHEMA:
-                raise InputError(f"{path}: not a motion graph (schema {SCHEMA} expected)")
-            d = {key: z[key] for key in z.files}
-        params = json.loads(str(d["params_json"]))
-        stats = params.pop("stats", {})
-        thr = params.pop("threshold_used", None)
-        g = cls(**params)
-        end_sites = {j: d["end_sites"][j] for j in range(len(d["parents"])) if not np.isnan(d["end_sites"][j]).any()}
-        g.skeleton_ = Skeleton([str(x) for x in d["joint_names"]], d["parents"], d["offsets"],
-                               [tuple(c) for c in json.loads(str(d["channels_json"]))], end_sites)
-        g.rotations_ = d["rotations"].astype(np.float64)
-        g.root_positions_ = d["root_positions"]
-        g.frame_clip_ = d["frame_clip"]
-        g.label_names_ = [str(x) for x in d["label_names"]]
-        g.labels_ = d["labels"]
-        g.joint_weights_ = d["joint_weights"]
-        g.scc_ = d["scc"]
-        for key in ("from", "to", "cost", "theta", "x0", "z0", "in_scc"):
-            setattr(g, f"trans_{key}_", d[f"trans_{key}"])
-        g.clips_ = {
-            "names": [str(x) for x in d["clip_names"]], "paths": [str(x) for x in d["clip_paths"]],
-            "sha": [str(x) for x in d["clip_sha256"]], "start": d["clip_start"].tolist(),
-            "frames": d["clip_frames"].tolist(), "first": d["clip_src_first"].tolist(),
-            "src_fps": d["clip_src_fps"].tolist(), "scale": d["clip_scale"].tolist(),
-        }
-        g.threshold_ = thr
-        g.stats_ = stats
-        return g
+    def load(cls, path: str | Path) -> MotionGraph:
+        """Read a graph file (schema version 1 or 2); malformed files raise ``FormatError``."""
+        from ..formats.motiongraph import read_graph
+
+        return read_graph(path)
 
     # ------------------------------------------------------------------------------------------ helpers
     @property
     def n_frames(self) -> int:
         return len(self.frame_clip_)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edge_src_)
+
+    def edges(self, kind: EdgeKind | int | None = None, in_scc: bool | None = None) -> np.ndarray:
+        """Row indices of the edge table, optionally of one ``kind`` and/or by ``edge_in_scc_``."""
+        m = np.ones(self.n_edges, bool)
+        if kind is not None:
+            m &= self.edge_kind_ == int(kind)
+        if in_scc is not None:
+            m &= self.edge_in_scc_ == in_scc
+        return np.flatnonzero(m)
 
     def motion(self, frames: np.ndarray | slice | None = None) -> Motion:
         """Database frames as a Motion (all frames by default)."""

@@ -32,8 +32,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..mocap import Motion
-from .blend import blend_frames, blend_weight, compose, place
-from .graph import MotionGraph
+from .blend import blend_frames, blend_weight
+from .graph import EdgeKind, MotionGraph
 
 log = logging.getLogger(__name__)
 
@@ -115,15 +115,17 @@ class Walk:
 
 
 def _cap_in_degree(graph: MotionGraph, use: np.ndarray, cap: int) -> np.ndarray:
-    """The approximation of ``plan_walk(max_in_degree=cap)``: of the transitions ``use`` arriving at one
-    frame from frames of one label, keep the ``cap`` cheapest. Per label, so every label change the exact
-    graph offers at a frame stays possible; what is lost is the choice among similar departures, whose
-    effect on the walk cost is measured against the exact DP (see the closing note of issue 6)."""
+    """The approximation of ``plan_walk(max_in_degree=cap)``: of the edges ``use`` arriving at one frame
+    from frames of one label, keep the ``cap`` cheapest. Per label, so every label change the exact graph
+    offers at a frame stays possible; what is lost is the choice among similar departures, whose effect
+    on the walk cost is measured against the exact DP (see the closing note of issue 6)."""
     if cap < 1:
-        raise InputError(f"--max-in-degree: must be at least 1, got {cap}")
-    arr = graph.trans_to_[use]
-    lab = graph.labels_[graph.trans_from_[use]]
-    cost = graph.trans_cost_[use]
+        raise InputError(f"max_in_degree: must be at least 1, got {cap}")
+    if not len(use):
+        return use
+    arr = graph.edge_dst_[use]
+    lab = graph.labels_[graph.edge_src_[use]]
+    cost = graph.edge_cost_[use]
     order = np.lexsort((cost, lab, arr))
     key = arr[order] * (int(lab.max()) + 1) + lab[order]
     first = np.flatnonzero(np.concatenate([[True], key[1:] != key[:-1]]))
@@ -131,101 +133,76 @@ def _cap_in_degree(graph: MotionGraph, use: np.ndarray, cap: int) -> np.ndarray:
     return np.sort(use[order[rank < cap]])
 
 
-class _Planner:
-    """The dynamic programme of :func:`plan_walk`, blocked by the window ``k``.
+def edge_frames(graph: MotionGraph, edges: np.ndarray) -> np.ndarray:
+    """(E, d) graph frames that stand for the output frames of ``edges`` (all of one kind; d = k for
+    BLEND, 2k for ENHANCEMENT): the dominant frame of a blend, and for an enhancement the departing frames
+    then the arriving ones (see :mod:`.graph`). Their labels are the labels the planner charges."""
+    k = int(graph.window)
+    p = np.arange(k)
+    src, dst = graph.edge_src_[edges][:, None], graph.edge_dst_[edges][:, None]
+    kinds = set(graph.edge_kind_[edges].tolist())
+    if len(kinds) > 1:
+        raise ValueError("edge_frames: edges of one kind at a time")
+    if kinds == {EdgeKind.ENHANCEMENT}:
+        return np.concatenate([src + 1 + p, dst - k + 1 + p], axis=1)
+    from_side = blend_weight(p, k) >= 0.5
+    return np.where(from_side[None, :], src + 1 + p, dst - k + 1 + p)
 
-    ``V_t[i]``: least cost of an output prefix of ``t + 1`` frames ending at component frame ``i``::
 
-        V_t[i] = min( V_{t-1}[i-1] + mm_t[i]                 (play on; i-1 -> i inside one clip)
-                      min_{e: arr_e = i} V_{t-k}[dep_e] + c_e(t) )   (a k-frame transition ends at t)
+class _EdgeSet:
+    """The walkable edges of one duration ``d = lag * k`` (BLEND: lag 1, ENHANCEMENT: lag 2), laid out for
+    the blocked minimum of :class:`_Planner`."""
 
-    A transition read ``V`` from k frames earlier, so the transition minima of the k frames of one block
-    ``[b k, b k + k)`` depend only on the previous block: they are computed together, as one gather of
-    (E, k) values and a per-arrival-group minimum over rows laid out by rank within the group (groups
-    sorted by in-degree, so row ``r`` is a prefix: ``max in-degree`` vectorised minimum calls per block
-    instead of a segmented reduction per frame, which dominated). Only the cheap playback recursion is
-    sequential per frame. This is the exact DP (no pruning); back-pointers are not stored but recovered
-    by re-evaluating the few candidates of each frame on the optimal path from the stored ``V`` blocks
-    (checkpointed and recomputed when the history would exceed ``max_history_bytes``).
-    """
+    CHUNK = 16384  # edges per cache-resident chunk of the transition step (measured: 2x on 227k transitions)
 
-    CHUNK = 16384  # transitions per cache-resident chunk of the transition step (measured: 2x on 227k transitions)
-
-    def __init__(self, graph: MotionGraph, acts: list[str], mismatch_penalty: float, transition_penalty: float,
-                 max_in_degree: int | None = None):
-        k = self.k = int(graph.window)
-        names = graph.label_names_
-        self.scc = scc = np.flatnonzero(graph.scc_)
-        n = self.n = len(scc)
-        act_id = {a: i for i, a in enumerate(acts)}
-        g2r = np.array([act_id.get(nm, -1) for nm in names])
-        node_lab = g2r[graph.labels_[scc]]
-        A = len(acts)
-        self.mismatch = float(mismatch_penalty)
-        self.mm = np.where(node_lab[None, :] == np.arange(A)[:, None], 0.0, self.mismatch)  # (A, n)
-        compact = np.full(graph.n_frames, -1)
-        compact[scc] = np.arange(n)
-        prev_ok = np.zeros(n, bool)
-        prev_ok[1:] = (scc[1:] == scc[:-1] + 1) & (graph.frame_clip_[scc[1:]] == graph.frame_clip_[scc[:-1]])
-        self.prev_ok = prev_ok
-        self.no_prev = np.flatnonzero(~prev_ok)
-
-        use = np.flatnonzero(graph.trans_in_scc_)
-        self.dropped = 0
-        if max_in_degree is not None and len(use):
-            use = _cap_in_degree(graph, use, int(max_in_degree))
-            self.dropped = int(graph.trans_in_scc_.sum() - len(use))
-        arr = compact[graph.trans_to_[use]]
-        p = np.arange(k)
-        self.from_side = from_side = blend_weight(p, k) >= 0.5
-        # row layout: arrival groups by in-degree (descending); row r holds the r-th transition of every
-        # group with more than r transitions, so it is a prefix of the group order. Every per-transition
-        # array below is in this order.
+    def __init__(self, graph: MotionGraph, use: np.ndarray, lag: int, compact: np.ndarray, g2r: np.ndarray, A: int,
+                 mismatch: float, transition_penalty: float):
+        k = int(graph.window)
+        self.lag, self.d = lag, lag * k
+        arr = compact[graph.edge_dst_[use]]
+        # row layout: arrival groups by in-degree (descending); row r holds the r-th edge of every group
+        # with more than r edges, so it is a prefix of the group order. Every per-edge array below is in
+        # this order.
         self.E = E = len(use)
-        self.row_counts = np.zeros(1, np.int64)
-        if E:
-            uarr, gid, deg = np.unique(arr, return_inverse=True, return_counts=True)
-            gorder = np.argsort(-deg, kind="stable")
-            grank = np.empty_like(gorder)
-            grank[gorder] = np.arange(len(gorder))
-            g = grank[gid]  # group of each transition in sorted order
-            order = np.argsort(g, kind="stable")
-            rank = np.empty(E, np.int64)
-            starts = np.searchsorted(g[order], np.arange(len(uarr)))
-            rank[order] = np.arange(E) - starts[g[order]]
-            rows = np.lexsort((g, rank))  # transitions by (rank, group)
-            use, arr = use[rows], arr[rows]
-            self.row_counts = np.bincount(rank, minlength=int(rank.max()) + 1)
-            self.row_off = np.concatenate([[0], np.cumsum(self.row_counts)])
-            chunks = [0]
-            for r in range(1, len(self.row_counts)):
-                if self.row_off[r + 1] - self.row_off[chunks[-1]] > self.CHUNK:
-                    chunks.append(r)
-            self.chunks = chunks + [len(self.row_counts)]
-            self.group_node = uarr[gorder]
-        dep = compact[graph.trans_from_[use] - 1]
+        uarr, gid, deg = np.unique(arr, return_inverse=True, return_counts=True)
+        gorder = np.argsort(-deg, kind="stable")
+        grank = np.empty_like(gorder)
+        grank[gorder] = np.arange(len(gorder))
+        g = grank[gid]  # group of each edge in sorted order
+        order = np.argsort(g, kind="stable")
+        rank = np.empty(E, np.int64)
+        starts = np.searchsorted(g[order], np.arange(len(uarr)))
+        rank[order] = np.arange(E) - starts[g[order]]
+        rows = np.lexsort((g, rank))  # edges by (rank, group)
+        use, arr = use[rows], arr[rows]
+        self.row_counts = np.bincount(rank, minlength=int(rank.max()) + 1)
+        self.row_off = np.concatenate([[0], np.cumsum(self.row_counts)])
+        chunks = [0]
+        for r in range(1, len(self.row_counts)):
+            if self.row_off[r + 1] - self.row_off[chunks[-1]] > self.CHUNK:
+                chunks.append(r)
+        self.chunks = chunks + [len(self.row_counts)]
+        self.group_node = uarr[gorder]
+        self.use, self.arr = use, arr
+        self.dep = compact[graph.edge_src_[use]]
         thr = graph.threshold_ or 1.0
-        tcost = graph.trans_cost_[use] / thr + transition_penalty
-        # labels of the k blend frames: the departing clip's while alpha >= 1/2, then the arriving clip's
-        fa = graph.trans_from_[use][:, None] + p[None, :]
-        fb = graph.trans_to_[use][:, None] - (k - 1) + p[None, :]
-        blend_lab = g2r[np.where(from_side[None, :], graph.labels_[fa], graph.labels_[fb])]  # (E, k)
-        # cum[a, q, e]: blend frames p < q of transition e whose label is not a; a window whose requested
-        # labels are constant over [q0, q1) costs cum[a, q1] - cum[a, q0] mismatches there
-        cum = np.zeros((A, k + 1, E), np.int32)
+        self.tcost = graph.edge_cost_[use] / thr + transition_penalty
+        self.frames = edge_frames(graph, use)  # (E, d)
+        lab = g2r[graph.labels_[self.frames]]
+        # cum[a, q, e]: output frames p < q of edge e whose label is not a; a window whose requested labels
+        # are constant over [q0, q1) costs cum[a, q1] - cum[a, q0] mismatches there
+        cum = np.zeros((A, self.d + 1, E), np.int32)
         for a in range(A):
-            for q in range(k):
-                np.add(cum[a, q], blend_lab[:, q] != a, out=cum[a, q + 1])
-        self.use, self.dep, self.arr, self.tcost, self.cum = use, dep, arr, tcost, cum
-        self.const_cost = tcost[None, :] + self.mismatch * cum[:, k, :]  # (A, E): constant request
-        # per node: its incoming transitions (for the back-tracking)
+            for q in range(self.d):
+                np.add(cum[a, q], lab[:, q] != a, out=cum[a, q + 1])
+        self.cum = cum
+        self.mismatch = mismatch
+        self.const_cost = self.tcost[None, :] + mismatch * cum[:, self.d, :]  # (A, E): constant request
         by_arr = np.argsort(arr, kind="stable")
-        self.in_ptr = np.searchsorted(arr[by_arr], np.arange(n + 1))
+        self.in_ptr = np.searchsorted(arr[by_arr], np.arange(len(compact) + 1))
         self.in_e = by_arr
 
-    # ----------------------------------------------------------------------------------- costs
     def _window_counts(self, win: np.ndarray, cum: np.ndarray) -> np.ndarray:
-        """Mismatched blend frames of every transition (columns of ``cum``) against requested ``win``."""
         cuts = np.flatnonzero(np.diff(win)) + 1
         bounds = np.concatenate([[0], cuts, [len(win)]])
         cnt = np.zeros(cum.shape[-1], np.int32)
@@ -238,19 +215,96 @@ class _Planner:
                 cnt -= cum[a, q0]
         return cnt
 
-    def _cost(self, win: np.ndarray, e) -> np.ndarray:
-        """Cost of transitions ``e`` (index or slice into the row-ordered arrays) whose blend covers the
-        requested labels ``win``: ``tcost + mismatch * count``, the same arithmetic wherever it is used,
-        so back-tracking reproduces the forward values exactly."""
+    def cost(self, win: np.ndarray, e) -> np.ndarray:
+        """Cost of edges ``e`` (index or slice into the row-ordered arrays) whose output frames meet the
+        requested labels ``win`` (length d): ``tcost + mismatch * count``, the same arithmetic wherever it
+        is used, so back-tracking reproduces the forward values exactly."""
         if (win == win[0]).all():
             return self.const_cost[win[0], e]
         return self.mismatch * self._window_counts(win, self.cum[:, :, e]) + self.tcost[e]
 
-    def transition_cost(self, e: np.ndarray, req: np.ndarray, t: int) -> np.ndarray:
-        """Cost of transitions ``e`` ending at output frame t."""
-        return self._cost(req[t - self.k + 1 : t + 1], e)
+    def best(self, Vp: np.ndarray, req: np.ndarray, t0: int, k: int) -> np.ndarray:
+        """(groups, k): per arrival group, the least ``V_{t-d}[dep] + cost`` for the k frames
+        ``t = t0 .. t0+k-1``; ``Vp`` (n, k) holds ``V_{t-d}``."""
+        d = self.d
+        span = req[t0 - d + 1 : t0 + k]
+        if (span == span[0]).all():
+            const = self.const_cost[span[0]][:, None]
+            wins = None
+        else:  # a step boundary inside some window: the columns' windows differ
+            const = None
+            wins = [req[t0 + c - d + 1 : t0 + c + 1] for c in range(k)]
+        # rows in chunks of <= CHUNK edges, so each chunk's (rows, k) candidates stay in cache while they are
+        # gathered, costed and reduced
+        best = None
+        for r0, r1 in zip(self.chunks[:-1], self.chunks[1:]):
+            o0, o1 = self.row_off[r0], self.row_off[r1]
+            M = np.take(Vp, self.dep[o0:o1], axis=0)
+            if wins is None:
+                M += const[o0:o1]
+            else:
+                for c, win in enumerate(wins):
+                    M[:, c] += self.cost(win, slice(o0, o1))
+            for r in range(r0, r1):
+                m = self.row_counts[r]
+                o = self.row_off[r] - o0
+                if best is None:
+                    best = M[:m].copy()
+                else:
+                    np.minimum(best[:m], M[o : o + m], out=best[:m])
+        return best
 
-    # ----------------------------------------------------------------------------------- forward
+
+class _Planner:
+    """The dynamic programme of :func:`plan_walk`, blocked by the window ``k``.
+
+    ``V_t[i]``: least cost of an output prefix of ``t + 1`` frames ending at component frame ``i``::
+
+        V_t[i] = min( V_{t-1}[i-1] + mm_t[i]                       (PLAYBACK edge i-1 -> i)
+                      min_{e: dst_e = i} V_{t-d_e}[src_e] + c_e(t) )  (a BLEND (d = k) or ENHANCEMENT
+                                                                      (d = 2k) edge ends at t)
+
+    An edge of ``d = lag k`` frames reads ``V`` from ``lag`` blocks earlier, so the edge minima of the k
+    frames of one block ``[b k, b k + k)`` depend only on earlier blocks: they are computed together, as
+    one gather of (E, k) values and a per-arrival-group minimum over rows laid out by rank within the
+    group (:class:`_EdgeSet`). Only the cheap playback recursion is sequential per frame. This is the
+    exact DP (no pruning); back-pointers are not stored but recovered by re-evaluating the few candidates
+    of each frame on the optimal path from the stored ``V`` blocks (checkpointed and recomputed when the
+    history would exceed ``max_history_bytes``).
+    """
+
+    def __init__(self, graph: MotionGraph, acts: list[str], mismatch_penalty: float, transition_penalty: float,
+                 max_in_degree: int | None = None):
+        self.k = int(graph.window)
+        names = graph.label_names_
+        self.scc = scc = np.flatnonzero(graph.scc_)
+        n = self.n = len(scc)
+        act_id = {a: i for i, a in enumerate(acts)}
+        g2r = np.array([act_id.get(nm, -1) for nm in names])
+        node_lab = g2r[graph.labels_[scc]]
+        A = len(acts)
+        self.mismatch = float(mismatch_penalty)
+        self.mm = np.where(node_lab[None, :] == np.arange(A)[:, None], 0.0, self.mismatch)  # (A, n)
+        compact = np.full(graph.n_frames, -1)
+        compact[scc] = np.arange(n)
+        play = graph.edges(EdgeKind.PLAYBACK, in_scc=True)
+        prev_ok = np.zeros(n, bool)
+        prev_ok[compact[graph.edge_dst_[play]]] = True  # dst = src + 1, both kept: compact neighbours
+        self.prev_ok = prev_ok
+        self.no_prev = np.flatnonzero(~prev_ok)
+        self.dropped = 0
+        self.sets: list[_EdgeSet] = []
+        for kind, lag in ((EdgeKind.BLEND, 1), (EdgeKind.ENHANCEMENT, 2)):
+            use = graph.edges(kind, in_scc=True)
+            if max_in_degree is not None:
+                capped = _cap_in_degree(graph, use, int(max_in_degree))
+                self.dropped += len(use) - len(capped)
+                use = capped
+            if len(use):
+                self.sets.append(_EdgeSet(graph, use, lag, compact, g2r, A, self.mismatch, transition_penalty))
+        self.E = sum(s.E for s in self.sets)
+        self.lag = max([s.lag for s in self.sets], default=1)
+
     def first_block(self, req: np.ndarray) -> np.ndarray:
         k = self.k
         B = np.empty((k, self.n))
@@ -264,48 +318,26 @@ class _Planner:
         np.add(V[:-1], self.mm[r][1:], out=out[1:])
         out[self.no_prev] = np.inf
 
-    def block(self, prev: np.ndarray, req: np.ndarray, b: int) -> np.ndarray:
-        """V of output frames ``b k .. b k + k - 1`` from those of the previous block (``prev`` (k, n));
-        ``req`` is padded to whole blocks."""
+    def block(self, history: list[np.ndarray], req: np.ndarray, b: int) -> np.ndarray:
+        """V of output frames ``b k .. b k + k - 1`` from the previous blocks (``history[-m]`` is block
+        ``b - m``, each (k, n)); ``req`` is padded to whole blocks."""
         k = self.k
         t0 = b * k
         B = np.empty((k, self.n))
-        best = None
-        if self.E:
-            Vp = np.ascontiguousarray(prev.T)  # (n, k): V_{t-k}[i] for the k frames of this block
-            span = req[t0 - k + 1 : t0 + k]
-            if (span == span[0]).all():
-                const = self.const_cost[span[0]][:, None]
-                wins = None
-            else:  # a step boundary inside some window: the columns' windows differ
-                wins = [req[t0 + c - k + 1 : t0 + c + 1] for c in range(k)]
-            # rows in chunks of <= CHUNK transitions, so each chunk's (rows, k) candidates stay in cache
-            # while they are gathered, costed and reduced (one (E, k) matrix would stream through memory
-            # three times; one row at a time costs Python overhead on graphs with hundreds of rows)
-            best = None
-            for r0, r1 in zip(self.chunks[:-1], self.chunks[1:]):
-                o0, o1 = self.row_off[r0], self.row_off[r1]
-                M = np.take(Vp, self.dep[o0:o1], axis=0)
-                if wins is None:
-                    M += const[o0:o1]
-                else:
-                    for c, win in enumerate(wins):
-                        M[:, c] += self._cost(win, slice(o0, o1))
-                for r in range(r0, r1):
-                    m = self.row_counts[r]
-                    o = self.row_off[r] - o0
-                    if best is None:
-                        best = M[:m].copy()
-                    else:
-                        np.minimum(best[:m], M[o : o + m], out=best[:m])
-        V = prev[k - 1]
+        bests = []
+        for s in self.sets:
+            if b - s.lag < 0:
+                continue
+            Vp = np.ascontiguousarray(history[-s.lag].T)  # (n, k): V_{t-d}[i] for the k frames of this block
+            bests.append((s, s.best(Vp, req, t0, k)))
+        V = history[-1][k - 1]
         for c in range(k):
             out = B[c]
             self._play(V, out, req[t0 + c])
-            if best is not None:
-                cur = out[self.group_node]
+            for s, best in bests:
+                cur = out[s.group_node]
                 np.minimum(cur, best[:, c], out=cur)
-                out[self.group_node] = cur
+                out[s.group_node] = cur
             V = out
         return B
 
@@ -321,17 +353,19 @@ def plan_walk(
 ) -> Walk:
     """Minimum-cost walk realising ``steps`` (see the module docstring and :class:`_Planner`).
 
-    Exact by default. ``max_in_degree`` trades optimality for speed on graphs with many transitions per
-    frame: only the cheapest ``max_in_degree`` transitions into each frame from each label are walked
-    (:func:`_cap_in_degree`); the walk is then optimal for that subgraph.
+    Exact by default. Every walkable edge (``edge_in_scc_``) of the graph's edge table is a candidate,
+    charged ``edge_cost_ / threshold_ + transition_penalty``. ``max_in_degree`` trades optimality for
+    speed on graphs with many transitions per frame: only the cheapest ``max_in_degree`` edges of each
+    kind into each frame from each label are walked (:func:`_cap_in_degree`); the walk is then optimal
+    for that subgraph.
 
-    ``max_history_bytes`` bounds the stored DP values; longer requests keep one block in
+    ``max_history_bytes`` bounds the stored DP values; longer requests keep a few blocks in
     ``ceil(history / max_history_bytes)`` and recompute the others while back-tracking (same result).
     """
     k = int(graph.window)
     names = graph.label_names_
     if not graph.scc_.any():
-        raise InputError("--graph: the graph has no strongly connected component to walk")
+        raise InputError("graph: the graph has no strongly connected component to walk")
     lab_scc = graph.labels_[graph.scc_]
     present = {names[i] for i in np.unique(lab_scc)}
     prev = None
@@ -339,7 +373,7 @@ def plan_walk(
         if step.action not in present:
             where = "has no clips labelled" if step.action not in names else "keeps no frames (after pruning) of"
             raise InputError(
-                f"--sequence: step {s} ({step.action!r}{', after ' + repr(prev) if prev else ''}): the graph {where} "
+                f"steps: step {s} ({step.action!r}{', after ' + repr(prev) if prev else ''}): the graph {where} "
                 f"{step.action!r}; it knows {sorted(present)}"
             )
         prev = step.action
@@ -348,75 +382,82 @@ def plan_walk(
     req = np.concatenate([np.full(st.frames, act_id[st.action]) for st in steps])
     T = len(req)
     P = _Planner(graph, acts, mismatch_penalty, transition_penalty, max_in_degree)
-    n = P.n
+    n, M = P.n, P.lag
     nb = -(-T // k)
     reqp = np.concatenate([req, np.full(nb * k - T, req[-1])])  # padded frames never reach frame T-1
 
-    # forward: keep every block, or every `stride`-th as a checkpoint
+    # forward: keep every block, or the M blocks ending at every `stride`-th block as a checkpoint
     stride = max(1, -(-(nb * k * n * 8) // max_history_bytes))
+
+    def checkpoint_member(b: int) -> bool:
+        return b == nb - 1 or any((b + j) % stride == 0 for j in range(M))
+
     kept: dict[int, np.ndarray] = {}
-    B = P.first_block(reqp)
-    kept[0] = B
+    history = [P.first_block(reqp)]
+    kept[0] = history[0]
     for b in range(1, nb):
-        B = P.block(B, reqp, b)
-        if b % stride == 0 or b == nb - 1:
+        B = P.block(history, reqp, b)
+        history = (history + [B])[-M:]
+        if checkpoint_member(b):
             kept[b] = B
     last = kept[nb - 1][(T - 1) % k]
     end = int(np.argmin(last))
     if not np.isfinite(last[end]):
-        raise InputError("--sequence: no walk of the requested length exists in the graph")
+        raise InputError("steps: no walk of the requested length exists in the graph")
     cost = float(last[end])
 
     def values(b: int) -> np.ndarray:
         """V of block b (recomputed from the checkpoint before it when not kept)."""
         if b not in kept:
             c = (b // stride) * stride
-            Bc = kept[c]
+            hist = [kept[x] for x in range(max(c - M + 1, 0), c + 1)]
             for bb in range(c + 1, b + 1):
-                Bc = P.block(Bc, reqp, bb)
+                Bc = P.block(hist, reqp, bb)
                 kept[bb] = Bc
+                hist = (hist + [Bc])[-M:]
         return kept[b]
 
     def V(t: int) -> np.ndarray:
         return values(t // k)[t % k]
 
-    # back-track: at (t, i) take the predecessor whose value is least (that is the one the forward pass
-    # kept: the same candidates, the same arithmetic)
+    # back-track: at (t, i) take the predecessor whose value is least (that is one the forward pass kept:
+    # the same candidates, the same arithmetic)
     frames = np.empty(T, np.int64)
     trans = np.full(T, -1, np.int64)
     used = []
-    p = np.arange(k)
     t, i = T - 1, end
     while t >= 0:
         if stride > 1:  # drop recomputed blocks behind us
-            for b in [b for b in kept if b > t // k + 1 and b % stride and b != nb - 1]:
+            for b in [b for b in kept if b > t // k + 1 and not checkpoint_member(b)]:
                 del kept[b]
-        best_play = np.inf
-        if t > 0 and P.prev_ok[i]:
-            best_play = V(t - 1)[i - 1] + P.mm[req[t], i]
-        best_e, best_tr = -1, np.inf
-        if t >= k and P.E:
-            es = P.in_e[P.in_ptr[i] : P.in_ptr[i + 1]]
-            if len(es):
-                cand = V(t - k)[P.dep[es]] + P.transition_cost(es, req, t)
-                j = int(np.argmin(cand))
-                best_e, best_tr = int(es[j]), float(cand[j])
         if t == 0:
             frames[0] = P.scc[i]
             break
-        if best_e >= 0 and best_tr < best_play:
-            ge = int(P.use[best_e])
-            used.append(ge)
-            fa_e, fb_e = graph.trans_from_[ge] + p, graph.trans_to_[ge] - (k - 1) + p
-            lo = t - k + 1
-            frames[lo : t + 1] = np.where(P.from_side, fa_e, fb_e)
-            trans[lo : t + 1] = ge
-            t, i = lo - 1, int(P.dep[best_e])
-        else:
-            if not np.isfinite(best_play):
-                raise RuntimeError("motion graph back-tracking lost the optimal path")  # a bug, not bad input
+        best, choice = np.inf, None
+        if P.prev_ok[i]:
+            best = V(t - 1)[i - 1] + P.mm[req[t], i]
+        for s in P.sets:
+            if t < s.d:
+                continue
+            es = s.in_e[s.in_ptr[i] : s.in_ptr[i + 1]]
+            if len(es):
+                cand = V(t - s.d)[s.dep[es]] + s.cost(req[t - s.d + 1 : t + 1], es)
+                j = int(np.argmin(cand))
+                if cand[j] < best:
+                    best, choice = float(cand[j]), (s, int(es[j]))
+        if not np.isfinite(best):
+            raise RuntimeError("motion graph back-tracking lost the optimal path")  # a bug, not bad input
+        if choice is None:
             frames[t] = P.scc[i]
             t, i = t - 1, i - 1
+        else:
+            s, e = choice
+            ge = int(s.use[e])
+            used.append(ge)
+            lo = t - s.d + 1
+            frames[lo : t + 1] = s.frames[e]
+            trans[lo : t + 1] = ge
+            t, i = lo - 1, int(s.dep[e])
     used.reverse()
     requested = [acts[r] for r in req]
     walk = Walk(frames, trans, requested, steps, used, cost)
@@ -449,22 +490,23 @@ def _check_steps(graph: MotionGraph, walk: Walk, strict: bool) -> None:
 
 
 def render_walk(graph: MotionGraph, walk: Walk, foot_lock: bool = True, ease: int | None = None) -> Motion:
-    """The output motion of a walk: clip frames placed by the accumulated alignments, transitions blended,
-    and (``foot_lock``) feet that are planted in the source clips held still across the seams by a
-    two-bone leg IK (:mod:`.footlock`; ``ease`` frames to release a lock, default ``window // 2 + 1``).
+    """The output motion of a walk: clip frames placed by the accumulated alignments, edges realised by
+    kind (BLEND: one k-frame blend; ENHANCEMENT: the two-half blend through its segment, see
+    :mod:`.graph`), and (``foot_lock``) feet that are planted in the source clips held still across the
+    seams by a two-bone leg IK (:mod:`.footlock`; ``ease`` frames to release a lock, default
+    ``window // 2 + 1``).
 
     The first frame is turned to face +Z with its root above the origin.
     """
+    from ..mocap.placement import Placement
+
     k = int(graph.window)
     T = len(walk.frames)
     rot = np.empty((T, graph.skeleton_.n_joints, 4))
     root = np.empty((T, 3))
     first = graph.motion(walk.frames[:1])
-    ang = first.facing_angles()[0]
-    theta = -ang
-    c, s = np.cos(theta), np.sin(theta)
-    r0 = graph.root_positions_[walk.frames[0]]
-    off = -np.array([c * r0[0] + s * r0[2], -s * r0[0] + c * r0[2]])
+    here = Placement.facing(float(first.facing_angles()[0]), graph.root_positions_[walk.frames[0]])
+    p = np.arange(k)
     t = 0
     while t < T:
         e = walk.transition[t]
@@ -473,18 +515,30 @@ def render_walk(graph: MotionGraph, walk: Walk, foot_lock: bool = True, ease: in
             while t1 < T and walk.transition[t1] < 0 and (t1 == t or walk.frames[t1] == walk.frames[t1 - 1] + 1):
                 t1 += 1
             f = walk.frames[t:t1]
-            rot[t:t1], root[t:t1] = place(graph.rotations_[f], graph.root_positions_[f], theta, off)
+            rot[t:t1], root[t:t1] = here.apply_frames(graph.rotations_[f], graph.root_positions_[f])
             t = t1
             continue
-        n = min(k, T - t)
-        fa = graph.trans_from_[e] + np.arange(k)
-        fb = graph.trans_to_[e] - (k - 1) + np.arange(k)
-        ra, pa = place(graph.rotations_[fa], graph.root_positions_[fa], theta, off)
-        theta, off = compose(theta, off, float(graph.trans_theta_[e]), np.array([graph.trans_x0_[e], graph.trans_z0_[e]]))
-        rb, pb = place(graph.rotations_[fb], graph.root_positions_[fb], theta, off)
-        br, bp = blend_frames(ra, pa, rb, pb, k)
-        rot[t : t + n], root[t : t + n] = br[:n], bp[:n]
-        t += n
+        kind = graph.edge_kind_[e]
+        src, dst = int(graph.edge_src_[e]), int(graph.edge_dst_[e])
+        fa, fb = src + 1 + p, dst - k + 1 + p
+        ra, pa = here.apply_frames(graph.rotations_[fa], graph.root_positions_[fa])
+        if kind == EdgeKind.ENHANCEMENT:
+            S = graph.segments_[int(graph.edge_segment_[e])]
+            at_w = here.then(Placement.from_array(graph.edge_align_segment_[e]))
+            w1 = S.centre - k + 1 + p
+            w2 = np.minimum(S.centre + 1 + p, S.n_frames - 1)  # w_{z+k} has weight 0 when absent
+            rw1, pw1 = at_w.apply_frames(S.rotations[w1], S.root_positions[w1])
+            rw2, pw2 = at_w.apply_frames(S.rotations[w2], S.root_positions[w2])
+            here = here.then(Placement.from_array(graph.edge_align_[e]))
+            rb, pb = here.apply_frames(graph.rotations_[fb], graph.root_positions_[fb])
+            rot[t : t + k], root[t : t + k] = blend_frames(ra, pa, rw1, pw1, k)
+            rot[t + k : t + 2 * k], root[t + k : t + 2 * k] = blend_frames(rw2, pw2, rb, pb, k)
+            t += 2 * k
+        else:
+            here = here.then(Placement.from_array(graph.edge_align_[e]))
+            rb, pb = here.apply_frames(graph.rotations_[fb], graph.root_positions_[fb])
+            rot[t : t + k], root[t : t + k] = blend_frames(ra, pa, rb, pb, k)
+            t += k
     motion = Motion(graph.skeleton_, rot, None, graph.fps, root_positions=root)
     if not foot_lock:
         walk.foot_lock = {"enabled": False}
@@ -522,6 +576,7 @@ def walk_labels(graph: MotionGraph, walk: Walk, bvh_name: str) -> dict:
         "graph_frame": walk.frames.tolist(),
         "transition": walk.transition.tolist(),
         "transitions_used": walk.transitions_used,
+        "transition_kinds": [EdgeKind(int(graph.edge_kind_[e])).name for e in walk.transitions_used],
         "events": events,
         "cost": walk.cost,
         "foot_lock": walk.foot_lock,
