@@ -27,9 +27,12 @@ import numpy as np
 
 from ..motiongraph.blend import place, slerp
 from ..motiongraph.distance import align_windows
+from .keypoints import KEYPOINTS
 
 #: keypoint weights of the windowed distance: the torso carries the pose (Kovar: hips/spine weigh more)
-KEYPOINT_WEIGHTS = np.array([1.0, 2.0, 3.0, 1.5, 1.0, 1.0, 1.5, 1.0, 1.0, 2.0, 1.5, 1.0, 2.0, 1.5, 1.0])
+_WEIGHT = {"pelvis": 3.0, "neck": 2.0, "left_hip": 2.0, "right_hip": 2.0, "left_shoulder": 1.5,
+           "right_shoulder": 1.5, "left_knee": 1.5, "right_knee": 1.5}
+KEYPOINT_WEIGHTS = np.array([_WEIGHT.get(k, 1.0) for k in KEYPOINTS])
 
 
 def window_distance(p: np.ndarray, q: np.ndarray) -> np.ndarray:

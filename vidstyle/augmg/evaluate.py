@@ -63,7 +63,7 @@ def dataset_queries(dataset: Path, annotations=None) -> tuple[dict, list[Query]]
     marks: dict[str, list[dict]] = {}
     for a in annotations or []:
         if a.get("status", "accepted") == "accepted":
-            marks.setdefault(Path(a["video"]).stem, []).append(a)
+            marks.setdefault(a["video"], []).append(a)
     out = []
     for v in manifest["videos"]:
         if v["kind"] != "performance":
@@ -103,11 +103,6 @@ class _Library:
         if clip not in self._motions:
             self._motions[clip] = read_bvh(self.clips[clip].path)
         return self._motions[clip]
-
-
-def _leg(sk) -> float:
-    n = sk.names
-    return float(np.linalg.norm(sk.offsets[n.index("LeftLeg")]) + np.linalg.norm(sk.offsets[n.index("LeftFoot")]))
 
 
 def aligned_mpjpe(true: np.ndarray, cand: np.ndarray) -> np.ndarray:
@@ -166,6 +161,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                    segment_scale: float = 1.0, seed: int = 0, jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}."""
     from ..mocap import Motion, read_bvh
+    from ..mocap.retarget import leg_length
     from ..logutil import progress
     from .enhance import enhanced_distance, place_segment, plain_transition, two_half_transition
     from .keypoints import keypoint_positions
@@ -189,7 +185,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         true = pts3d[f]
         err_lib = aligned_mpjpe(true, lib.points)
         oracle = int(np.argmin(err_lib))
-        scale = _leg(motion.skeleton) / _leg(lib.motion(0).skeleton)
+        scale = leg_length(motion.skeleton) / leg_length(lib.motion(0).skeleton)
         L = e - s
         h = max(1, int(round(segment_scale * (L // 2))))  # library half-segment, time-warped to L // 2
         truth_seg = pts3d[s:e]

@@ -207,7 +207,7 @@ def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[
         m = read_bvh(f)
         if has_tpose_first_frame(m):
             m = m[1:]
-        m = retarget(m.resample(params.mocap_fps), skeleton)
+        m = retarget_rest_corrected(m.resample(params.mocap_fps), skeleton)
         labels = book.frame_labels(f, m.n_frames) if book.has(f) else ["other"] * m.n_frames
         name = f"cmu_{f.stem}"
         bvh = f"clips/{name}.bvh"
@@ -219,11 +219,13 @@ def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[
     return entries
 
 
-def retarget(motion, target):
-    """``motion`` on skeleton ``target`` of the same hierarchy: every bone keeps its *global direction*
-    (the rest-pose difference of each bone is absorbed into its parent joint's rotation), and the root
-    path is scaled by the ratio of leg lengths. Joints whose rest bone directions agree keep their
-    rotation exactly."""
+def retarget_rest_corrected(motion, target):
+    """``motion`` on skeleton ``target`` of the same hierarchy but another *rest pose*: every bone keeps
+    its global direction (the rest-pose difference of each non-branching joint's bone is absorbed into
+    that joint's rotation), and the root path is scaled by the leg-length ratio. Unlike
+    :func:`vidstyle.mocap.retarget.retarget`, which keeps local rotations (right when the rest poses
+    agree), this is needed for CMU clips on the library's clean T-pose: CMU's rest legs splay 20 degrees,
+    and copied rotations would turn the knees inwards."""
     from scipy.spatial.transform import Rotation
 
     from ..mocap import Motion, forward_kinematics
@@ -255,10 +257,8 @@ def retarget(motion, target):
     q = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat().reshape(-1, J, 4)
     from ..demo.rig import continuous_quaternions
 
-    scale = _leg(target) / max(_leg(src), 1e-9)
+    from ..mocap.retarget import leg_length
+
+    scale = leg_length(target) / max(leg_length(src), 1e-9)
     return Motion(target, continuous_quaternions(q), None, motion.fps, root_positions=motion.root_positions * scale)
 
-
-def _leg(sk) -> float:
-    names = sk.names
-    return float(sum(np.linalg.norm(sk.offsets[names.index(n)]) for n in ("LeftLeg", "LeftFoot")))

@@ -21,6 +21,66 @@ _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp
 
 def register(app: typer.Typer) -> None:
     app.command("match-pose")(match_pose)
+    app.command("augment")(augment)
+
+
+def augment(
+    graph_path: Path = typer.Option(..., "--graph", "-g", help="Plain motion graph (from build-graph)."),
+    annotations: Path = typer.Option(..., "--annotations", "-a", help="Annotations file with transition marks (vidstyle annotate)."),
+    library: List[Path] = typer.Option(..., "--library", "-l", help="Library BVH clips or directories to find reference points in (repeatable)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Augmented graph file to write."),
+    video: Optional[Path] = typer.Option(None, "--video", "-V", help="Use only the marks of this video (default: every annotated video)."),
+    poses: List[Path] = typer.Option([], "--poses", "-p", help="poses.json of the marked frames (from vidstyle pose; repeatable, one per video)."),
+    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Pose model: estimate the marked frames' poses here (needs --video)."),
+    k: int = typer.Option(10, "--k", help="Candidate reference points per mark."),
+    views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
+    edges_per_side: int = typer.Option(3, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
+    enhancement_cost: float = typer.Option(0.5, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
+    jobs: int = _JOBS,
+) -> None:
+    """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
+    2D pose against the projected library, pick the reference point by the enhanced distance, and add
+    ENHANCEMENT edges through it for that action pair. Discarded marks / candidates are left out, so a
+    rerun restores the plain transition (or takes the next candidate)."""
+    from ..augmg.annotations_io import read_marks
+    from ..augmg.augment import augment_graph
+    from ..augmg.poses_io import read_frame_poses
+    from ..motiongraph import MotionGraph
+
+    marks = read_marks(annotations)
+    if video is not None:
+        marks = [m for m in marks if m["video"] == video.stem]
+        if not marks:
+            raise InputError(f"{annotations}: no transition marks for {video.name}")
+    by_video: dict = {}
+    if pose_model is not None:
+        if video is None:
+            raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
+        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] for m in marks}))
+    for p in poses:
+        vid, frames = read_frame_poses(p)
+        by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
+    if not by_video and any(m["status"] == "accepted" for m in marks):
+        raise InputError("give --poses (poses.json of the marked frames) or --pose-model with --video")
+    graph = MotionGraph.load(graph_path)
+    inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
+                             enhancement_cost=enhancement_cost, jobs=jobs)
+    graph.save(out)
+    log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
+             sum(len(i.edges) for i in inserted))
+
+
+def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
+    """Poses of ``frames`` of ``video`` by the pose stage's estimator."""
+    try:
+        from ..pose import estimate_frames  # the pose stage's Python entry point
+    except ImportError:
+        raise InputError("--pose-model: this build's pose stage has no estimator for pictorial-structures models; "
+                         "run `vidstyle pose VIDEO --model M --frames ... --out poses.json` and pass --poses") from None
+    from ..augmg.poses_io import FramePose
+
+    doc = estimate_frames(model, video, frames)
+    return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}
 
 
 @demo_app.command("make-library")
