@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..motiongraph.blend import place, slerp
+from ..mocap.placement import Placement
+from ..motiongraph.blend import slerp
 from ..motiongraph.distance import align_windows
 from .keypoints import KEYPOINTS
 
@@ -75,6 +76,29 @@ def enhanced_distance(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.n
     return EnhancedCost(float(d_in[bx] + d_out[by]), float(d_in[bx]), float(d_out[by]), int(xs[bx]), int(ys[by]))
 
 
+def enhancement_nodes(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, k: int = 5,
+                      max_span: int = 60, lam: float = 0.0, fps: float = 60.0) -> tuple[int, int, float] | None:
+    """The nearest transition points ``(z0, z2, cost)`` around reference point ``z`` (thesis 5.2.4: "the
+    nearest transition points w_z0 and w_z2 are the enhancement nodes"): ``z0 < z`` where the source's
+    window ending at ``i0`` best joins ``C_w`` (window ``w_{z0-k+1..z0}``), ``z2 > z`` where ``C_w`` best
+    joins the target's window starting at ``j0`` (``w_{z2..z2+k-1}``), each within ``max_span`` frames
+    and charged ``lam`` per second away from ``z`` (the responsiveness terms). None if nothing fits."""
+    if i0 - k + 1 < 0 or j0 + k > len(dst):
+        return None
+    z0s = np.arange(max(k - 1, z - max_span), z)
+    z2s = np.arange(z + 1, min(len(w) - k, z + max_span) + 1)
+    if len(z0s) == 0 or len(z2s) == 0:
+        return None
+    A = src[i0 - k + 1:i0 + 1]
+    B = dst[j0:j0 + k]
+    WA = np.stack([w[t - k + 1:t + 1] for t in z0s])
+    WB = np.stack([w[t:t + k] for t in z2s])
+    d0 = window_distance(np.broadcast_to(A, WA.shape), WA) + lam * (z - z0s) / fps
+    d2 = window_distance(WB, np.broadcast_to(B, WB.shape)) + lam * (z2s - z) / fps
+    a, b = int(np.argmin(d0)), int(np.argmin(d2))
+    return int(z0s[a]), int(z2s[b]), float(d0[a] + d2[b])
+
+
 def _smooth(u: np.ndarray) -> np.ndarray:
     """C^1 ease ``3u^2 - 2u^3`` (``1 - alpha`` of the motion-graph blend weight)."""
     u = np.clip(u, 0.0, 1.0)
@@ -102,12 +126,18 @@ def plain_transition(rot_a: np.ndarray, root_a: np.ndarray, rot_b: np.ndarray, r
     return rot, root_a[None] * (1 - t)[:, None] + root_b[None] * t[:, None]
 
 
-def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int) -> tuple[np.ndarray, np.ndarray]:
+def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int, centre: int | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """``n`` transition frames from departing pose ``a`` through the (placed) enhancement segment
-    ``seg`` (its middle frame is ``w_z``) into arriving pose ``b``: the first half blends ``a`` into the
-    segment, the second the segment into ``b``; the middle frame is exactly ``w_z``."""
-    W_rot, W_root = resample_segment(seg_rot, seg_root, n)
-    mid = (n - 1) / 2.0
+    ``seg`` (``w_z0 .. w_z .. w_z2``, ``w_z`` at index ``centre``, default the middle) into arriving pose
+    ``b``: the first half blends ``a`` into ``w_z0 .. w_z`` (time-warped to the first half), the second
+    ``w_z .. w_z2`` into ``b``; the middle output frame is exactly ``w_z``."""
+    c = (len(seg_rot) - 1) // 2 if centre is None else int(centre)
+    n1 = n // 2 + 1  # output frames 0 .. n1-1 carry w_z0 .. w_z (the last one is w_z)
+    r1, p1 = resample_segment(seg_rot[:c + 1], seg_root[:c + 1], n1)
+    r2, p2 = resample_segment(seg_rot[c:], seg_root[c:], n - n1 + 1)
+    W_rot, W_root = np.concatenate([r1, r2[1:]]), np.concatenate([p1, p2[1:]])
+    mid = float(n1 - 1)
     f = np.arange(n, dtype=np.float64)
     first = f <= mid
     J = rot_a.shape[0]
@@ -133,4 +163,4 @@ def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray,
     pts = seg_points[:1] * scale
     _, theta, x0, z0 = _align(anchor_points[None], pts, KEYPOINT_WEIGHTS)
     root = seg_motion.root_positions * scale
-    return place(seg_motion.rotations, root, float(theta), np.array([float(x0), float(z0)]))
+    return Placement(float(theta), float(x0), float(z0)).apply_frames(seg_motion.rotations, root)

@@ -17,7 +17,9 @@ For each query and each 2D source (``gt``: the exact projection of the true pose
   transition with the same endpoints (the frame before the transition and the frame after it):
   ``plain`` blends straight from one endpoint into the other (the motion-graph transition),
   ``augmg`` passes through the reference point chosen by the enhanced distance among the top-k
-  (:mod:`.enhance`), ``augmg_top1`` through the top-1 match, ``oracle`` through the oracle frame.
+  (:mod:`.enhance`), using the library segment between its enhancement nodes ``w_z0 .. w_z2``
+  (:func:`.enhance.enhancement_nodes`; ``segment="fixed"``: ``w_{z-h} .. w_{z+h}`` with ``h`` =
+  ``segment_scale`` x half the transition), ``augmg_top1`` through the top-1 match, ``oracle`` through the oracle frame.
 """
 
 from __future__ import annotations
@@ -157,13 +159,17 @@ def _camera(q: Query, motion, manifest: dict):
 
 
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
-                   annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 5,
-                   segment_scale: float = 1.0, seed: int = 0, jobs: int = 1) -> dict:
-    """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}."""
+                   annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
+                   segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60, seed: int = 0, jobs: int = 1) -> dict:
+    """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}.
+    Defaults (``segment="fixed"``, ``segment_scale=1``, ``enh_window=9``) are the best rows of
+    ``scripts/validate_augmg.py`` on a validation dataset (another seed), never on the test data."""
+    if segment not in ("fixed", "nodes"):
+        raise ValueError(f"segment: 'fixed' or 'nodes', got {segment!r}")
     from ..mocap import Motion, read_bvh
     from ..mocap.retarget import leg_length
     from ..logutil import progress
-    from .enhance import enhanced_distance, place_segment, plain_transition, two_half_transition
+    from .enhance import enhanced_distance, enhancement_nodes, place_segment, plain_transition, two_half_transition
     from .keypoints import keypoint_positions
 
     manifest, queries = dataset_queries(Path(dataset), annotations)
@@ -187,7 +193,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         oracle = int(np.argmin(err_lib))
         scale = leg_length(motion.skeleton) / leg_length(lib.motion(0).skeleton)
         L = e - s
-        h = max(1, int(round(segment_scale * (L // 2))))  # library half-segment, time-warped to L // 2
+        h = max(1, int(round(segment_scale * (L // 2))))  # segment="fixed": library half-segment
         truth_seg = pts3d[s:e]
 
         def transition_error(cand: int | None) -> float:
@@ -197,12 +203,17 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             else:
                 c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
                 lm = lib.motion(c)
-                lo, hi = max(0, z - h), min(lm.n_frames - 1, z + h)
+                nodes = enhancement_nodes(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, k=enh_window,
+                                          max_span=max_span) if segment == "nodes" else None
+                if nodes is not None:
+                    lo, hi = nodes[0], nodes[1]
+                else:
+                    lo, hi = max(0, z - h), min(lm.n_frames - 1, z + h)
                 seg = lm[lo:hi + 1]
                 seg_pts = lib.clips[c].points[lo:hi + 1]
                 srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale)
                 rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
-                                                motion.rotations[e], motion.root_positions[e], L)
+                                                motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
             return float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
 
@@ -238,7 +249,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             })
     return summarise(rows, dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                                 library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
-                                enh_window=enh_window, segment_scale=segment_scale, sources=list(sources), index=idx_all.get_params(),
+                                enh_window=enh_window, segment=segment, segment_scale=segment_scale, max_span=max_span, sources=list(sources), index=idx_all.get_params(),
                                 queries=len(queries), annotations=annotations is not None))
 
 

@@ -49,6 +49,14 @@ def augment(
 
     marks = read_marks(annotations)
     if video is not None:
+        from ..formats.annotations import file_sha256, read_annotations
+
+        if not video.is_file():
+            raise InputError(f"--video: {video}: no such file")
+        ann = read_annotations(annotations)
+        va = next((v for v in ann.videos if Path(v.path).stem == video.stem), None)
+        if va is not None and va.sha256 != file_sha256(video):
+            raise InputError(f"{annotations}: {video} is not the annotated video (its sha256 differs)")
         marks = [m for m in marks if m["video"] == video.stem]
         if not marks:
             raise InputError(f"{annotations}: no transition marks for {video.name}")
@@ -183,7 +191,9 @@ def evaluate_augmg_cmd(
     noise: float = typer.Option(0.05, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
     k: int = typer.Option(10, "--k", help="Candidates per query (the reference point is chosen among them)."),
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
+    segment: str = typer.Option("fixed", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition) or nodes (between the enhancement nodes w_z0..w_z2)."),
     segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
+    enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
     jobs: int = _JOBS,
@@ -196,6 +206,10 @@ def evaluate_augmg_cmd(
     from ..augmg.evaluate import evaluate_augmg
     from ..fileio import write_json
 
+    if segment not in ("fixed", "nodes"):
+        raise InputError(f"--segment: fixed or nodes, got {segment!r}")
+    if enh_window < 1:
+        raise InputError(f"--enh-window: must be at least 1, got {enh_window}")
     if not 0 < segment_scale <= 1:
         raise InputError(f"--segment-scale: must be in (0, 1], got {segment_scale}")
     marks = _read_marks(annotations) if annotations else None
@@ -205,7 +219,8 @@ def evaluate_augmg_cmd(
         poses = _read_poses_dir(poses_dir)
         sources.insert(0, "model")
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
-                             k=k, n_views=views, segment_scale=segment_scale, seed=seed, jobs=jobs)
+                             k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
+                             seed=seed, jobs=jobs)
     main = metrics["by_source"].get("model") or metrics["by_source"].get("gt")
     metrics["headline"] = {
         "augmg.retrieval_mpjpe": main["retrieval_mpjpe_mm"],
