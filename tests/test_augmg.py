@@ -318,3 +318,23 @@ def test_evaluate_augmg_beats_the_plain_transition_with_true_2d(tmp_path, librar
     assert gt["transition_augmg_mm"] < gt["transition_plain_mm"]
     assert m["by_source"]["noisy"]["retrieval_mpjpe_mm"] >= gt["oracle_mpjpe_mm"]
     assert set(m["headline"]) >= {"augmg.retrieval_mpjpe", "augmg.transition_error_plain", "augmg.transition_error_augmg"}
+
+
+def test_bundled_demo_annotations_mark_frames_inside_the_true_transitions():
+    from vidstyle.augmg.annotations_io import read_marks
+    from vidstyle.demo.dataset import video_transitions
+
+    path = Path(__file__).resolve().parents[1] / "annotations" / "demo.json"
+    marks = read_marks(path)
+    assert marks and {m["status"] for m in marks} == {"accepted", "discarded"}
+    params = DatasetParams()  # the pipeline's seed 0; a take does not depend on the dataset's size
+    by_video: dict[str, list] = {}
+    for m in marks:
+        by_video.setdefault(m["video"], []).append(m)
+    for vid, ms in list(by_video.items())[:2]:
+        i = int(vid[1:3])
+        tk = make_take(params, make_performer(params, i), i, 100)
+        styled = video_transitions(tk)
+        for m in ms:
+            t = next(t for t in styled if t["start"] <= m["frame"] < t["end"])
+            assert (t["from"], t["to"]) == (m["from"], m["to"])
