@@ -153,14 +153,20 @@ def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int,
     return rot, root
 
 
-def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray, scale: float = 1.0
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray, scale: float = 1.0,
+                  arrival_points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Rotations (m, J, 4) and roots (m, 3) of a library segment moved onto the performer: roots scaled
     by ``scale`` (body size), then the segment's first frame aligned (vertical rotation + floor
-    translation, Kovar) onto ``anchor_points`` (15, 3), the departing pose."""
+    translation, Kovar) onto ``anchor_points`` (15, 3), the departing pose. With ``arrival_points``
+    (the arriving pose) the placement is the mean of that one and the last frame's onto the arrival,
+    so the segment drifts from neither end."""
     from ..motiongraph.distance import align_windows as _align
 
-    pts = seg_points[:1] * scale
-    _, theta, x0, z0 = _align(anchor_points[None], pts, KEYPOINT_WEIGHTS)
+    _, theta, x0, z0 = _align(anchor_points[None], seg_points[:1] * scale, KEYPOINT_WEIGHTS)
+    theta, x0, z0 = float(theta), float(x0), float(z0)
+    if arrival_points is not None:
+        _, t2, x2, z2 = _align(arrival_points[None], seg_points[-1:] * scale, KEYPOINT_WEIGHTS)
+        theta = float(np.angle(np.exp(1j * theta) + np.exp(1j * float(t2))))
+        x0, z0 = (x0 + float(x2)) / 2, (z0 + float(z2)) / 2
     root = seg_motion.root_positions * scale
-    return Placement(float(theta), float(x0), float(z0)).apply_frames(seg_motion.rotations, root)
+    return Placement(theta, x0, z0).apply_frames(seg_motion.rotations, root)

@@ -160,10 +160,12 @@ def _camera(q: Query, motion, manifest: dict):
 
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
-                   segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60, seed: int = 0, jobs: int = 1) -> dict:
+                   place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60, seed: int = 0, jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}.
     Defaults (``segment="fixed"``, ``segment_scale=1``, ``enh_window=9``) are the best rows of
     ``scripts/validate_augmg.py`` on a validation dataset (another seed), never on the test data."""
+    if place not in ("first", "both"):
+        raise ValueError(f"place: 'first' or 'both', got {place!r}")
     if segment not in ("fixed", "nodes"):
         raise ValueError(f"segment: 'fixed' or 'nodes', got {segment!r}")
     from ..mocap import Motion, read_bvh
@@ -211,7 +213,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                     lo, hi = max(0, z - h), min(lm.n_frames - 1, z + h)
                 seg = lm[lo:hi + 1]
                 seg_pts = lib.clips[c].points[lo:hi + 1]
-                srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale)
+                srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale, pts3d[e] if place == "both" else None)
                 rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
                                                 motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
@@ -249,7 +251,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             })
     return summarise(rows, dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                                 library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
-                                enh_window=enh_window, segment=segment, segment_scale=segment_scale, max_span=max_span, sources=list(sources), index=idx_all.get_params(),
+                                enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale, max_span=max_span, sources=list(sources), index=idx_all.get_params(),
                                 queries=len(queries), annotations=annotations is not None))
 
 
