@@ -282,7 +282,9 @@ def _annotations(tmp_path: Path, frame: int, a: str, b: str, status: str = "acce
 @pytest.mark.slow
 def test_augment_adds_enhancement_edges_and_a_discarded_mark_adds_none(tmp_path, take, library):
     from vidstyle.motiongraph import MotionGraph
+    from vidstyle.motiongraph import plan_walk
     from vidstyle.motiongraph.graph import EdgeKind, load_clips
+    from vidstyle.motiongraph.synthesis import Step
 
     clips = load_clips(sorted((library / "clips").glob("lib00_*.bvh")))
     g = MotionGraph(window=6, fps=20.0).fit(clips)
@@ -301,6 +303,10 @@ def test_augment_adds_enhancement_edges_and_a_discarded_mark_adds_none(tmp_path,
         assert (n_enh > 0) == expect
         if expect:
             assert len(g2.segments_) == 1 and g2.segments_[0].label == f"{t['from']}->{t['to']}"
+        # synthesis of that pair goes through the enhancement exactly when the mark is accepted
+        walk = plan_walk(g2, [Step(t["from"], 20), Step(t["to"], 20)], strict=False)
+        used = {int(g2.edge_kind_[e]) for e in walk.transitions_used}
+        assert (int(EdgeKind.ENHANCEMENT) in used) == expect
 
 
 @pytest.mark.slow
