@@ -14,11 +14,13 @@ Every frame served is checked to show its own number. Median of ``--requests`` r
 Goals (issue 15): step <= 10 ms; seek <= 50 ms at 640x480 and <= 100 ms at 1080p.
 
     python scripts/bench_annotate.py [--requests 60] [--seconds 20] [--long-minutes 10] [--workdir /tmp/bench_annotate]
+        [--only all|latency|open]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import sys
@@ -29,7 +31,7 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from _benchutil import machine, write_results
+from _benchutil import RESULTS, machine, write_results
 
 from vidstyle.annotate import session as sess
 from vidstyle.annotate.server import Running, new_session
@@ -70,14 +72,13 @@ def stats(ts: list[float]) -> dict:
     return {"median_ms": statistics.median(ms), "p90_ms": float(np.percentile(ms, 90)), "max_ms": max(ms), "n": len(ms)}
 
 
-def bench_http(video: Path, requests: int, rng, read_ahead: bool, tmp: Path) -> dict:
+def bench_http(video: Path, requests: int, plan: dict, read_ahead: bool, tmp: Path) -> dict:
     import httpx
 
     old = sess.READ_AHEAD
     sess.READ_AHEAD = sess.READ_AHEAD if read_ahead else 0
     try:
         vids = open_videos([video])
-        n = vids[0].frames
         s = new_session(vids, Store(tmp / "ann.json", vids, ["a"]))
         with Running(s) as url, httpx.Client(base_url=url, timeout=60) as c:
             def get(i):
@@ -89,7 +90,7 @@ def bench_http(video: Path, requests: int, rng, read_ahead: bool, tmp: Path) -> 
                 assert read_number(img) == i, (i, read_number(img))
                 return dt
 
-            start = int(rng.integers(0, n - requests - 10))
+            start = plan["start"]
             for i in range(start, start + 5):  # warm-up
                 get(i)
             step = []
@@ -98,7 +99,7 @@ def bench_http(video: Path, requests: int, rng, read_ahead: bool, tmp: Path) -> 
                 step.append(get(i))
             back2back = [get(i) for i in range(start + 5 + requests, start + 5 + 2 * requests)] if read_ahead else []
             seek = []
-            for i in rng.integers(0, n, requests):
+            for i in plan["seek"]:
                 time.sleep(0.02)
                 seek.append(get(int(i)))
         for v in vids:
@@ -111,20 +112,19 @@ def bench_http(video: Path, requests: int, rng, read_ahead: bool, tmp: Path) -> 
     return out
 
 
-def bench_inproc(video: Path, requests: int, rng) -> dict:
+def bench_inproc(video: Path, requests: int, plan: dict) -> dict:
     with VideoReader(video) as r:
-        n = len(r)
 
         def get(i):
             t0 = time.perf_counter()
             ok, buf = cv2.imencode(".jpg", r.frame(i), [cv2.IMWRITE_JPEG_QUALITY, sess.JPEG_QUALITY])
             return time.perf_counter() - t0
 
-        start = int(rng.integers(0, n - requests - 10))
+        start = plan["start"]
         for i in range(start, start + 5):
             get(i)
         step = [get(i) for i in range(start + 5, start + 5 + requests)]
-        seek = [get(int(i)) for i in rng.integers(0, n, requests)]
+        seek = [get(int(i)) for i in plan["seek"]]
     return {"step": stats(step), "seek": stats(seek)}
 
 
@@ -170,6 +170,8 @@ def main() -> None:
     ap.add_argument("--long-minutes", type=float, default=10)
     ap.add_argument("--workdir", type=Path, default=Path("/tmp/bench_annotate"))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", choices=("all", "latency", "open"), default="all",
+                    help="run only the latency part or only the long-video open (results merge into one JSON)")
     args = ap.parse_args()
     args.workdir.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(args.seed)
@@ -177,19 +179,24 @@ def main() -> None:
     n = int(args.seconds * fps)
     sizes = {"640x480": (640, 480), "1080p": (1920, 1080)}
     rows = {}
-    for name, (w, h) in sizes.items():
+    for name, (w, h) in (sizes.items() if args.only != "open" else []):
         v = make_video(args.workdir / f"{name}.mp4", w, h, n, fps)
         tmp = args.workdir / f"run_{name}"
         tmp.mkdir(exist_ok=True)
         (tmp / "ann.json").unlink(missing_ok=True)
-        rows[name] = {"http": bench_http(v, args.requests, rng, True, tmp)}
+        # the same frames for every variant: a start for the steps, random frames for the seeks
+        plan = {"start": int(rng.integers(0, n - 2 * args.requests - 10)),
+                "seek": [int(i) for i in rng.integers(0, n, args.requests)]}
+        rows[name] = {"http": bench_http(v, args.requests, plan, True, tmp)}
         (tmp / "ann.json").unlink(missing_ok=True)
-        rows[name]["http_no_read_ahead"] = bench_http(v, args.requests, rng, False, tmp)
-        rows[name]["in_process"] = bench_inproc(v, args.requests, rng)
+        rows[name]["http_no_read_ahead"] = bench_http(v, args.requests, plan, False, tmp)
+        rows[name]["in_process"] = bench_inproc(v, args.requests, plan)
         rows[name]["parts"] = bench_decode_parts(v, min(30, args.requests), rng)
-    long = make_video(args.workdir / f"long_{args.long_minutes:g}min_1080p.mp4", 1920, 1080,
-                      int(args.long_minutes * 60 * 25), 25.0, texture=False)
-    opened = bench_open(long, 5)
+    opened = None
+    if args.only != "latency":
+        long = make_video(args.workdir / f"long_{args.long_minutes:g}min_1080p.mp4", 1920, 1080,
+                          int(args.long_minutes * 60 * 25), 25.0, texture=False)
+        opened = bench_open(long, 5)
     goals = {"640x480": (10, 50), "1080p": (10, 100)}
     print("| size | measure | HTTP (read-ahead) | HTTP (no read-ahead) | in-process baseline | goal |")
     print("|---|---|---|---|---|---|")
@@ -200,10 +207,14 @@ def main() -> None:
         print(f"| {name} | step back-to-back median ms | {r['http']['step_back_to_back']['median_ms']:.1f} | | | |")
         print(f"| {name} | parts: decode-only seek / JPEG encode ms | {r['parts']['decode_seek']['median_ms']:.1f} / "
               f"{r['parts']['jpeg_encode']['median_ms']:.1f} | | | |")
-    print(f"\nopen a {args.long_minutes:g}-minute 1080p video ({opened['frames']} frames, {opened['size_mb']:.0f} MB): "
-          f"{opened['open_s']:.2f} s (demux index + sha256), first frame {1000 * opened['first_frame_s']:.0f} ms")
+    if opened:
+        print(f"\nopen a {args.long_minutes:g}-minute 1080p video ({opened['frames']} frames, {opened['size_mb']:.0f} MB): "
+              f"{opened['open_s']:.2f} s (demux index + sha256), first frame {1000 * opened['first_frame_s']:.0f} ms")
+    prev = RESULTS / "annotate.json"
+    old = json.loads(prev.read_text()) if prev.exists() and args.only != "all" else {}
     out = write_results("annotate", {"machine": machine(), "args": {k: str(v) for k, v in vars(args).items()},
-                                     "results": rows, "open_long": opened,
+                                     "results": rows or old.get("results", {}),
+                                     "open_long": opened or old.get("open_long"),
                                      "goals_ms": {k: {"step": a, "seek": b} for k, (a, b) in goals.items()}})
     print(f"wrote {out}", file=sys.stderr)
 

@@ -17,6 +17,7 @@ from annotate_util import numbered_video, session
 from vidstyle.annotate.overlays import load_overlays
 from vidstyle.annotate.server import Running
 from vidstyle.formats.annotations import read_annotations
+from vidstyle.formats.poses import PoseFrame, Poses, write_poses
 from vidstyle.video.numbered import read_number
 
 sync_api = pytest.importorskip("playwright.sync_api")
@@ -40,12 +41,8 @@ def browser():
 def app(tmp_path):
     video = numbered_video(tmp_path / "clip.mp4", N, 25.0, size=(320, 240))
     poses = tmp_path / "poses.json"
-    names = ["head_top", "neck", "pelvis", "left_shoulder", "right_shoulder", "left_elbow", "right_elbow",
-             "left_wrist", "right_wrist", "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle",
-             "right_ankle"]
     pts = [[160 + 20 * np.sin(k), 60 + 10 * k, 0.9] for k in range(15)]
-    poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 1, "video": str(video), "backend": "ps",
-                                 "keypoints": names, "frames": [{"frame": 32, "viewpoint": "front", "points": pts}]}))
+    write_poses(poses, Poses(str(video), "ps", [PoseFrame(32, "front", pts, {"front": 0.9, "left": 0.1})]))
     matches = tmp_path / "matches.json"
     matches.write_text(json.dumps({"kind": "vidstyle.matches", "schema_version": 1, "video": str(video),
                                    "frames": [{"frame": 32, "candidates": [
@@ -143,11 +140,14 @@ def test_page_end_to_end(browser, app):
     ov = cv2.imdecode(np.frombuffer(overlay, np.uint8), cv2.IMREAD_COLOR)
     green = (ov[..., 1] > 180) & (ov[..., 0] < 120) & (ov[..., 2] < 120)
     assert green.sum() > 50  # the skeleton is drawn
-    # T on a marked frame toggles its status; 3 changes the action of the segment under the cursor
+    # a digit picks the next segment's action only; Shift+digit relabels the segment under the cursor
     goto(page, 40)
     page.keyboard.press("3")
+    assert state(page)["segments"][1]["action"] == "Hook"
+    page.keyboard.press("Shift+Digit3")
     assert state(page)["segments"][1]["action"] == "Guard"
     page.keyboard.press("Control+z")
+    assert state(page)["segments"][1]["action"] == "Hook"
     # Delete removes the segment here
     goto(page, 12)
     page.keyboard.press("Delete")

@@ -66,6 +66,10 @@ def test_conventions(target):
     ranges = [(r["value"]["ranges"][0]["start"], r["value"]["ranges"][0]["end"], r["value"]["timelinelabels"][0])
               for r in ls[0]["annotations"][0]["result"]]
     assert ranges == [(1, 10, "Jab"), (21, n, "Hook"), (16, 16, "transition")]
+    cfg = ET.fromstring(exchange.labelstudio_config(CLASSES))
+    names = {t.get("name"): [lab.get("value") for lab in t] for t in cfg.findall("TimelineLabels")}
+    assert names == {"actions": CLASSES, "transitions": ["transition"]}
+    assert {r["from_name"] for r in ls[0]["annotations"][0]["result"]} <= set(names)
     # CVAT: 0-based frames, keyframe at start, outside box at the exclusive end, tag for the transition
     root = ET.fromstring(exchange.export("cvat", CLASSES, target))
     tracks = [[(int(b.get("frame")), b.get("outside")) for b in t] for t in root.findall("track")]

@@ -214,3 +214,17 @@ def test_frame_labels_and_paths(tmp_path):
     assert resolve_video_path(a, ann.videos[0]) == vid.resolve()
     import hashlib
     assert file_sha256(vid) == hashlib.sha256(b"hello").hexdigest()
+
+
+def test_lookup_helpers(tmp_path):
+    ann = sample()
+    t = ann.videos[0].transitions[0]
+    assert t.decision("lib/x.bvh", 1.5) == "accepted" and t.decision("lib/y.bvh", 0.0) == "discarded"
+    assert t.decision("lib/x.bvh", 1.25) is None
+    vid = tmp_path / "v.bin"
+    vid.write_bytes(b"video bytes")
+    ann.videos[0].sha256 = file_sha256(vid)
+    assert ann.video_for(vid) is ann.videos[0]
+    vid.write_bytes(b"other bytes")
+    with pytest.raises(FormatError, match="no annotations of"):
+        ann.video_for(vid, "a.json")

@@ -163,22 +163,23 @@ def test_overlays_map_onto_decoded_frames(videos, tmp_path):
         labels = ["Jab"] * 10 + ["Hook"] * (len(src) - 10)
         lab = tmp_path / "lab.json"
         lab.write_text(json.dumps({"video": str(videos[0]), "fps": 12.5, "classes": CLASSES, "labels": labels}))
+        from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+        from vidstyle.mocap.keypoints import KEYPOINTS
+
         poses = tmp_path / "p.json"
-        poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 1, "video": videos[1].name,
-                                     "keypoints": ["neck", "pelvis"],
-                                     "frames": [{"frame": 3, "viewpoint": "left", "points": [[1, 2, 0.5], [3, 4, 0.9]]}]}))
+        pts = np.arange(45, dtype=float).reshape(15, 3) / 50
+        write_poses(poses, Poses(videos[1].name, "ps", [PoseFrame(3, "left", pts, {"left": 1.0})]))
         ov = load_overlays(vids, labels=[lab], poses=[poses])
         spans = ov["0"]["recognized"]["spans"]
         assert spans == [{"start": 0, "end": int(src[10]), "action": "Jab"}, {"start": int(src[10]), "end": 80, "action": "Hook"}]
         assert int(src[10]) == 20
-        assert ov["1"]["poses"]["frames"]["3"]["points"] == [[1, 2, 0.5], [3, 4, 0.9]]
-        assert ov["1"]["poses"]["edges"] == [[0, 1]]
+        assert ov["1"]["poses"]["frames"]["3"]["points"] == np.round(pts, 2).tolist()
+        assert ov["1"]["poses"]["keypoints"] == list(KEYPOINTS) and len(ov["1"]["poses"]["edges"]) == 14
         # wrong label count, frame outside the video, a video not in the session: errors naming the file
         lab.write_text(json.dumps({"video": str(videos[0]), "fps": 12.5, "labels": labels[:-1]}))
         with pytest.raises(FormatError, match="lab.json"):
             load_overlays(vids, labels=[lab])
-        poses.write_text(json.dumps({"video": videos[1].name, "keypoints": ["neck"],
-                                     "frames": [{"frame": 70, "points": [[1, 2, 1]]}]}))
+        write_poses(poses, Poses(videos[1].name, "ps", [PoseFrame(70, "left", pts, {"left": 1.0})]))
         with pytest.raises(FormatError, match=r"frames\[0\].frame"):
             load_overlays(vids, poses=[poses])
         m = tmp_path / "m.json"
@@ -188,3 +189,30 @@ def test_overlays_map_onto_decoded_frames(videos, tmp_path):
     finally:
         for v in vids:
             v.close()
+
+
+def test_cli_bad_inputs_exit_2(videos, tmp_path, capsys):
+    from vidstyle.cli import main
+
+    assert main(["annotate", str(tmp_path / "missing.mp4"), "--no-browser"]) == 2
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"kind": "vidstyle.annotations", "schema_version": 1, "revision": -3, "classes": [], "videos": []}')
+    assert main(["annotate", str(videos[0]), "-a", str(bad), "--no-browser"]) == 2
+    assert main(["annotate", str(videos[0]), str(videos[0]), "-a", str(tmp_path / "a.json"), "--no-browser"]) == 2
+    assert main(["annotate", str(videos[0]), "--port", "70000", "--no-browser"]) == 2
+    err = capsys.readouterr().err
+    assert "missing.mp4" in err and "bad.json: revision" in err and "identical content" in err
+
+
+def test_concurrent_requests_stay_frame_exact(videos, tmp_path, rng):
+    from concurrent.futures import ThreadPoolExecutor
+
+    idx = [int(i) for i in rng.integers(0, 70, 20)] + list(range(20, 30))
+    with running(videos[1:], tmp_path / "a.json") as url:
+        def fetch(i):
+            with httpx.Client(base_url=url, timeout=60) as c:
+                r = c.get(f"/api/videos/0/frames/{i}")
+                return read_number(cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR))
+
+        with ThreadPoolExecutor(6) as ex:
+            assert list(ex.map(fetch, idx)) == idx

@@ -10,7 +10,8 @@ video: 0-based decoded frame indices, half-open segments ``[start, end)``, sha25
     inclusive frame numbers**: our ``[start, end)`` is ``{"start": start + 1, "end": end}``. A transition at
     frame ``f`` is a one-frame range ``{"start": f + 1, "end": f + 1}`` of label ``"transition"`` from
     ``from_name: "transitions"`` with its actions, status and candidates in the region's ``meta.text[0]``
-    (JSON). ``data`` also carries ``vidstyle_sha256``, ``vidstyle_frames`` and ``vidstyle_classes``. Label
+    (JSON). ``data`` also carries ``vidstyle_sha256``, ``vidstyle_frames``, ``vidstyle_fps`` and
+    ``vidstyle_classes``; :func:`labelstudio_config` gives the project's labeling config. Label
     Studio numbers frames as ``time x fps`` in the browser; its frames equal decoded frames only on a
     constant-rate video, so a variable-rate video exports correctly but Label Studio may show it shifted.
 
@@ -402,6 +403,17 @@ def _via_in(data: bytes, classes, target: Target, name) -> Marks:
             _add_class(classes, t.to_action)
             trans.append(t)
     return Marks(classes, trans, segs)
+
+
+def labelstudio_config(classes: list[str]) -> str:
+    """The Label Studio labeling config that matches :func:`export` ``labelstudio`` files (paste it into a
+    project's Labeling Interface, then import the exported JSON as tasks)."""
+    from xml.sax.saxutils import quoteattr
+
+    labels = "".join(f"<Label value={quoteattr(c)}/>" for c in classes)
+    return ('<View><Video name="video" value="$video" framerate="$vidstyle_fps"/>'
+            f'<TimelineLabels name="actions" toName="video">{labels}</TimelineLabels>'
+            f'<TimelineLabels name="transitions" toName="video"><Label value="{TRANSITION}"/></TimelineLabels></View>')
 
 
 def default_filename(fmt: str, target: Target) -> str:

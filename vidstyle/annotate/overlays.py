@@ -2,16 +2,15 @@
 poses of ``pose`` and the library poses ``match-pose`` matched to them. Each is mapped onto the video's
 decoded frame indices here, once, so the page only ever deals in decoded indices.
 
-Schemas read (small readers of their own until the owner modules exist on this branch):
+Schemas read:
 
 * recognised labels (``vidstyle recognize``): ``{"video", "fps", "classes", "labels": [one per working
   frame]}``; working frame ``k`` is decoded frame ``working_indices(timestamps, fps)[k]`` and covers the
   decoded frames up to the next working frame;
-* poses (issue 13): ``{"kind": "vidstyle.poses", "schema_version", "video", "backend", "keypoints": [15
-  names], "frames": [{"frame", "viewpoint", "viewpoint_scores", "points": [[x, y, score], ...]}]}``, x =
-  column and y = row in the video's pixels;
+* poses: :mod:`vidstyle.formats.poses` (``points`` x = column, y = row in the video's pixels);
 * matches (issue 14): ``{"kind": "vidstyle.matches", "schema_version", "video", "frames": [{"frame",
-  "candidates": [{"clip", "time", "cost"}]}]}``.
+  "candidates": [{"clip", "time", "cost"}]}]}`` - a small reader of its own, as the owner module
+  (``vidstyle/formats/matches.py``) is on the ``augmg`` branch, not this one; it ignores the other fields.
 
 A file applies to the session video whose path (resolved, else file name) equals its ``video`` field; with
 a single video in the session it applies to that one.
@@ -26,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..formats import FormatError
-from ..formats._base import Fields, check_array, read_json_document
+from ..formats._base import Fields, read_json_document
 from ..video import working_indices
 
 #: skeleton drawn for the 15 keypoints of the pose stage (pairs of names)
@@ -81,20 +80,19 @@ def read_labels_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
 
 
 def read_poses_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
-    """(video id, {"keypoints", "edges", "frames": {index: {"viewpoint", "points"}}})."""
-    doc = read_json_document(path)
-    f = Fields(doc, path)
-    if f.has("kind") and doc["kind"] != "vidstyle.poses":
-        raise FormatError(path, "kind", f"expected 'vidstyle.poses', got {doc['kind']!r}")
-    names = f.str_list("keypoints", unique=True, min_len=1)
-    v = _match_video(f.str("video", required=False), videos, path)
+    """(video id, {"keypoints", "edges", "frames": {index: {"viewpoint", "points"}}}), read by the owner
+    module :func:`vidstyle.formats.poses.read_poses`."""
+    from ..formats.poses import read_poses
+
+    poses = read_poses(path)
+    names = list(poses.keypoints)
+    v = _match_video(poses.video or None, videos, path)
     frames = {}
-    for i, fr in enumerate(f.list("frames")):
-        ff = Fields(fr, path, f"frames[{i}]")
-        idx = ff.int("frame", min=0, max=v.frames - 1)
-        pts = check_array(ff.get("points"), path, f"frames[{i}].points", (len(names), 3))
-        frames[str(idx)] = {"viewpoint": ff.str("viewpoint", required=False, default=""),
-                            "points": np.round(pts, 2).tolist()}
+    for i, fr in enumerate(poses.frames):
+        if fr.frame >= v.frames:
+            raise FormatError(path, f"frames[{i}].frame", f"frame {fr.frame} is past the end of {v.path.name} "
+                                                          f"({v.frames} frames)")
+        frames[str(fr.frame)] = {"viewpoint": fr.viewpoint, "points": np.round(fr.points, 2).tolist()}
     edges = [[names.index(a), names.index(b)] for a, b in EDGES if a in names and b in names]
     return v.id, {"keypoints": names, "edges": edges, "frames": frames, "file": Path(path).name}
 

@@ -58,6 +58,7 @@ class Video:
     sha256: str
     reader: VideoReader
     lock: threading.Lock = field(default_factory=threading.Lock)
+    _cache_lock: threading.Lock = field(default_factory=threading.Lock)
     _cache: OrderedDict = field(default_factory=OrderedDict)
     _wanted: int = -1
     _pool: ThreadPoolExecutor | None = None
@@ -81,49 +82,63 @@ class Video:
                 "constant_rate": bool(self.reader.info.constant_rate)}
 
     def image(self, index: int, fmt: str = "jpeg", read_ahead: bool = True) -> bytes:
-        """The encoded image of decoded frame ``index`` (``IndexError`` outside the video)."""
+        """The encoded image of decoded frame ``index`` (``IndexError`` outside the video).
+
+        ``lock`` guards the reader (decoding); ``_cache_lock`` the encoded-frame cache, held only for a
+        look-up or an insert, so a cached frame is served while the read-ahead decodes another."""
         if not 0 <= index < self.frames:
             raise IndexError(index)
         self._wanted = index
-        key = (index, fmt)
-        with self.lock:
-            data = self._cache.get(key)
+        data = self._cached(index, fmt)
+        if data is None:
+            with self.lock:
+                data = self._cached(index, fmt)  # the read-ahead may have made it meanwhile
+                img = self.reader.frame(index) if data is None else None
             if data is None:
-                data = self._encode(index, fmt)
-            else:
-                self._cache.move_to_end(key)
+                data = self._store(index, fmt, self._encode(img, fmt))
         if read_ahead and fmt == "jpeg" and READ_AHEAD:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(1, thread_name_prefix=f"read-ahead-{self.id}")
             self._pool.submit(self._read_ahead, index)
         return data
 
-    def _encode(self, index: int, fmt: str) -> bytes:
+    def _cached(self, index: int, fmt: str) -> bytes | None:
+        with self._cache_lock:
+            data = self._cache.get((index, fmt))
+            if data is not None:
+                self._cache.move_to_end((index, fmt))
+            return data
+
+    def _store(self, index: int, fmt: str, data: bytes) -> bytes:
+        with self._cache_lock:
+            self._cache[(index, fmt)] = data
+            while len(self._cache) > IMAGE_CACHE:
+                self._cache.popitem(last=False)
+        return data
+
+    def _encode(self, img: np.ndarray, fmt: str) -> bytes:
         import cv2
 
-        img = self.reader.frame(index)
         if fmt == "png":
             ok, buf = cv2.imencode(".png", img, [cv2.IMWRITE_PNG_COMPRESSION, 1])
         else:
             ok, buf = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         if not ok:  # pragma: no cover - OpenCV encodes any uint8 image
-            raise InputError(f"{self.path}: frame {index} cannot be encoded")
-        data = buf.tobytes()
-        self._cache[(index, fmt)] = data
-        while len(self._cache) > IMAGE_CACHE:
-            self._cache.popitem(last=False)
-        return data
+            raise InputError(f"{self.path}: a frame cannot be encoded")
+        return buf.tobytes()
 
     def _read_ahead(self, index: int) -> None:
         for j in range(index + 1, min(self.frames, index + 1 + READ_AHEAD)):
             if self._wanted != index:  # the page moved on: stop, do not hold the reader
                 return
-            with self.lock:
-                if (j, "jpeg") not in self._cache:
-                    try:
-                        self._encode(j, "jpeg")
-                    except InputError:
-                        return
+            if self._cached(j, "jpeg") is not None:
+                continue
+            try:
+                with self.lock:
+                    img = self.reader.frame(j)
+            except InputError:
+                return
+            self._store(j, "jpeg", self._encode(img, "jpeg"))
 
     def close(self) -> None:
         if self._pool is not None:

@@ -69,6 +69,14 @@ class Transition:
     status: str = "accepted"
     candidates: list[Candidate] = field(default_factory=list)
 
+    def decision(self, clip: str, time: float, tol: float = 1e-6) -> str | None:
+        """The person's decision on the library pose ``clip`` at ``time`` s (``accepted``, ``discarded``) or
+        None when they left it undecided."""
+        for c in self.candidates:
+            if c.clip == clip and abs(c.time - time) <= tol:
+                return c.status
+        return None
+
 
 @dataclass
 class Segment:
@@ -96,7 +104,16 @@ class Annotations:
     revision: int = 0
 
     def video(self, sha256: str) -> VideoAnnotations | None:
+        """The entry of the video with this content hash (see :func:`file_sha256`), or None."""
         return next((v for v in self.videos if v.sha256 == sha256), None)
+
+    def video_for(self, path: str | os.PathLike, annotations_path: str | os.PathLike | None = None) -> VideoAnnotations:
+        """The entry of the video file ``path``, matched by content; :class:`FormatError` when the file is
+        not annotated here (``annotations_path`` names this file in the message)."""
+        v = self.video(file_sha256(path))
+        if v is None:
+            raise FormatError(annotations_path, "videos", f"no annotations of {path} (no video with its sha256)")
+        return v
 
 
 # ------------------------------------------------------------------------------------------ JSON Schema

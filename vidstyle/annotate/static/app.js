@@ -162,13 +162,19 @@ function endSegment() {
   });
 }
 
-function pickAction(k) {
+function pickAction(k) {         // the action of the next segment
   if (k >= S.classes.length) return;
   S.action = k;
-  const s = S.pending === null ? segmentAt(S.frame) : null;
-  if (s && s.action !== S.classes[k]) change(() => { segmentAt(S.frame).action = S.classes[k]; });
-  else render();
   renderClasses();
+  render();
+}
+
+function relabelHere(k) {        // Shift+digit: the action of the segment under the cursor
+  if (k >= S.classes.length) return;
+  S.action = k;
+  renderClasses();
+  if (segmentAt(S.frame)) change(() => { segmentAt(S.frame).action = S.classes[k]; });
+  else flash("no segment at this frame to relabel");
 }
 
 function removeHere() {
@@ -260,6 +266,7 @@ document.addEventListener("keydown", (e) => {
   if (ctrl && (k === "y" || k === "Y")) { e.preventDefault(); redo(); return; }
   if (ctrl || e.altKey) return;
   let handled = true;
+  if (/^Digit[1-9]$/.test(e.code) && e.shiftKey) { e.preventDefault(); relabelHere(Number(e.code.slice(5)) - 1); return; }
   switch (k) {
     case "f": case "F": case "ArrowRight": go(S.frame + 1); break;
     case "d": case "D": case "ArrowLeft": go(S.frame - 1); break;
@@ -275,7 +282,8 @@ document.addEventListener("keydown", (e) => {
     case "Delete": case "Backspace": removeHere(); break;
     case "?": $("help").hidden = !$("help").hidden; break;
     default:
-      if (k >= "1" && k <= "9") pickAction(Number(k) - 1); else handled = false;
+      if (k >= "1" && k <= "9") pickAction(Number(k) - 1);
+      else handled = false;
   }
   if (handled) e.preventDefault();
 });

@@ -1,0 +1,139 @@
+"""``vidstyle train-pose``, ``vidstyle pose`` and ``vidstyle evaluate pose`` (2D pose, method 2)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import InputError
+from ._evaluate import evaluate_app
+
+log = logging.getLogger(__name__)
+
+DEFAULT_CMU = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "mocap" / "cmu"
+DEFAULT_REAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "video" / "real"
+
+
+def register(app: typer.Typer) -> None:
+    app.command("train-pose")(train_pose)
+    app.command("pose")(pose)
+
+
+def _cmu(cmu_dir: Optional[Path]) -> Optional[Path]:
+    if cmu_dir is not None and not cmu_dir.is_dir():
+        raise InputError(f"{cmu_dir}: CMU BVH directory not found")
+    if cmu_dir is None and DEFAULT_CMU.is_dir():
+        return DEFAULT_CMU
+    return cmu_dir
+
+
+def train_pose(
+    out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
+    cmu_dir: Optional[Path] = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
+                                           "performers (default: ../shared/data/mocap/cmu when present)."),
+    n_demo: int = typer.Option(6, "--demo-performers", help="Demo performers rendered for training."),
+    n_cmu: int = typer.Option(10, "--cmu-clips", help="CMU clips (of the training subjects) rendered."),
+    views_per_clip: int = typer.Option(4, "--views-per-clip", help="Camera azimuths per clip."),
+    seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
+    fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
+    n_orient: int = typer.Option(12, "--orientations", help="Part orientation bins."),
+    hard_rounds: int = typer.Option(1, "--hard-rounds", help="Rounds of hard-negative mining (0 or 1)."),
+    viewpoint: str = typer.Option("svm", "--viewpoint", help="Viewpoint classifier: svm (thesis: torso scores, "
+                                  "one-vs-all + one-vs-one SVMs) or logistic (every part's score)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
+) -> None:
+    """Train the pictorial-structures pose model (viewpoint-specific + generic part detectors, tree
+    priors, viewpoint SVMs) on frames rendered from the demo performers and CMU clips."""
+    from ..pose.data import make_specs
+    from ..pose.estimator import PoseModel, save_pose_model
+
+    if viewpoint not in ("svm", "logistic"):
+        raise InputError(f"--viewpoint: {viewpoint!r} is not svm or logistic")
+    if hard_rounds not in (0, 1):
+        raise InputError("--hard-rounds: must be 0 or 1")
+    if n_orient < 4 or n_orient > 36:
+        raise InputError("--orientations: must be between 4 and 36")
+    cmu = _cmu(cmu_dir)
+    specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, seed=seed)
+    model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
+    save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
+                                              "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,
+                                              "cmu_dir": None if cmu is None else str(cmu), "n_specs": len(specs)}})
+    log.info("wrote %s (%d training frames)", out, model.n_train_frames_)
+
+
+def pose(
+    video: Path = typer.Argument(..., help="Input video."),
+    out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
+    model: Optional[Path] = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
+    backend: str = typer.Option("ps", "--backend", help="ps (pictorial structures) or blazepose (MediaPipe)."),
+    frames: Optional[str] = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
+) -> None:
+    """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
+    y = row in the input video's pixels)."""
+    from ..formats.poses import write_poses
+    from ..pose.run import estimate_video, parse_frames
+    from ..video import VideoReader
+
+    if backend not in ("ps", "blazepose"):
+        raise InputError(f"--backend: {backend!r} is not ps or blazepose")
+    if backend == "ps" and model is None:
+        raise InputError("--model: the ps backend needs a pose model (vidstyle train-pose)")
+    with VideoReader(video) as r:
+        idx = parse_frames(frames, len(r))
+    poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler)
+    write_poses(out, poses)
+    log.info("wrote %s (%d frames, backend %s)", out, len(poses.frames), backend)
+
+
+@evaluate_app.command("pose")
+def evaluate_pose(
+    model: Path = typer.Option(..., "--model", "-m", help="Pose model (train-pose)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
+    cmu_dir: Optional[Path] = typer.Option(None, "--cmu-dir", help="CMU BVH clips (held-out subjects are rendered)."),
+    n_demo: int = typer.Option(3, "--demo-performers", help="Held-out demo performers rendered."),
+    n_cmu: int = typer.Option(6, "--cmu-clips", help="Held-out CMU clips rendered."),
+    views_per_clip: int = typer.Option(4, "--views-per-clip", help="Held-out azimuths per clip."),
+    seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
+    fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
+    real_dir: Optional[Path] = typer.Option(None, "--real-dir", help="Real footage to compare the backends on "
+                                            "(default: ../shared/data/video/real when present; 'none' to skip)."),
+    overlay_dir: Path = typer.Option(Path("pose_overlays"), "--overlay-dir", help="Where overlay PNGs go."),
+    real_frames: int = typer.Option(6, "--real-frames", help="Frames per real video."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the held-out renders."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers for rendering (-1: all cores)."),
+) -> None:
+    """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
+    held-out renders for both backends; backend agreement and overlays on real footage."""
+    from ..formats import write_json_document
+    from ..pose.data import make_specs, render_samples
+    from ..pose.estimator import load_pose_model
+    from ..pose.evaluate import evaluate_real, evaluate_renders, format_tables
+
+    pm, header = load_pose_model(model)
+    cmu = _cmu(cmu_dir)
+    specs = make_specs("test", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    samples = render_samples(specs, jobs=jobs, keep_bgr=True)
+    metrics = evaluate_renders(pm, samples)
+    metrics["params"] = {"model": str(model), "model_params": header.get("params"), "seed": seed,
+                         "demo_performers": n_demo, "cmu_clips": n_cmu, "views_per_clip": views_per_clip,
+                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu)}
+    rd = real_dir if real_dir is not None else (DEFAULT_REAL if DEFAULT_REAL.is_dir() else None)
+    if rd is not None and str(rd) != "none":
+        if not rd.is_dir():
+            raise InputError(f"{rd}: real footage directory not found")
+        videos = sorted(p for p in rd.iterdir() if p.suffix.lower() in (".mp4", ".mkv", ".avi", ".mov"))
+        metrics["real"] = evaluate_real(str(model), videos, overlay_dir, real_frames, jobs=1)
+    if out is not None:
+        write_json_document(out, json.loads(json.dumps(metrics, allow_nan=True).replace("NaN", "null")))
+    sys.stdout.write(format_tables(metrics) + "\n")

@@ -1,0 +1,179 @@
+"""Labelled pose frames rendered from mocap: demo performers and CMU clips at chosen azimuths and
+elevations, with random looks and backgrounds (:mod:`vidstyle.render`), keypoints from
+:mod:`vidstyle.mocap.keypoints` projected by the render camera.
+
+A *spec* names one short clip excerpt and one camera; :func:`render_spec` turns it into frames.
+Specs are rendered through :func:`vidstyle.parallel.parallel_map` (the project's one parallel path).
+
+Split for evaluation (nothing held out is ever used for training, tuning or selection):
+
+- demo performers: training ``p00..p{n-1}``; held out: performers 50.. (different seeds);
+- CMU subjects: training the subjects listed in ``TRAIN_CMU_SUBJECTS``, held out the others;
+- azimuths: training every 30 degrees from 0 (0, 30, ..., 330) plus jitter of at most 5 degrees;
+  held out: 15 + 30 k degrees (never closer than 10 degrees to a training azimuth).
+
+The viewpoint label of a frame is the nearest of front (0), left (+90), right (-90), back (180).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..mocap.keypoints import keypoint_positions
+
+VIEW_NAMES = ("front", "left", "right", "back")
+VIEW_AZ = {"front": 0.0, "left": 90.0, "right": -90.0, "back": 180.0}
+TRAIN_CMU_SUBJECTS = ("01", "02", "05", "06", "07", "08", "09", "10", "12", "13", "14", "15", "16")
+FIGURE_FRACTION = 0.7  # standing figure height / frame height at the nominal camera distance
+
+
+def view_of(azimuth_deg: float) -> str:
+    a = (azimuth_deg + 180.0) % 360.0 - 180.0
+    return min(VIEW_NAMES, key=lambda v: abs((a - VIEW_AZ[v] + 180.0) % 360.0 - 180.0))
+
+
+@dataclass(frozen=True)
+class Spec:
+    source: str  # "demo:<performer index>" or a BVH path
+    start_s: float  # excerpt start (seconds into the source motion)
+    seconds: float
+    azimuth: float
+    elevation: float
+    seed: int
+    fps: float = 5.0
+    size: tuple[int, int] = (160, 120)
+    scale: float = 1.0  # figure size relative to the nominal (FIGURE_FRACTION of the frame height)
+
+
+@dataclass
+class Sample:
+    """One labelled frame: gray image (H, W) uint8, keypoints (15, 2) px, view, azimuth, source."""
+
+    image: np.ndarray
+    keypoints: np.ndarray
+    view: str
+    azimuth: float
+    source: str
+    bgr: np.ndarray | None = None
+
+
+def _demo_motion(index: int, seconds: float, seed: int):
+    from ..demo import Performer, build_take, performance_plan
+
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
+    p = Performer.random(f"p{index:02d}", rng, video_fps=20)
+    take = build_take(p, performance_plan(p, int(round(seconds * 20)) + 4, rng), rng, video_fps=20)
+    return take.motion
+
+
+def load_source(source: str, seed: int = 0, seconds: float = 30.0):
+    from ..mocap import read_bvh
+
+    if source.startswith("demo:"):
+        return _demo_motion(int(source[5:]), seconds, seed)
+    m = read_bvh(source)
+    return m[1:]  # frame 0 of the CMU files is a T-pose
+
+
+def render_spec(spec: Spec, keep_bgr: bool = False) -> list[Sample]:
+    """Render one spec into samples (one per rendered frame)."""
+    from ..render import Appearance, Camera, render_motion
+    from ..render.body import skeleton_height
+
+    rng = np.random.default_rng(spec.seed)
+    motion = load_source(spec.source, seed=0, seconds=max(30.0, spec.start_s + spec.seconds + 1))
+    a = int(spec.start_s * motion.fps)
+    b = min(motion.n_frames, a + max(2, int(spec.seconds * motion.fps)))
+    if b - a < 2:
+        a, b = 0, min(motion.n_frames, 2)
+    motion = motion[a:b].resample(spec.fps)
+    W, H = spec.size
+    height = skeleton_height(motion.skeleton)
+    probe = Camera.for_view(motion, view=spec.azimuth, elevation_deg=spec.elevation, size=spec.size)
+    distance = probe.focal * height / (FIGURE_FRACTION * spec.scale * H)
+    cam = Camera.for_view(motion, view=spec.azimuth, elevation_deg=spec.elevation, size=spec.size,
+                          distance=distance)
+    look = Appearance.random(rng)
+    bg = ["plain", "texture", "texture:brick", "texture:grass", "texture:gravel"][int(rng.integers(5))]
+    if bg == "plain":
+        bg = "plain:" + ",".join(str(int(v)) for v in rng.integers(40, 230, 3))
+    frames, _truth = render_motion(motion, cam, fps=motion.fps, appearance=look, background=bg,
+                                   noise_sigma=float(rng.uniform(1.0, 4.0)), seed=spec.seed)
+    kp3 = keypoint_positions(motion)
+    uv, _ = cam.project(kp3)
+    import cv2
+
+    out = []
+    for f in range(len(frames)):
+        g = cv2.cvtColor(frames[f], cv2.COLOR_BGR2GRAY)
+        out.append(Sample(g, uv[f].astype(np.float32), view_of(spec.azimuth), float(spec.azimuth), spec.source,
+                          frames[f] if keep_bgr else None))
+    return out
+
+
+def cmu_clips(cmu_dir: str | Path | None, subjects: tuple[str, ...] | None, exclude: tuple[str, ...] = ()) -> list[str]:
+    if cmu_dir is None or not Path(cmu_dir).is_dir():
+        return []
+    files = sorted(Path(cmu_dir).glob("*.bvh"))
+    out = []
+    for f in files:
+        subj = f.stem.split("_")[0]
+        if subjects is not None and subj not in subjects:
+            continue
+        if subj in exclude:
+            continue
+        out.append(str(f))
+    return out
+
+
+def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: int,
+               cmu_dir: str | Path | None, fps: float = 4.0, seconds: float = 2.0) -> list[Spec]:
+    """Specs for ``split`` ``"train"`` or ``"test"`` (see the module docstring for what is held out)."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0 if split == "train" else 1]))
+    if split == "train":
+        demo_ids = list(range(n_demo))
+        clips = cmu_clips(cmu_dir, TRAIN_CMU_SUBJECTS)
+        base = np.arange(0, 360, 30.0)
+        jitter = 5.0
+    else:
+        demo_ids = list(range(50, 50 + n_demo))
+        clips = cmu_clips(cmu_dir, None, exclude=TRAIN_CMU_SUBJECTS)
+        base = np.arange(15, 360, 30.0)
+        jitter = 0.0
+    if clips:
+        clips = [clips[i] for i in rng.permutation(len(clips))[:n_cmu]]
+    sources = [f"demo:{i}" for i in demo_ids] + clips
+    specs = []
+    for si, src in enumerate(sources):
+        for v in range(views_per_clip):
+            az = float(base[(si * views_per_clip + v + int(rng.integers(len(base)))) % len(base)])
+            az += float(rng.uniform(-jitter, jitter))
+            start = float(rng.uniform(0.0, 6.0 if src.startswith("demo:") else 2.0))
+            specs.append(Spec(src, start, seconds, (az + 180.0) % 360.0 - 180.0, float(rng.uniform(0.0, 20.0)),
+                              int(rng.integers(2**31)), fps, (160, 120), float(rng.uniform(0.9, 1.1))))
+    return specs
+
+
+def _render_job(spec: Spec) -> list[Sample]:
+    return render_spec(spec)
+
+
+def _render_job_bgr(spec: Spec) -> list[Sample]:
+    return render_spec(spec, keep_bgr=True)
+
+
+def render_samples(specs: list[Spec], jobs: int = -1, scheduler: str | None = None,
+                   keep_bgr: bool = False) -> list[Sample]:
+    from ..parallel import parallel_map
+
+    parts = parallel_map(_render_job_bgr if keep_bgr else _render_job, specs, jobs=jobs, scheduler=scheduler,
+                         description="rendering pose frames")
+    return [s for p in parts for s in p]
+
+
+def spec_dict(spec: Spec) -> dict:
+    return asdict(spec)
+

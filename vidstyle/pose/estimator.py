@@ -1,0 +1,397 @@
+"""The pose model of ``vidstyle train-pose``: viewpoint-specific pictorial structures (front, left,
+right, back) plus a generic set, and the thesis' viewpoint classifier (best torso-detector score of
+every viewpoint -> one-vs-all + one-vs-one SVMs).
+
+Training (:meth:`PoseModel.fit_specs`) goes through :func:`vidstyle.parallel.parallel_map` three
+times: render the frames; extract positive/negative template windows per part (random negatives
+plus background-only frames); after a first fit, mine hard negatives (the best-scoring false
+detections) and collect the torso scores the viewpoint SVMs learn from.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from sklearn.linear_model import LogisticRegression
+from sklearn.multiclass import OneVsRestClassifier
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVC
+
+from ..errors import InputError
+from ..formats.poses import PoseFrame
+from ..mocap.keypoints import PART_NAMES
+from .data import VIEW_NAMES, Sample, Spec, render_samples
+from .features import RotatedFeatures, orientation_bin
+from .model import N_PARTS, PictorialStructures, part_geometry
+
+log = logging.getLogger(__name__)
+MODEL_KIND = "vidstyle.pose-model"
+MODEL_VERSION = 1
+GENERIC = "generic"
+WORK_HEIGHT = 120
+
+
+class ViewpointSVM:
+    """Thesis viewpoint classifier: one-vs-all and one-vs-one RBF SVMs on the vector of best
+    torso scores of every viewpoint's detector. The prediction is the one-vs-one vote winner, ties
+    (and disagreements) broken by the one-vs-all decision values; ``scores`` are the one-vs-all
+    decision values turned into a softmax."""
+
+    def __init__(self, C: float = 3.0, gamma: str | float = "scale", seed: int = 0) -> None:
+        self.C = C
+        self.gamma = gamma
+        self.seed = seed
+
+    def fit(self, X: np.ndarray, y: np.ndarray) -> "ViewpointSVM":
+        self.scaler_ = StandardScaler().fit(X)
+        Z = self.scaler_.transform(X)
+        self.classes_ = np.array(VIEW_NAMES)
+        yi = np.array([VIEW_NAMES.index(v) for v in y])
+        self.ovo_ = SVC(C=self.C, gamma=self.gamma, decision_function_shape="ovo", random_state=self.seed).fit(Z, yi)
+        self.ova_ = OneVsRestClassifier(SVC(C=self.C, gamma=self.gamma, random_state=self.seed)).fit(Z, yi)
+        return self
+
+    def decision(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        Z = self.scaler_.transform(np.atleast_2d(X))
+        ova = np.full((len(Z), len(VIEW_NAMES)), -10.0)
+        ova[:, self.ova_.classes_] = self.ova_.decision_function(Z).reshape(len(Z), -1)
+        votes = np.zeros((len(Z), len(VIEW_NAMES)))
+        pairs = self.ovo_.decision_function(Z).reshape(len(Z), -1)
+        cls = self.ovo_.classes_
+        n = 0
+        for a in range(len(cls)):
+            for b in range(a + 1, len(cls)):
+                win = np.where(pairs[:, n] > 0, cls[a], cls[b])
+                votes[np.arange(len(Z)), win] += 1
+                n += 1
+        return votes, ova
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        votes, ova = self.decision(X)
+        return self.classes_[np.argmax(votes + 0.01 * np.tanh(ova), axis=1)]
+
+    def scores(self, X: np.ndarray) -> list[dict[str, float]]:
+        votes, ova = self.decision(X)
+        z = votes + 0.01 * np.tanh(ova)
+        p = np.exp(z - z.max(axis=1, keepdims=True))
+        p /= p.sum(axis=1, keepdims=True)
+        return [{v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, row)} for row in p]
+
+
+class ViewpointLogistic(ViewpointSVM):
+    """Alternative viewpoint classifier: multinomial logistic regression on the best score of every
+    part detector of every viewpoint (40 features)."""
+
+    def __init__(self, C: float = 1.0, seed: int = 0) -> None:
+        self.C = C
+        self.seed = seed
+
+    def fit(self, X, y):
+        self.scaler_ = StandardScaler().fit(X)
+        self.classes_ = np.array(VIEW_NAMES)
+        self.clf_ = LogisticRegression(C=self.C, max_iter=2000).fit(self.scaler_.transform(X),
+                                                                     [VIEW_NAMES.index(v) for v in y])
+        return self
+
+    def predict(self, X):
+        p = self._proba(X)
+        return self.classes_[p.argmax(axis=1)]
+
+    def _proba(self, X):
+        p = np.zeros((len(np.atleast_2d(X)), len(VIEW_NAMES)))
+        p[:, self.clf_.classes_] = self.clf_.predict_proba(self.scaler_.transform(np.atleast_2d(X)))
+        return p
+
+    def scores(self, X):
+        return [{v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, row)} for row in self._proba(X)]
+
+
+# ---------------------------------------------------------------- parallel training jobs
+@dataclass
+class _WindowJob:
+    samples: list  # (image, keypoints, view)
+    sizes: dict  # model name -> list of (h, w)
+    n_orient: int
+    cell: int
+    neg_per_pos: int
+    seed: int
+    backgrounds: list
+
+
+def _windows(job: _WindowJob) -> dict:
+    """Per model and part: positive and random negative windows of the job's frames."""
+    rng = np.random.default_rng(job.seed)
+    out = {name: [([], []) for _ in range(N_PARTS)] for name in job.sizes}
+    for img, kp, view in job.samples:
+        f = RotatedFeatures(img, job.n_orient, job.cell)
+        for name in (view, GENERIC):
+            probe = PictorialStructures(job.n_orient, job.cell)
+            probe.sizes_ = job.sizes[name]
+            for j in range(N_PARTS):
+                p, n = probe._samples(f, kp, j, rng, job.neg_per_pos)
+                if p is not None:
+                    out[name][j][0].append(p)
+                out[name][j][1].extend(n)
+    for bg in job.backgrounds:  # figure-free frames: negatives only
+        f = RotatedFeatures(bg, job.n_orient, job.cell)
+        for name in job.sizes:
+            for j in range(N_PARTS):
+                h, w = job.sizes[name][j]
+                for _ in range(job.neg_per_pos):
+                    xy = rng.uniform([0, 0], [bg.shape[1] - 1, bg.shape[0] - 1])
+                    win = f.window(int(rng.integers(job.n_orient)), xy, h, w)
+                    if win is not None:
+                        out[name][j][1].append(win)
+    return {name: [(np.array(p, np.float32), np.array(n, np.float32)) for p, n in parts] for name, parts in out.items()}
+
+
+@dataclass
+class _MineJob:
+    samples: list
+    models: dict  # name -> PictorialStructures
+    n_hard: int
+
+
+def _mine(job: _MineJob) -> dict:
+    """Hard negatives (per model, part) and viewpoint features (per frame) with the current models."""
+    hard = {name: [[] for _ in range(N_PARTS)] for name in job.models}
+    vfeat = []
+    for img, kp, view in job.samples:
+        f = RotatedFeatures(img, next(iter(job.models.values())).n_orient, next(iter(job.models.values())).cell)
+        row = []
+        for name in VIEW_NAMES:
+            m = job.models[name]
+            S = m.score_maps(f)
+            row.extend(S.reshape(N_PARTS, -1).max(axis=1))
+            if name == view:
+                hard[name] = _merge(hard[name], _hard_windows(m, f, S, kp, job.n_hard))
+        m = job.models[GENERIC]
+        hard[GENERIC] = _merge(hard[GENERIC], _hard_windows(m, f, m.score_maps(f), kp, job.n_hard))
+        vfeat.append(row)
+    return {"hard": {k: [np.array(v, np.float32).reshape(len(v), -1) if v else None for v in parts]
+                     for k, parts in hard.items()},
+            "vfeat": np.array(vfeat, np.float64)}
+
+
+def _merge(acc, new):
+    for j in range(N_PARTS):
+        acc[j].extend(new[j])
+    return acc
+
+
+def _hard_windows(m: PictorialStructures, f: RotatedFeatures, S: np.ndarray, kp: np.ndarray, n: int):
+    out = [[] for _ in range(N_PARTS)]
+    c, th, L = part_geometry(kp[None])
+    K, cell = m.n_orient, m.cell
+    gy, gx = np.mgrid[0:S.shape[2], 0:S.shape[3]]
+    for j in range(N_PARTS):
+        kt = int(orientation_bin(th[0, j], K))
+        d = np.hypot(gx * cell + (cell - 1) / 2 - c[0, j, 0], gy * cell + (cell - 1) / 2 - c[0, j, 1])
+        dk = np.minimum((np.arange(K) - kt) % K, (kt - np.arange(K)) % K)
+        near = (d[None] < 0.5 * max(L[0, j], 4)) & (dk[:, None, None] <= 1)
+        s = np.where(near, -np.inf, S[j])
+        h, w = m.sizes_[j]
+        for idx in np.argsort(s.ravel())[::-1][:n]:
+            kk, yy, xx = np.unravel_index(idx, s.shape)
+            if s[kk, yy, xx] < -1.0:
+                break
+            win = f.window(int(kk), np.array([xx * cell + (cell - 1) / 2, yy * cell + (cell - 1) / 2]), h, w)
+            if win is not None:
+                out[j].append(win)
+    return out
+
+
+def _background_frames(n: int, seed: int, size=(160, 120)) -> list[np.ndarray]:
+    from ..render.background import make_background
+
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(n):
+        spec = ["texture", "texture:brick", "texture:grass", "texture:gravel", "plain"][i % 5]
+        bg, _ = make_background(spec, size, rng)
+        g = cv2.cvtColor(np.clip(bg + rng.normal(0, 2, bg.shape), 0, 255).astype(np.uint8), cv2.COLOR_BGR2GRAY)
+        out.append(g)
+    return out
+
+
+def _chunks(seq, n):
+    n = max(1, n)
+    size = max(1, math.ceil(len(seq) / n))
+    return [seq[i:i + size] for i in range(0, len(seq), size)]
+
+
+# ---------------------------------------------------------------- the model
+class PoseModel:
+    """Viewpoint-specific + generic pictorial structures and a viewpoint classifier.
+
+    Parameters (stored as given): ``n_orient``, ``cell``, ``C`` (part logistic regressions),
+    ``neg_per_pos``, ``hard_rounds`` (0 or 1), ``viewpoint`` ("svm" = the thesis' torso-score SVMs,
+    "logistic" = logistic regression on every part's best score), ``dt`` ("envelope" or "brute"),
+    ``seed``.
+    Learned: ``models_`` (view name or "generic" -> :class:`PictorialStructures`),
+    ``viewpoint_`` (the chosen classifier), ``viewpoint_svm_``, ``viewpoint_logistic_``,
+    ``n_train_frames_``.
+    """
+
+    def __init__(self, n_orient: int = 12, cell: int = 4, C: float = 0.05, neg_per_pos: int = 12,
+                 hard_rounds: int = 1, viewpoint: str = "svm", dt: str = "envelope", seed: int = 0) -> None:
+        self.n_orient = n_orient
+        self.cell = cell
+        self.C = C
+        self.neg_per_pos = neg_per_pos
+        self.hard_rounds = hard_rounds
+        self.viewpoint = viewpoint
+        self.dt = dt
+        self.seed = seed
+
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in ("n_orient", "cell", "C", "neg_per_pos", "hard_rounds", "viewpoint",
+                                              "dt", "seed")}
+
+    # ---------------------------------------------------------- training
+    def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+        samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
+        return self.fit(samples, jobs=jobs, scheduler=scheduler)
+
+    def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+        from ..parallel import parallel_map
+
+        if self.viewpoint not in ("svm", "logistic"):
+            raise ValueError(f"viewpoint must be 'svm' or 'logistic', got {self.viewpoint!r}")
+        views = {s.view for s in samples}
+        missing = [v for v in VIEW_NAMES if v not in views]
+        if missing:
+            raise InputError(f"training frames have no {', '.join(missing)} view")
+        kp = {name: np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
+              for name in VIEW_NAMES + (GENERIC,)}
+        self.models_ = {}
+        for name in VIEW_NAMES + (GENERIC,):
+            m = PictorialStructures(self.n_orient, self.cell, self.C, self.neg_per_pos, self.hard_rounds, self.seed,
+                                    self.dt)
+            self.models_[name] = m.fit_geometry(kp[name])
+        sizes = {n: m.sizes_ for n, m in self.models_.items()}
+        triples = [(s.image, s.keypoints, s.view) for s in samples]
+        n_chunks = max(2, min(32, len(triples) // 20))
+        bgs = _chunks(_background_frames(max(10, len(triples) // 20), self.seed + 1), n_chunks)
+        chunks = _chunks(triples, n_chunks)
+        jobs_ = [_WindowJob(c, sizes, self.n_orient, self.cell, self.neg_per_pos, self.seed * 1000 + i,
+                            bgs[i] if i < len(bgs) else []) for i, c in enumerate(chunks)]
+        res = parallel_map(_windows, jobs_, jobs=jobs, scheduler=scheduler, description="part windows")
+        data = {name: [(np.vstack([r[name][j][0] for r in res if len(r[name][j][0])]),
+                        np.vstack([r[name][j][1] for r in res if len(r[name][j][1])]))
+                       for j in range(N_PARTS)] for name in self.models_}
+        for name, m in self.models_.items():
+            self._fit_templates(m, data[name])
+        if self.hard_rounds:
+            mined = parallel_map(_mine, [_MineJob(c, self.models_, 3) for c in chunks], jobs=jobs,
+                                 scheduler=scheduler, description="hard negatives")
+            for name, m in self.models_.items():
+                extra = [[r["hard"][name][j] for r in mined if r["hard"][name][j] is not None] for j in range(N_PARTS)]
+                data[name] = [(P, np.vstack([Nn] + e)) for (P, Nn), e in zip(data[name], extra)]
+                self._fit_templates(m, data[name])
+        # viewpoint features with the final detectors
+        vf = parallel_map(_mine, [_MineJob(c, self.models_, 0) for c in chunks], jobs=jobs, scheduler=scheduler,
+                          description="viewpoint features")
+        X = np.vstack([r["vfeat"] for r in vf])
+        y = np.array([t[2] for t in triples])
+        self._fit_viewpoint(X, y)
+        self.n_train_frames_ = len(samples)
+        return self
+
+    def _fit_templates(self, m: PictorialStructures, data) -> None:
+        m.templates_, m.bias_ = [], np.zeros(N_PARTS)
+        for j, (P, Nn) in enumerate(data):
+            X = np.vstack([P, Nn])
+            y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced").fit(X, y)
+            h, w = m.sizes_[j]
+            m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
+            m.bias_[j] = float(clf.intercept_[0])
+
+    def _fit_viewpoint(self, X: np.ndarray, y: np.ndarray) -> None:
+        torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        self.viewpoint_svm_ = ViewpointSVM(seed=self.seed).fit(torso, y)
+        self.viewpoint_logistic_ = ViewpointLogistic(seed=self.seed).fit(X, y)
+        self.viewpoint_ = self.viewpoint_svm_ if self.viewpoint == "svm" else self.viewpoint_logistic_
+
+    # ---------------------------------------------------------- inference
+    def work_scale(self, frame_shape) -> float:
+        return WORK_HEIGHT / float(frame_shape[0])
+
+    def prepare(self, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
+        g = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        s = self.work_scale(g.shape)
+        if abs(s - 1.0) > 1e-6:
+            g = cv2.resize(g, (max(8, int(round(g.shape[1] * s))), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+        return RotatedFeatures(g, self.n_orient, self.cell), s
+
+    def view_features(self, f: RotatedFeatures, maps: dict | None = None) -> tuple[np.ndarray, dict]:
+        maps = maps if maps is not None else {}
+        row = []
+        for name in VIEW_NAMES:
+            if name not in maps:
+                maps[name] = self.models_[name].score_maps(f)
+            row.extend(maps[name].reshape(N_PARTS, -1).max(axis=1))
+        return np.array(row), maps
+
+    def classify_view(self, feats: np.ndarray, which: str | None = None) -> tuple[str, dict]:
+        clf = {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_}[which or self.viewpoint]
+        x = feats if which == "logistic" or (which is None and self.viewpoint == "logistic") else \
+            feats[[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
+
+    def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
+                 detectors: str | None = None) -> PoseFrame:
+        """Pose of one frame. ``view`` forces a viewpoint (else the classifier decides);
+        ``detectors="generic"`` uses the generic set."""
+        f, s = self.prepare(frame)
+        feats, maps = self.view_features(f)
+        vname, vscores = self.classify_view(feats)
+        if view is not None:
+            vname = view
+        model_name = GENERIC if detectors == GENERIC else vname
+        m = self.models_[model_name]
+        S = maps.get(model_name)
+        if S is None:
+            S = m.score_maps(f)
+        r = m.infer(S)
+        pts = m.keypoints(r["states"], r["unary"], scale=s)
+        return PoseFrame(index, vname, pts, vscores)
+
+
+# ---------------------------------------------------------------- files
+def save_pose_model(path: str | Path, model: PoseModel, extra: dict | None = None) -> None:
+    import joblib
+
+    from ..fileio import atomic_path
+
+    header = {"kind": MODEL_KIND, "schema_version": MODEL_VERSION, "params": model.get_params(),
+              "seed": model.seed, "n_train_frames": int(getattr(model, "n_train_frames_", 0)),
+              "parts": list(PART_NAMES), **(extra or {})}
+    with atomic_path(Path(path)) as tmp:
+        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
+
+
+def load_pose_model(path: str | Path) -> tuple[PoseModel, dict]:
+    import joblib
+
+    path = Path(path)
+    try:
+        obj = joblib.load(path)
+    except FileNotFoundError:
+        raise InputError(f"{path}: pose model not found") from None
+    except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad model file
+        raise InputError(f"{path}: not a pose model file ({type(exc).__name__}: {exc})"[:300]) from None
+    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), PoseModel):
+        raise InputError(f"{path}: not a pose model file (written by vidstyle train-pose)")
+    header = json.loads(obj["header"])
+    if header.get("kind") != MODEL_KIND or header.get("schema_version") != MODEL_VERSION:
+        raise InputError(f"{path}: kind/schema_version {header.get('kind')}/{header.get('schema_version')} "
+                         f"is not {MODEL_KIND}/{MODEL_VERSION}")
+    return obj["model"], header

@@ -1,0 +1,198 @@
+"""``vidstyle evaluate pose``: strict PCP per part (thesis Table 5 layout), PCK@0.2 of the torso length
+and the viewpoint confusion matrix (Table 6 layout) on held-out renders, for both backends on the same
+frames; on real footage (no labels) the agreement of the backends and an overlay image per video.
+
+Held-out renders: performers, CMU subjects and azimuths never used in training (see
+:mod:`vidstyle.pose.data`). Strict PCP: a part is correct when both its estimated endpoints lie within
+50 % of the true part length of the true endpoints. PCK@0.2: a keypoint is correct within 20 % of the
+true torso (neck-pelvis) length.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
+from .data import VIEW_NAMES
+
+log = logging.getLogger(__name__)
+
+TABLE5 = (("LLL", "left_lower_leg"), ("LUL", "left_upper_leg"), ("RUL", "right_upper_leg"),
+          ("RLL", "right_lower_leg"), ("LFA", "left_forearm"), ("LUA", "left_upper_arm"),
+          ("RUA", "right_upper_arm"), ("RFA", "right_forearm"), ("Torso", "torso"), ("Head", "head"))
+
+
+def strict_pcp(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """(N, 15, >=2) predictions, (N, 15, 2) truth -> (N, 10) bool per part (PART_NAMES order)."""
+    a, b = PART_KEYPOINTS[:, 0], PART_KEYPOINTS[:, 1]
+    L = np.linalg.norm(gt[:, b] - gt[:, a], axis=-1)
+    da = np.linalg.norm(pred[:, a, :2] - gt[:, a], axis=-1)
+    db = np.linalg.norm(pred[:, b, :2] - gt[:, b], axis=-1)
+    return (da <= 0.5 * L) & (db <= 0.5 * L)
+
+
+def pck(pred: np.ndarray, ref: np.ndarray, alpha: float = 0.2) -> np.ndarray:
+    """(N, 15) bool: keypoint within ``alpha`` x the reference torso length of the reference."""
+    torso = np.linalg.norm(ref[:, KEYPOINT_INDEX["neck"]] - ref[:, KEYPOINT_INDEX["pelvis"]], axis=-1)
+    return np.linalg.norm(pred[..., :2] - ref[..., :2], axis=-1) <= alpha * torso[:, None]
+
+
+def confusion(true: list[str], pred: list[str], labels=VIEW_NAMES) -> dict:
+    M = np.zeros((len(labels), len(labels)))
+    for t, p in zip(true, pred):
+        if t in labels and p in labels:
+            M[labels.index(t), labels.index(p)] += 1
+    n = M.sum(axis=1, keepdims=True)
+    R = np.divide(M, n, out=np.zeros_like(M), where=n > 0)
+    return {"labels": list(labels), "counts": M.astype(int).tolist(), "rates": R.round(4).tolist(),
+            "per_view_accuracy": {v: float(R[i, i]) for i, v in enumerate(labels)},
+            "accuracy": float(np.trace(M) / max(1, M.sum()))}
+
+
+def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
+    rows = {}
+    views = np.array(views)
+    for v in VIEW_NAMES:
+        sel = views == v
+        if sel.any():
+            rows[v] = {short: float(hits[sel, PART_NAMES.index(p)].mean()) for short, p in TABLE5}
+            rows[v]["n"] = int(sel.sum())
+    rows["all"] = {short: float(hits[:, PART_NAMES.index(p)].mean()) for short, p in TABLE5}
+    rows["all"]["n"] = int(len(hits))
+    rows["all"]["mean"] = float(hits.mean())
+    return rows
+
+
+def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
+    """Run every method on the same held-out frames; return the metrics dict."""
+    from .blazepose import BlazePoseEstimator
+
+    gt = np.stack([s.keypoints for s in samples])
+    views = [s.view for s in samples]
+    methods = {"ps": [], "ps_generic": [], "ps_oracle_view": []}
+    vpred = {"svm": [], "logistic": []}
+    times = []
+    for s in samples:
+        t0 = time.perf_counter()
+        f, scale = model.prepare(s.image)
+        feats, maps = model.view_features(f)
+        v_svm, _ = model.classify_view(feats, "svm")
+        v_log, _ = model.classify_view(feats, "logistic")
+        vpred["svm"].append(v_svm)
+        vpred["logistic"].append(v_log)
+        chosen = v_svm if model.viewpoint == "svm" else v_log
+        for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
+            m = model.models_[mname]
+            S = maps[mname] if mname in maps else m.score_maps(f)
+            r = m.infer(S)
+            methods[name].append(m.keypoints(r["states"], r["unary"], scale))
+            if name == "ps":
+                times.append(time.perf_counter() - t0)
+    if blazepose:
+        est = BlazePoseEstimator()
+        bp, bview = [], []
+        for s in samples:
+            pf = est.estimate(s.bgr if s.bgr is not None else np.repeat(s.image[..., None], 3, 2))
+            bp.append(pf.points)
+            bview.append(pf.viewpoint)
+        est.close()
+        methods["blazepose"] = bp
+        vpred["blazepose"] = bview
+    out = {"n_frames": len(samples), "pcp": {}, "pck@0.2": {}, "viewpoint": {}}
+    for name, preds in methods.items():
+        P = np.stack(preds)
+        hits = strict_pcp(P, gt)
+        out["pcp"][name] = pcp_table(hits, views)
+        k = pck(P, gt)
+        if name == "blazepose":
+            found = P[:, :, 2].max(axis=1) > 0
+            out["blazepose_detected"] = float(found.mean())
+        out["pck@0.2"][name] = {"all": float(k.mean()), **{kp: float(k[:, i].mean()) for i, kp in enumerate(KEYPOINTS)}}
+    for name, pred in vpred.items():
+        out["viewpoint"][name] = confusion(views, pred)
+    out["ps_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
+    return out
+
+
+def format_tables(m: dict) -> str:
+    lines = []
+    cols = [s for s, _ in TABLE5]
+    for name, rows in m["pcp"].items():
+        lines.append(f"strict PCP, {name} (rows: true viewpoint; thesis Table 5 layout)")
+        lines.append(f"{'':10s}" + "".join(f"{c:>7s}" for c in cols) + f"{'mean':>7s}{'n':>6s}")
+        for v, r in rows.items():
+            mean = np.mean([r[c] for c in cols])
+            lines.append(f"{v:10s}" + "".join(f"{r[c]:7.2f}" for c in cols) + f"{mean:7.3f}{r['n']:6d}")
+        lines.append(f"PCK@0.2 torso: {m['pck@0.2'][name]['all']:.3f}")
+        lines.append("")
+    for name, c in m["viewpoint"].items():
+        lines.append(f"viewpoint confusion, {name} (rows true, columns estimated; thesis Table 6 layout)")
+        lines.append(f"{'':8s}" + "".join(f"{v:>8s}" for v in c["labels"]))
+        for v, row in zip(c["labels"], c["rates"]):
+            lines.append(f"{v:8s}" + "".join(f"{x:8.2f}" for x in row))
+        lines.append(f"accuracy {c['accuracy']:.3f}")
+        lines.append("")
+    if "real" in m:
+        lines.append("real footage: agreement of ps with blazepose (PCK@0.2 of blazepose's torso)")
+        for v, r in m["real"].items():
+            lines.append(f"  {v}: {r['pck']:.3f} over {r['frames']} frames (blazepose found a person in "
+                         f"{r['blazepose_found']} of them); overlay {r['overlay']}")
+    return "\n".join(lines)
+
+
+SKELETON_LINES = [tuple(p) for p in PART_KEYPOINTS.tolist()]
+
+
+def draw_overlay(frame: np.ndarray, poses: dict[str, np.ndarray]) -> np.ndarray:
+    """Both backends' skeletons drawn on a frame: ps in red, blazepose in green."""
+    import cv2
+
+    img = frame.copy()
+    s = max(1, int(round(img.shape[0] / 300)))
+    colours = {"ps": (40, 40, 230), "blazepose": (40, 200, 40)}
+    for name, pts in poses.items():
+        col = colours.get(name, (200, 200, 0))
+        for a, b in SKELETON_LINES:
+            if pts[a, 2] > 0 and pts[b, 2] > 0:
+                cv2.line(img, tuple(int(round(v)) for v in pts[a, :2]), tuple(int(round(v)) for v in pts[b, :2]),
+                         col, 2 * s, cv2.LINE_AA)
+        for p in pts:
+            if p[2] > 0:
+                cv2.circle(img, (int(round(p[0])), int(round(p[1]))), 2 * s, col, -1, cv2.LINE_AA)
+        cv2.putText(img, name, (10 * s, (30 if name == "ps" else 60) * s), cv2.FONT_HERSHEY_SIMPLEX, 0.8 * s, col, 2 * s)
+    return img
+
+
+def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames_per_video: int = 6,
+                  jobs: int = 1) -> dict:
+    import cv2
+
+    from ..video import VideoReader
+    from .run import estimate_video
+
+    overlay_dir.mkdir(parents=True, exist_ok=True)
+    out = {}
+    for v in videos:
+        with VideoReader(v) as r:
+            n = len(r)
+        idx = sorted(set(np.linspace(0, n - 1, frames_per_video).round().astype(int).tolist()))
+        ps = estimate_video(v, "ps", model_path, idx, jobs=jobs)
+        bp = estimate_video(v, "blazepose", None, idx, jobs=jobs)
+        P = np.stack([f.points for f in ps.frames])
+        B = np.stack([f.points for f in bp.frames])
+        found = B[:, :, 2].max(axis=1) > 0
+        agree = pck(P[found], B[found]).mean() if found.any() else float("nan")
+        mid = int(np.flatnonzero(found)[len(np.flatnonzero(found)) // 2]) if found.any() else 0
+        with VideoReader(v) as r:
+            frame = np.array(r.frame(idx[mid]))
+        png = overlay_dir / f"{Path(v).stem}.pose_overlay.png"
+        cv2.imwrite(str(png), draw_overlay(frame, {"ps": P[mid], "blazepose": B[mid]}))
+        out[Path(v).stem] = {"pck": float(agree), "frames": len(idx), "blazepose_found": int(found.sum()),
+                             "overlay": str(png),
+                             "ps_viewpoints": [f.viewpoint for f in ps.frames],
+                             "blazepose_viewpoints": [f.viewpoint for f in bp.frames]}
+    return out

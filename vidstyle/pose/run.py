@@ -1,0 +1,112 @@
+"""Poses of chosen frames of one video, through the project's one parallel path (frame chunks, each
+worker opening its own :class:`vidstyle.video.VideoReader`: memory stays bounded by a chunk)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..formats.poses import PoseFrame, Poses
+from .estimator import WORK_HEIGHT
+
+BLAZEPOSE_MAX_HEIGHT = 720
+
+
+@dataclass
+class _Chunk:
+    video: str
+    frames: list[int]
+    backend: str
+    model_path: str | None
+
+
+def working_height(backend: str, native_height: int) -> int:
+    if backend == "ps":
+        return WORK_HEIGHT
+    return min(native_height, BLAZEPOSE_MAX_HEIGHT)
+
+
+def to_input_pixels(pts: np.ndarray, work_size: tuple[int, int], in_size: tuple[int, int]) -> np.ndarray:
+    """Keypoints (n, 3) at the working size -> the input video's pixels (pixel centres at integers)."""
+    out = np.array(pts, dtype=np.float64, copy=True)
+    sx, sy = in_size[0] / work_size[0], in_size[1] / work_size[1]
+    out[:, 0] = (out[:, 0] + 0.5) * sx - 0.5
+    out[:, 1] = (out[:, 1] + 0.5) * sy - 0.5
+    return out
+
+
+def _make_estimator(backend: str, model_path: str | None):
+    if backend == "blazepose":
+        from .blazepose import BlazePoseEstimator
+
+        return BlazePoseEstimator()
+    from .estimator import load_pose_model
+
+    return load_pose_model(model_path)[0]
+
+
+def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
+    from ..video import VideoReader
+
+    est = _make_estimator(chunk.backend, chunk.model_path)
+    with VideoReader(chunk.video) as probe:
+        in_size = (probe.info.width, probe.info.height)
+    h = working_height(chunk.backend, in_size[1])
+    out = []
+    with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
+        for i in chunk.frames:
+            frame = np.asarray(reader.frame(i))
+            pf = est.estimate(frame, i)
+            pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
+            pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
+            out.append(pf)
+    if hasattr(est, "close"):
+        est.close()
+    return out
+
+
+def parse_frames(text: str | None, n_frames: int) -> list[int]:
+    """``"12,40,100"`` -> sorted unique indices (all frames when ``None``); errors name the frame."""
+    if text is None or not str(text).strip():
+        return list(range(n_frames))
+    out = set()
+    for tok in str(text).split(","):
+        tok = tok.strip()
+        if not tok:
+            continue
+        try:
+            i = int(tok)
+        except ValueError:
+            raise InputError(f"frames: {tok!r} is not a frame index") from None
+        if not 0 <= i < n_frames:
+            raise InputError(f"frames: {i} is outside the video's 0..{n_frames - 1}")
+        out.add(i)
+    if not out:
+        raise InputError("frames: no frame index given")
+    return sorted(out)
+
+
+def estimate_video(video: str | Path, backend: str = "ps", model_path: str | Path | None = None,
+                   frames: list[int] | None = None, jobs: int = -1, scheduler: str | None = None,
+                   chunk_frames: int = 16) -> Poses:
+    from ..parallel import parallel_map
+    from ..video import VideoReader
+
+    if backend not in ("ps", "blazepose"):
+        raise InputError(f"backend: {backend!r} is not ps or blazepose")
+    if backend == "ps" and model_path is None:
+        raise InputError("model: the ps backend needs a pose model (vidstyle train-pose)")
+    with VideoReader(video) as r:
+        n = len(r)
+    frames = list(range(n)) if frames is None else frames
+    if backend == "ps":  # fail early on a bad model file, before any worker starts
+        _make_estimator(backend, str(model_path))
+    size = max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
+    chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path))
+              for i in range(0, len(frames), size)]
+    res = parallel_map(_run_chunk, chunks, jobs=jobs, scheduler=scheduler, description=f"pose ({backend})")
+    return Poses(str(video), backend, [pf for part in res for pf in part])
