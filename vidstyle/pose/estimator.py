@@ -48,7 +48,7 @@ class ViewpointSVM:
         self.gamma = gamma
         self.seed = seed
 
-    def fit(self, X: np.ndarray, y: np.ndarray) -> "ViewpointSVM":
+    def fit(self, X: np.ndarray, y: np.ndarray) -> ViewpointSVM:
         self.scaler_ = StandardScaler().fit(X)
         Z = self.scaler_.transform(X)
         self.classes_ = np.array(VIEW_NAMES)
@@ -253,11 +253,11 @@ class PoseModel:
                                               "dt", "seed")}
 
     # ---------------------------------------------------------- training
-    def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+    def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
         return self.fit(samples, jobs=jobs, scheduler=scheduler)
 
-    def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+    def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         from ..parallel import parallel_map
 
         if self.viewpoint not in ("svm", "logistic"):
@@ -328,7 +328,7 @@ class PoseModel:
         g = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         s = self.work_scale(g.shape)
         if abs(s - 1.0) > 1e-6:
-            g = cv2.resize(g, (max(8, int(round(g.shape[1] * s))), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+            g = cv2.resize(g, (max(8, round(g.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
         return RotatedFeatures(g, self.n_orient, self.cell), s
 
     def view_features(self, f: RotatedFeatures, full: bool | None = None) -> tuple[np.ndarray, dict]:

@@ -92,7 +92,7 @@ class PictorialStructures:
         self.dt = dt
 
     # ------------------------------------------------------------------ training
-    def fit_geometry(self, keypoints: np.ndarray) -> "PictorialStructures":
+    def fit_geometry(self, keypoints: np.ndarray) -> PictorialStructures:
         kp = np.asarray(keypoints, dtype=np.float64) / self.cell  # cells
         c, th, L = part_geometry(kp)
         K = self.n_orient
@@ -162,7 +162,7 @@ class PictorialStructures:
         return pos, negs
 
     def fit(self, images: list[np.ndarray], keypoints: np.ndarray, feats: list[RotatedFeatures] | None = None,
-            backgrounds: list[np.ndarray] | None = None) -> "PictorialStructures":
+            backgrounds: list[np.ndarray] | None = None) -> PictorialStructures:
         """``images``: gray frames; ``keypoints`` (N, 15, 2) px. ``feats`` may pass precomputed
         :class:`RotatedFeatures` (same ``n_orient``/``cell``)."""
         rng = np.random.default_rng(self.seed)
