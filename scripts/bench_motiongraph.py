@@ -143,7 +143,7 @@ def synthesis_speed(runs: int) -> dict:
         motion = render_walk(graph, walk)
         ts.append(time.perf_counter() - t0)
         plan_ts.append(t1 - t0)
-    return {"graph_frames": graph.n_frames, "scc_frames": int(graph.scc_.sum()), "transitions": int(graph.trans_in_scc_.sum()),
+    return {"graph_frames": graph.n_frames, "scc_frames": int(graph.scc_.sum()), "transitions": int(graph.stats_["transitions_in_scc"]),
             "actions": acts, "output_s": motion.duration, "median_s": statistics.median(ts), "plan_median_s": statistics.median(plan_ts),
             "x_real_time": motion.duration / statistics.median(ts), "cost": walk.cost}
 

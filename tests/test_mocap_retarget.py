@@ -164,3 +164,31 @@ def test_build_graph_names_the_clip_of_another_joint_layout(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(b) in err and "joint layout differs" in err
     assert not out.exists()
+
+
+def test_library_keypoints_of_other_layouts_and_units_are_comparable(cmu_dir, tmp_path):
+    from vidstyle.mocap.keypoints import keypoint_positions
+    from vidstyle.mocap.retarget import library_keypoints
+
+    m = read_bvh(cmu_dir / "02_01.bvh")[:30]
+    metres = rescale(m, 0.0564)
+    np.testing.assert_allclose(library_keypoints(metres, m.skeleton), keypoint_positions(m), atol=1e-9)
+    # a 22-joint Mixamo-like clip: keypoints by name, scaled onto the CMU body's leg length
+    p = tmp_path / "mx.bvh"
+    _mixamo_bvh(p)
+    mx = read_bvh(p)
+    pts = library_keypoints(mx, m.skeleton)
+    assert pts.shape == (3, 15, 3)
+    i_hip, i_ankle = KEYPOINTS.index("left_hip"), KEYPOINTS.index("left_ankle")
+    ratio = leg_length(m.skeleton) / leg_length(mx.skeleton)
+    np.testing.assert_allclose(np.linalg.norm(pts[0, i_hip] - pts[0, i_ankle]), 82 * ratio, rtol=1e-9)
+    from bvh_samples import TWO_JOINT
+
+    with pytest.raises(InputError, match="keypoints"):
+        library_keypoints(read_bvh_text(TWO_JOINT, tmp_path))
+
+
+def read_bvh_text(text, tmp_path):
+    p = tmp_path / "t.bvh"
+    p.write_text(text)
+    return read_bvh(p)

@@ -92,6 +92,9 @@ def test_enhancement_edge_is_taken_and_passes_through_the_segment_middle(base):
     pos = global_positions(motion)
     orig = np.linalg.norm(np.diff(global_positions(graph.motion()), axis=0), axis=-1).max(1)
     assert np.linalg.norm(np.diff(pos, axis=0), axis=-1).max() < 3 * orig.max()
+    # foot locking runs over the enhancement's frames too (contacts from the departing/arriving frames)
+    locked = render_walk(graph, walk)
+    assert np.isfinite(locked.rotations).all() and walk.foot_lock["enabled"]
     # removing (discarding) the edge leaves the plain walk
     graph.remove_edges([e])
     graph.prune()
@@ -258,3 +261,40 @@ def test_checkpointed_history_with_two_block_edges_gives_the_same_walk(base):
     assert any(graph.edge_kind_[e] == EdgeKind.ENHANCEMENT for e in full.transitions_used)
     assert tiny.cost == full.cost and tiny.transitions_used == full.transitions_used
     np.testing.assert_array_equal(tiny.frames, full.frames)
+
+
+def test_segment_from_a_library_motion_in_another_unit_and_rate(base):
+    from vidstyle.mocap.retarget import rescale
+
+    graph = _copy(base)
+    k = graph.window
+    m = _gait(120, 1.0, 30, 4.0, fps=60.0)  # the base clips' skeleton, at 60 fps, in other units
+    sid = graph.add_segment_from(rescale(m, 0.01), 1.0, source="lib.bvh@1s")
+    S = graph.segments_[sid]
+    ref = m.resample(30.0)
+    assert S.n_frames == 2 * k and S.centre == k - 1
+    np.testing.assert_allclose(S.root_positions, ref.root_positions[30 - k + 1 : 30 + k + 1], atol=1e-9)
+    np.testing.assert_allclose(np.abs(np.sum(S.rotations * ref.rotations[30 - k + 1 : 30 + k + 1], -1)), 1, atol=1e-9)
+    with pytest.raises(ValueError, match="closer than"):
+        graph.add_segment_from(m, 0.05)
+
+
+def test_library_errors_name_parameters_and_the_cli_its_flags(base, tmp_path, capsys):
+    from vidstyle.cli import main
+    from vidstyle.errors import InputError
+    from vidstyle.mocap import write_bvh
+
+    with pytest.raises(InputError, match=r"^window: must be at least 2"):
+        MotionGraph(window=1).fit(_clips())
+    with pytest.raises(InputError, match=r"^steps: step 0 \('jump'"):
+        plan_walk(base, [Step("jump", 10)])
+    clip = tmp_path / "a.bvh"
+    write_bvh(_gait(40, 1.0, 30, 4.0), clip)
+    assert main(["build-graph", str(clip), "--window", "1", "--out", str(tmp_path / "g.npz")]) == 2
+    assert "--window: must be at least 2" in capsys.readouterr().err
+    graph = tmp_path / "g2.npz"
+    base.save(graph)
+    seq = tmp_path / "s.json"
+    seq.write_text('["jump"]')
+    assert main(["synthesize", "--graph", str(graph), "--sequence", str(seq), "--out", str(tmp_path / "o.bvh")]) == 2
+    assert "--sequence: step 0 ('jump'" in capsys.readouterr().err

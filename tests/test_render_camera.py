@@ -110,3 +110,21 @@ def test_rotation_is_orthonormal_and_projection_matches_formula(rng):
     h = xc @ cam.K.T
     assert np.allclose(uv, h[:, :2] / h[:, 2:], atol=1e-9)
     assert np.allclose(z, xc[:, 2])
+
+
+def test_camera_imports_and_projects_without_opencv():
+    """Camera geometry is numpy only: with cv2 unimportable, Camera still loads, places and projects."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; sys.modules['cv2'] = None\n"
+        "from vidstyle.render import Camera\n"
+        "from vidstyle.render.samples import sample_motion\n"
+        "cam = Camera.for_view(sample_motion(5), 'left')\n"
+        "uv, z = cam.project([[0.0, 1.0, 0.0]])\n"
+        "assert z[0] > 0 and 0 <= uv[0, 0] < cam.width\n"
+        "assert sys.modules['cv2'] is None\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr

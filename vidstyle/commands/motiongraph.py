@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
+from contextlib import contextmanager
 from pathlib import Path
 from typing import List, Optional
 
@@ -14,6 +15,23 @@ from ..errors import InputError
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
+
+
+@contextmanager
+def flag_names(mapping: dict[str, str]):
+    """Library errors name parameters (``window: ...``); say the command's flags instead (``--window: ...``)."""
+    try:
+        yield
+    except InputError as e:
+        msg = str(e)
+        for name, flag in mapping.items():
+            if msg.startswith(name + ":") or msg.startswith(name + " "):
+                raise InputError(flag + msg[len(name):]) from None
+        raise
+
+
+_BUILD_FLAGS = {"window": "--window", "fps": "--fps", "mirror": "--mirror", "scheduler": "--scheduler", "clips": "CLIPS"}
+_PLAN_FLAGS = {"steps": "--sequence", "graph": "--graph", "max_in_degree": "--max-in-degree"}
 
 
 def register(app: typer.Typer) -> None:
@@ -37,7 +55,10 @@ def build_graph(
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the threshold sample."),
 ) -> None:
-    """Build a motion graph from labelled clips (see vidstyle.motiongraph.graph for the .npz schema)."""
+    """Build a motion graph from labelled clips (see vidstyle.formats.motiongraph for the .npz schema, version 2).
+
+    Clips of one joint layout in other units or bone lengths are retargeted onto the first clip's skeleton
+    (rotations kept, root path scaled by leg length)."""
     from ..motiongraph import MotionGraph, load_clips
 
     if dtype not in ("float32", "float64"):
@@ -48,10 +69,11 @@ def build_graph(
         raise InputError(f"--threshold: must be positive, got {threshold}")
     if tile < 16:
         raise InputError(f"--tile: must be at least 16, got {tile}")
-    data = load_clips(clips, labels)
-    graph = MotionGraph(window=window, fps=fps, threshold=threshold, threshold_quantile=quantile, min_gap=min_gap,
-                        mirror=mirror, tile=tile, dtype=dtype, n_jobs=jobs, scheduler=scheduler, random_state=seed)
-    graph.fit(data)
+    with flag_names(_BUILD_FLAGS):
+        data = load_clips(clips, labels)
+        graph = MotionGraph(window=window, fps=fps, threshold=threshold, threshold_quantile=quantile, min_gap=min_gap,
+                            mirror=mirror, tile=tile, dtype=dtype, n_jobs=jobs, scheduler=scheduler, random_state=seed)
+        graph.fit(data)
     graph.save(out)
     st = graph.stats_
     log.info("wrote %s: %d frames, %d transitions in the component (%d frames), labels %s, %.1f s",
@@ -78,7 +100,8 @@ def synthesize(
     graph = MotionGraph.load(graph_path)
     steps = read_sequence(sequence, graph.fps, seconds)
     t0 = time.perf_counter()
-    walk = plan_walk(graph, steps, mismatch_penalty, transition_penalty, strict=strict, max_in_degree=max_in_degree)
+    with flag_names(_PLAN_FLAGS):
+        walk = plan_walk(graph, steps, mismatch_penalty, transition_penalty, strict=strict, max_in_degree=max_in_degree)
     motion = render_walk(graph, walk, foot_lock=foot_lock)
     elapsed = time.perf_counter() - t0
     write_bvh(motion, out)
@@ -140,7 +163,8 @@ def evaluate_motion(
 
         seq = read_sequence(sequence, graph.fps)
         t0 = time.perf_counter()
-        walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
+        with flag_names(_PLAN_FLAGS):
+            walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
         motion = render_walk(graph, walk, foot_lock=foot_lock)
         synth_seconds += time.perf_counter() - t0
         synth_frames += motion.n_frames
@@ -162,7 +186,8 @@ def evaluate_motion(
                 prev = str(rng.choice(choices))
                 seq.append(Step(prev, int(rng.integers(int(min_seconds * graph.fps), int(max_seconds * graph.fps) + 1))))
             t0 = time.perf_counter()
-            walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
+            with flag_names({**_PLAN_FLAGS, "steps": "--actions"}):
+                walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
             motion = render_walk(graph, walk, foot_lock=foot_lock)
             synth_seconds += time.perf_counter() - t0
             synth_frames += motion.n_frames

@@ -186,17 +186,27 @@ class Motion:
 
     def rotate_about_vertical(self, angle: float | np.ndarray, pivot: np.ndarray | None = None) -> "Motion":
         """Rotate the whole motion by ``angle`` radians about the vertical (+Y) axis through ``pivot``
-        (default the world origin). ``angle`` may be a scalar or ``(F,)``."""
+        (default the world origin). ``angle`` may be a scalar or ``(F,)``. The rotation is that of
+        :class:`~vidstyle.mocap.placement.Placement` (turns +Z towards +X)."""
+        from .placement import yaw_quat
+        from .quat import qmul
+
         angle = np.broadcast_to(np.asarray(angle, dtype=np.float64), (self.n_frames,))
-        yaw = Rotation.from_rotvec(angle[:, None] * UP)
         pivot = np.zeros(3) if pivot is None else np.asarray(pivot, dtype=np.float64)
+        c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
         rotations = self.rotations.copy()
         translations = self.translations.copy()
-        roots = np.flatnonzero(self.skeleton.parents < 0)
-        for r in roots:
-            rotations[:, r] = (yaw * Rotation.from_quat(self.rotations[:, r])).as_quat()
-            translations[:, r] = yaw.apply(self.translations[:, r] - pivot) + pivot
+        for r in np.flatnonzero(self.skeleton.parents < 0):
+            rotations[:, r] = qmul(yaw_quat(angle), self.rotations[:, r])
+            p = self.translations[:, r] - pivot
+            translations[:, r, 0] = (c * p[:, [0]] + s * p[:, [2]])[:, 0] + pivot[0]
+            translations[:, r, 2] = (-s * p[:, [0]] + c * p[:, [2]])[:, 0] + pivot[2]
         return Motion(self.skeleton, rotations, translations, self.fps)
+
+    def place(self, placement) -> "Motion":
+        """Every root moved by a :class:`~vidstyle.mocap.placement.Placement` (yaw, then floor offset)."""
+        out = self.rotate_about_vertical(placement.theta)
+        return out.translate(np.array([placement.x0, 0.0, placement.z0]))
 
     def translate(self, offset: np.ndarray) -> "Motion":
         """Move every root by ``offset`` ((3,) or (F, 3))."""
@@ -212,14 +222,12 @@ class Motion:
 
     def normalize_facing(self, frame: int = 0, angle: float = 0.0, origin: bool = True) -> "Motion":
         """Rotate about the vertical axis so that the character faces ``angle`` (0 = +Z) at ``frame``,
-        and (``origin``) move it so that its root is above the world origin at that frame."""
-        current = self.facing_angles()[frame]
-        pivot = self.root_positions[frame].copy()
-        pivot[1] = 0.0
-        out = self.rotate_about_vertical(angle - current, pivot=pivot)
-        if origin:
-            out = out.translate(-pivot)
-        return out
+        and (``origin``) move it so that its root is above the world origin at that frame
+        (:meth:`~vidstyle.mocap.placement.Placement.facing`)."""
+        from .placement import Placement
+
+        P = Placement.facing(float(self.facing_angles()[frame]), self.root_positions[frame], angle, origin)
+        return self.place(P)
 
 
 def _find(names: list[str], candidates: Sequence[str]) -> int | None:

@@ -90,3 +90,20 @@ def rescale(motion: Motion, factor: float) -> Motion:
     skeleton = Skeleton(list(sk.names), sk.parents.copy(), sk.offsets * factor, list(sk.channels),
                         {j: v * factor for j, v in sk.end_sites.items()})
     return Motion(skeleton, motion.rotations.copy(), motion.translations * factor, motion.fps)
+
+
+def library_keypoints(motion: Motion, reference: Skeleton | None = None) -> np.ndarray:
+    """(F, 15, 3) body keypoints of a clip of any joint layout (:func:`vidstyle.mocap.keypoints.keypoint_positions`,
+    joints found by name or topology), scaled by ``leg_length(reference) / leg_length(clip)`` so clips of
+    other units and body sizes are comparable with ``reference``'s (its own scale when ``None``).
+    Raises :class:`~vidstyle.errors.InputError` when the skeleton has no joint for some keypoint."""
+    from .keypoints import KeypointMappingError, keypoint_positions
+
+    try:
+        pts = keypoint_positions(motion)
+    except KeypointMappingError as e:
+        raise InputError(f"motion: cannot place the body keypoints ({e})") from None
+    if reference is None:
+        return pts
+    h, h_ref = leg_length(motion.skeleton), leg_length(reference)
+    return pts * (h_ref / h if h > 1e-12 and h_ref > 1e-12 else 1.0)

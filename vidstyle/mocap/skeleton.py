@@ -119,9 +119,3 @@ class Skeleton:
             list(self.channels),
             {k: v.copy() for k, v in self.end_sites.items()},
         )
-
-    def bone_lengths(self) -> np.ndarray:
-        """(J,) length of the bone from each joint's parent to the joint (0 for roots)."""
-        lengths = np.linalg.norm(self.offsets, axis=1)
-        lengths[self.parents < 0] = 0.0
-        return lengths

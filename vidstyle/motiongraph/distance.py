@@ -27,7 +27,6 @@ Distances are reported as RMS over the cloud, ``sqrt(D / W)``, in the motion's l
 from __future__ import annotations
 
 import logging
-import math
 import os
 from dataclasses import dataclass
 from typing import Iterator, Sequence
@@ -81,16 +80,6 @@ def align_windows(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarr
     x0 = mp[..., 0] - (c * mq[..., 0] + s * mq[..., 2])
     z0 = mp[..., 2] - (-s * mq[..., 0] + c * mq[..., 2])
     return np.maximum(D, 0.0), theta, x0, z0
-
-
-def apply_alignment(points: np.ndarray, theta: float, x0: float, z0: float) -> np.ndarray:
-    """``R_y(theta) points + (x0, 0, z0)`` for (..., 3) points."""
-    c, s = math.cos(theta), math.sin(theta)
-    out = np.array(points, dtype=np.float64, copy=True)
-    x, z = points[..., 0], points[..., 2]
-    out[..., 0] = c * x + s * z + x0
-    out[..., 2] = -s * x + c * z + z0
-    return out
 
 
 # ---------------------------------------------------------------------------------------------- data
@@ -369,11 +358,11 @@ def _dask_blocks(ws, blocks, threshold_sq, min_gap, dtype, scheduler) -> list[Ti
     try:
         from dask.distributed import Client
     except ImportError:  # pragma: no cover
-        raise InputError("--scheduler: dask[distributed] is not installed") from None
+        raise InputError("scheduler: dask[distributed] is not installed") from None
     try:
         client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as e:
-        raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+        raise InputError(f"scheduler {scheduler}: cannot connect ({e})") from None
     try:
         log.info("%d distance tiles on Dask cluster %s", len(blocks), scheduler)
         [ws_future] = client.scatter([ws], broadcast=True)

@@ -379,6 +379,26 @@ class MotionGraph:
         self.segments_.append(Segment(rot / norm, root, c, str(source), str(label)))
         return len(self.segments_) - 1
 
+    def add_segment_from(self, motion: Motion, time: float, source: str = "", label: str = "") -> int:
+        """Store the window of a library ``motion`` around ``time`` (seconds) as a segment: the motion is
+        retargeted onto the graph's skeleton (:func:`vidstyle.mocap.retarget.retarget`; same joint
+        layout required), resampled to the graph's ``fps``, and frames ``w_{z-k+1}..w_{z+k}`` around the
+        frame ``z`` nearest ``time`` are kept (fewer at a clip end; ``ValueError`` when fewer than
+        ``k - 1`` remain on a side). Returns the segment id."""
+        from ..mocap.retarget import retarget
+
+        k = int(self.window)
+        m, _ = retarget(motion, self.skeleton_, source or "motion")
+        if abs(m.fps - self.fps) > 1e-9:
+            m = m.resample(self.fps)
+        z = int(round(float(time) * self.fps))
+        if not 0 <= z < m.n_frames:
+            raise ValueError(f"time: {time} s is outside the motion (0 .. {m.duration:.3f} s)")
+        lo, hi = z - k + 1, min(z + k + 1, m.n_frames)
+        if lo < 0 or hi - z < k:
+            raise ValueError(f"time: {time} s is closer than window - 1 = {k - 1} frames to an end of the motion")
+        return self.add_segment(m.rotations[lo:hi], m.root_positions[lo:hi], centre=z - lo, source=source, label=label)
+
     def add_edges(self, src, dst, kind: EdgeKind | int, cost=None, segment=None) -> np.ndarray:
         """Append edges ``src -> dst`` (graph frames, scalars or (n,) arrays) of one ``kind`` and return
         their row indices in the edge table.

@@ -3,14 +3,18 @@
 The request is a label per output frame (the sequence's actions, each for its duration, resampled to
 the graph's frame rate). The walk minimises
 
-    sum over transitions (cost / threshold + transition_penalty) + mismatch_penalty * #frames whose label
-    differs from the requested one
+    sum over the non-playback edges it takes (edge_cost_ / threshold_ + transition_penalty)
+    + mismatch_penalty * #output frames whose label differs from the requested one
 
-by dynamic programming over (graph frame x output time): at each output frame the walk either plays
-the next frame of the current clip or completes a transition, whose k blended frames count with the
-label of the clip that dominates the blend. The DP is exact and blocked by k (see :class:`_Planner`):
-the transition step of k output frames is one cache-friendly gather-and-minimum over the transitions,
-so planning runs >100x real time on a 10k-frame, 54k-transition graph. Sequence file: what ``vidstyle generate --format json`` writes, as-is::
+by dynamic programming over (graph frame x output time) on the graph's edge table (:mod:`.graph`): at
+each output frame the walk either plays the next frame of the current clip (a PLAYBACK edge) or completes
+a BLEND (k output frames, labelled by the clip that dominates the blend) or an ENHANCEMENT (2k output
+frames through its segment, the first k labelled as the departing frames, the last k as the arriving
+ones). Every edge's own ``edge_cost_`` is what it is charged, so an enhancement edge cheaper than the
+plain blends between two actions is taken when the request asks for that pair, and a removed edge is
+simply not there. The DP is exact and blocked by k (see :class:`_Planner`): the edge step of k output
+frames is one cache-friendly gather-and-minimum over the edges, so planning runs >100x real time on a
+10k-frame, 54k-transition graph (``scripts/bench_graph_edges.py`` compares it with the planner it replaced). Sequence file: what ``vidstyle generate --format json`` writes, as-is::
 
     {"kind": "vidstyle.sequence", "fps": 20.0,
      "events": [{"action": "Jab", "duration_frames": 14, "start_frame": 0}, ...]}
@@ -52,7 +56,7 @@ def read_sequence(path: str | Path, fps: float, default_seconds: float = 1.0) ->
     return parse_sequence(data, fps, default_seconds, source=str(path))
 
 
-def parse_sequence(data, fps: float, default_seconds: float = 1.0, source: str = "--sequence") -> list[Step]:
+def parse_sequence(data, fps: float, default_seconds: float = 1.0, source: str = "sequence") -> list[Step]:
     default = max(1, int(round(default_seconds * fps)))
     if isinstance(data, list):
         items, classes, seq_fps = data, [], None
@@ -478,7 +482,7 @@ def _check_steps(graph: MotionGraph, walk: Walk, strict: bool) -> None:
         if hit == 0 and strict:
             prev = walk.steps[s - 1].action if s else None
             raise InputError(
-                f"--sequence: step {s} ({step.action!r}, {step.frames} frames{', after ' + repr(prev) if prev else ''}): "
+                f"steps: step {s} ({step.action!r}, {step.frames} frames{', after ' + repr(prev) if prev else ''}): "
                 f"the graph cannot reach {step.action!r} {'from ' + repr(prev) + ' ' if prev else ''}within the requested "
                 "duration (no transition path; add clips, raise the threshold or lengthen the step)"
             )
@@ -577,6 +581,7 @@ def walk_labels(graph: MotionGraph, walk: Walk, bvh_name: str) -> dict:
         "transition": walk.transition.tolist(),
         "transitions_used": walk.transitions_used,
         "transition_kinds": [EdgeKind(int(graph.edge_kind_[e])).name for e in walk.transitions_used],
+        "transition_segments": [int(graph.edge_segment_[e]) for e in walk.transitions_used],
         "events": events,
         "cost": walk.cost,
         "foot_lock": walk.foot_lock,

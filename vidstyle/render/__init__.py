@@ -47,11 +47,27 @@ Part masks are not stored; ``render_motion(..., return_masks=True)`` returns the
 joint index owning the front-most body part at each pixel (-1 = background).
 """
 
-from .appearance import Appearance
-from .body import BodyModel, build_body, classify_bone, skeleton_height
-from .camera import Camera, parse_view
-from .core import SIDECAR_SUFFIX, load_truth, render_motion, render_to_file, sidecar_path
-from .videoio import read_video, write_video
+# Submodules load on first use (PEP 562), so ``from vidstyle.render import Camera`` (camera geometry:
+# numpy only) works without OpenCV; the rasteriser, backgrounds and video output need it.
+_LAZY = {
+    "Appearance": "appearance",
+    "BodyModel": "body", "build_body": "body", "classify_bone": "body", "skeleton_height": "body",
+    "Camera": "camera", "parse_view": "camera",
+    "SIDECAR_SUFFIX": "core", "load_truth": "core", "render_motion": "core", "render_to_file": "core",
+    "sidecar_path": "core",
+    "read_video": "videoio", "write_video": "videoio",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "SIDECAR_SUFFIX",

@@ -1,4 +1,5 @@
-"""Static pinhole camera placed relative to a performer's facing direction.
+"""Static pinhole camera placed relative to a performer's facing direction (numpy only: importable
+without OpenCV).
 
 Conventions (OpenCV): camera coordinates have +x to the right of the image, +y down, +z forward (the
 viewing direction); ``x_cam = R @ x_world + t``; pixel ``(u, v) = (K @ x_cam)[:2] / z`` with ``u`` the
@@ -132,21 +133,6 @@ class Camera:
         return uv, z
 
     # ------------------------------------------------------------------ constructors
-    @classmethod
-    def look_at(
-        cls,
-        eye: np.ndarray,
-        target: np.ndarray,
-        size: tuple[int, int] = (160, 120),
-        vfov_deg: float = DEFAULT_VFOV_DEG,
-        azimuth_deg: float = 0.0,
-        elevation_deg: float = 0.0,
-        facing_deg: float = 0.0,
-    ) -> Camera:
-        R = look_at_rotation(np.asarray(eye, float), np.asarray(target, float))
-        t = -R @ np.asarray(eye, float)
-        return cls(intrinsics(size, vfov_deg), R, t, azimuth_deg, elevation_deg, tuple(size), facing_deg)
-
     @classmethod
     def for_view(
         cls,

@@ -186,14 +186,13 @@ def _motion_section(page: Page, run: Path) -> None:
     gpath = run / "graph" / "graph.npz"
     body = []
     if gpath.is_file():
-        with np.load(gpath, allow_pickle=False) as z:
-            params = json.loads(str(z["params_json"]))
-            labels = [str(x) for x in z["label_names"]]
-        stats = params.get("stats", {})
-        rows = [[k.replace("_", " "), v] for k, v in stats.items() if isinstance(v, (int, float))]
+        from ..formats.motiongraph import read_graph
+
+        g = read_graph(gpath)
+        rows = [[k.replace("_", " "), v] for k, v in g.stats_.items() if isinstance(v, (int, float))]
         body.append(table(rows, ["motion graph", "value"]))
-        body.append(f'<p class="note">labels: {esc(", ".join(labels))}; window {params.get("window")} frames at '
-                    f'{params.get("fps")} fps</p>')
+        body.append(f'<p class="note">labels: {esc(", ".join(g.label_names_))}; window {g.window} frames at '
+                    f'{g.fps:g} fps</p>')
     else:
         body.append(_missing("motion graph", gpath))
     m = _load(run / "metrics" / "motion.json")
