@@ -79,15 +79,11 @@ def augment(
 
 
 def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
-    """Poses of ``frames`` of ``video`` by the pose stage's estimator."""
-    try:
-        from ..pose import estimate_frames  # the pose stage's Python entry point
-    except ImportError:
-        raise InputError("--pose-model: this build's pose stage has no estimator for pictorial-structures models; "
-                         "run `vidstyle pose VIDEO --model M --frames ... --out poses.json` and pass --poses") from None
+    """Poses of ``frames`` of ``video`` by the pose stage (pictorial structures, ``model``)."""
     from ..augmg.poses_io import FramePose
+    from ..pose.run import estimate_video
 
-    doc = estimate_frames(model, video, frames)
+    doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1)
     return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}
 
 
