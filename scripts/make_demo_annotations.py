@@ -22,7 +22,13 @@ import numpy as np
 
 from vidstyle.demo.actions import ACTIONS
 from vidstyle.demo.dataset import DatasetParams, generate_take, make_performer, make_take
-from vidstyle.formats.annotations import Annotations, Transition, VideoAnnotations, file_sha256, write_annotations
+from vidstyle.formats.annotations import (
+    Annotations,
+    Transition,
+    VideoAnnotations,
+    file_sha256,
+    write_annotations,
+)
 from vidstyle.mocap.keypoints import KEYPOINT_INDEX, keypoint_positions
 
 REPO = Path(__file__).resolve().parents[1]

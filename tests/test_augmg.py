@@ -18,7 +18,13 @@ from vidstyle.augmg.enhance import (
 )
 from vidstyle.augmg.index import LibraryClip, PoseIndex, coherent_ranking
 from vidstyle.augmg.keypoints import KP, keypoint_positions
-from vidstyle.augmg.projection import angle_features, facing_normalised, facing_of_keypoints, project, relative_azimuth
+from vidstyle.augmg.projection import (
+    angle_features,
+    facing_normalised,
+    facing_of_keypoints,
+    project,
+    relative_azimuth,
+)
 from vidstyle.cli import app
 from vidstyle.demo.dataset import DatasetParams, make_performer, make_take
 from vidstyle.demo.timeline import apply_transition_styles, build_take, performance_plan
@@ -61,7 +67,7 @@ def test_transition_pose_differs_from_guard_and_is_drawn_from_the_motion(take):
         guard_end = pts[t["start"] - 1]
         key = pts[t["key"]]
         # the transition pose is far from the guard around it: > 5 cm mean keypoint displacement
-        rel = lambda x: x - x[KP["pelvis"]] * [1, 0, 1]  # noqa: E731
+        rel = lambda x: x - x[KP["pelvis"]] * [1, 0, 1]
         assert np.linalg.norm(rel(key) - rel(guard_end), axis=1).mean() * 0.0564 > 0.05
 
 
@@ -206,7 +212,7 @@ def test_two_half_transition_passes_exactly_through_w_z(rng):
     from scipy.spatial.transform import Rotation
 
     J, n = 5, 21
-    q = lambda m: Rotation.random(m, random_state=int(rng.integers(1 << 30))).as_quat()  # noqa: E731
+    q = lambda m: Rotation.random(m, random_state=int(rng.integers(1 << 30))).as_quat()
     seg = q(13 * J).reshape(13, J, 4)
     ra, rb = q(J), q(J)
     rot, root = two_half_transition(ra, np.zeros(3), seg, np.ones((13, 3)), rb, np.full(3, 2.0), n, centre=6)
@@ -281,8 +287,7 @@ def _annotations(tmp_path: Path, frame: int, a: str, b: str, status: str = "acce
 
 @pytest.mark.slow
 def test_augment_adds_enhancement_edges_and_a_discarded_mark_adds_none(tmp_path, take, library):
-    from vidstyle.motiongraph import MotionGraph
-    from vidstyle.motiongraph import plan_walk
+    from vidstyle.motiongraph import MotionGraph, plan_walk
     from vidstyle.motiongraph.graph import EdgeKind, load_clips
     from vidstyle.motiongraph.synthesis import Step
 

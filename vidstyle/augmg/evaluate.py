@@ -168,10 +168,16 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         raise ValueError(f"place: 'first' or 'both', got {place!r}")
     if segment not in ("fixed", "nodes"):
         raise ValueError(f"segment: 'fixed' or 'nodes', got {segment!r}")
+    from ..logutil import progress
     from ..mocap import Motion, read_bvh
     from ..mocap.retarget import leg_length
-    from ..logutil import progress
-    from .enhance import enhanced_distance, enhancement_nodes, place_segment, plain_transition, two_half_transition
+    from .enhance import (
+        enhanced_distance,
+        enhancement_nodes,
+        place_segment,
+        plain_transition,
+        two_half_transition,
+    )
     from .keypoints import keypoint_positions
 
     manifest, queries = dataset_queries(Path(dataset), annotations)

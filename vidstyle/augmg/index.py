@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .keypoints import KP
-from .projection import angle_features, facing_of_keypoints, facing_normalised, project
+from .projection import angle_features, facing_normalised, facing_of_keypoints, project
 
 
 @dataclass

@@ -256,7 +256,6 @@ def retarget_rest_corrected(motion, target):
         local[:, j] = G[:, j] if p < 0 else np.swapaxes(G[:, p], 1, 2) @ G[:, j]
     q = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat().reshape(-1, J, 4)
     from ..demo.rig import continuous_quaternions
-
     from ..mocap.retarget import leg_length
 
     scale = leg_length(target) / max(leg_length(src), 1e-9)
