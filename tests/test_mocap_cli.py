@@ -77,6 +77,6 @@ def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
     stages = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
               "synthesize"]
     assert listed[: len(stages)] == stages
-    assert set(listed[len(stages):]) == {"train-pose", "pose", "annotate", "demo", "render", "evaluate", "report", "mocap"}
+    assert set(listed[len(stages):]) == {"train-pose", "pose", "match-pose", "augment", "annotate", "demo", "render", "evaluate", "report", "mocap"}
     for command in listed:  # every listed command answers --help
         assert main([command, "--help"]) == 0

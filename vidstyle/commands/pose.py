@@ -6,7 +6,6 @@ import json
 import logging
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -24,7 +23,7 @@ def register(app: typer.Typer) -> None:
     app.command("pose")(pose)
 
 
-def _cmu(cmu_dir: Optional[Path]) -> Optional[Path]:
+def _cmu(cmu_dir: Path | None) -> Path | None:
     if cmu_dir is not None and not cmu_dir.is_dir():
         raise InputError(f"{cmu_dir}: CMU BVH directory not found")
     if cmu_dir is None and DEFAULT_CMU.is_dir():
@@ -34,7 +33,7 @@ def _cmu(cmu_dir: Optional[Path]) -> Optional[Path]:
 
 def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
-    cmu_dir: Optional[Path] = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
+    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
                                            "performers (default: ../shared/data/mocap/cmu when present)."),
     n_demo: int = typer.Option(6, "--demo-performers", help="Demo performers rendered for training."),
     n_cmu: int = typer.Option(10, "--cmu-clips", help="CMU clips (of the training subjects) rendered."),
@@ -47,7 +46,7 @@ def train_pose(
                                   "one-vs-all + one-vs-one SVMs) or logistic (every part's score)."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
+    scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """Train the pictorial-structures pose model (viewpoint-specific + generic part detectors, tree
     priors, viewpoint SVMs) on frames rendered from the demo performers and CMU clips."""
@@ -73,11 +72,11 @@ def train_pose(
 def pose(
     video: Path = typer.Argument(..., help="Input video."),
     out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
-    model: Optional[Path] = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
     backend: str = typer.Option("ps", "--backend", help="ps (pictorial structures) or blazepose (MediaPipe)."),
-    frames: Optional[str] = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
+    frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
+    scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
     y = row in the input video's pixels)."""
@@ -99,14 +98,14 @@ def pose(
 @evaluate_app.command("pose")
 def evaluate_pose(
     model: Path = typer.Option(..., "--model", "-m", help="Pose model (train-pose)."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
-    cmu_dir: Optional[Path] = typer.Option(None, "--cmu-dir", help="CMU BVH clips (held-out subjects are rendered)."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
+    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips (held-out subjects are rendered)."),
     n_demo: int = typer.Option(3, "--demo-performers", help="Held-out demo performers rendered."),
     n_cmu: int = typer.Option(6, "--cmu-clips", help="Held-out CMU clips rendered."),
     views_per_clip: int = typer.Option(4, "--views-per-clip", help="Held-out azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
     fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
-    real_dir: Optional[Path] = typer.Option(None, "--real-dir", help="Real footage to compare the backends on "
+    real_dir: Path | None = typer.Option(None, "--real-dir", help="Real footage to compare the backends on "
                                             "(default: ../shared/data/video/real when present; 'none' to skip)."),
     overlay_dir: Path = typer.Option(Path("pose_overlays"), "--overlay-dir", help="Where overlay PNGs go."),
     real_frames: int = typer.Option(6, "--real-frames", help="Frames per real video."),

@@ -10,6 +10,11 @@ Layout of ``DIR`` (paths in the manifest are relative to ``DIR``)::
     mocap/<take>.bvh                  the motion the take's videos were rendered from (60 fps)
     mocap/<take>.labels.json          the same labels per mocap frame
 
+Both labels files carry ``styled_transitions``: the performer's own transition movements
+(:mod:`.transitions`) as ``{"from", "to", "kind", "start", "end", "key"}`` in that file's frames (``end``
+exclusive, ``key`` the middle of the held transition pose); their 3D motion is the take's BVH over
+those frames. The frames keep the label ``Guard`` (a transition is the pause between two actions).
+
 Takes: ``<performer>_<action>`` (single-action takes, e.g. ``p00_jab``) and ``<performer>_perf<k>``
 (performances). Every random draw comes from ``numpy.random.SeedSequence([seed, performer, take])``,
 so a take does not depend on which worker ran it or on the other takes: the same seed gives
@@ -146,6 +151,12 @@ def label_document(labels: list[str], fps: float, chain: list[str], **meta) -> d
             "events": events, "chain": list(chain), "segments": segments}
 
 
+def video_transitions(tk: Take) -> list[dict]:
+    """The take's styled transitions in video frames (their boundaries fall on video frames)."""
+    return [{**t, "start": t["start"] // tk.ratio, "end": t["end"] // tk.ratio, "key": t["key"] // tk.ratio}
+            for t in tk.transitions]
+
+
 def _render_seed(params: DatasetParams, index: int, take: int, view_index: int) -> int:
     return int(np.random.SeedSequence([params.seed, index, take, 2, view_index]).generate_state(1)[0])
 
@@ -173,7 +184,8 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
     bvh_labels_rel = f"mocap/{name}.labels.json"
     write_bvh(tk.motion, root / bvh_rel)
     write_labels(root / bvh_labels_rel, label_document(tk.labels, float(params.mocap_fps), tk.chain,
-                                                    bvh=bvh_rel, performer=performer.id))
+                                                    bvh=bvh_rel, performer=performer.id,
+                                                    styled_transitions=tk.transitions))
     video_labels = tk.video_labels
     is_transition = np.zeros(len(tk.labels), dtype=bool)
     is_transition[1:] = np.array(tk.labels[1:]) != np.array(tk.labels[:-1])
@@ -192,7 +204,8 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
                            background=params.background, noise_sigma=params.noise_sigma,
                            seed=_render_seed(params, index, take, vi), labels=tk.labels, transitions=is_transition)
         write_labels(root / labels_rel, label_document(video_labels, float(params.fps), tk.chain, video=video_rel,
-                                                     performer=performer.id, view=view))
+                                                     performer=performer.id, view=view,
+                                                     styled_transitions=video_transitions(tk)))
         entry = {"id": vid, "performer": performer.id, "kind": kind}
         if kind == "single":
             entry["action"] = ACTIONS[take]

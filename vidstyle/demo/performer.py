@@ -9,6 +9,7 @@ import numpy as np
 
 from .actions import ACTIONS, BASE_SECONDS
 from .skeleton import Body
+from .transitions import draw_transition_styles
 
 
 @dataclass(frozen=True)
@@ -110,12 +111,23 @@ class Performer:
     body: Body
     style: Style
     chain: Chain
+    transitions: tuple[tuple[str, str, str], ...] = ()  # (from, to, kind): see :mod:`.transitions`
 
     @classmethod
     def random(cls, performer_id: str, rng: np.random.Generator, video_fps: float = 20.0) -> Performer:
         body = Body.random(rng)
         style = Style.random(rng)
-        return cls(performer_id, body, style, Chain.random(rng, style, video_fps))
+        chain = Chain.random(rng, style, video_fps)
+        # drawn last, so body, style and chain are those of a performer without transition styles
+        return cls(performer_id, body, style, chain, draw_transition_styles(rng, chain.transition))
+
+    def transition_kind(self, src: str, dst: str) -> str | None:
+        """This performer's way of moving from action ``src`` to ``dst`` (None: a plain guard pause)."""
+        for a, b, kind in self.transitions:
+            if a == src and b == dst:
+                return kind
+        return None
 
     def to_dict(self) -> dict:
-        return {"id": self.id, "body": self.body.to_dict(), "style": self.style.to_dict(), "chain": self.chain.to_dict()}
+        return {"id": self.id, "body": self.body.to_dict(), "style": self.style.to_dict(), "chain": self.chain.to_dict(),
+                "transitions": [{"from": a, "to": b, "kind": k} for a, b, k in self.transitions]}

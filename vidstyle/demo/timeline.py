@@ -29,6 +29,7 @@ from .actions import (
 )
 from .performer import Performer
 from .rig import CH, CHANNELS, solve_motion
+from .transitions import KEY_PHASES, MIN_FRAMES, transition_keys
 
 _NOISE_SCALE = np.ones(len(CHANNELS))
 for _c in ("yaw", "pitch", "roll", "cyaw", "cpitch", "croll", "hpitch", "lfyaw", "lfpitch", "rfyaw", "rfpitch"):
@@ -44,6 +45,8 @@ class Segment:
     label: str
     frames: int  # video frames
     step: int = 0  # +1 forward, -1 backward (Step segments)
+    keys: list[Key] | None = None  # own keys (a transition style or a library movement), guard to guard
+    style: str = ""  # the transition kind animated in this guard pause (:mod:`.transitions`)
 
 
 @dataclass
@@ -55,6 +58,9 @@ class Take:
     plan: list[Segment]
     ratio: int  # mocap frames per video frame
     chain: list[str] = field(default_factory=list)
+    transitions: list[dict] = field(default_factory=list)
+    """Styled transitions: ``{"from", "to", "kind", "start", "end", "key"}`` in mocap frames (``end``
+    exclusive; ``key`` is the middle of the held transition pose)."""
 
     @property
     def video_labels(self) -> list[str]:
@@ -111,7 +117,9 @@ def build_take(p: Performer, plan: list[Segment], rng: np.random.Generator, vide
     labels: list[str] = []
     for seg in plan:
         t0, dur = frame / video_fps, seg.frames / video_fps
-        if seg.label == "Guard":
+        if seg.keys is not None:  # deterministic: the take's random stream stays that of a plain take
+            tk, vk = _keys_of(p, guard, seg.keys, t0, dur, origin, rng, noisy=False)
+        elif seg.label == "Guard":
             bounce_windows.append((t0, dur))
             tk, vk = [t0 + dur], [values[-1].copy()]
         elif seg.label == "Step":
@@ -121,8 +129,9 @@ def build_take(p: Performer, plan: list[Segment], rng: np.random.Generator, vide
         else:
             tk, vk = _keys_of(p, guard, ACTION_KEYS[seg.label], t0, dur, origin, rng, noisy=True)
         # the segment's first key repeats the previous segment's last one (both are the guard)
-        times += tk[1:] if seg.label != "Guard" else tk
-        values += vk[1:] if seg.label != "Guard" else vk
+        held = seg.label == "Guard" and seg.keys is None
+        times += tk if held else tk[1:]
+        values += vk if held else vk[1:]
         labels += [seg.label] * (seg.frames * ratio)
         frame += seg.frames
     n = frame * ratio
@@ -142,7 +151,15 @@ def build_take(p: Performer, plan: list[Segment], rng: np.random.Generator, vide
     if p.style.lead == "southpaw":
         motion = motion.mirror()
     chain = [s.label for s in plan if s.label in ACTIONS]
-    return Take(motion, labels, plan, ratio, chain)
+    transitions, frame = [], 0
+    for i, seg in enumerate(plan):
+        if seg.style:
+            start, end = frame * ratio, (frame + seg.frames) * ratio
+            key = start + int(round(0.5 * (KEY_PHASES[0] + KEY_PHASES[1]) * (end - start)))
+            transitions.append({"from": plan[i - 1].label, "to": plan[i + 1].label, "kind": seg.style,
+                                "start": start, "end": end, "key": key})
+        frame += seg.frames
+    return Take(motion, labels, plan, ratio, chain, transitions)
 
 
 # --------------------------------------------------------------------------- plans
@@ -205,4 +222,24 @@ def performance_plan(p: Performer, n_frames: int, rng: np.random.Generator) -> l
             used += d + gap
         prev = a
     plan[-1].frames += n_frames - used  # the last segment is always a guard pause
-    return plan
+    return apply_transition_styles(p, plan, n_frames)
+
+
+def apply_transition_styles(p: Performer, plan: list[Segment], n_frames: int) -> list[Segment]:
+    """Animate every guard pause between two actions the performer has a transition habit for as that
+    transition (lengthened to :data:`MIN_FRAMES` where shorter). If lengthening overruns ``n_frames``,
+    trailing segments are dropped and the final guard pause absorbs the rest. Plans without such a
+    pair come back unchanged."""
+    min_frames = int(round(MIN_FRAMES * p.chain.video_fps / 20.0))
+    out = [Segment(s.label, s.frames, s.step, s.keys, s.style) for s in plan]
+    for i in range(1, len(out) - 1):
+        a, g, b = out[i - 1], out[i], out[i + 1]
+        kind = p.transition_kind(a.label, b.label) if g.label == "Guard" else None
+        if kind and a.label in ACTIONS and b.label in ACTIONS:
+            g.keys, g.style, g.frames = transition_keys(kind), kind, max(g.frames, min_frames)
+    if all(not s.style for s in out):
+        return out
+    while sum(s.frames for s in out) > n_frames or out[-1].label != "Guard" or out[-1].style:
+        out.pop()  # the first segment is a plain guard pause, so this stops
+    out[-1].frames += n_frames - sum(s.frames for s in out)
+    return out

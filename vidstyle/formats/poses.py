@@ -25,7 +25,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..mocap.keypoints import KEYPOINTS
-from ._base import FormatError, Fields, check_array, check_header, header, read_json_document, write_json_document
+from ._base import (
+    Fields,
+    FormatError,
+    check_array,
+    check_header,
+    header,
+    read_json_document,
+    write_json_document,
+)
 
 KIND = "vidstyle.poses"
 SCHEMA_VERSION = 1

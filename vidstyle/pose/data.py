@@ -65,7 +65,7 @@ def _demo_motion(index: int, seconds: float, seed: int):
 
     rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
     p = Performer.random(f"p{index:02d}", rng, video_fps=20)
-    take = build_take(p, performance_plan(p, int(round(seconds * 20)) + 4, rng), rng, video_fps=20)
+    take = build_take(p, performance_plan(p, round(seconds * 20) + 4, rng), rng, video_fps=20)
     return take.motion
 
 
@@ -90,7 +90,7 @@ def render_spec(spec: Spec, keep_bgr: bool = False) -> list[Sample]:
     if b - a < 2:
         a, b = 0, min(motion.n_frames, 2)
     motion = motion[a:b].resample(spec.fps)
-    W, H = spec.size
+    _W, H = spec.size
     height = skeleton_height(motion.skeleton)
     probe = Camera.for_view(motion, view=spec.azimuth, elevation_deg=spec.elevation, size=spec.size)
     distance = probe.focal * height / (FIGURE_FRACTION * spec.scale * H)

@@ -28,7 +28,7 @@ from ..formats.poses import PoseFrame
 from ..mocap.keypoints import PART_NAMES
 from .data import VIEW_NAMES, Sample, Spec, render_samples
 from .features import RotatedFeatures, orientation_bin
-from .model import N_PARTS, PictorialStructures, part_geometry
+from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
 log = logging.getLogger(__name__)
 MODEL_KIND = "vidstyle.pose-model"
@@ -48,7 +48,7 @@ class ViewpointSVM:
         self.gamma = gamma
         self.seed = seed
 
-    def fit(self, X: np.ndarray, y: np.ndarray) -> "ViewpointSVM":
+    def fit(self, X: np.ndarray, y: np.ndarray) -> ViewpointSVM:
         self.scaler_ = StandardScaler().fit(X)
         Z = self.scaler_.transform(X)
         self.classes_ = np.array(VIEW_NAMES)
@@ -165,14 +165,12 @@ def _mine(job: _MineJob) -> dict:
     for img, kp, view in job.samples:
         f = RotatedFeatures(img, next(iter(job.models.values())).n_orient, next(iter(job.models.values())).cell)
         row = []
+        maps = score_models(job.models if job.n_hard else {v: job.models[v] for v in VIEW_NAMES}, f)
         for name in VIEW_NAMES:
-            m = job.models[name]
-            S = m.score_maps(f)
-            row.extend(S.reshape(N_PARTS, -1).max(axis=1))
-            if name == view:
-                hard[name] = _merge(hard[name], _hard_windows(m, f, S, kp, job.n_hard))
-        m = job.models[GENERIC]
-        hard[GENERIC] = _merge(hard[GENERIC], _hard_windows(m, f, m.score_maps(f), kp, job.n_hard))
+            row.extend(maps[name].reshape(N_PARTS, -1).max(axis=1))
+        if job.n_hard:
+            for name in (view, GENERIC):
+                hard[name] = _merge(hard[name], _hard_windows(job.models[name], f, maps[name], kp, job.n_hard))
         vfeat.append(row)
     return {"hard": {k: [np.array(v, np.float32).reshape(len(v), -1) if v else None for v in parts]
                      for k, parts in hard.items()},
@@ -255,11 +253,11 @@ class PoseModel:
                                               "dt", "seed")}
 
     # ---------------------------------------------------------- training
-    def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+    def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
         return self.fit(samples, jobs=jobs, scheduler=scheduler)
 
-    def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> "PoseModel":
+    def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         from ..parallel import parallel_map
 
         if self.viewpoint not in ("svm", "logistic"):
@@ -275,6 +273,8 @@ class PoseModel:
             m = PictorialStructures(self.n_orient, self.cell, self.C, self.neg_per_pos, self.hard_rounds, self.seed,
                                     self.dt)
             self.models_[name] = m.fit_geometry(kp[name])
+        for m in self.models_.values():  # one template size per part: window gathers are shared
+            m.sizes_ = list(self.models_[GENERIC].sizes_)
         sizes = {n: m.sizes_ for n, m in self.models_.items()}
         triples = [(s.image, s.keypoints, s.view) for s in samples]
         n_chunks = max(2, min(32, len(triples) // 20))
@@ -328,28 +328,33 @@ class PoseModel:
         g = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         s = self.work_scale(g.shape)
         if abs(s - 1.0) > 1e-6:
-            g = cv2.resize(g, (max(8, int(round(g.shape[1] * s))), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+            g = cv2.resize(g, (max(8, round(g.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
         return RotatedFeatures(g, self.n_orient, self.cell), s
 
-    def view_features(self, f: RotatedFeatures, maps: dict | None = None) -> tuple[np.ndarray, dict]:
-        maps = maps if maps is not None else {}
-        row = []
-        for name in VIEW_NAMES:
-            if name not in maps:
-                maps[name] = self.models_[name].score_maps(f)
-            row.extend(maps[name].reshape(N_PARTS, -1).max(axis=1))
-        return np.array(row), maps
+    def view_features(self, f: RotatedFeatures, full: bool | None = None) -> tuple[np.ndarray, dict]:
+        """Viewpoint features of a frame: the best score of every part detector of every viewpoint
+        (40 values, view-major; with ``full=False`` only the torso detectors are run and the other
+        entries are NaN). Also returns the score maps computed (view name -> maps)."""
+        full = self.viewpoint == "logistic" if full is None else full
+        views = {v: self.models_[v] for v in VIEW_NAMES}
+        maps = score_models(views, f, None if full else [0])
+        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
+        for n, name in enumerate(VIEW_NAMES):
+            best = maps[name].reshape(maps[name].shape[0], -1).max(axis=1)
+            row[n * N_PARTS: n * N_PARTS + len(best)] = best
+        return row, (maps if full else {})
 
     def classify_view(self, feats: np.ndarray, which: str | None = None) -> tuple[str, dict]:
-        clf = {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_}[which or self.viewpoint]
-        x = feats if which == "logistic" or (which is None and self.viewpoint == "logistic") else \
-            feats[[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        which = which or self.viewpoint
+        clf = {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_}[which]
+        x = feats if which == "logistic" else feats[[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
         return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
 
     def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
                  detectors: str | None = None) -> PoseFrame:
-        """Pose of one frame. ``view`` forces a viewpoint (else the classifier decides);
-        ``detectors="generic"`` uses the generic set."""
+        """Pose of one frame (BGR or gray, any size: it is resized to the working height). ``view``
+        forces a viewpoint (else the classifier decides); ``detectors="generic"`` uses the generic
+        set."""
         f, s = self.prepare(frame)
         feats, maps = self.view_features(f)
         vname, vscores = self.classify_view(feats)
@@ -357,9 +362,7 @@ class PoseModel:
             vname = view
         model_name = GENERIC if detectors == GENERIC else vname
         m = self.models_[model_name]
-        S = maps.get(model_name)
-        if S is None:
-            S = m.score_maps(f)
+        S = maps[model_name] if model_name in maps else score_models({model_name: m}, f)[model_name]
         r = m.infer(S)
         pts = m.keypoints(r["states"], r["unary"], scale=s)
         return PoseFrame(index, vname, pts, vscores)

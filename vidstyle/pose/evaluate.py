@@ -18,6 +18,7 @@ import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
 from .data import VIEW_NAMES
+from .model import score_models
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +63,7 @@ def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
             rows[v] = {short: float(hits[sel, PART_NAMES.index(p)].mean()) for short, p in TABLE5}
             rows[v]["n"] = int(sel.sum())
     rows["all"] = {short: float(hits[:, PART_NAMES.index(p)].mean()) for short, p in TABLE5}
-    rows["all"]["n"] = int(len(hits))
+    rows["all"]["n"] = len(hits)
     rows["all"]["mean"] = float(hits.mean())
     return rows
 
@@ -79,7 +80,7 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     for s in samples:
         t0 = time.perf_counter()
         f, scale = model.prepare(s.image)
-        feats, maps = model.view_features(f)
+        feats, maps = model.view_features(f, full=True)
         v_svm, _ = model.classify_view(feats, "svm")
         v_log, _ = model.classify_view(feats, "logistic")
         vpred["svm"].append(v_svm)
@@ -87,11 +88,11 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
         chosen = v_svm if model.viewpoint == "svm" else v_log
         for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
             m = model.models_[mname]
-            S = maps[mname] if mname in maps else m.score_maps(f)
+            S = maps[mname] if mname in maps else score_models({mname: m}, f)[mname]
             r = m.infer(S)
             methods[name].append(m.keypoints(r["states"], r["unary"], scale))
             if name == "ps":
-                times.append(time.perf_counter() - t0)
+                times.append(time.perf_counter() - t0)  # includes all 40 detectors (both classifiers)
     if blazepose:
         est = BlazePoseEstimator()
         bp, bview = [], []
@@ -152,17 +153,17 @@ def draw_overlay(frame: np.ndarray, poses: dict[str, np.ndarray]) -> np.ndarray:
     import cv2
 
     img = frame.copy()
-    s = max(1, int(round(img.shape[0] / 300)))
+    s = max(1, round(img.shape[0] / 300))
     colours = {"ps": (40, 40, 230), "blazepose": (40, 200, 40)}
     for name, pts in poses.items():
         col = colours.get(name, (200, 200, 0))
         for a, b in SKELETON_LINES:
             if pts[a, 2] > 0 and pts[b, 2] > 0:
-                cv2.line(img, tuple(int(round(v)) for v in pts[a, :2]), tuple(int(round(v)) for v in pts[b, :2]),
+                cv2.line(img, tuple(round(v) for v in pts[a, :2]), tuple(round(v) for v in pts[b, :2]),
                          col, 2 * s, cv2.LINE_AA)
         for p in pts:
             if p[2] > 0:
-                cv2.circle(img, (int(round(p[0])), int(round(p[1]))), 2 * s, col, -1, cv2.LINE_AA)
+                cv2.circle(img, (round(p[0]), round(p[1])), 2 * s, col, -1, cv2.LINE_AA)
         cv2.putText(img, name, (10 * s, (30 if name == "ps" else 60) * s), cv2.FONT_HERSHEY_SIMPLEX, 0.8 * s, col, 2 * s)
     return img
 

@@ -80,7 +80,7 @@ class RotatedFeatures:
     def __init__(self, gray: np.ndarray, n_orient: int, cell: int = 4) -> None:
         H, W = gray.shape
         self.H, self.W, self.cell, self.n_orient = H, W, cell, n_orient
-        S = int(math.ceil(math.hypot(H, W) / cell)) * cell
+        S = math.ceil(math.hypot(H, W) / cell) * cell
         self.S = S
         self.mats = []
         self.feats = []
@@ -105,8 +105,8 @@ class RotatedFeatures:
         """Cells of the (h, w)-cell window centred on frame point ``centre_xy`` in copy ``k``
         (flattened), or None when it leaves the canvas."""
         cx, cy = (self.to_canvas(k, centre_xy) - (self.cell - 1) / 2.0) / self.cell
-        r0 = int(round(cy - (h - 1) / 2.0))
-        c0 = int(round(cx - (w - 1) / 2.0))
+        r0 = round(cy - (h - 1) / 2.0)
+        c0 = round(cx - (w - 1) / 2.0)
         f = self.feats[k]
         if r0 < 0 or c0 < 0 or r0 + h > f.shape[0] or c0 + w > f.shape[1]:
             return None

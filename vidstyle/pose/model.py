@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 from sklearn.linear_model import LogisticRegression
 
@@ -93,7 +92,7 @@ class PictorialStructures:
         self.dt = dt
 
     # ------------------------------------------------------------------ training
-    def fit_geometry(self, keypoints: np.ndarray) -> "PictorialStructures":
+    def fit_geometry(self, keypoints: np.ndarray) -> PictorialStructures:
         kp = np.asarray(keypoints, dtype=np.float64) / self.cell  # cells
         c, th, L = part_geometry(kp)
         K = self.n_orient
@@ -163,7 +162,7 @@ class PictorialStructures:
         return pos, negs
 
     def fit(self, images: list[np.ndarray], keypoints: np.ndarray, feats: list[RotatedFeatures] | None = None,
-            backgrounds: list[np.ndarray] | None = None) -> "PictorialStructures":
+            backgrounds: list[np.ndarray] | None = None) -> PictorialStructures:
         """``images``: gray frames; ``keypoints`` (N, 15, 2) px. ``feats`` may pass precomputed
         :class:`RotatedFeatures` (same ``n_orient``/``cell``)."""
         rng = np.random.default_rng(self.seed)
@@ -230,38 +229,13 @@ class PictorialStructures:
         Hc, Wc = f.H // self.cell, f.W // self.cell
         return np.mgrid[0:Hc, 0:Wc]
 
-    def _remap(self, f: RotatedFeatures):
-        key = (f.H, f.W, f.S)
-        cache = getattr(self, "_remap_cache", None)
-        if cache is None:
-            cache = self._remap_cache = {}
-        if key not in cache:
-            gy, gx = self._grid(f)
-            px = np.stack([gx * self.cell + (self.cell - 1) / 2.0, gy * self.cell + (self.cell - 1) / 2.0], -1)
-            maps = []
-            for k in range(self.n_orient):
-                q = (f.to_canvas(k, px.reshape(-1, 2)) - (self.cell - 1) / 2.0) / self.cell
-                maps.append((q[:, 0].reshape(gx.shape).astype(np.float32), q[:, 1].reshape(gx.shape).astype(np.float32)))
-            cache[key] = maps
-        return cache[key]
-
     def _part_scores(self, f: RotatedFeatures, j: int) -> np.ndarray:
         """(K, Hc, Wc) log-odds of part j at every frame cell and orientation."""
-        T = self.templates_[j]
-        maps = self._remap(f)
-        out = []
-        for k in range(self.n_orient):
-            F = f.feats[k]
-            R = np.zeros(F.shape[:2], dtype=np.float32)
-            for ch in range(F.shape[2]):
-                R += cv2.filter2D(F[..., ch], cv2.CV_32F, T[..., ch], borderType=cv2.BORDER_CONSTANT)
-            mx, my = maps[k]
-            out.append(cv2.remap(R, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=-20.0))
-        return np.stack(out) + self.bias_[j]
+        return score_models({"m": self}, f, parts=[j])["m"][0]
 
     def score_maps(self, f: RotatedFeatures) -> np.ndarray:
         """(10, K, Hc, Wc) part log-odds."""
-        return np.stack([self._part_scores(f, j) for j in range(N_PARTS)])
+        return score_models({"m": self}, f)["m"]
 
     # ------------------------------------------------------------------ inference
     def _rounded(self, off: np.ndarray) -> np.ndarray:
@@ -367,6 +341,53 @@ class PictorialStructures:
                 sc[kpi] += p[j]
         xy = acc / n[:, None] / scale
         return np.column_stack([xy, sc / n])
+
+
+_GRID_CACHE: dict = {}
+
+
+def _canvas_maps(f: RotatedFeatures, cell: int):
+    """Per orientation k: float32 (col, row) canvas cell coordinates under every frame cell centre
+    (for ``cv2.remap``)."""
+    key = (f.H, f.W, f.S, f.n_orient, cell)
+    if key not in _GRID_CACHE:
+        Hc, Wc = f.H // cell, f.W // cell
+        gy, gx = np.mgrid[0:Hc, 0:Wc]
+        px = np.stack([gx * cell + (cell - 1) / 2.0, gy * cell + (cell - 1) / 2.0], -1).reshape(-1, 2)
+        out = []
+        for k in range(f.n_orient):
+            q = (f.to_canvas(k, px) - (cell - 1) / 2.0) / cell
+            out.append((q[:, 0].reshape(Hc, Wc).astype(np.float32), q[:, 1].reshape(Hc, Wc).astype(np.float32)))
+        _GRID_CACHE[key] = (Hc, Wc, out)
+    return _GRID_CACHE[key]
+
+
+def score_models(models: dict, f: RotatedFeatures, parts: list[int] | None = None) -> dict:
+    """Log-odds maps (len(parts), K, Hc, Wc) of each model's part templates on one frame: every
+    template is correlated with each orientation copy's cells (``cv2.filter2D`` per channel, the
+    window centred on the cell, as in training), and the response read back under the frame's own
+    cell grid (bilinear ``cv2.remap``; -20 outside the canvas)."""
+    import cv2
+
+    parts = list(range(N_PARTS)) if parts is None else parts
+    cell = next(iter(models.values())).cell
+    Hc, Wc, maps = _canvas_maps(f, cell)
+    K = f.n_orient
+    out = {}
+    for name, m in models.items():
+        res = np.empty((len(parts), K, Hc, Wc), dtype=np.float32)
+        for n, j in enumerate(parts):
+            T = m.templates_[j]
+            for k in range(K):
+                F = f.feats[k]
+                R = np.zeros(F.shape[:2], dtype=np.float32)
+                for ch in range(F.shape[2]):
+                    R += cv2.filter2D(F[..., ch], cv2.CV_32F, T[..., ch], borderType=cv2.BORDER_CONSTANT)
+                mx, my = maps[k]
+                res[n, k] = cv2.remap(R, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=-20.0)
+            res[n] += m.bias_[j]
+        out[name] = res
+    return out
 
 
 def _dt_rows(dtf, maps: np.ndarray, w: np.ndarray):

@@ -1,0 +1,113 @@
+"""Benchmark the 2D pose backends: ms/frame of pictorial structures (ps) and BlazePose at 160x120 and
+640x480 on one core (median of 5 runs after a warm-up), plus the distance transform alone
+(Felzenszwalb-Huttenlocher lower envelope vs separable brute force, the baseline, same run).
+
+    python scripts/bench_pose.py [--model pose.joblib] [--out bench_results/pose.json]
+
+Without --model a small model is trained first (a few demo renders; speed does not depend on how well
+it is trained). Prints a table and writes JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("GLOG_minloglevel", "2")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import cv2
+import numpy as np
+
+
+def _median_ms(fn, runs: int = 5) -> tuple[float, list[float]]:
+    fn()  # warm-up
+    ts = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        fn()
+        ts.append((time.perf_counter() - t) * 1000)
+    return statistics.median(ts), ts
+
+
+def _frame(size):
+    from vidstyle.demo import Performer, build_take, performance_plan
+    from vidstyle.render import Appearance, Camera, render_motion
+
+    rng = np.random.default_rng(5)
+    p = Performer.random("p05", rng, video_fps=20)
+    m = build_take(p, performance_plan(p, 20, rng), rng, video_fps=20).motion.resample(20)[5:6]
+    cam = Camera.for_view(m, view=20.0, size=size)
+    frames, _ = render_motion(m, cam, fps=20, appearance=Appearance.random(2), background="texture")
+    return frames[0]
+
+
+def _small_model():
+    from vidstyle.pose.data import Spec, render_samples
+    from vidstyle.pose.estimator import PoseModel
+
+    specs = [Spec("demo:0", 1.0 + i, 2.0, az, 10.0, 100 + i, fps=3.0)
+             for i, az in enumerate((0.0, 90.0, -90.0, 180.0))]
+    return PoseModel(hard_rounds=0, neg_per_pos=6).fit(render_samples(specs, jobs=1), jobs=1)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--model", type=Path, default=None)
+    ap.add_argument("--out", type=Path, default=Path("bench_results/pose.json"))
+    ap.add_argument("--runs", type=int, default=5)
+    args = ap.parse_args()
+    try:
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    except (AttributeError, OSError):
+        pass
+    cv2.setNumThreads(1)
+    from threadpoolctl import threadpool_limits
+
+    from vidstyle.pose.blazepose import BlazePoseEstimator
+    from vidstyle.pose.dt import brute_dt2d, dt2d
+    from vidstyle.pose.estimator import load_pose_model
+
+    rows = []
+    with threadpool_limits(1):
+        model = load_pose_model(args.model)[0] if args.model else _small_model()
+        bp = BlazePoseEstimator()
+        for size in ((160, 120), (640, 480)):
+            frame = _frame(size)
+            ps_ms, ps_runs = _median_ms(lambda f=frame: model.estimate(f), args.runs)
+            bp_ms, bp_runs = _median_ms(lambda f=frame: bp.estimate(f), args.runs)
+            rows.append({"what": f"ps (n_orient={model.n_orient}, dt={model.dt})", "size": f"{size[0]}x{size[1]}",
+                         "ms_per_frame": ps_ms, "runs_ms": ps_runs})
+            rows.append({"what": "blazepose (complexity 1)", "size": f"{size[0]}x{size[1]}", "ms_per_frame": bp_ms,
+                         "runs_ms": bp_runs})
+        bp.close()
+        rng = np.random.default_rng(0)
+        maps = rng.normal(size=(5 * model.n_orient, 30, 40))
+        env_ms, env_runs = _median_ms(lambda: dt2d(maps, 0.3, 0.3), args.runs)
+        bru_ms, bru_runs = _median_ms(lambda: brute_dt2d(maps, 0.3, 0.3), args.runs)
+        rows.append({"what": f"distance transform, lower envelope ({maps.shape[0]} maps 30x40)", "size": "30x40",
+                     "ms_per_frame": env_ms, "runs_ms": env_runs})
+        rows.append({"what": f"distance transform, brute force baseline ({maps.shape[0]} maps)", "size": "30x40",
+                     "ms_per_frame": bru_ms, "runs_ms": bru_runs})
+    print(f"{'what':62s} {'size':>8s} {'ms (median of %d)' % args.runs:>18s}")
+    for r in rows:
+        print(f"{r['what']:62s} {r['size']:>8s} {r['ms_per_frame']:18.1f}")
+    print(f"ratio brute-force / lower-envelope DT: {bru_ms / env_ms:.2f}")
+    doc = {"benchmark": "pose", "rows": rows, "dt_speedup_vs_brute": bru_ms / env_ms, "runs": args.runs,
+           "one_core": True, "python": platform.python_version(), "machine": platform.machine(),
+           "model": str(args.model) if args.model else "small model trained by the script", "load_avg": os.getloadavg()}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(doc, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,112 @@
+"""BlazePose backend (runs offline from the wheel's models; CI runs it, no skip when installed)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from vidstyle.mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, keypoint_joints, keypoint_positions
+from vidstyle.pose.blazepose import BlazePoseEstimator, facing_azimuth, to_keypoints
+
+SHARED_REAL = __import__("tests.conftest", fromlist=["SHARED"]).SHARED / "data" / "video" / "real"
+BODY = [KEYPOINT_INDEX[k] for k in ("left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_knee",
+                                    "right_knee", "left_ankle", "right_ankle")]
+
+
+@pytest.fixture(scope="module")
+def take():
+    from vidstyle.demo import Performer, build_take, performance_plan
+
+    rng = np.random.default_rng(3)
+    p = Performer.random("p03", rng, video_fps=20)
+    return build_take(p, performance_plan(p, 40, rng), rng, video_fps=20).motion.resample(20)[10:30:10]
+
+
+@pytest.fixture(scope="module")
+def estimator():
+    est = BlazePoseEstimator()
+    yield est
+    est.close()
+
+
+@pytest.mark.parametrize("view, azimuth", [("front", 0.0), ("left", 90.0)])
+def test_rendered_frame_keypoints_and_view(take, estimator, view, azimuth):
+    from vidstyle.render import Appearance, Camera, render_motion
+
+    cam = Camera.for_view(take, view=azimuth, size=(320, 240))
+    frames, _ = render_motion(take, cam, fps=take.fps, appearance=Appearance(), background="texture")
+    truth, _ = cam.project(keypoint_positions(take))
+    for f in range(len(frames)):
+        pf = estimator.estimate(frames[f], f)
+        torso = np.linalg.norm(truth[f, KEYPOINT_INDEX["neck"]] - truth[f, KEYPOINT_INDEX["pelvis"]])
+        err = np.linalg.norm(pf.points[BODY, :2] - truth[f, BODY], axis=1)
+        assert np.median(err) < 0.2 * torso, err
+        assert pf.viewpoint == view and pf.viewpoint_scores[view] == max(pf.viewpoint_scores.values())
+        assert np.all((pf.points[:, 2] >= 0) & (pf.points[:, 2] <= 1))
+        # head_top (extrapolated from the face) near the true crown
+        assert np.linalg.norm(pf.points[0, :2] - truth[f, 0]) < 0.5 * torso
+
+
+def test_nobody_is_unknown(estimator):
+    pf = estimator.estimate(np.full((120, 160, 3), 90, np.uint8), 7)
+    assert pf.viewpoint == "unknown" and pf.frame == 7 and np.all(pf.points[:, 2] == 0)
+
+
+def test_mapping_and_facing_geometry():
+    lm = np.zeros((33, 3))
+    lm[:, 2] = 1.0
+    lm[11, :2], lm[12, :2] = (60, 40), (40, 40)  # performer's left shoulder on the image right: facing us
+    lm[23, :2], lm[24, :2] = (56, 80), (44, 80)
+    lm[7, :2], lm[8, :2] = (54, 20), (46, 20)
+    lm[9, :2], lm[10, :2] = (52, 26), (48, 26)
+    k = to_keypoints(lm)
+    np.testing.assert_allclose(k[KEYPOINT_INDEX["neck"], :2], (50, 40))
+    np.testing.assert_allclose(k[KEYPOINT_INDEX["pelvis"], :2], (50, 80))
+    np.testing.assert_allclose(k[0, :2], (50, 20 - 1.6 * 6))
+    w = np.zeros((33, 3))
+    w[11], w[12], w[23], w[24] = (0.2, -0.5, 0), (-0.2, -0.5, 0), (0.1, 0, 0), (-0.1, 0, 0)
+    assert facing_azimuth(w) == pytest.approx(0.0, abs=1e-6)
+    w2 = w.copy()
+    w2[[11, 12, 23, 24], 0], w2[[11, 12, 23, 24], 2] = 0.0, -w[[11, 12, 23, 24], 0]  # left side faces the camera
+    assert facing_azimuth(w2) == pytest.approx(90.0, abs=1e-6)
+
+
+def test_pose_command_blazepose_in_input_pixels(tmp_path, take):
+    """`vidstyle pose --backend blazepose` on a rendered video: points in the input video's pixels."""
+    from typer.testing import CliRunner
+
+    from vidstyle.cli import app
+    from vidstyle.render import load_truth, render_to_file
+
+    video = tmp_path / "clip.mp4"
+    render_to_file(take, video, view="front", size=(640, 480), fps=take.fps, background="texture")
+    truth = load_truth(video)
+    out = tmp_path / "poses.json"
+    res = CliRunner().invoke(app, ["pose", str(video), "--backend", "blazepose", "--frames", "1", "--out", str(out),
+                                   "-j", "1"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())
+    assert doc["backend"] == "blazepose" and doc["keypoints"] == list(KEYPOINTS) and len(doc["frames"]) == 1
+    fr = doc["frames"][0]
+    assert fr["frame"] == 1
+    m = keypoint_joints(take.skeleton)
+    pts = np.array(fr["points"])
+    gt = np.array([truth["joints2d"][1, m[KEYPOINTS[i]].joint] for i in BODY])
+    torso = np.linalg.norm(truth["joints2d"][1, m["neck"].joint] - truth["joints2d"][1, m["pelvis"].joint])
+    assert np.median(np.linalg.norm(pts[BODY, :2] - gt, axis=1)) < 0.15 * torso
+
+
+@pytest.mark.skipif(not (SHARED_REAL / "pose2sim_single_cam01.mp4").is_file(), reason="real footage absent")
+def test_real_footage_finds_the_person(estimator):
+    from vidstyle.video import VideoReader
+
+    with VideoReader(SHARED_REAL / "pose2sim_single_cam01.mp4", height=640) as r:
+        frame = np.asarray(r.frame(50))
+    pf = estimator.estimate(frame, 50)
+    assert pf.viewpoint != "unknown"
+    body = pf.points[BODY]
+    assert np.mean(body[:, 2]) > 0.5
+    torso = abs(pf.points[KEYPOINT_INDEX["pelvis"], 1] - pf.points[KEYPOINT_INDEX["neck"], 1])
+    assert torso > 0.05 * frame.shape[0]  # the standing person is not a speck

@@ -1,0 +1,94 @@
+"""Pose model: training on renders, save/load, the pose command (ps backend), errors, evaluation metrics."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from vidstyle.mocap.keypoints import KEYPOINTS
+from vidstyle.pose.data import Spec, render_samples, view_of
+from vidstyle.pose.estimator import PoseModel, load_pose_model, save_pose_model
+from vidstyle.pose.evaluate import confusion, pck, strict_pcp
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    specs = [Spec("demo:0", 1.0 + i, 2.0, az + 4 * i, 10.0, 100 + i, fps=3.0)
+             for i, az in enumerate((0.0, 90.0, -90.0, 180.0, 0.0, 90.0, -90.0, 180.0))]
+    samples = render_samples(specs, jobs=1)
+    model = PoseModel(n_orient=8, hard_rounds=0, neg_per_pos=6, seed=3).fit(samples, jobs=1)
+    path = tmp_path_factory.mktemp("pose") / "pose.joblib"
+    save_pose_model(path, model)
+    return model, path, samples
+
+
+def test_view_of():
+    assert [view_of(a) for a in (0, 44, 46, 90, -91, 180, -170, 225)] == \
+        ["front", "front", "left", "left", "right", "back", "back", "right"]
+
+
+@pytest.mark.slow
+def test_model_round_trip_and_fit_on_training_frames(trained):
+    model, path, samples = trained
+    loaded, header = load_pose_model(path)
+    assert header["params"] == model.get_params() and header["seed"] == 3
+    assert loaded.get_params() == {"n_orient": 8, "cell": 4, "C": 0.05, "neg_per_pos": 6, "hard_rounds": 0,
+                                   "viewpoint": "svm", "dt": "envelope", "seed": 3}
+    preds = np.stack([loaded.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples)])
+    gt = np.stack([s.keypoints for s in samples])
+    hits = strict_pcp(preds, gt)
+    # on its own training frames the torso and head are found nearly always
+    assert hits[:, 0].mean() >= 0.8 and hits[:, 1].mean() >= 0.7
+    same = np.stack([model.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples[:3])])
+    np.testing.assert_allclose(same, preds[:3])
+
+
+def test_metrics_against_hand_computed_values():
+    gt = np.zeros((1, 15, 2))
+    gt[0, :, 1] = np.arange(15) * 10.0  # keypoint i at (0, 10 i)
+    pred = gt.copy()
+    i = KEYPOINTS.index("left_wrist")  # left_forearm: left_elbow (50) -> left_wrist (70), length 20
+    pred[0, i, 0] = 9.0
+    assert strict_pcp(pred, gt)[0].all()  # 9 <= 0.5 * 20
+    pred[0, i, 0] = 11.0
+    hits = strict_pcp(pred, gt)
+    assert hits[0].sum() == 9 and not hits[0, 4]
+    # torso neck (10) - pelvis (20): length 10; PCK threshold 2
+    k = pck(pred, gt)
+    assert k[0].sum() == 14
+    c = confusion(["front", "front", "left"], ["front", "back", "left"])
+    assert c["per_view_accuracy"]["front"] == 0.5 and c["per_view_accuracy"]["left"] == 1.0
+
+
+@pytest.mark.slow
+def test_pose_command_ps_and_errors(tmp_path, trained, capsys):
+    from typer.testing import CliRunner
+
+    from vidstyle.cli import app, main
+    from vidstyle.demo import Performer, build_take, performance_plan
+    from vidstyle.render import render_to_file
+
+    _, path, _ = trained
+    rng = np.random.default_rng(9)
+    p = Performer.random("p09", rng, video_fps=20)
+    motion = build_take(p, performance_plan(p, 20, rng), rng, video_fps=20).motion.resample(10)[:6]
+    video = tmp_path / "clip.mp4"
+    render_to_file(motion, video, view="front", size=(320, 240), fps=10)
+    out = tmp_path / "poses.json"
+    r = CliRunner().invoke(app, ["pose", str(video), "--model", str(path), "--frames", "4,1", "--out", str(out), "-j", "1"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(out.read_text())
+    assert [f["frame"] for f in doc["frames"]] == [1, 4] and doc["backend"] == "ps"
+    pts = np.array(doc["frames"][0]["points"])
+    assert pts.shape == (15, 3) and pts[:, 0].max() > 160  # input-video pixels, not the 160x120 working size
+    capsys.readouterr()
+    assert main(["pose", str(video), "--model", str(path), "--frames", "99", "--out", str(out)]) == 2
+    assert "99" in capsys.readouterr().err
+    bad = tmp_path / "bad.joblib"
+    bad.write_bytes(b"not a model")
+    assert main(["pose", str(video), "--model", str(bad), "--out", str(tmp_path / "x.json")]) == 2
+    assert "bad.joblib" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
+    assert main(["pose", str(video), "--out", str(tmp_path / "x.json")]) == 2
+    assert "--model" in capsys.readouterr().err

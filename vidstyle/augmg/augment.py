@@ -1,0 +1,163 @@
+"""``vidstyle augment``: enhancement nodes from annotated transition frames, inserted into a motion graph.
+
+For every *accepted* transition mark (video frame, from-action ``A``, to-action ``B``) of an annotations
+file:
+
+1. the frame's 2D pose (``poses.json`` of the pose stage) is matched against the library projected at its
+   viewpoint (:class:`.index.PoseIndex`): the top-k candidate reference points, minus the candidates the
+   annotator discarded;
+2. each candidate ``w_z`` is scored by the enhanced distance (:func:`.enhance.enhanced_distance`, thesis
+   eq. 16) against the graph: departures ``a_i`` are the last frames of the graph's ``A`` runs, arrivals
+   ``b_j`` the first frames of its ``B`` runs (both within the walkable component), each allowed to move
+   ``max_x`` / ``max_y`` frames (the responsiveness terms); the best candidate is the **reference point**;
+3. the library segment ``w_{z-k+1}..w_{z+k-1}`` (``k`` = the graph's window, resampled to the graph's
+   rate and put on the graph's skeleton) is stored with :meth:`MotionGraph.add_segment`, and
+   ``ENHANCEMENT`` edges ``a_i -> b_j`` through it are added for the ``edges_per_side`` best departures
+   and arrivals (the **enhancement nodes**), with cost ``enhancement_cost`` x the cheapest plain ``A -> B``
+   blend cost so that the planner prefers them for that pair; then the graph is re-pruned.
+
+A discarded mark adds nothing, so the pair keeps its plain transitions; a discarded candidate is skipped,
+so the next candidate becomes the reference point. ``augment`` always starts from the plain graph, so a
+rerun with changed decisions gives exactly the graph those decisions describe.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Insertion:
+    """What one accepted mark added: the reference point and the enhancement edges."""
+
+    video: str
+    frame: int
+    from_action: str
+    to_action: str
+    clip: str
+    time: float
+    cost: float
+    segment: int
+    edges: list[tuple[int, int]]
+
+
+def _runs(labels: np.ndarray, clip: np.ndarray, code: int) -> tuple[np.ndarray, np.ndarray]:
+    """(last frames, first frames) of the maximal runs of label ``code`` inside one clip."""
+    on = labels == code
+    prev = np.concatenate([[False], on[:-1] & (clip[1:] == clip[:-1])])
+    nxt = np.concatenate([on[1:] & (clip[1:] == clip[:-1]), [False]])
+    return np.flatnonzero(on & ~nxt), np.flatnonzero(on & ~prev)
+
+
+def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int = 10, n_views: int = 12,
+                  elevation_deg: float = 10.0, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
+                  edges_per_side: int = 3, enhancement_cost: float = 0.5, jobs: int = 1) -> list[Insertion]:
+    """Add enhancement segments and edges to ``graph`` in place (module docstring).
+
+    ``marks``: :func:`.annotations_io.read_marks` items; ``poses``: video stem -> {frame: FramePose}.
+    """
+    from ..mocap import read_bvh
+    from ..mocap.retarget import retarget
+    from ..motiongraph.graph import EdgeKind
+    from ..render.camera import parse_view
+    from .enhance import enhanced_distance
+    from .evaluate import _query_views
+    from .index import PoseIndex, library_clips
+    from .keypoints import keypoint_positions
+
+    accepted = [m for m in marks if m["status"] == "accepted"]
+    if not accepted:
+        log.info("no accepted transition marks: the graph keeps its plain transitions")
+        return []
+    clips = library_clips(library_paths)
+    index = PoseIndex(n_views=n_views, elevation_deg=elevation_deg, jobs=jobs).fit(clips)
+    gk = int(graph.window)
+    gpts = keypoint_positions(graph.motion())
+    names = list(graph.label_names_)
+    out: list[Insertion] = []
+    motions: dict[int, object] = {}
+    for m in accepted:
+        a_name, b_name = m["from"], m["to"]
+        if a_name not in names or b_name not in names:
+            log.warning("%s frame %d: the graph has no %r or %r frames; mark skipped", m["video"], m["frame"],
+                        a_name, b_name)
+            continue
+        fp = poses.get(m["video"], {}).get(m["frame"])
+        if fp is None:
+            raise InputError(f"poses: no pose for {m['video']} frame {m['frame']} (run vidstyle pose with --frames)")
+        az = parse_view(fp.viewpoint) if fp.viewpoint != "unknown" else 0.0
+        spread = index.n_views // 2 if fp.viewpoint == "unknown" else 1
+        ids, _ = _query_views(index, fp.points, az, k, spread)
+        discarded = {(c["clip"], round(c["time"], 3)) for c in m.get("candidates", []) if c["status"] == "discarded"}
+        cands = [int(i) for i in ids[0]
+                 if (index.paths_[int(index.clip_[i])], round(float(index.time_of(np.array([i]))[0]), 3)) not in discarded]
+        ends_a, _ = _runs(graph.labels_, graph.frame_clip_, names.index(a_name))
+        _, starts_b = _runs(graph.labels_, graph.frame_clip_, names.index(b_name))
+        ends_a = ends_a[graph.scc_[ends_a]]
+        starts_b = starts_b[graph.scc_[starts_b]]
+        if len(ends_a) == 0 or len(starts_b) == 0:
+            log.warning("%s frame %d: no walkable %s run end or %s run start", m["video"], m["frame"], a_name, b_name)
+            continue
+        best = None
+        for cand in cands:
+            c = int(index.clip_[cand])
+            if c not in motions:
+                lm = read_bvh(clips[c].path).resample(graph.fps)
+                motions[c] = (lm, keypoint_positions(lm))
+            lm, lpts = motions[c]
+            z = int(round(index.time_of(np.array([cand]))[0] * graph.fps))
+            # h = 0: the edge blends A's last k frames with w_{z-k+1}..w_z and w_z.. with B's first k
+            d_in, d_out, xs, ys = [], [], [], []
+            for i in ends_a:
+                e = enhanced_distance(gpts, int(i), lpts, z, gpts, int(i), 0, k=gk, max_x=max_x, max_y=0,
+                                      lam=lam, fps=graph.fps)
+                d_in.append(np.inf if e is None else e.into)
+                xs.append(0 if e is None else e.x)
+            for j in starts_b:
+                e = enhanced_distance(gpts, int(j), lpts, z, gpts, int(j), 0, k=gk, max_x=0, max_y=max_y,
+                                      lam=lam, fps=graph.fps)
+                d_out.append(np.inf if e is None else e.out)
+                ys.append(0 if e is None else e.y)
+            d_in, d_out = np.array(d_in), np.array(d_out)
+            total = d_in.min() + d_out.min()
+            if np.isfinite(total) and (best is None or total < best[0]):
+                best = (total, cand, c, z, d_in, d_out, np.array(xs), np.array(ys))
+        if best is None:
+            log.warning("%s frame %d: no candidate fits the graph's windows; plain transition kept", m["video"], m["frame"])
+            continue
+        total, cand, c, z, d_in, d_out, xs, ys = best
+        lm, _ = motions[c]
+        seg_motion, _ = retarget(lm[z - gk + 1:z + gk], graph.skeleton_, clips[c].path)
+        t = float(z / graph.fps)
+        seg = graph.add_segment(seg_motion.rotations, seg_motion.root_positions, centre=gk - 1,
+                                source=f"{clips[c].path}@{t:.3f}s", label=f"{a_name}->{b_name}")
+        # departures: the run end i of A (minus the best x of the window) -> the edge leaves at src = i - x
+        # the edge blends src+1..src+k (A's frames ending x before the run end) and dst-k+1..dst (B's
+        # frames starting y after the run start)
+        oa, ob = np.argsort(d_in)[:edges_per_side], np.argsort(d_out)[:edges_per_side]
+        src = ends_a[oa] - xs[oa] - gk
+        dst = starts_b[ob] + ys[ob] + gk - 1
+        pairs = [(int(s), int(d)) for s in src for d in dst if s >= 0 and d < graph.n_frames]
+        plain = graph.edges(EdgeKind.BLEND)
+        ab = plain[(graph.labels_[graph.edge_src_[plain]] == names.index(a_name))
+                   & (graph.labels_[graph.edge_dst_[plain]] == names.index(b_name))]
+        ref_cost = float(graph.edge_cost_[ab].min()) if len(ab) else float(graph.threshold_)
+        ok = []
+        for s, d in pairs:
+            try:
+                graph.add_edges(s, d, EdgeKind.ENHANCEMENT, cost=enhancement_cost * ref_cost, segment=seg)
+                ok.append((s, d))
+            except ValueError as exc:  # windows crossing a clip end: that node pair cannot carry the edge
+                log.debug("enhancement edge %d -> %d skipped: %s", s, d, exc)
+        out.append(Insertion(m["video"], int(m["frame"]), a_name, b_name, clips[c].path, t, float(total), seg, ok))
+        log.info("%s frame %d (%s -> %s): reference point %s @ %.2f s, %d enhancement edges", m["video"], m["frame"],
+                 a_name, b_name, clips[c].path, t, len(ok))
+    graph.prune()
+    return out

@@ -1,0 +1,172 @@
+"""Enhanced distance (thesis eq. 16, figure 15), the reference point, and the two-half transition.
+
+For a candidate reference frame ``w_z`` of clip ``C_w`` and the transition from source action ``C_a``
+into target action ``C_b``, with enhancement half-length ``h``:
+
+    D(z) = min_x [ d_k(a_{i0-x-k+1 .. i0-x},  w_{z-h-k+1 .. z-h}) + lam * x / fps ]
+         + min_y [ d_k(w_{z+h .. z+h+k-1},    b_{j0+y .. j0+y+k-1}) + lam * y / fps ]
+
+``d_k`` is the windowed Kovar point-cloud distance (:func:`vidstyle.motiongraph.distance.align_windows`,
+RMS over the cloud, minimised over a vertical rotation and a floor translation); ``i0`` is the last frame
+the source action may leave from and ``j0`` the first frame the target may be entered at; ``x`` and
+``y`` are the responsiveness terms (how much earlier the character leaves ``C_a`` / later it enters
+``C_b``: the larger, the slower the transition). The candidate with the smallest ``D`` is the
+**reference point**; ``a_{i0-x*} -> w_{z-h}`` and ``w_{z+h} -> b_{j0+y*}`` are its **enhancement nodes**.
+
+The transition (thesis 5.2.5): the first half blends ``a_i .. a_{i+k}`` with ``w_{z-k} .. w_z``, the
+second half ``w_z .. w_{z+k}`` with ``b_{j-k} .. b_j`` — here with half-length ``h``: the blend weight
+moves from the source to the enhancement segment over the first half and from the segment to the target
+over the second, so the character passes exactly through ``w_z`` (:func:`two_half_transition`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..mocap.placement import Placement
+from ..motiongraph.blend import slerp
+from ..motiongraph.distance import align_windows
+from .keypoints import KEYPOINTS
+
+#: keypoint weights of the windowed distance: the torso carries the pose (Kovar: hips/spine weigh more)
+_WEIGHT = {"pelvis": 3.0, "neck": 2.0, "left_hip": 2.0, "right_hip": 2.0, "left_shoulder": 1.5,
+           "right_shoulder": 1.5, "left_knee": 1.5, "right_knee": 1.5}
+KEYPOINT_WEIGHTS = np.array([_WEIGHT.get(k, 1.0) for k in KEYPOINTS])
+
+
+def window_distance(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """RMS Kovar distance of windows ``p``, ``q`` (..., k, 15, 3), in their length unit."""
+    D, *_ = align_windows(p, q, KEYPOINT_WEIGHTS)
+    W = KEYPOINT_WEIGHTS.sum() * p.shape[-3]
+    return np.sqrt(np.maximum(D, 0.0) / W)
+
+
+@dataclass
+class EnhancedCost:
+    cost: float
+    into: float  # source -> segment distance at the best x
+    out: float  # segment -> target distance at the best y
+    x: int
+    y: int
+
+
+def enhanced_distance(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, h: int,
+                      k: int = 5, max_x: int = 0, max_y: int = 0, lam: float = 0.0, fps: float = 60.0
+                      ) -> EnhancedCost | None:
+    """Eq. 16 for candidate ``z`` of clip ``w`` (module docstring); all clips are keypoint arrays
+    (F, 15, 3). None when the windows do not fit in the clips."""
+    a_lo, b_hi = z - h - k + 1, z + h + k - 1
+    if a_lo < 0 or b_hi >= len(w):
+        return None
+    xs = np.arange(0, max_x + 1)
+    xs = xs[i0 - xs - k + 1 >= 0]
+    ys = np.arange(0, max_y + 1)
+    ys = ys[j0 + ys + k - 1 < len(dst)]
+    if len(xs) == 0 or len(ys) == 0:
+        return None
+    wa = w[a_lo:z - h + 1]
+    wb = w[z + h:b_hi + 1]
+    A = np.stack([src[i0 - x - k + 1:i0 - x + 1] for x in xs])
+    B = np.stack([dst[j0 + y:j0 + y + k] for y in ys])
+    d_in = window_distance(A, np.broadcast_to(wa, A.shape)) + lam * xs / fps
+    d_out = window_distance(np.broadcast_to(wb, B.shape), B) + lam * ys / fps
+    bx, by = int(np.argmin(d_in)), int(np.argmin(d_out))
+    return EnhancedCost(float(d_in[bx] + d_out[by]), float(d_in[bx]), float(d_out[by]), int(xs[bx]), int(ys[by]))
+
+
+def enhancement_nodes(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, k: int = 5,
+                      max_span: int = 60, lam: float = 0.0, fps: float = 60.0) -> tuple[int, int, float] | None:
+    """The nearest transition points ``(z0, z2, cost)`` around reference point ``z`` (thesis 5.2.4: "the
+    nearest transition points w_z0 and w_z2 are the enhancement nodes"): ``z0 < z`` where the source's
+    window ending at ``i0`` best joins ``C_w`` (window ``w_{z0-k+1..z0}``), ``z2 > z`` where ``C_w`` best
+    joins the target's window starting at ``j0`` (``w_{z2..z2+k-1}``), each within ``max_span`` frames
+    and charged ``lam`` per second away from ``z`` (the responsiveness terms). None if nothing fits."""
+    if i0 - k + 1 < 0 or j0 + k > len(dst):
+        return None
+    z0s = np.arange(max(k - 1, z - max_span), z)
+    z2s = np.arange(z + 1, min(len(w) - k, z + max_span) + 1)
+    if len(z0s) == 0 or len(z2s) == 0:
+        return None
+    A = src[i0 - k + 1:i0 + 1]
+    B = dst[j0:j0 + k]
+    WA = np.stack([w[t - k + 1:t + 1] for t in z0s])
+    WB = np.stack([w[t:t + k] for t in z2s])
+    d0 = window_distance(np.broadcast_to(A, WA.shape), WA) + lam * (z - z0s) / fps
+    d2 = window_distance(WB, np.broadcast_to(B, WB.shape)) + lam * (z2s - z) / fps
+    a, b = int(np.argmin(d0)), int(np.argmin(d2))
+    return int(z0s[a]), int(z2s[b]), float(d0[a] + d2[b])
+
+
+def _smooth(u: np.ndarray) -> np.ndarray:
+    """C^1 ease ``3u^2 - 2u^3`` (``1 - alpha`` of the motion-graph blend weight)."""
+    u = np.clip(u, 0.0, 1.0)
+    return 3 * u**2 - 2 * u**3
+
+
+def resample_segment(rot: np.ndarray, root: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A segment (m frames) time-warped to ``n`` frames: rotations by slerp, roots linearly."""
+    m = len(rot)
+    t = np.linspace(0.0, m - 1, n)
+    lo = np.floor(t).astype(int)
+    hi = np.minimum(lo + 1, m - 1)
+    f = t - lo
+    rot_n = slerp(rot[lo], rot[hi], np.broadcast_to(f[:, None], (n, rot.shape[1])))
+    return rot_n, root[lo] * (1 - f)[:, None] + root[hi] * f[:, None]
+
+
+def plain_transition(rot_a: np.ndarray, root_a: np.ndarray, rot_b: np.ndarray, root_b: np.ndarray, n: int
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The plain motion-graph transition of ``n`` frames between departing pose ``a`` and arriving pose
+    ``b`` ((J, 4) rotations, (3,) root): one C^1 blend straight from one into the other."""
+    t = _smooth((np.arange(n) + 1.0) / (n + 1.0))
+    rot = slerp(np.broadcast_to(rot_a, (n,) + rot_a.shape), np.broadcast_to(rot_b, (n,) + rot_b.shape),
+                np.broadcast_to(t[:, None], (n, rot_a.shape[0])))
+    return rot, root_a[None] * (1 - t)[:, None] + root_b[None] * t[:, None]
+
+
+def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int, centre: int | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` transition frames from departing pose ``a`` through the (placed) enhancement segment
+    ``seg`` (``w_z0 .. w_z .. w_z2``, ``w_z`` at index ``centre``, default the middle) into arriving pose
+    ``b``: the first half blends ``a`` into ``w_z0 .. w_z`` (time-warped to the first half), the second
+    ``w_z .. w_z2`` into ``b``; the middle output frame is exactly ``w_z``."""
+    c = (len(seg_rot) - 1) // 2 if centre is None else int(centre)
+    n1 = n // 2 + 1  # output frames 0 .. n1-1 carry w_z0 .. w_z (the last one is w_z)
+    r1, p1 = resample_segment(seg_rot[:c + 1], seg_root[:c + 1], n1)
+    r2, p2 = resample_segment(seg_rot[c:], seg_root[c:], n - n1 + 1)
+    W_rot, W_root = np.concatenate([r1, r2[1:]]), np.concatenate([p1, p2[1:]])
+    mid = float(n1 - 1)
+    f = np.arange(n, dtype=np.float64)
+    first = f <= mid
+    J = rot_a.shape[0]
+    rot = np.empty_like(W_rot)
+    root = np.empty_like(W_root)
+    t1 = _smooth((f[first] + 1.0) / (mid + 1.0))
+    rot[first] = slerp(np.broadcast_to(rot_a, (first.sum(), J, 4)), W_rot[first], np.broadcast_to(t1[:, None], (first.sum(), J)))
+    root[first] = root_a[None] * (1 - t1)[:, None] + W_root[first] * t1[:, None]
+    second = ~first
+    t2 = _smooth((f[second] - mid) / (n - mid))
+    rot[second] = slerp(W_rot[second], np.broadcast_to(rot_b, (second.sum(), J, 4)), np.broadcast_to(t2[:, None], (second.sum(), J)))
+    root[second] = W_root[second] * (1 - t2)[:, None] + root_b[None] * t2[:, None]
+    return rot, root
+
+
+def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray, scale: float = 1.0,
+                  arrival_points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rotations (m, J, 4) and roots (m, 3) of a library segment moved onto the performer: roots scaled
+    by ``scale`` (body size), then the segment's first frame aligned (vertical rotation + floor
+    translation, Kovar) onto ``anchor_points`` (15, 3), the departing pose. With ``arrival_points``
+    (the arriving pose) the placement is the mean of that one and the last frame's onto the arrival,
+    so the segment drifts from neither end."""
+    from ..motiongraph.distance import align_windows as _align
+
+    _, theta, x0, z0 = _align(anchor_points[None], seg_points[:1] * scale, KEYPOINT_WEIGHTS)
+    theta, x0, z0 = float(theta), float(x0), float(z0)
+    if arrival_points is not None:
+        _, t2, x2, z2 = _align(arrival_points[None], seg_points[-1:] * scale, KEYPOINT_WEIGHTS)
+        theta = float(np.angle(np.exp(1j * theta) + np.exp(1j * float(t2))))
+        x0, z0 = (x0 + float(x2)) / 2, (z0 + float(z2)) / 2
+    root = seg_motion.root_positions * scale
+    return Placement(theta, x0, z0).apply_frames(seg_motion.rotations, root)

@@ -1,0 +1,306 @@
+"""``vidstyle evaluate augmg``: retrieval error and transition error against the demo's true transitions.
+
+Queries: every styled transition (:mod:`vidstyle.demo.transitions`) of every performance video of the
+dataset, at its key frame, or at the frames of an annotations file (accepted marks only). The dataset's
+performers are never library performers and the library holds no transition (:mod:`.library`), so every
+query is a held-out performer and a held-out transition.
+
+For each query and each 2D source (``gt``: the exact projection of the true pose with the video's camera;
+``noisy``: the same plus Gaussian noise of ``noise`` x the 2D torso length per coordinate; ``model``:
+``poses.json`` files of the pose stage, with its viewpoint class):
+
+- **retrieval**: MPJPE (mm, over the 15 keypoints, after the motion-graph alignment: vertical rotation +
+  floor translation) between the top-1 library frame and the true 3D pose; recall@1 / @10: a top-k
+  candidate lies within 2 indexed frames (same clip) of the library frame closest to the true 3D pose
+  (the *oracle* frame, found by brute force over the whole library after alignment);
+- **transition error**: mean keypoint error (mm) over the true transition's frames of the generated
+  transition with the same endpoints (the frame before the transition and the frame after it):
+  ``plain`` blends straight from one endpoint into the other (the motion-graph transition),
+  ``augmg`` passes through the reference point chosen by the enhanced distance among the top-k
+  (:mod:`.enhance`), using the library segment between its enhancement nodes ``w_z0 .. w_z2``
+  (:func:`.enhance.enhancement_nodes`; ``segment="fixed"``: ``w_{z-h} .. w_{z+h}`` with ``h`` =
+  ``segment_scale`` x half the transition), ``augmg_top1`` through the top-1 match, ``oracle`` through the oracle frame.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+MM_PER_UNIT = 56.4  # CMU length unit (vidstyle.demo.skeleton.UNIT_M) in millimetres
+
+
+@dataclass
+class Query:
+    video: str  # manifest id
+    performer: str
+    take_bvh: Path
+    truth: Path
+    view: str
+    azimuth: float
+    frame: int  # video frame
+    ratio: int  # mocap frames per video frame
+    transition: dict  # styled transition, video frames
+    annotation: dict | None = None
+
+
+def dataset_queries(dataset: Path, annotations=None) -> tuple[dict, list[Query]]:
+    """The manifest and one query per styled transition x performance video (or per accepted mark of
+    ``annotations``: a list of ``{"video", "frame", "from", "to", "status"}``)."""
+    import json
+
+    manifest_path = dataset / "dataset.json" if dataset.is_dir() else dataset
+    if not manifest_path.is_file():
+        raise InputError(f"{manifest_path}: no demo dataset manifest")
+    root = manifest_path.parent
+    manifest = json.loads(manifest_path.read_text())
+    ratio = int(manifest["mocap_fps"] // manifest["fps"])
+    marks: dict[str, list[dict]] = {}
+    for a in annotations or []:
+        if a.get("status", "accepted") == "accepted":
+            marks.setdefault(a["video"], []).append(a)
+    out = []
+    for v in manifest["videos"]:
+        if v["kind"] != "performance":
+            continue
+        labels = json.loads((root / v["labels"]).read_text())
+        styled = labels.get("styled_transitions", [])
+        base = dict(video=v["id"], performer=v["performer"], take_bvh=root / v["bvh"], truth=root / v["truth"],
+                    view=v["view"], azimuth=float(v["azimuth_deg"]), ratio=ratio)
+        if annotations is None:
+            out += [Query(**base, frame=int(t["key"]), transition=t) for t in styled]
+            continue
+        for a in marks.get(v["id"], []):
+            t = next((t for t in styled if t["start"] <= a["frame"] < t["end"]), None)
+            if t is None:
+                log.warning("%s frame %d: no styled transition there; skipped", v["id"], a["frame"])
+                continue
+            out.append(Query(**base, frame=int(a["frame"]), transition=t, annotation=a))
+    return manifest, out
+
+
+class _Library:
+    """The indexed library plus lazily loaded clip motions."""
+
+    def __init__(self, library: Path, n_views: int, elevation: float, jobs: int) -> None:
+        from .index import PoseIndex, library_clips
+
+        clips_dir = library / "clips" if (library / "clips").is_dir() else library
+        self.clips = library_clips([clips_dir])
+        self.index = PoseIndex(n_views=n_views, elevation_deg=elevation, jobs=jobs).fit(self.clips)
+        self._motions: dict[int, object] = {}
+        # every indexed frame's 3D keypoints, for the oracle
+        self.points = np.concatenate([c.points[::self.index.stride] for c in self.clips])
+
+    def motion(self, clip: int):
+        from ..mocap import read_bvh
+
+        if clip not in self._motions:
+            self._motions[clip] = read_bvh(self.clips[clip].path)
+        return self._motions[clip]
+
+
+def aligned_mpjpe(true: np.ndarray, cand: np.ndarray) -> np.ndarray:
+    """MPJPE (length units) of candidate poses (N, 15, 3) against ``true`` (15, 3) after aligning each
+    candidate (vertical rotation + floor translation, :func:`.enhance.window_distance`'s alignment)."""
+    from ..motiongraph.distance import align_windows
+    from .enhance import KEYPOINT_WEIGHTS
+
+    p = np.broadcast_to(true[None, None], (len(cand), 1) + true.shape)
+    q = cand[:, None]
+    _, th, x0, z0 = align_windows(p, q, KEYPOINT_WEIGHTS)
+    c, s = np.cos(th), np.sin(th)
+    x = c[:, None] * cand[..., 0] + s[:, None] * cand[..., 2] + x0[:, None]
+    z = -s[:, None] * cand[..., 0] + c[:, None] * cand[..., 2] + z0[:, None]
+    moved = np.stack([x, cand[..., 1], z], axis=-1)
+    return np.linalg.norm(moved - true[None], axis=-1).mean(axis=1)
+
+
+def _query_2d(q: Query, pts3d: np.ndarray, cam, source: str, rng, noise: float, poses: dict | None):
+    """(15, 2) image keypoints and the viewpoint (degrees relative to facing) of query ``q``, or None."""
+    from .keypoints import KP
+    from .projection import facing_of_keypoints, relative_azimuth
+
+    f = q.frame * q.ratio
+    if source == "model":
+        doc = (poses or {}).get(q.video)
+        if doc is None:
+            return None
+        fr = doc.get(q.frame)
+        if fr is None:
+            return None
+        return fr
+    uv, _ = cam.project(pts3d[f])
+    az = float(relative_azimuth(cam.center, pts3d[f:f + 1, KP["pelvis"]], facing_of_keypoints(pts3d[f:f + 1]))[0])
+    if source == "noisy":
+        torso = float(np.linalg.norm(uv[KP["neck"]] - uv[KP["pelvis"]]))
+        uv = uv + rng.normal(0.0, noise * torso, uv.shape)
+    return uv, az, 0
+
+
+def _camera(q: Query, motion, manifest: dict):
+    from ..render.camera import Camera
+
+    if q.truth.is_file():
+        from ..render import load_truth
+
+        t = load_truth(q.truth)
+        return Camera(t["K"], t["R"], t["t"], float(t["azimuth_deg"]), float(t["elevation_deg"]),
+                      tuple(int(x) for x in t["size"]), float(t["facing_deg"]))
+    return Camera.for_view(motion, view=q.azimuth, elevation_deg=float(manifest["params"]["elevation_deg"]),
+                           size=tuple(manifest["size"]))
+
+
+def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
+                   annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
+                   place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60, seed: int = 0, jobs: int = 1) -> dict:
+    """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}.
+    Defaults (``segment="fixed"``, ``segment_scale=1``, ``enh_window=9``) are the best rows of
+    ``scripts/validate_augmg.py`` on a validation dataset (another seed), never on the test data."""
+    if place not in ("first", "both"):
+        raise ValueError(f"place: 'first' or 'both', got {place!r}")
+    if segment not in ("fixed", "nodes"):
+        raise ValueError(f"segment: 'fixed' or 'nodes', got {segment!r}")
+    from ..logutil import progress
+    from ..mocap import Motion, read_bvh
+    from ..mocap.retarget import leg_length
+    from .enhance import (
+        enhanced_distance,
+        enhancement_nodes,
+        place_segment,
+        plain_transition,
+        two_half_transition,
+    )
+    from .keypoints import keypoint_positions
+
+    manifest, queries = dataset_queries(Path(dataset), annotations)
+    if not queries:
+        raise InputError(f"{dataset}: no styled transitions in any performance video to evaluate")
+    lib = _Library(Path(library), n_views, float(manifest["params"]["elevation_deg"]), jobs)
+    idx_all = lib.index
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
+    takes: dict[Path, tuple] = {}
+    rows: list[dict] = []
+    for q in progress(queries, "augmg queries"):
+        if q.take_bvh not in takes:
+            m = read_bvh(q.take_bvh)
+            takes[q.take_bvh] = (m, keypoint_positions(m))
+        motion, pts3d = takes[q.take_bvh]
+        cam = _camera(q, motion, manifest)
+        f = q.frame * q.ratio
+        s, e = q.transition["start"] * q.ratio, q.transition["end"] * q.ratio
+        true = pts3d[f]
+        err_lib = aligned_mpjpe(true, lib.points)
+        oracle = int(np.argmin(err_lib))
+        scale = leg_length(motion.skeleton) / leg_length(lib.motion(0).skeleton)
+        L = e - s
+        h = max(1, int(round(segment_scale * (L // 2))))  # segment="fixed": library half-segment
+        truth_seg = pts3d[s:e]
+
+        def transition_error(cand: int | None) -> float:
+            if cand is None:
+                rot, root = plain_transition(motion.rotations[s - 1], motion.root_positions[s - 1],
+                                             motion.rotations[e], motion.root_positions[e], L)
+            else:
+                c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
+                lm = lib.motion(c)
+                nodes = enhancement_nodes(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, k=enh_window,
+                                          max_span=max_span) if segment == "nodes" else None
+                if nodes is not None:
+                    lo, hi = nodes[0], nodes[1]
+                else:
+                    lo, hi = max(0, z - h), min(lm.n_frames - 1, z + h)
+                seg = lm[lo:hi + 1]
+                seg_pts = lib.clips[c].points[lo:hi + 1]
+                srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale, pts3d[e] if place == "both" else None)
+                rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
+                                                motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
+            gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
+            return float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+
+        plain = transition_error(None)
+        oracle_err = transition_error(oracle)
+        for source in sources:
+            got = _query_2d(q, pts3d, cam, source, rng, noise, poses)
+            if got is None:
+                continue
+            uv, az, spread = got
+            ii, cc = _query_views(idx_all, uv, az, k, spread)
+            top = ii[0]
+            same = idx_all.clip_[top] == idx_all.clip_[oracle]
+            near = same & (np.abs(idx_all.frame_[top] - idx_all.frame_[oracle]) <= 2 * idx_all.stride)
+            # reference point: the enhanced distance over the top-k candidates
+            best, best_cost = top[0], np.inf
+            for cand in top:
+                c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
+                ec = enhanced_distance(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, h, k=enh_window)
+                if ec is not None and ec.cost < best_cost:
+                    best, best_cost = cand, ec.cost
+            rows.append({
+                "video": q.video, "performer": q.performer, "view": q.view, "frame": q.frame, "source": source,
+                "kind": q.transition["kind"], "from": q.transition["from"], "to": q.transition["to"],
+                "viewpoint_deg": round(az, 2),
+                "top1_clip": Path(lib.clips[int(idx_all.clip_[top[0]])].path).stem,
+                "top1_mpjpe_mm": float(err_lib[top[0]] * MM_PER_UNIT),
+                "reference_mpjpe_mm": float(err_lib[best] * MM_PER_UNIT),
+                "oracle_mpjpe_mm": float(err_lib[oracle] * MM_PER_UNIT),
+                "recall_at_1": bool(near[0]), "recall_at_10": bool(near[:10].any()),
+                "transition_plain_mm": plain, "transition_augmg_mm": transition_error(int(best)),
+                "transition_augmg_top1_mm": transition_error(int(top[0])), "transition_oracle_mm": oracle_err,
+            })
+    return summarise(rows, dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
+                                library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
+                                enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale, max_span=max_span, sources=list(sources), index=idx_all.get_params(),
+                                queries=len(queries), annotations=annotations is not None))
+
+
+def _query_views(index, uv: np.ndarray, az: float, k: int, spread: int):
+    """kNN at the view nearest ``az`` and, with ``spread`` > 0, its neighbours; merged by cost."""
+    if spread == 0:
+        return index.query(uv[None], az, k)
+    step = 360.0 / index.n_views
+    ids, costs = [], []
+    for d in range(-spread, spread + 1):
+        i, c = index.query(uv[None], az + d * step, k)
+        ids.append(i[0])
+        costs.append(c[0])
+    ids, costs = np.concatenate(ids), np.concatenate(costs)
+    order = np.argsort(costs, kind="stable")
+    ids, costs = ids[order], costs[order]
+    _, first = np.unique(ids, return_index=True)
+    keep = np.sort(first)[:k]
+    return ids[keep][None], costs[keep][None]
+
+
+def summarise(rows: list[dict], params: dict) -> dict:
+    out: dict = {"params": params, "by_source": {}, "rows": rows}
+    for source in params["sources"]:
+        r = [x for x in rows if x["source"] == source]
+        if not r:
+            continue
+
+        def mean(key: str) -> float:
+            return float(np.mean([x[key] for x in r]))
+
+        plain, aug = mean("transition_plain_mm"), mean("transition_augmg_mm")
+        out["by_source"][source] = {
+            "queries": len(r),
+            "retrieval_mpjpe_mm": mean("top1_mpjpe_mm"), "reference_mpjpe_mm": mean("reference_mpjpe_mm"),
+            "oracle_mpjpe_mm": mean("oracle_mpjpe_mm"),
+            "recall_at_1": mean("recall_at_1"), "recall_at_10": mean("recall_at_10"),
+            "transition_plain_mm": plain, "transition_augmg_mm": aug,
+            "transition_augmg_top1_mm": mean("transition_augmg_top1_mm"),
+            "transition_oracle_mm": mean("transition_oracle_mm"),
+            "transition_reduction": float(1.0 - aug / plain) if plain > 0 else 0.0,
+            "by_kind": {kind: {"queries": len(rk), "plain_mm": float(np.mean([x["transition_plain_mm"] for x in rk])),
+                               "augmg_mm": float(np.mean([x["transition_augmg_mm"] for x in rk]))}
+                        for kind in sorted({x["kind"] for x in r}) for rk in [[x for x in r if x["kind"] == kind]]},
+        }
+    return out

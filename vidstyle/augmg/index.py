@@ -1,0 +1,168 @@
+"""k nearest neighbours of a 2D pose over the projected mocap library, and temporal coherence.
+
+:class:`PoseIndex` (scikit-learn style: parameters in ``__init__``, ``fit(clips)`` learns) projects every
+library frame (every ``stride``-th mocap frame) at ``n_views`` azimuths around the character (relative
+to its facing in that frame) and builds one :class:`scipy.spatial.cKDTree` per azimuth over the
+joint-angle features (:mod:`.projection`). A query at viewpoint ``az`` searches the tree of the nearest
+azimuth: exact kNN in that view, O(log N) per query. Projection and tree building go through
+:func:`vidstyle.parallel.parallel_map` (joblib locally, Dask with a scheduler), one clip / one view
+per item.
+
+Temporal coherence (Tautges et al. 2011, online lazy neighbourhood graph): with several consecutive
+annotated frames, each frame's kNN candidates are nodes; an edge joins candidates of successive query
+frames that lie in the same clip and advance by about the query's frame step. The best path (sum of
+pose costs plus ``jump_cost`` for every step that is not such an edge) is found by dynamic
+programming, and each frame's candidates are re-ranked by the best path through them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .keypoints import KP
+from .projection import angle_features, facing_normalised, facing_of_keypoints, project
+
+
+@dataclass
+class LibraryClip:
+    """A library clip's keypoints: ``points`` (F, 15, 3) world positions at ``fps``."""
+
+    path: str
+    points: np.ndarray
+    fps: float
+
+
+def _project_clip(args) -> list[np.ndarray]:
+    points, stride, views, elevation = args
+    pts = points[::stride]
+    norm = facing_normalised(pts, facing_of_keypoints(pts))
+    return [angle_features(project(norm, az, elevation)) for az in views]
+
+
+def _build_tree(features: np.ndarray):
+    from scipy.spatial import cKDTree
+
+    return cKDTree(features, leafsize=16, balanced_tree=False, compact_nodes=False)
+
+
+class PoseIndex:
+    """kNN over projected library frames. Learned: ``views_`` (azimuths, degrees), ``clip_`` (N,) clip
+    number and ``frame_`` (N,) mocap frame of every indexed frame, ``paths_``, ``fps_``, ``trees_``
+    (one per view), ``features_`` (views, N, 28) float32."""
+
+    def __init__(self, n_views: int = 12, elevation_deg: float = 10.0, stride: int = 3, jobs: int = 1,
+                 scheduler: str | None = None) -> None:
+        self.n_views = n_views
+        self.elevation_deg = elevation_deg
+        self.stride = stride
+        self.jobs = jobs
+        self.scheduler = scheduler
+
+    def get_params(self) -> dict:
+        return {"n_views": self.n_views, "elevation_deg": self.elevation_deg, "stride": self.stride}
+
+    def fit(self, clips: list[LibraryClip]) -> PoseIndex:
+        from ..parallel import parallel_map
+
+        if self.n_views < 1 or self.stride < 1:
+            raise ValueError(f"n_views and stride must be >= 1, got {self.n_views}, {self.stride}")
+        if not clips:
+            raise ValueError("fit: no library clips")
+        self.views_ = np.arange(self.n_views) * (360.0 / self.n_views)
+        per_clip = parallel_map(_project_clip, [(c.points, self.stride, self.views_, self.elevation_deg)
+                                                for c in clips], jobs=self.jobs, scheduler=self.scheduler,
+                                description="projecting library")
+        self.paths_ = [c.path for c in clips]
+        self.fps_ = np.array([c.fps for c in clips])
+        self.clip_ = np.concatenate([np.full(len(f[0]), i) for i, f in enumerate(per_clip)])
+        self.frame_ = np.concatenate([np.arange(len(f[0])) * self.stride for f in per_clip])
+        self.features_ = np.stack([np.concatenate([f[v] for f in per_clip]) for v in range(self.n_views)])
+        self.trees_ = parallel_map(_build_tree, list(self.features_), jobs=self.jobs, scheduler=self.scheduler,
+                                   description="indexing views")
+        return self
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.clip_)
+
+    def view_index(self, azimuth_deg: float) -> int:
+        step = 360.0 / self.n_views
+        return int(np.round((azimuth_deg % 360.0) / step)) % self.n_views
+
+    def query(self, points2d: np.ndarray, azimuth_deg: float, k: int = 10) -> tuple[np.ndarray, np.ndarray]:
+        """Top-``k`` library frames for 2D keypoints (Q, 15, 2) seen at ``azimuth_deg`` relative to the
+        character's facing: (indices into ``clip_``/``frame_``, costs) each (Q, k), best first. The cost
+        is the feature distance (root of the summed ``2 - 2 cos`` bone-angle differences)."""
+        feats = angle_features(np.asarray(points2d, dtype=np.float64))
+        k = min(k, self.n_frames)
+        d, i = self.trees_[self.view_index(azimuth_deg)].query(feats, k=k)
+        return np.asarray(i).reshape(len(feats), k), np.asarray(d).reshape(len(feats), k)
+
+    def time_of(self, idx: np.ndarray) -> np.ndarray:
+        """Seconds into its clip of every indexed frame ``idx``."""
+        return self.frame_[idx] / self.fps_[self.clip_[idx]]
+
+
+def coherent_ranking(index: PoseIndex, idx: np.ndarray, cost: np.ndarray, query_frames: np.ndarray,
+                     query_fps: float, jump_cost: float = 0.5, tolerance: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Re-rank kNN candidates (Q, k) of consecutive query frames by temporal coherence (module
+    docstring). Returns (idx, cost) re-ordered per frame by the best path cost through each candidate
+    (``cost`` becomes that path cost). ``tolerance``: allowed deviation of a candidate's time step from
+    the query's, as a fraction of the query step (plus one library stride)."""
+    Q, k = idx.shape
+    if Q < 2:
+        return idx, cost
+    t = index.time_of(idx)  # (Q, k) seconds
+    clip = index.clip_[idx]
+    fwd = np.zeros((Q, k))
+    back = np.zeros((Q, k))
+    fwd[0] = cost[0]
+    slack = index.stride / index.fps_[clip]  # (Q, k)
+
+    def trans(q: int) -> np.ndarray:  # (k, k) cost of moving from candidate a at q-1 to b at q
+        dt = (query_frames[q] - query_frames[q - 1]) / query_fps
+        step = t[q][None, :] - t[q - 1][:, None]
+        ok = (clip[q][None, :] == clip[q - 1][:, None]) & (np.abs(step - dt) <= tolerance * abs(dt) + slack[q][None, :])
+        return np.where(ok, 0.0, jump_cost)
+
+    for q in range(1, Q):
+        fwd[q] = cost[q] + np.min(fwd[q - 1][:, None] + trans(q), axis=0)
+    for q in range(Q - 2, -1, -1):
+        back[q] = np.min(trans(q + 1) + (cost[q + 1] + back[q + 1])[None, :], axis=1)
+    total = fwd + back  # best full path through each candidate
+    order = np.argsort(total, axis=1, kind="stable")
+    return np.take_along_axis(idx, order, 1), np.take_along_axis(total, order, 1)
+
+
+def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
+    """Read BVH clips (files or directories) into keypoints; a CMU calibration T-pose frame is dropped."""
+    from pathlib import Path
+
+    from ..errors import InputError
+    from ..mocap import read_bvh
+    from ..motiongraph.graph import has_tpose_first_frame
+    from .keypoints import keypoint_positions
+
+    files = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            files += sorted(p.rglob("*.bvh"))
+        elif p.is_file():
+            files.append(p)
+        else:
+            raise InputError(f"{p}: no such clip file or directory")
+    if not files:
+        raise InputError("--library: no .bvh clips")
+    out = []
+    for f in files:
+        m = read_bvh(f)
+        first = 1 if has_tpose_first_frame(m) else 0
+        pts = keypoint_positions(m)
+        pts[:first] = pts[first:first + 1]  # keep frame numbers of the file; never match the T-pose
+        out.append(LibraryClip(str(f), pts, m.fps))
+    return out
+
+
+__all__ = ["KP", "LibraryClip", "PoseIndex", "coherent_ranking", "library_clips"]

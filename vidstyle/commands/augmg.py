@@ -1,0 +1,269 @@
+"""AugMG stages: ``vidstyle match-pose``, ``vidstyle augment``, ``vidstyle evaluate augmg`` and
+``vidstyle demo make-library`` (the demo's mocap library that holds transition poses, not transitions)."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from ..errors import InputError
+from ._evaluate import evaluate_app
+from .demo import demo_app
+
+log = logging.getLogger(__name__)
+
+_JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
+_SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("match-pose")(match_pose)
+    app.command("augment")(augment)
+
+
+def augment(
+    graph_path: Path = typer.Option(..., "--graph", "-g", help="Plain motion graph (from build-graph)."),
+    annotations: Path = typer.Option(..., "--annotations", "-a", help="Annotations file with transition marks (vidstyle annotate)."),
+    library: List[Path] = typer.Option(..., "--library", "-l", help="Library BVH clips or directories to find reference points in (repeatable)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Augmented graph file to write."),
+    video: Optional[Path] = typer.Option(None, "--video", "-V", help="Use only the marks of this video (default: every annotated video)."),
+    poses: List[Path] = typer.Option([], "--poses", "-p", help="poses.json of the marked frames (from vidstyle pose; repeatable, one per video)."),
+    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Pose model: estimate the marked frames' poses here (needs --video)."),
+    k: int = typer.Option(10, "--k", help="Candidate reference points per mark."),
+    views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
+    edges_per_side: int = typer.Option(3, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
+    enhancement_cost: float = typer.Option(0.5, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
+    jobs: int = _JOBS,
+) -> None:
+    """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
+    2D pose against the projected library, pick the reference point by the enhanced distance, and add
+    ENHANCEMENT edges through it for that action pair. Discarded marks / candidates are left out, so a
+    rerun restores the plain transition (or takes the next candidate)."""
+    from ..augmg.annotations_io import read_marks
+    from ..augmg.augment import augment_graph
+    from ..augmg.poses_io import read_frame_poses
+    from ..motiongraph import MotionGraph
+
+    marks = read_marks(annotations)
+    if video is not None:
+        from ..formats.annotations import file_sha256, read_annotations
+
+        if not video.is_file():
+            raise InputError(f"--video: {video}: no such file")
+        ann = read_annotations(annotations)
+        va = next((v for v in ann.videos if Path(v.path).stem == video.stem), None)
+        if va is not None and va.sha256 != file_sha256(video):
+            raise InputError(f"{annotations}: {video} is not the annotated video (its sha256 differs)")
+        marks = [m for m in marks if m["video"] == video.stem]
+        if not marks:
+            raise InputError(f"{annotations}: no transition marks for {video.name}")
+    by_video: dict = {}
+    if pose_model is not None:
+        if video is None:
+            raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
+        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] for m in marks}))
+    for p in poses:
+        vid, frames = read_frame_poses(p)
+        by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
+    if not by_video and any(m["status"] == "accepted" for m in marks):
+        raise InputError("give --poses (poses.json of the marked frames) or --pose-model with --video")
+    graph = MotionGraph.load(graph_path)
+    inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
+                             enhancement_cost=enhancement_cost, jobs=jobs)
+    graph.save(out)
+    log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
+             sum(len(i.edges) for i in inserted))
+
+
+def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
+    """Poses of ``frames`` of ``video`` by the pose stage (pictorial structures, ``model``)."""
+    from ..augmg.poses_io import FramePose
+    from ..pose.run import estimate_video
+
+    doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1)
+    return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}
+
+
+@demo_app.command("make-library")
+def make_library_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the library performers (disjoint from every dataset performer)."),
+    performers: int = typer.Option(3, "--performers", help="Library performers."),
+    action_seconds: float = typer.Option(6.0, "--action-seconds", help="Length of each single-action clip."),
+    cmu: Optional[Path] = typer.Option(None, "--cmu", help="Also add CMU BVH clips from this directory (retargeted)."),
+    cmu_clips: int = typer.Option(-1, "--cmu-clips", help="How many CMU clips (sorted by name) to add; -1 = all."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a non-empty --out once the new library is complete."),
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+    scheduler: str = _SCHEDULER,
+) -> None:
+    """Write the AugMG mocap library: every action per library performer, plus dodge / stance-switch /
+    stop clips that hold the demo's transition poses in another context (never a performer's
+    transition itself). Layout: DIR/library.json, DIR/clips/<name>.bvh (+ .labels.json)."""
+    from ..augmg.library import LibraryParams, make_library
+
+    params = LibraryParams(seed=seed, performers=performers, action_seconds=action_seconds,
+                           cmu_clips=cmu_clips if cmu is not None else 0)
+    path = make_library(out, params, cmu_dir=cmu, overwrite=overwrite, jobs=jobs, scheduler=scheduler)
+    log.info("library manifest %s", path)
+
+
+def match_pose(
+    poses: Path = typer.Argument(..., help="poses.json of the annotated frames (from vidstyle pose)."),
+    library: List[Path] = typer.Option(..., "--library", "-l", help="Library BVH clips or directories (repeatable)."),
+    out: Path = typer.Option(..., "--out", "-o", help="matches.json to write."),
+    k: int = typer.Option(10, "--k", help="Candidates per frame."),
+    views: int = typer.Option(12, "--views", help="Azimuths the library is projected at (360 / views apart)."),
+    elevation: float = typer.Option(10.0, "--elevation", help="Camera elevation of the projection (degrees)."),
+    stride: int = typer.Option(3, "--stride", help="Index every N-th library frame."),
+    coherence: bool = typer.Option(False, "--coherence/--no-coherence", help="Re-rank candidates of consecutive frames by temporal coherence (Tautges' lazy neighbourhood graph)."),
+    fps: float = typer.Option(20.0, "--fps", help="Video rate of the poses' frame numbers (for --coherence)."),
+    jobs: int = _JOBS,
+    scheduler: str = _SCHEDULER,
+) -> None:
+    """Match each frame's 2D pose against the library projected at the frame's viewpoint (relative to
+    the character's facing; joint-angle features, kd-tree kNN); write the top-k library frames per
+    frame as {"clip", "time", "cost"}."""
+    import numpy as np
+
+    from ..augmg.index import PoseIndex, coherent_ranking, library_clips
+    from ..augmg.poses_io import read_frame_poses
+    from ..formats.matches import Candidate, FrameMatches, Matches, write_matches
+    from ..render.camera import parse_view
+
+    if k < 1:
+        raise InputError(f"--k: must be at least 1, got {k}")
+    if views < 1 or stride < 1:
+        raise InputError("--views and --stride must be at least 1")
+    video, frames = read_frame_poses(poses)
+    if not frames:
+        raise InputError(f"{poses}: no frames to match")
+    clips = library_clips(library)
+    index = PoseIndex(n_views=views, elevation_deg=elevation, stride=stride, jobs=jobs, scheduler=scheduler).fit(clips)
+    ids, costs, azs = [], [], []
+    for f in frames:
+        try:
+            az = parse_view(f.viewpoint)
+        except ValueError as e:
+            raise InputError(f"{poses}: frame {f.frame}: {e}") from None
+        from ..augmg.evaluate import _query_views
+
+        # a named viewpoint is a class (front / left / right): search its neighbouring azimuths too
+        spread = 0 if _is_number(f.viewpoint) else 1
+        i, c = _query_views(index, f.points, az, k, spread)
+        ids.append(i[0])
+        costs.append(c[0])
+        azs.append(az)
+    kk = min(len(x) for x in ids)
+    I, C = np.stack([x[:kk] for x in ids]), np.stack([x[:kk] for x in costs])
+    if coherence:
+        I, C = coherent_ranking(index, I, C, np.array([f.frame for f in frames]), fps)
+    times = index.time_of(I)
+    out_frames = [FrameMatches(f.frame, float(az), [Candidate(index.paths_[int(index.clip_[j])], float(t), float(c))
+                                                    for j, t, c in zip(I[q], times[q], C[q])])
+                  for q, (f, az) in enumerate(zip(frames, azs))]
+    write_matches(out, Matches(str(poses), video, index.paths_, {**index.get_params(), "k": k, "coherence": coherence},
+                               out_frames))
+    log.info("wrote %s: %d frames x %d candidates over %d library frames", out, len(frames), kk, index.n_frames)
+
+
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
+
+
+@evaluate_app.command("augmg")
+def evaluate_augmg_cmd(
+    dataset: Path = typer.Option(..., "--dataset", "-d", help="Demo dataset directory (performances with styled transitions)."),
+    library: Path = typer.Option(..., "--library", "-l", help="Library directory (vidstyle demo make-library)."),
+    out: Path = typer.Option(Path("metrics/augmg.json"), "--out", "-o", help="Metrics JSON."),
+    annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Query the accepted marks of this annotations file instead of every transition's key frame."),
+    poses_dir: Optional[Path] = typer.Option(None, "--poses-dir", help="poses.json files (<video id>.poses.json) of the pose model: adds the 'model' source."),
+    noise: float = typer.Option(0.05, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
+    k: int = typer.Option(10, "--k", help="Candidates per query (the reference point is chosen among them)."),
+    views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
+    segment: str = typer.Option("fixed", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition) or nodes (between the enhancement nodes w_z0..w_z2)."),
+    segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
+    enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
+    headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
+    jobs: int = _JOBS,
+) -> None:
+    """Retrieval MPJPE / recall@1/@10 and transition error (AugMG vs plain motion graph against the
+    performer's true transition, same endpoints), per 2D source: gt, noisy (and model)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..augmg.evaluate import evaluate_augmg
+    from ..fileio import write_json
+
+    if segment not in ("fixed", "nodes"):
+        raise InputError(f"--segment: fixed or nodes, got {segment!r}")
+    if enh_window < 1:
+        raise InputError(f"--enh-window: must be at least 1, got {enh_window}")
+    if not 0 < segment_scale <= 1:
+        raise InputError(f"--segment-scale: must be in (0, 1], got {segment_scale}")
+    marks = _read_marks(annotations) if annotations else None
+    sources = ["gt", "noisy"]
+    poses = None
+    if poses_dir is not None:
+        poses = _read_poses_dir(poses_dir)
+        sources.insert(0, "model")
+    metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
+                             k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
+                             seed=seed, jobs=jobs)
+    main = metrics["by_source"].get("model") or metrics["by_source"].get("gt")
+    metrics["headline"] = {
+        "augmg.retrieval_mpjpe": main["retrieval_mpjpe_mm"],
+        "augmg.transition_error_plain": main["transition_plain_mm"],
+        "augmg.transition_error_augmg": main["transition_augmg_mm"],
+        "augmg.source": "model" if "model" in metrics["by_source"] else "gt",
+    }
+    write_json(out, metrics)
+    if headline is not None:
+        from ..fileio import read_json
+
+        doc = read_json(headline) if headline.is_file() else {}
+        doc.update({k2: v for k2, v in metrics["headline"].items()})
+        write_json(headline, doc)
+    table = Table(title=f"AugMG: {metrics['params']['queries']} held-out transitions, "
+                        f"{metrics['params']['library_frames']} library frames")
+    for col in ("2D source", "queries", "MPJPE top-1 mm", "MPJPE ref mm", "oracle mm", "R@1", "R@10",
+                "plain mm", "AugMG mm", "top-1 mm", "oracle mm ", "reduction"):
+        table.add_column(col)
+    for src, r in metrics["by_source"].items():
+        table.add_row(src, str(r["queries"]), f"{r['retrieval_mpjpe_mm']:.1f}", f"{r['reference_mpjpe_mm']:.1f}",
+                      f"{r['oracle_mpjpe_mm']:.1f}", f"{r['recall_at_1']:.2f}", f"{r['recall_at_10']:.2f}",
+                      f"{r['transition_plain_mm']:.1f}", f"{r['transition_augmg_mm']:.1f}",
+                      f"{r['transition_augmg_top1_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
+                      f"{100 * r['transition_reduction']:.0f} %")
+    Console().print(table)
+    log.info("wrote %s", out)
+
+
+def _read_marks(path: Path) -> list[dict]:
+    """Transition marks of an annotations file as {"video", "frame", "from", "to", "status"}."""
+    from ..augmg.annotations_io import read_marks
+
+    return read_marks(path)
+
+
+def _read_poses_dir(d: Path) -> dict:
+    from ..augmg.poses_io import read_frame_poses
+    from ..render.camera import parse_view
+
+    files = sorted(d.glob("*.poses.json"))
+    if not files:
+        raise InputError(f"--poses-dir: no *.poses.json in {d}")
+    out: dict = {}
+    for f in files:
+        _, frames = read_frame_poses(f)
+        vid = f.name[: -len(".poses.json")]
+        out[vid] = {fp.frame: (fp.points, parse_view(fp.viewpoint), 0 if _is_number(fp.viewpoint) else 1)
+                    for fp in frames}
+    return out
