@@ -136,6 +136,9 @@ def _patch_message_factory() -> None:
 def _import_pose():
     global _patched
     with _lock:
+        import os
+
+        os.environ.setdefault("GLOG_minloglevel", "2")  # MediaPipe's C++ info/warning lines stay off stderr
         _patch_message_factory()
         try:
             import mediapipe as mp
