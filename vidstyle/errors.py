@@ -12,3 +12,11 @@ class VidstyleError(Exception):
 
 class InputError(VidstyleError):
     """A file or argument that cannot be used (missing, unreadable, wrong shape, wrong schema)."""
+
+
+class ResourceError(VidstyleError):
+    """The machine ran out of a resource (memory) for this input at these settings: exit status 3.
+
+    The CLI also turns a bare :class:`MemoryError` into this one-line error and exit status."""
+
+    exit_code = 3
