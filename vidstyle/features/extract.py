@@ -125,14 +125,15 @@ def process_video(
     height: int | None = WORKING_HEIGHT,
     window: int = WINDOW,
 ) -> dict[str, Any]:
-    """Stream ``video`` at the working ``fps`` / ``height`` (``None``: the video's own), extract its
-    features, write ``out_path`` atomically; return a short summary."""
+    """Stream ``video`` at the working ``fps`` / ``height`` (``None``: the video's own; both only ever
+    lower the video's rate and size), extract its features, write ``out_path`` atomically; return a short
+    summary."""
     from ..formats.features import Features, write_features
     from ..video import VideoReader
 
     descriptor = get_descriptor(variant, params)
     salient = salient or SalientParams()
-    with limit_threads(1), VideoReader(video, fps=fps, height=height, gray=True) as reader:
+    with limit_threads(1), VideoReader(video, fps=fps, height=height, gray=True, enlarge=False) as reader:
         n = len(reader)
         frames = (f for _, f in reader.iter_frames())
         try:

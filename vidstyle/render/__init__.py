@@ -51,7 +51,6 @@ from .appearance import Appearance
 from .body import BodyModel, build_body, classify_bone, skeleton_height
 from .camera import Camera, parse_view
 from .core import SIDECAR_SUFFIX, load_truth, render_motion, render_to_file, sidecar_path
-from .videoio import read_video, write_video
 
 __all__ = [
     "SIDECAR_SUFFIX",
@@ -62,10 +61,8 @@ __all__ = [
     "classify_bone",
     "load_truth",
     "parse_view",
-    "read_video",
     "render_motion",
     "render_to_file",
     "sidecar_path",
     "skeleton_height",
-    "write_video",
 ]

@@ -129,7 +129,8 @@ class VideoReader:
 
     ``fps``: working frame rate (``None``: every decoded frame). Only ever lowers the rate; a video slower
     than ``fps`` keeps its own frames. ``height``: working height in pixels, width scaled to keep the
-    aspect ratio (``None``: native size). ``gray``: single-channel frames. Frames are uint8, BGR (OpenCV's
+    aspect ratio (``None``: native size); with ``enlarge=False`` a video not taller than ``height`` keeps
+    its size. ``gray``: single-channel frames. Frames are uint8, BGR (OpenCV's
     order) unless ``gray``. Use as a context manager, or call :meth:`close`.
     """
 
@@ -139,6 +140,7 @@ class VideoReader:
         fps: float | None = None,
         height: int | None = None,
         gray: bool = False,
+        enlarge: bool = True,
     ) -> None:
         if fps is not None and not fps > 0:
             raise InputError(f"fps: must be positive, got {fps}")
@@ -152,7 +154,7 @@ class VideoReader:
         self._pts: np.ndarray = self.info.__dict__["_pts"]
         self.source_index = working_indices(self.info.timestamps, fps)
         """int64 (len(self),): decoded index of each working frame"""
-        if height is None or height == self.info.height:
+        if height is None or height == self.info.height or (not enlarge and self.info.height < height):
             self.size = (self.info.width, self.info.height)
         else:
             self.size = (max(1, int(round(self.info.width * height / self.info.height))), int(height))
