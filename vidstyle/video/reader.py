@@ -118,7 +118,9 @@ def probe(path: str | os.PathLike) -> VideoInfo:
     if len(order) != len(pts):
         raise InputError(f"{path}: corrupt video ({len(pts) - len(order)} frames share a timestamp)")
     t = (order - order[0]).astype(np.float64) * float(tb)
-    fps = (len(t) - 1) / t[-1] if len(t) > 1 and t[-1] > 0 else 0.0
+    # exact rational arithmetic, so that 39 frames over 39 * 1/20 s give 20.0, not 19.999999999999996
+    span = int(order[-1] - order[0])
+    fps = float(Fraction(len(t) - 1) / (span * Fraction(tb))) if len(t) > 1 and span > 0 else 0.0
     info = VideoInfo(str(path), len(order), float(fps), width, height, t)
     info.__dict__["_pts"] = order  # the raw timestamps, for exact seeking (not part of the public view)
     return info
