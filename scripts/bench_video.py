@@ -87,8 +87,9 @@ def make_clip(seconds: float, cache: Path) -> Path:
     return out
 
 
-def run_child(args: list[str]) -> tuple[float, float]:
-    """Wall seconds and peak RSS (MB) of one child process (its own, from wait4)."""
+def run_child(args: list[str]) -> tuple[float, float, float]:
+    """Wall seconds, CPU seconds (user + system) and peak RSS (MB) of one child process (its own, from
+    wait4)."""
     t0 = time.perf_counter()
     p = subprocess.Popen(args, env=env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(p.pid, 0)
@@ -97,7 +98,7 @@ def run_child(args: list[str]) -> tuple[float, float]:
     err = p.stderr.read().decode(errors="replace") if p.stderr else ""
     if p.returncode != 0:
         raise SystemExit(f"child failed ({p.returncode}): {' '.join(args)}\n{err[-2000:]}")
-    return wall, usage.ru_maxrss / 1024.0  # ru_maxrss is in kB on Linux
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0  # ru_maxrss: kB on Linux
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -121,16 +122,18 @@ def main(argv: list[str] | None = None) -> int:
         cases = [("decode only (VideoReader 20 fps, 120 px)", decode), ("vidstyle features", feats)]
         for _, c in cases:  # warm-up (page cache, imports)
             run_child(c)
-        results: list[tuple[list[float], list[float]]] = [([], []) for _ in cases]
+        results: list[tuple[list[float], list[float], list[float]]] = [([], [], []) for _ in cases]
         for _ in range(args.runs):
-            for (_, c), (walls, rss) in zip(cases, results):
-                w, m = run_child(c)
+            for (_, c), (walls, cpus, rss) in zip(cases, results):
+                w, cpu, m = run_child(c)
                 walls.append(w)
+                cpus.append(cpu)
                 rss.append(m)
     rows = []
-    for (name, _), (walls, rss) in zip(cases, results):
+    for (name, _), (walls, cpus, rss) in zip(cases, results):
         med = statistics.median(walls)
-        rows.append({"case": name, "median_s": med, "runs_s": walls, "peak_rss_mb_median": statistics.median(rss),
+        rows.append({"case": name, "median_s": med, "runs_s": walls, "cpu_median_s": statistics.median(cpus),
+                     "runs_cpu_s": cpus, "peak_rss_mb_median": statistics.median(rss),
                      "peak_rss_mb_max": max(rss), "runs_rss_mb": rss, "realtime_factor": duration / med,
                      "working_frames_per_s": duration * 20.0 / med})
     base = rows[0]["median_s"]
@@ -151,9 +154,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"video benchmark: {info.width}x{info.height} {info.fps:.0f} fps, {duration:.0f} s "
           f"({info.frames} frames), median of {args.runs} runs after a warm-up, "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
-    print(f"{'case':42s} {'wall s':>8s} {'x real time':>11s} {'peak RSS MB':>12s} {'vs decode':>10s}")
+    print(f"{'case':42s} {'wall s':>8s} {'x real time':>11s} {'CPU s':>7s} {'peak RSS MB':>12s} {'vs decode':>10s}")
     for r in rows:
-        print(f"{r['case']:42s} {r['median_s']:8.1f} {r['realtime_factor']:11.2f} "
+        print(f"{r['case']:42s} {r['median_s']:8.1f} {r['realtime_factor']:11.2f} {r['cpu_median_s']:7.1f} "
               f"{r['peak_rss_mb_max']:12.0f} {r['vs_decode_only']:9.2f}x")
     verdict = "met" if payload["goal_met"] else "NOT met"
     print(f"goal: peak RSS <= {GOAL_RSS_MB:.0f} MB and faster than real time: {verdict}")

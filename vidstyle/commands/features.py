@@ -90,9 +90,13 @@ def register(app: typer.Typer) -> None:
             if variant == "thesis"
             else None
         )
-        done = run_features(
-            [str(v) for v in videos], out, jobs=jobs, variant=variant, salient=salient, params=sift,
-            scheduler=scheduler, fps=fps or None, height=height or None,
-        )
+        from ._flags import as_flags
+
+        with as_flags(jobs="--jobs", scheduler="--scheduler", variant="--variant", fps="--fps",
+                      height="--height"):
+            done = run_features(
+                [str(v) for v in videos], out, jobs=jobs, variant=variant, salient=salient, params=sift,
+                scheduler=scheduler, fps=fps or None, height=height or None,
+            )
         total = sum(d["points"] for d in done)
         log.info("features: %d video(s), %d points -> %s", len(done), total, out)

@@ -244,7 +244,10 @@ def recognize(
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
     _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
     items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
-    parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
+    from ._flags import as_flags
+
+    with as_flags(jobs="--jobs", scheduler="--scheduler"):
+        parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
     if out_dir is not None:
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 
