@@ -20,7 +20,6 @@ for pipelines that train, recognise and evaluate as separate stages.
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
