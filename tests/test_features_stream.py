@@ -113,7 +113,10 @@ def test_out_of_memory_is_one_line_exit_3(tmp_path, monkeypatch, capsys):
 
 
 def test_descriptor_interface():
+    from vidstyle.features import describe
+
     assert DEFAULT_VARIANT == "scovanner2007" == get_descriptor().name
+    assert describe(moving_blobs(16).astype(np.float32), [[8, 30, 40]]).dtype == np.uint8
     vol = moving_blobs(20).astype(np.float32) / 255
     pts = np.array([[10, 30, 40], [0, 5, 5]])
     for name in REGISTRY:

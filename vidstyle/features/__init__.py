@@ -9,8 +9,8 @@ Modules:
   flow, the N largest-flow silhouette pixels at least a minimum distance apart (thesis N = 10).
 - :mod:`~vidstyle.features.sift3d` — 3D SIFT (Scovanner, Ali, Shah 2007) as the thesis describes it:
   8x4 (theta, phi) orientation bins normalised by solid angle, Gaussian weighting, rotation to the
-  dominant orientation, 2x2x2 sub-regions -> 256-D; and the public entry point
-  :func:`~vidstyle.features.sift3d.describe` for both variants.
+  dominant orientation, 2x2x2 sub-regions -> 256-D; and the
+  thesis variant's entry point :func:`~vidstyle.features.sift3d.describe`.
 - :mod:`~vidstyle.features.scovanner2007` — the descriptor as the authors' released code computes it
   (80 icosahedral bins, no rotation, 640-D uint8), bit-exact by its own definition.
 - :mod:`~vidstyle.features.sift2d` — the 2D SIFT ablation (``variant="sift2d"``): 4x4 cells x 8 bins of the
@@ -20,9 +20,9 @@ Modules:
   frames; many videos in parallel.
 """
 
-from .descriptors import DEFAULT_VARIANT, Descriptor, get_descriptor
+from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
 from .salient import SalientParams, salient_points
-from .sift3d import Sift3DParams, describe
+from .sift3d import Sift3DParams
 
 __all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "get_descriptor",
            "salient_points"]

@@ -192,3 +192,8 @@ def get_descriptor(variant: str = DEFAULT_VARIANT, params: Any = None) -> Descri
     if cls is None:
         raise InputError(f"variant: expected one of {', '.join(REGISTRY)}, got {variant!r}")
     return cls(params)
+
+
+def describe(volume: np.ndarray, points: np.ndarray, variant: str = DEFAULT_VARIANT, params: Any = None) -> np.ndarray:
+    """Descriptors (n, d) of ``points`` in ``volume`` with ``variant`` (default: the CLI's default)."""
+    return get_descriptor(variant, params).describe(volume, points)
