@@ -232,17 +232,19 @@ class VideoReader:
 
     # --------------------------------------------------------------- private
     def _convert(self, frame) -> np.ndarray:
-        """A decoded ``av.VideoFrame`` to the working size and colour in one libswscale pass (area
-        averaging when shrinking, bilinear when enlarging): converting the full-size picture to BGR first
-        and resizing after would cost several times the decoding of a 1080p stream."""
-        fmt = "gray" if self.gray else "bgr24"
+        """A decoded ``av.VideoFrame`` to the working size in BGR in one libswscale pass (area averaging
+        when shrinking, bilinear when enlarging): converting the full-size picture first and resizing
+        after would cost several times the decoding of a 1080p stream. Gray is OpenCV's BGR -> gray of
+        that, so that gray frames equal what OpenCV's own decoding gives (its BGR is bit-identical)."""
+        import cv2
+
         if (frame.width, frame.height) == self.size:
-            img = frame.to_ndarray(format=fmt)
+            img = frame.to_ndarray(format="bgr24")
         else:
             interp = "AREA" if self.size[1] < frame.height else "BILINEAR"
-            img = frame.reformat(width=self.size[0], height=self.size[1], format=fmt,
+            img = frame.reformat(width=self.size[0], height=self.size[1], format="bgr24",
                                  interpolation=interp).to_ndarray()
-        img = np.ascontiguousarray(img)
+        img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) if self.gray else np.ascontiguousarray(img)
         img.setflags(write=False)
         return img
 
