@@ -94,6 +94,10 @@ def test_working_size_and_gray(tmp_path):
         f = r[3]
         assert f.shape == (60, 80) and f.dtype == np.uint8 and (r.width, r.height) == (80, 60)
         assert numbers(r) == list(range(10))
+    import cv2
+
+    with VideoReader(p, height=60) as c, VideoReader(p, height=60, gray=True) as g:
+        assert np.array_equal(g[5], cv2.cvtColor(c[5], cv2.COLOR_BGR2GRAY))  # OpenCV's gray of the BGR
     with VideoReader(p, height=480, enlarge=False) as r:
         assert r[0].shape == (240, 320, 3)
     with VideoReader(p, height=480) as r:
