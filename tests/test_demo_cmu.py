@@ -14,7 +14,12 @@ from vidstyle.cli import main
 from vidstyle.demo.cmu import CMUParams, Clip, clip_windows, make_cmu_dataset, parse_actions, plan_segments, video_frames
 from vidstyle.errors import InputError
 from vidstyle.mocap import read_bvh
-from vidstyle.render import read_video
+from vidstyle.video import VideoReader
+
+
+def read_video(path):
+    with VideoReader(path) as r:
+        return r.read_all()
 
 # two actions of distinct subjects, one view, 1.5 s windows, two windows per subject: ~20 short videos
 SMALL = dict(classes=parse_actions("walk,basketball"), views=("left",), segment_seconds=1.5, max_per_subject=2)

@@ -150,17 +150,10 @@ def test_dataset_refuses_a_non_empty_directory_and_overwrites_on_request(tmp_pat
 
 
 def _video_frames(path: Path) -> np.ndarray:
-    import cv2
+    from vidstyle.video import VideoReader
 
-    cap = cv2.VideoCapture(str(path))
-    frames = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
-    return np.stack(frames)
+    with VideoReader(path) as r:
+        return r.read_all()
 
 
 def test_cli_tiny_rendered_dataset_end_to_end(tmp_path):

@@ -11,25 +11,23 @@ import pytest
 
 from vidstyle.cli import main
 from vidstyle.errors import InputError
-from vidstyle.features.extract import load_features
-from vidstyle.features.videoio import read_gray
+from vidstyle.formats.features import read_features
+from vidstyle.video import VideoWriter
 
 
 def write_video(path: Path, T=16, H=48, W=64, speed=2, fps=20.0) -> np.ndarray:
-    """A bright textured disc moving right on a dark background (mp4v); returns the gray frames."""
+    """A bright textured disc moving right on a dark background; returns the gray frames."""
     rng = np.random.default_rng(0)
     tex = (rng.random((H, W)) * 60).astype(np.uint8)
-    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
-    assert w.isOpened()
     out = []
-    for t in range(T):
-        f = np.full((H, W), 30, np.uint8)
-        mask = np.zeros((H, W), np.uint8)
-        cv2.circle(mask, (12 + speed * t, H // 2), 10, 255, -1)
-        f = np.where(mask > 0, 150 + np.roll(tex, speed * t, axis=1), f).astype(np.uint8)
-        out.append(f)
-        w.write(cv2.cvtColor(f, cv2.COLOR_GRAY2BGR))
-    w.release()
+    with VideoWriter(path, fps) as w:
+        for t in range(T):
+            f = np.full((H, W), 30, np.uint8)
+            mask = np.zeros((H, W), np.uint8)
+            cv2.circle(mask, (12 + speed * t, H // 2), 10, 255, -1)
+            f = np.where(mask > 0, 150 + np.roll(tex, speed * t, axis=1), f).astype(np.uint8)
+            out.append(f)
+            w.write(f)
     return np.stack(out)
 
 
@@ -40,64 +38,23 @@ def video(tmp_path):
     return p, frames
 
 
-def test_read_gray(video):
-    p, frames = video
-    v = read_gray(p)
-    assert v.frames.shape == frames.shape and v.frames.dtype == np.float32
-    assert v.fps == pytest.approx(20.0)
-    assert 0 <= v.frames.min() and v.frames.max() <= 1
-    assert np.mean(np.abs(v.frames * 255 - frames)) < 6  # lossy codec, same picture
-
-
-def test_unreadable_inputs(tmp_path, video):
-    with pytest.raises(InputError, match="file not found"):
-        read_gray(tmp_path / "missing.mp4")
-    bad = tmp_path / "garbage.mp4"
-    bad.write_bytes(b"this is not a video" * 50)
-    with pytest.raises(InputError, match="garbage.mp4: cannot be read as video"):
-        read_gray(bad)
-    empty = tmp_path / "empty.avi"
-    empty.write_bytes(b"")
-    with pytest.raises(InputError, match="empty.avi"):
-        read_gray(empty)
-    p, _ = video
-    cut = tmp_path / "cut.mp4"
-    data = p.read_bytes()
-    cut.write_bytes(data[: len(data) // 2])
-    with pytest.raises(InputError, match=r"cut.mp4: (cannot be read as video|truncated)"):
-        read_gray(cut)
-
-
-def test_truncated_avi_is_reported(tmp_path):
-    # an AVI cut in the middle still opens and its header still declares every frame: the reader must
-    # notice the shortfall instead of returning half a video
-    p = tmp_path / "clip.avi"
-    w = cv2.VideoWriter(str(p), cv2.VideoWriter_fourcc(*"MJPG"), 20.0, (64, 48))
-    rng = np.random.default_rng(4)
-    for _ in range(30):
-        w.write((rng.random((48, 64, 3)) * 255).astype(np.uint8))
-    w.release()
-    data = p.read_bytes()
-    cut = tmp_path / "cut.avi"
-    cut.write_bytes(data[: len(data) // 2])
-    with pytest.raises(InputError, match=r"cut.avi: truncated video \(decoded \d+ of 30 frames\)"):
-        read_gray(cut)
-
-
 def test_cli_writes_the_documented_npz(video, tmp_path):
     p, frames = video
     out = tmp_path / "feat"
     assert main(["features", str(p), "--out", str(out), "--jobs", "1", "--variant", "thesis"]) == 0
-    d = load_features(out / "clip.npz")
-    n = len(d["points"])
-    assert n > 0 and d["points"].dtype == np.int32 and d["points"].shape == (n, 3)
-    assert d["descriptors"].shape == (n, 256) and d["descriptors"].dtype == np.float32
-    assert np.array_equal(d["frame_index"], d["points"][:, 0])
-    assert (d["n_frames"], d["height"], d["width"]) == frames.shape
-    assert d["fps"] == pytest.approx(20.0) and d["video"] == str(p) and d["variant"] == "thesis"
-    assert d["params"]["variant"] == "thesis" and d["params"]["salient"]["n_points"] == 10
-    assert d["params"]["descriptor"]["n_subregions"] == [2, 2, 2]
-    assert np.bincount(d["frame_index"]).max() <= 10
+    d = read_features(out / "clip.npz")
+    n = len(d.points)
+    assert n > 0 and d.points.dtype == np.int32 and d.points.shape == (n, 3)
+    assert d.descriptors.shape == (n, 256) and d.descriptors.dtype == np.float32
+    assert np.array_equal(d.frame_index, d.points[:, 0])
+    # a 48-pixel-high video is below the working height: kept at its own size and rate
+    assert (d.n_frames, d.height, d.width) == frames.shape
+    assert np.array_equal(d.source_index, np.arange(len(frames))) and d.source_frames == len(frames)
+    assert d.fps == pytest.approx(20.0) and d.video == str(p) and d.variant == "thesis"
+    assert d.params["variant"] == "thesis" and d.params["salient"]["n_points"] == 10
+    assert d.params["descriptor"]["n_subregions"] == [2, 2, 2]
+    assert d.params["working"] == {"fps": 20.0, "height": 120}
+    assert np.bincount(d.frame_index).max() <= 10
     assert [f.name for f in out.iterdir()] == ["clip.npz"]  # no temporary left behind
 
 
@@ -108,18 +65,18 @@ def test_cli_parallel_equals_serial_and_scovanner_variant(video, tmp_path):
     assert main(["features", str(p), str(q), "--out", str(tmp_path / "s"), "--jobs", "1"]) == 0
     assert main(["features", str(p), str(q), "--out", str(tmp_path / "par"), "--jobs", "2"]) == 0
     for name in ("clip.npz", "other.npz"):
-        a, b = load_features(tmp_path / "s" / name), load_features(tmp_path / "par" / name)
-        assert np.array_equal(a["points"], b["points"])
-        assert np.array_equal(a["descriptors"], b["descriptors"])
+        a, b = read_features(tmp_path / "s" / name), read_features(tmp_path / "par" / name)
+        assert np.array_equal(a.points, b.points)
+        assert np.array_equal(a.descriptors, b.descriptors)
     # the default variant is scovanner2007 (it recognises best on the demo; see the features command)
     assert main(["features", str(p), "--out", str(tmp_path / "sc"), "-j", "1"]) == 0
-    d = load_features(tmp_path / "sc" / "clip.npz")
-    assert d["descriptors"].dtype == np.uint8 and d["descriptors"].shape[1] == 640
-    assert d["variant"] == "scovanner2007" and json.dumps(d["params"]).count("scovanner2007") >= 1
+    d = read_features(tmp_path / "sc" / "clip.npz")
+    assert d.descriptors.dtype == np.uint8 and d.descriptors.shape[1] == 640
+    assert d.variant == "scovanner2007" and json.dumps(d.params).count("scovanner2007") >= 1
     assert main(["features", str(p), "--out", str(tmp_path / "2d"), "--variant", "sift2d", "-j", "1"]) == 0
-    d2 = load_features(tmp_path / "2d" / "clip.npz")
-    assert d2["descriptors"].shape[1] == 128 and d2["variant"] == "sift2d"
-    assert np.array_equal(d2["points"], d["points"])  # same salient points, only the descriptor differs
+    d2 = read_features(tmp_path / "2d" / "clip.npz")
+    assert d2.descriptors.shape[1] == 128 and d2.variant == "sift2d"
+    assert np.array_equal(d2.points, d.points)  # same salient points, only the descriptor differs
     assert main(["features", str(p), "--out", str(tmp_path / "x"), "--variant", "sift2d", "--subregions", "4"]) == 2
 
 
@@ -151,16 +108,18 @@ def test_npz_keys_and_load_errors(video, tmp_path):
     with zipfile.ZipFile(out / "clip.npz") as z:
         keys = {n[:-4] for n in z.namelist()}
     assert keys == {
-        "points", "descriptors", "frame_index", "params", "variant", "n_frames", "height", "width", "fps", "video"
+        "kind", "schema_version", "points", "descriptors", "frame_index", "params", "variant", "n_frames",
+        "height", "width", "fps", "video", "source_index", "source_frames", "source_fps", "source_width",
+        "source_height",
     }  # fmt: skip
-    d = load_features(out / "clip.npz")
-    assert np.bincount(d["frame_index"]).max() <= 3
+    d = read_features(out / "clip.npz")
+    assert np.bincount(d.frame_index).max() <= 3
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"not a zip")
-    with pytest.raises(InputError, match="bad.npz: not a features .npz"):
-        load_features(bad)
+    with pytest.raises(InputError, match="bad.npz: not a readable .npz"):
+        read_features(bad)
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(InputError, match="missing"):
-        load_features(tmp_path / "other.npz")
-    with pytest.raises(InputError, match="file not found"):
-        load_features(tmp_path / "nope.npz")
+        read_features(tmp_path / "other.npz")
+    with pytest.raises(InputError, match="not found"):
+        read_features(tmp_path / "nope.npz")

@@ -42,3 +42,29 @@ def test_atomic_files_get_the_normal_mode(tmp_path):
     plain = tmp_path / "plain.txt"
     plain.write_text("x")
     assert os.stat(tmp_path / "a.json").st_mode & 0o777 == os.stat(plain).st_mode & 0o777
+
+
+def test_library_errors_name_parameters_and_the_cli_its_flags(capsys):
+    from vidstyle.cli import main
+    from vidstyle.commands._flags import as_flags
+
+    with pytest.raises(InputError, match=r"^jobs: must be a positive"):
+        parallel_map(_work, [1], jobs=0)
+    with pytest.raises(InputError, match=r"^--jobs: must be a positive"):
+        with as_flags(jobs="--jobs"):
+            parallel_map(_work, [1], jobs=0)
+    with pytest.raises(InputError, match=r"^jobsite"):  # only a whole parameter name is mapped
+        with as_flags(jobs="--jobs"):
+            raise InputError("jobsite")
+    assert main(["recognize", "x.npz", "--model", "m.joblib", "--out", "o.json", "-j", "0"]) == 2
+
+
+def test_limit_threads_restores_opencv():
+    import cv2
+
+    from vidstyle.parallel import limit_threads
+
+    before = cv2.getNumThreads()
+    with limit_threads(1):
+        assert cv2.getNumThreads() == 1
+    assert cv2.getNumThreads() == before

@@ -107,16 +107,16 @@ def test_bad_inputs_exit_2(ds, tmp_path, capsys):
 
 def test_recognize_a_video_through_the_features_stage(tmp_path):
     pytest.importorskip("vidstyle.features.extract")
-    import cv2
 
     rng = np.random.default_rng(SEED)
     path = tmp_path / "clip.avi"
-    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 20, (160, 120))
-    for t in range(16):  # a bright square moving right over noise: motion for the salient points
-        img = (rng.random((120, 160)) * 40).astype(np.uint8)
-        img[40:80, 20 + 6 * t : 60 + 6 * t] = 220
-        w.write(cv2.cvtColor(img, cv2.COLOR_GRAY2BGR))
-    w.release()
+    from vidstyle.video import VideoWriter
+
+    with VideoWriter(path, 20) as w:
+        for t in range(16):  # a bright square moving right over noise: motion for the salient points
+            img = (rng.random((120, 160)) * 40).astype(np.uint8)
+            img[40:80, 20 + 6 * t : 60 + 6 * t] = 220
+            w.write(img)
     assert main(["features", str(path), "--out", str(tmp_path / "f")]) == 0
     feats = tmp_path / "f" / "clip.npz"
     n = int(np.load(feats)["n_frames"])

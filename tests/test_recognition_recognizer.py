@@ -108,10 +108,10 @@ def test_input_errors(data, tmp_path):
     with pytest.raises(InputError, match="w.npz: descriptors have dimension 16"):
         data["rec"].predict_video(wrong)
     np.savez(tmp_path / "bad.npz", descriptors=np.ones((3, 32)), frame_index=np.array([0, 1, 9]), n_frames=5)
-    with pytest.raises(InputError, match="bad.npz: frame indices outside"):
+    with pytest.raises(InputError, match="bad.npz: frame_index: frame indices outside"):
         load_features(tmp_path / "bad.npz")
     np.savez(tmp_path / "bad2.npz", descriptors=np.ones((3, 32)), n_frames=5)
-    with pytest.raises(InputError, match="bad2.npz: missing 'frame_index'"):
+    with pytest.raises(InputError, match="bad2.npz: frame_index: missing"):
         load_features(tmp_path / "bad2.npz")
     with pytest.raises(InputError, match="not found"):
         load_features(tmp_path / "none.npz")

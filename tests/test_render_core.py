@@ -13,13 +13,17 @@ from vidstyle.render import (
     build_body,
     classify_bone,
     load_truth,
-    read_video,
     render_motion,
     render_to_file,
     sidecar_path,
-    write_video,
 )
 from vidstyle.render.samples import humanoid_skeleton, sample_motion
+from vidstyle.video import VideoReader, write_video
+
+
+def read_video(path):
+    with VideoReader(path) as r:
+        return r.read_all()
 
 TRUTH_KEYS = {
     "joints2d", "joints3d", "visible", "depth", "joint_names", "parents", "K", "R", "t", "azimuth_deg",

@@ -4,6 +4,10 @@ Each stage lives in its own module under ``vidstyle/commands/`` and exposes ``re
 adds its commands (or a command group) to the root Typer app. Modules are discovered, so adding a stage
 touches one new file. Errors derived from :class:`vidstyle.errors.VidstyleError` become a one-line
 message on stderr and a non-zero exit status.
+
+Exit status: 0 success; 1 internal error (a bug: traceback on stderr); 2 bad input or usage (a file,
+an argument); 3 out of memory (:class:`MemoryError` or :class:`vidstyle.errors.ResourceError`: the
+input is too large at these settings); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -16,7 +20,9 @@ import sys
 import typer
 
 from . import __version__
-from .errors import VidstyleError
+from .errors import ResourceError, VidstyleError
+
+MEMORY_EXIT = ResourceError.exit_code
 
 app = typer.Typer(
     name="vidstyle",
@@ -172,6 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("vidstyle: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        # the input is too large for this machine at these settings: the user's to fix, like bad input
+        print("vidstyle: error: out of memory (try a smaller input, working size or fewer jobs)", file=sys.stderr)
+        return MEMORY_EXIT
     except Exception as e:
         # usage errors (unknown option, missing argument): Typer raises click's ClickException, from
         # its vendored copy of click in recent versions, so match the interface rather than the class

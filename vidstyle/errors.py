@@ -22,3 +22,11 @@ class ParameterError(InputError):
         self.param = param
         self.problem = problem
         super().__init__(f"{param}: {problem}")
+
+
+class ResourceError(VidstyleError):
+    """The machine ran out of a resource (memory) for this input at these settings: exit status 3.
+
+    The CLI also turns a bare :class:`MemoryError` into this one-line error and exit status."""
+
+    exit_code = 3

@@ -9,8 +9,10 @@ module-level function (picklable). OpenCV and BLAS are limited to one thread ins
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+from collections.abc import Iterator
 from typing import Callable, Iterable, Sequence, TypeVar
 
 from .errors import InputError
@@ -21,20 +23,43 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
+@contextlib.contextmanager
+def limit_threads(n: int = 1) -> Iterator[None]:
+    """OpenCV and BLAS/OpenMP on ``n`` threads inside the block (the one thread-limit helper): work is
+    parallel across items, and the per-item matrix products are too small to gain from threads."""
+    import cv2
+    from threadpoolctl import threadpool_limits
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(n)
+    try:
+        with threadpool_limits(limits=n):
+            yield
+    finally:
+        cv2.setNumThreads(before)
+
+
 def _single_threaded(fn: Callable[[T], R], item: T) -> R:
-    try:
-        import cv2
-
-        cv2.setNumThreads(1)
-    except ImportError:  # pragma: no cover - opencv is a dependency
-        pass
-    try:
-        from threadpoolctl import threadpool_limits
-
-        with threadpool_limits(1):
-            return fn(item)
-    except ImportError:  # pragma: no cover
+    with limit_threads(1):
         return fn(item)
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str) -> Iterator["object"]:
+    """A ``dask.distributed.Client`` connected to ``scheduler`` (the one Dask client helper); closed on
+    exit. Errors name the ``scheduler`` parameter."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError("scheduler: dask[distributed] is not installed (pip install 'vidstyle[dask]')") from None
+    try:
+        client = Client(scheduler, timeout="10s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise InputError(f"scheduler {scheduler}: cannot connect ({e})") from None
+    try:
+        yield client
+    finally:
+        client.close()
 
 
 def parallel_map(
@@ -52,7 +77,7 @@ def parallel_map(
     if not items:
         return []
     if jobs == 0:
-        raise InputError("--jobs: must be a positive number of workers or -1 for all cores")
+        raise InputError("jobs: must be a positive number of workers or -1 for all cores")
     if scheduler:
         return _dask_map(fn, items, scheduler, description)
     n = os.cpu_count() or 1
@@ -72,17 +97,7 @@ def parallel_map(
 def _dask_map(fn: Callable[[T], R], items: Sequence[T], scheduler: str, description: str) -> list[R]:
     from .logutil import progress
 
-    try:
-        from dask.distributed import Client
-    except ImportError:
-        raise InputError("--scheduler: dask[distributed] is not installed (pip install 'vidstyle[dask]')") from None
-    try:
-        client = Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError) as e:
-        raise InputError(f"--scheduler {scheduler}: cannot connect ({e})") from None
-    try:
+    with dask_client(scheduler) as client:
         log.info("%s: %d items on Dask cluster %s", description, len(items), scheduler)
         futures = client.map(_single_threaded, [fn] * len(items), items, pure=False)
         return [f.result() for f in progress(futures, description, total=len(futures))]
-    finally:
-        client.close()

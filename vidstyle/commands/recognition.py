@@ -250,30 +250,29 @@ def _same_video(recorded: str, path: Path) -> bool:
 
 
 def _feature_params(paths) -> dict | None:
-    import json
+    from ..formats.features import read_features
 
     for p in paths:
         try:
-            with np.load(p, allow_pickle=False) as z:
-                if "params" in z.files:
-                    return json.loads(str(z["params"]))
-        except Exception:  # informative only
+            return read_features(p).params or None
+        except InputError:  # informative only
             return None
     return None
 
 
 def _video_features(path: Path, header: dict):
-    """Compute features of a video with the features stage (same variant as the training files)."""
+    """Compute features of a video with the features stage (same variant, salient-point parameters and
+    working rate and size as the training files)."""
     import tempfile
 
     from ..recognition.io import load_features
 
     try:
-        from ..features.extract import process_video
+        from ..features.extract import WORKING_FPS, WORKING_HEIGHT, process_video
     except ImportError:
         raise InputError(f"{path}: not a features .npz, and the features stage is not installed") from None
     fp = header.get("features_params") or {}
-    variant = fp.get("variant", "thesis")
+    variant = fp.get("variant", "scovanner2007")
     salient = None
     try:
         from ..features.salient import SalientParams
@@ -282,9 +281,13 @@ def _video_features(path: Path, header: dict):
             salient = SalientParams(**fp["salient"])
     except Exception:  # older/newer params: fall back to the defaults, which is what training used by default
         log.warning("%s: could not rebuild the training salient-point parameters; using defaults", path)
+    working = fp.get("working") if isinstance(fp.get("working"), dict) else None
+    # features of schema 1 were computed on the video's own frames
+    fps = working.get("fps") if working else (None if fp else WORKING_FPS)
+    height = working.get("height") if working else (None if fp else WORKING_HEIGHT)
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d) / f"{path.stem}.npz"
-        process_video(path, tmp, variant=variant, salient=salient)
+        process_video(path, tmp, variant=variant, salient=salient, fps=fps, height=height)
         return load_features(tmp)
 
 
@@ -317,7 +320,10 @@ def recognize(
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
     _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
     items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
-    parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
+    from ._flags import as_flags
+
+    with as_flags(jobs="--jobs", scheduler="--scheduler"):
+        parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
     if out_dir is not None:
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 
@@ -357,12 +363,11 @@ def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: 
     if input.suffix.lower() == ".npz":
         feats = load_features(input)
         video = feats.video or str(input)
-        if fps is None:
-            with np.load(input, allow_pickle=False) as z:
-                fps = float(z["fps"]) if "fps" in z.files and float(z["fps"]) > 0 else None
     else:
         feats = _video_features(input, header)
         video = str(input)
+    if fps is None:
+        fps = feats.fps if feats.fps > 0 else None
     res = rec.predict_video(feats)
     classes = [str(c) for c in rec.classes_]
     track = RecognisedLabels(

@@ -85,7 +85,7 @@ def render(
     from ..render import Camera, render_to_file
     from ..render.background import parse_background
     from ..render.camera import parse_view
-    from ..render.videoio import CODECS
+    from ..video import CODECS
 
     wh = parse_size(size)
     if out.suffix.lower() not in CODECS:

@@ -2,22 +2,27 @@
 
 Modules:
 
-- :mod:`~vidstyle.features.videoio` — read a video as a grayscale float volume (frames, height, width).
+- :mod:`~vidstyle.features.descriptors` — the descriptor variants behind one interface
+  (``describe``, ``dimension``, ``parameters``, ``temporal_margin``, ``mirror_permutation``), registered
+  in one place; :func:`~vidstyle.features.descriptors.get_descriptor`. Default ``scovanner2007``.
 - :mod:`~vidstyle.features.salient` — per-frame salient points: frame-difference silhouette, dense optical
   flow, the N largest-flow silhouette pixels at least a minimum distance apart (thesis N = 10).
 - :mod:`~vidstyle.features.sift3d` — 3D SIFT (Scovanner, Ali, Shah 2007) as the thesis describes it:
   8x4 (theta, phi) orientation bins normalised by solid angle, Gaussian weighting, rotation to the
-  dominant orientation, 2x2x2 sub-regions -> 256-D; and the public entry point
-  :func:`~vidstyle.features.sift3d.describe` for both variants.
+  dominant orientation, 2x2x2 sub-regions -> 256-D; and the
+  thesis variant's entry point :func:`~vidstyle.features.sift3d.describe`.
 - :mod:`~vidstyle.features.scovanner2007` — the descriptor as the authors' released code computes it
   (80 icosahedral bins, no rotation, 640-D uint8), bit-exact by its own definition.
 - :mod:`~vidstyle.features.sift2d` — the 2D SIFT ablation (``variant="sift2d"``): 4x4 cells x 8 bins of the
   frame patch at the point, rotated to the dominant orientation, 128-D.
-- :mod:`~vidstyle.features.extract` — one video -> one ``.npz`` (schema in that module), many videos in
-  parallel with joblib.
+- :mod:`~vidstyle.features.extract` — one video -> one ``.npz`` (schema in
+  :mod:`vidstyle.formats.features`), streamed through :class:`vidstyle.video.VideoReader` in windows of
+  frames; many videos in parallel.
 """
 
+from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
 from .salient import SalientParams, salient_points
-from .sift3d import Sift3DParams, describe
+from .sift3d import Sift3DParams
 
-__all__ = ["SalientParams", "Sift3DParams", "describe", "salient_points"]
+__all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "get_descriptor",
+           "salient_points"]

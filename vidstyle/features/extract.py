@@ -1,123 +1,158 @@
-"""One video -> one compressed ``.npz`` of salient points and their 3D SIFT descriptors.
+"""One video -> one features ``.npz`` (schema: :mod:`vidstyle.formats.features`), streamed.
 
-Schema (``FEATURES_SCHEMA`` = 1), one file ``<out>/<video stem>.npz`` per video:
-
-=============== ============== =====================================================================
-key             dtype, shape   meaning
-=============== ============== =====================================================================
-``points``      int32 (n, 3)   0-based (frame, row, column) of each salient point, sorted by frame
-``descriptors`` (n, d)         float32, d = 256 by default (variant "thesis"), or uint8, d = 640
-                               (variant "scovanner2007"), or float32, d = 128 (variant "sift2d",
-                               the 2D ablation); row i describes ``points[i]``
-``frame_index`` int32 (n,)     frame of each point (``points[:, 0]``), for grouping by frame
-``params``      str (0-d)      JSON: ``schema``, ``variant``, ``salient`` (N, thresholds, flow
-                               method), ``descriptor`` (all descriptor parameters)
-``variant``     str (0-d)      "thesis", "scovanner2007" or "sift2d"
-``n_frames``    int64 (0-d)    frames decoded
-``height``      int64 (0-d)    frame height in pixels
-``width``       int64 (0-d)    frame width in pixels
-``fps``         float64 (0-d)  frame rate the container declares (0 if unknown); frames are
-                               addressed by index only
-``video``       str (0-d)      path of the source video as given
-=============== ============== =====================================================================
+The video is read through :class:`vidstyle.video.VideoReader` at a working rate and size (the method's
+20 fps and a figure about 60-100 px tall: ``height=120`` keeps the demo's 160x120 and turns a 1080x1920
+phone clip into 68x120), in grayscale. Frames are processed in windows of ``window`` frames; each window
+is described on a slab that adds ``margin`` frames on each side, the frames that the salient points
+(t-1, t+1, flow) and the descriptor's neighbourhoods read (:attr:`Descriptor.temporal_margin`). The result
+is identical to processing the whole volume at once (:func:`extract_features`), and peak memory is set by
+``window + 2 * margin`` working frames, never by the video's length.
 
 Everything is deterministic (no random numbers are used). Files are written atomically.
 """
 
 from __future__ import annotations
 
-import contextlib
-import json
 import logging
 import os
-import zipfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import outputs_by_stem, write_npz
+from ..errors import InputError, ResourceError
+from ..fileio import outputs_by_stem
+from ..parallel import limit_threads
+from .descriptors import DEFAULT_VARIANT, Descriptor, get_descriptor
 from .salient import SalientParams, salient_points
-from .sift3d import VARIANTS, Sift3DParams, describe, params_json
-from .videoio import read_gray
 
 log = logging.getLogger(__name__)
 
-FEATURES_SCHEMA = 1
+#: schema of the ``params`` JSON inside a features file
+FEATURES_SCHEMA = 2
+#: working rate and height of the method (``vidstyle features --fps/--height`` defaults)
+WORKING_FPS = 20.0
+WORKING_HEIGHT = 120
+#: working frames described per window
+WINDOW = 128
 
 
-@contextlib.contextmanager
-def single_threaded() -> Iterator[None]:
-    """OpenCV and BLAS on one thread: parallelism is across videos, and the per-point matrix products
-    are too small to gain from threads (they lose)."""
-    import cv2
-    from threadpoolctl import threadpool_limits
-
-    before = cv2.getNumThreads()
-    cv2.setNumThreads(1)
-    try:
-        with threadpool_limits(limits=1):
-            yield
-    finally:
-        cv2.setNumThreads(before)
+def _params(descriptor: Descriptor, salient: SalientParams, fps: float | None, height: int | None) -> dict:
+    return {
+        "schema": FEATURES_SCHEMA,
+        "variant": descriptor.name,
+        "salient": salient.to_dict(),
+        "descriptor": descriptor.parameters(),
+        "working": {"fps": fps, "height": height},
+    }
 
 
 def extract_features(
     frames: np.ndarray,
-    variant: str = "thesis",
+    variant: str | Descriptor = DEFAULT_VARIANT,
     salient: SalientParams | None = None,
-    sift: Sift3DParams | None = None,
+    params: Any = None,
 ) -> dict[str, Any]:
-    """Salient points and descriptors of a (frames, h, w) volume in [0, 1]; the .npz arrays (no metadata
-    about a file)."""
-    if variant not in VARIANTS:
-        raise InputError(f"variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
+    """Salient points and descriptors of a whole (frames, h, w) volume in [0, 1] at once (the reference
+    that :func:`extract_stream` equals; for short clips and tests): ``points`` (n, 3) int32,
+    ``descriptors`` (n, d), ``params`` (dict)."""
+    descriptor = get_descriptor(variant, params)
     salient = salient or SalientParams()
+    frames = np.asarray(frames)
     pts = salient_points(frames, salient)
-    if variant == "thesis":
-        desc = describe(frames, pts, "thesis", params=sift or Sift3DParams())
-    elif variant == "sift2d":
-        desc = describe(frames, pts, "sift2d")
-        sift = None  # params_json records the 2D defaults
-    else:
-        desc = describe(frames, pts, "scovanner2007")
-    params = {
-        "schema": FEATURES_SCHEMA,
-        "variant": variant,
-        "salient": salient.to_dict(),
-        "descriptor": json.loads(params_json(variant, sift)),
-    }
     return {
         "points": pts.astype(np.int32),
-        "descriptors": desc,
-        "frame_index": pts[:, 0].astype(np.int32),
-        "params": np.array(json.dumps(params, sort_keys=True)),
-        "variant": np.array(variant),
-        "n_frames": np.int64(frames.shape[0]),
-        "height": np.int64(frames.shape[1]),
-        "width": np.int64(frames.shape[2]),
+        "descriptors": descriptor.describe(frames, pts).astype(descriptor.dtype, copy=False),
+        "params": _params(descriptor, salient, None, None),
     }
+
+
+def extract_stream(
+    frames: Iterable[np.ndarray],
+    n_frames: int,
+    variant: str | Descriptor = DEFAULT_VARIANT,
+    salient: SalientParams | None = None,
+    params: Any = None,
+    window: int = WINDOW,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Salient points (n, 3) int32 and descriptors (n, d) of ``n_frames`` uint8 (or [0, 1] float) gray
+    frames streamed from ``frames``, holding at most ``window + 2 * margin`` frames; equal to
+    :func:`extract_features` on the stacked volume. ``progress(k)`` is told of ``k`` frames done."""
+    descriptor = get_descriptor(variant, params)
+    salient = salient or SalientParams()
+    if window < 1:
+        raise InputError(f"window: must be >= 1, got {window}")
+    margin = max(1, descriptor.temporal_margin)
+    it = iter(frames)
+    buf: list[np.ndarray] = []  # frames [buf_start, buf_start + len(buf))
+    buf_start = 0
+    all_pts, all_desc = [], []
+    for s in range(0, n_frames, window):
+        e = min(s + window, n_frames)
+        a, b = max(0, s - margin), min(n_frames, e + margin)
+        del buf[: a - buf_start]
+        buf_start = a
+        while buf_start + len(buf) < b:
+            try:
+                f = next(it)
+            except StopIteration:
+                raise InputError(f"frames: expected {n_frames} frames, got {buf_start + len(buf)}") from None
+            f = np.asarray(f)
+            buf.append(f.astype(np.float32) * np.float32(1 / 255) if f.dtype == np.uint8 else
+                       np.asarray(f, np.float32))
+        slab = np.stack(buf)
+        pts = salient_points(slab, salient, start=s - a, stop=e - a)
+        desc = descriptor.describe(slab, pts).astype(descriptor.dtype, copy=False)
+        pts[:, 0] += a
+        all_pts.append(pts)
+        all_desc.append(desc)
+        if progress is not None:
+            progress(e - s)
+    if not all_pts:
+        return np.zeros((0, 3), np.int32), np.zeros((0, descriptor.dimension), descriptor.dtype)
+    return np.concatenate(all_pts).astype(np.int32), np.concatenate(all_desc)
 
 
 def process_video(
     video: str | os.PathLike,
     out_path: str | os.PathLike,
-    variant: str = "thesis",
+    variant: str | Descriptor = DEFAULT_VARIANT,
     salient: SalientParams | None = None,
-    sift: Sift3DParams | None = None,
+    params: Any = None,
+    fps: float | None = WORKING_FPS,
+    height: int | None = WORKING_HEIGHT,
+    window: int = WINDOW,
 ) -> dict[str, Any]:
-    """Read ``video``, extract its features, write ``out_path`` atomically; return a short summary."""
-    with single_threaded():
-        v = read_gray(video)
-        arrays = extract_features(v.frames, variant, salient, sift)
-    arrays["fps"] = np.float64(v.fps)
-    arrays["video"] = np.array(str(video))
-    write_npz(out_path, **arrays)
-    n = len(arrays["points"])
-    log.info("%s: %d frames, %d points -> %s", video, v.frames.shape[0], n, out_path)
-    return {"video": str(video), "out": str(out_path), "frames": int(v.frames.shape[0]), "points": n}
+    """Stream ``video`` at the working ``fps`` / ``height`` (``None``: the video's own; both only ever
+    lower the video's rate and size), extract its features, write ``out_path`` atomically; return a short
+    summary."""
+    from ..formats.features import Features, write_features
+    from ..video import VideoReader
+
+    descriptor = get_descriptor(variant, params)
+    salient = salient or SalientParams()
+    with limit_threads(1), VideoReader(video, fps=fps, height=height, gray=True, enlarge=False) as reader:
+        n = len(reader)
+        frames = (f for _, f in reader.iter_frames())
+        try:
+            pts, desc = extract_stream(frames, n, descriptor, salient, window=window)
+        except MemoryError:
+            raise ResourceError(f"{video}: out of memory extracting features at {reader.width}x{reader.height} "
+                                f"(lower the working height)") from None
+        info = reader.info
+        feats = Features(
+            descriptors=desc, frame_index=pts[:, 0], n_frames=n, points=pts,
+            height=reader.height, width=reader.width, fps=float(reader.fps), variant=descriptor.name,
+            params=_params(descriptor, salient, fps, height), video=str(video),
+            source_index=reader.source_index, source_frames=info.frames, source_fps=info.fps,
+            source_width=info.width, source_height=info.height,
+        )
+    write_features(out_path, feats)
+    log.info("%s: %d frames (%dx%d at %.3g fps), %d points -> %s", video, n, feats.width, feats.height,
+             feats.fps, len(pts), out_path)
+    return {"video": str(video), "out": str(out_path), "frames": n, "points": int(len(pts))}
 
 
 def _process_item(item: tuple) -> dict[str, Any]:
@@ -128,49 +163,23 @@ def run_features(
     videos: Sequence[str | os.PathLike],
     out_dir: str | os.PathLike,
     jobs: int = -1,
-    variant: str = "thesis",
+    variant: str = DEFAULT_VARIANT,
     salient: SalientParams | None = None,
-    sift: Sift3DParams | None = None,
+    params: Any = None,
     scheduler: str | None = None,
+    fps: float | None = WORKING_FPS,
+    height: int | None = WORKING_HEIGHT,
 ) -> list[dict[str, Any]]:
     """Extract features of every video into ``out_dir``, videos in parallel: joblib with ``jobs`` local
     workers (-1 = all cores), or the Dask cluster at ``scheduler`` (its workers must see the same
     paths). Each worker runs OpenCV and BLAS on one thread; every output is written atomically."""
     from ..parallel import parallel_map
 
-    if variant not in VARIANTS:
-        raise InputError(f"--variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
-    if jobs == 0:
-        raise InputError("--jobs: must be a positive number of workers or -1 for all cores")
+    descriptor = get_descriptor(variant, params)
     for v in videos:
         if not Path(v).is_file():
             raise InputError(f"{v}: file not found")
     outs = outputs_by_stem(videos, out_dir, ".npz")
     Path(out_dir).mkdir(parents=True, exist_ok=True)
-    items = [(str(v), str(o), variant, salient, sift) for v, o in zip(videos, outs)]
+    items = [(str(v), str(o), descriptor, salient, None, fps, height) for v, o in zip(videos, outs)]
     return parallel_map(_process_item, items, jobs=jobs, scheduler=scheduler, description="features")
-
-
-def load_features(path: str | os.PathLike) -> dict[str, Any]:
-    """Read a features ``.npz``; ``params`` is decoded from JSON, scalars become Python values."""
-    path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            d = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except (OSError, ValueError, zipfile.BadZipFile) as e:
-        raise InputError(f"{path}: not a features .npz ({e})") from None
-    missing = {"points", "descriptors", "frame_index", "params"} - set(d)
-    if missing:
-        raise InputError(f"{path}: not a features .npz (missing {', '.join(sorted(missing))})")
-    for k in ("n_frames", "height", "width"):
-        if k in d:
-            d[k] = int(d[k])
-    for k in ("variant", "video"):
-        if k in d:
-            d[k] = str(d[k])
-    if "fps" in d:
-        d["fps"] = float(d["fps"])
-    d["params"] = json.loads(str(d["params"]))
-    return d

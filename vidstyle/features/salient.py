@@ -79,7 +79,8 @@ def to_uint8(frame: np.ndarray) -> np.ndarray:
 
 
 class FlowMagnitude:
-    """Dense optical-flow magnitude between two frames with one OpenCV method (reusable object)."""
+    """Dense optical-flow magnitude between two frames with one OpenCV method; every call depends on its
+    two frames only."""
 
     def __init__(self, method: str = "dis") -> None:
         import cv2
@@ -91,7 +92,7 @@ class FlowMagnitude:
                 "dis-ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
                 "dis-medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM,
             }[method]
-            self._dis = cv2.DISOpticalFlow_create(preset)
+            self._preset = preset
         elif method != "farneback":
             raise InputError(f"flow: expected one of {', '.join(FLOW_METHODS)}, got {method!r}")
 
@@ -103,7 +104,11 @@ class FlowMagnitude:
             # OpenCV's documented example parameters (pyramid 0.5 x 3, window 15, 3 iterations)
             flow = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, 3, 15, 3, 5, 1.2, 0)
         else:
-            flow = self._dis.calc(a, b, None)
+            # a fresh DIS object per pair (creating one costs ~5 us): a reused one carries state from its
+            # previous call into the next (its result on a pair moves by pixels depending on the pair
+            # before, and a size change crashes OpenCV 4.x), so the flow of a frame pair would depend on
+            # where a video starts or is cut into windows
+            flow = cv2.DISOpticalFlow_create(self._preset).calc(a, b, None)
         return np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2)
 
 
@@ -133,9 +138,13 @@ def select_points(score: np.ndarray, n_points: int, min_distance: float) -> np.n
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
 
 
-def salient_points(frames: np.ndarray, params: SalientParams | None = None) -> np.ndarray:
-    """Salient points of every frame of ``frames`` (T, h, w), intensities in [0, 1].
+def salient_points(
+    frames: np.ndarray, params: SalientParams | None = None, start: int = 0, stop: int | None = None
+) -> np.ndarray:
+    """Salient points of frames ``start <= t < stop`` of ``frames`` (T, h, w), intensities in [0, 1].
 
+    Frame t reads frames t-1, t and t+1 only, so the points of ``[start, stop)`` computed on a slab that
+    holds one more frame on each side (or ends where the video ends) equal those of the whole video.
     Returns an (n, 3) int32 array of (frame, row, column), sorted by frame, then by decreasing flow.
     """
     p = params or SalientParams()
@@ -143,16 +152,24 @@ def salient_points(frames: np.ndarray, params: SalientParams | None = None) -> n
     if frames.ndim != 3:
         raise InputError(f"frames: expected (frames, height, width), got shape {frames.shape}")
     T = frames.shape[0]
-    if T < 2 or p.n_points == 0:
+    stop = T if stop is None else min(stop, T)
+    start = max(0, start)
+    if T < 2 or p.n_points == 0 or start >= stop:
         return np.zeros((0, 3), dtype=np.int32)
     flow = FlowMagnitude(p.flow)
-    u8 = [to_uint8(f) for f in frames]
+    u8 = {}
+
+    def byte(t: int) -> np.ndarray:
+        if t not in u8:
+            u8[t] = to_uint8(frames[t])
+        return u8[t]
+
     out = []
-    for t in range(T):
+    for t in range(start, stop):
         mask = silhouette(frames, t, p.threshold)
         if not mask.any():
             continue
-        mag = flow(u8[t], u8[t + 1]) if t < T - 1 else flow(u8[t], u8[t - 1])
+        mag = flow(byte(t), byte(t + 1)) if t < T - 1 else flow(byte(t), byte(t - 1))
         score = np.where(mask & (mag > p.min_flow), mag, -np.inf)
         rc = select_points(score, p.n_points, p.min_distance)
         if len(rc):

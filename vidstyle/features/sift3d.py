@@ -53,7 +53,6 @@ the outer product of its spatial and its orientation weights.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass, replace
 from typing import Any
@@ -61,8 +60,6 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-
-VARIANTS = ("thesis", "scovanner2007", "sift2d")
 
 #: Gaussian smoothing kernels are cut at this many standard deviations (scipy's default is 4; 3 keeps
 #: slab margins small and changes the weights by < 1 %).
@@ -363,42 +360,25 @@ def describe(
     volume: np.ndarray,
     points: np.ndarray,
     variant: str = "thesis",
-    params: Sift3DParams | None = None,
+    params: Any = None,
     **overrides: Any,
 ) -> np.ndarray:
     """3D SIFT descriptors of ``points`` (n, 3 ints: frame, row, column) in ``volume`` (frames, h, w).
 
+    A shortcut to :func:`vidstyle.features.descriptors.get_descriptor` ``(variant, params).describe``.
     Returns (n, d): float32 with d = ``params.dim`` (256 by default) for ``variant="thesis"``; uint8 with
     d = 640 for ``variant="scovanner2007"`` (which takes no parameters). Keyword ``overrides`` replace
     fields of ``params`` (e.g. ``n_subregions=4``).
     """
-    vol = _check_volume(volume)
-    pts = _check_points(vol, points)
-    if variant == "scovanner2007":
-        if params is not None or overrides:
-            raise InputError("variant scovanner2007: takes no parameters (it is fixed by the released code)")
-        from .scovanner2007 import describe as describe_scovanner
+    from .descriptors import get_descriptor
 
-        return describe_scovanner(vol, pts)
-    if variant == "sift2d":
-        # the 2D ablation: one frame, no time axis (see vidstyle.features.sift2d)
-        from .sift2d import Sift2DParams, describe as describe_2d
-
-        if params is not None and not isinstance(params, Sift2DParams):
-            raise InputError("variant sift2d: params must be a Sift2DParams")
-        p2 = params if params is not None else Sift2DParams()
-        if overrides:
-            p2 = replace(p2, **overrides)
-        return describe_2d(vol, pts, p2)
-    if variant != "thesis":
-        raise InputError(f"variant: expected one of {', '.join(VARIANTS)}, got {variant!r}")
-    p = params if params is not None else Sift3DParams()
     if overrides:
-        p = replace(p, **overrides)
-    out = np.zeros((len(pts), p.dim), dtype=np.float32)
-    for idx, arrays in _batches(vol, pts, p):
-        out[idx] = _describe_batch(*arrays, p)[0]
-    return out
+        if variant == "scovanner2007":
+            raise InputError("variant scovanner2007: takes no parameters (it is fixed by the released code)")
+        if params is None:
+            params = get_descriptor(variant).params  # type: ignore[attr-defined]
+        params = replace(params, **overrides)
+    return get_descriptor(variant, params).describe(volume, points)
 
 
 def dominant_orientation(
@@ -527,17 +507,3 @@ def normalise_sift(hist: np.ndarray, clip: float = 0.2) -> np.ndarray:
         if i == 0:
             h = np.minimum(h, np.float32(clip))
     return h
-
-
-def params_json(variant: str, params: Sift3DParams | None) -> str:
-    """The descriptor parameters as a JSON string (for the .npz ``params`` field)."""
-    if variant == "scovanner2007":
-        from . import scovanner2007
-
-        return json.dumps({"variant": variant, **scovanner2007.PARAMS}, sort_keys=True)
-    if variant == "sift2d":
-        from .sift2d import Sift2DParams
-
-        p2 = params if isinstance(params, Sift2DParams) else Sift2DParams()
-        return json.dumps({"variant": variant, **p2.to_dict()}, sort_keys=True)
-    return json.dumps({"variant": variant, **(params or Sift3DParams()).to_dict()}, sort_keys=True)

@@ -353,23 +353,13 @@ def all_pair_candidates(
 
 
 def _dask_blocks(ws, blocks, threshold_sq, min_gap, dtype, scheduler) -> list[TileResult]:
-    from ..errors import InputError
+    from ..parallel import dask_client
 
-    try:
-        from dask.distributed import Client
-    except ImportError:  # pragma: no cover
-        raise InputError("scheduler: dask[distributed] is not installed") from None
-    try:
-        client = Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError) as e:
-        raise InputError(f"scheduler {scheduler}: cannot connect ({e})") from None
-    try:
+    with dask_client(scheduler) as client:
         log.info("%d distance tiles on Dask cluster %s", len(blocks), scheduler)
         [ws_future] = client.scatter([ws], broadcast=True)
         futures = [client.submit(_run_block_dask, ws_future, b, threshold_sq, min_gap, dtype, pure=False) for b in blocks]
         return client.gather(futures)
-    finally:
-        client.close()
 
 
 def merge_results(results: Sequence[TileResult]) -> TileResult:

@@ -20,7 +20,6 @@ for pipelines that train, recognise and evaluate as separate stages.
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -242,10 +241,10 @@ def evaluate_recognition(
     metrics = score_videos(rec.classes_, truths, outputs, split.test, actions)
     feature_params = None
     try:
-        with np.load(features_path(features_dir, split.test[0]), allow_pickle=False) as z:
-            if "params" in z.files:
-                feature_params = json.loads(str(z["params"]))
-    except Exception:  # params are informative only
+        from ..formats.features import read_features
+
+        feature_params = read_features(features_path(features_dir, split.test[0])).params or None
+    except InputError:  # params are informative only
         feature_params = None
     result: dict[str, Any] = {
         "kind": "vidstyle.metrics.recognition",

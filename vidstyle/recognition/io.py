@@ -1,12 +1,7 @@
 """Reading and validating the inputs of the recognition stage.
 
-Features file (one ``.npz`` per video, written by ``vidstyle features``)::
-
-    points       (n, 3) int     (frame, row, col) of each salient point
-    descriptors  (n, d) float32 | uint8
-    frame_index  (n,) int       == points[:, 0] (optional here; derived from points when absent)
-    n_frames     int            frames of the video (frames without points are allowed)
-    height, width, video, params (JSON str)   carried along, not needed for recognition
+Features file (one ``.npz`` per video, written by ``vidstyle features``): schema and reader in
+:mod:`vidstyle.formats.features`; recognition uses its descriptors, frame indices and frame count.
 
 Labels files and the dataset manifest are owned by :mod:`vidstyle.formats.labels` and
 :mod:`vidstyle.formats.dataset`. A features directory holds ``<video id>.npz``.
@@ -35,6 +30,8 @@ class VideoFeatures:
     video: str = ""
     path: str = ""
     variant: str = ""  # descriptor variant recorded by `vidstyle features` ("" when unknown)
+    fps: float = 0.0  # working frame rate of the frames (0 when unknown)
+    params: dict | None = None  # the features file's parameters (None when unknown)
 
     @property
     def dim(self) -> int:
@@ -58,41 +55,13 @@ class VideoFeatures:
 
 
 def load_features(path: str | Path) -> VideoFeatures:
-    """Load and validate one features ``.npz``; every problem becomes an :class:`InputError`."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: features file not found")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except Exception as e:  # zipfile/format errors of every kind
-        raise InputError(f"{path}: not a readable .npz ({e})") from None
-    for key in ("descriptors", "n_frames"):
-        if key not in data:
-            raise InputError(f"{path}: missing array '{key}'")
-    desc = data["descriptors"]
-    if desc.ndim != 2:
-        raise InputError(f"{path}: 'descriptors' must be 2-D (n, d), got shape {desc.shape}")
-    if "frame_index" in data:
-        fi = data["frame_index"]
-    elif "points" in data:
-        pts = data["points"]
-        if pts.ndim != 2 or pts.shape[1] != 3:
-            raise InputError(f"{path}: 'points' must have shape (n, 3), got {pts.shape}")
-        fi = pts[:, 0]
-    else:
-        raise InputError(f"{path}: missing 'frame_index' (and 'points')")
-    if "points" in data and data["points"].shape[0] != desc.shape[0]:
-        raise InputError(f"{path}: {data['points'].shape[0]} points but {desc.shape[0]} descriptors")
-    if not np.issubdtype(desc.dtype, np.number):
-        raise InputError(f"{path}: 'descriptors' must be numeric, got {desc.dtype}")
-    try:
-        n_frames = int(data["n_frames"])
-    except (TypeError, ValueError):
-        raise InputError(f"{path}: 'n_frames' must be an integer") from None
-    video = str(data["video"]) if "video" in data else ""
-    variant = str(data["variant"]) if "variant" in data else ""
-    return VideoFeatures(desc, fi, n_frames, video=video, path=str(path), variant=variant)
+    """The descriptors and frame indices of one features ``.npz`` (read and validated by
+    :func:`vidstyle.formats.features.read_features`; every problem is a FormatError naming the file)."""
+    from ..formats.features import read_features
+
+    f = read_features(path)
+    return VideoFeatures(f.descriptors, f.frame_index, f.n_frames, video=f.video, path=str(path),
+                         variant=f.variant, fps=f.fps, params=f.params)
 
 
 def crop_features(f: VideoFeatures, start: int, end: int) -> VideoFeatures:

@@ -55,7 +55,6 @@ _LAZY = {
     "Camera": "camera", "parse_view": "camera",
     "SIDECAR_SUFFIX": "core", "load_truth": "core", "render_motion": "core", "render_to_file": "core",
     "sidecar_path": "core",
-    "read_video": "videoio", "write_video": "videoio",
 }
 
 
@@ -78,10 +77,8 @@ __all__ = [
     "classify_bone",
     "load_truth",
     "parse_view",
-    "read_video",
     "render_motion",
     "render_to_file",
     "sidecar_path",
     "skeleton_height",
-    "write_video",
 ]

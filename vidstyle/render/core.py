@@ -19,7 +19,7 @@ from .background import NoiseBank, make_background
 from .body import TORSO_KINDS, BodyModel, build_body
 from .camera import Camera
 from .raster import Rasterizer
-from .videoio import CODECS, VideoSink
+from ..video import CODECS, VideoWriter
 
 SIDECAR_SUFFIX = ".truth.npz"
 
@@ -296,13 +296,11 @@ def render_to_file(
         camera = Camera.for_view(motion, view=view, elevation_deg=elevation_deg, distance=distance, size=size)
     job = _Job(motion, camera, fps, appearance, background, noise_sigma, seed, labels, transitions)
     side = sidecar_path(out)
-    with atomic_path(out) as tmp_video, atomic_path(side, suffix=".npz") as tmp_side:
-        sink = VideoSink(tmp_video, job.fps, out.suffix)
-        try:
-            for frame, _ in job.frames(False):
-                sink.write(frame)
-        finally:
-            sink.close()
+    # the writer renames its temporary file when its block ends without error; an error anywhere
+    # (rendering, the sidecar) leaves neither file
+    with atomic_path(side, suffix=".npz") as tmp_side, VideoWriter(out, job.fps) as writer:
+        for frame, _ in job.frames(False):
+            writer.write(frame)
         truth = job.truth()
         truth["seed"] = np.int64(seed)
         truth["noise_sigma"] = np.float64(noise_sigma)

@@ -60,27 +60,18 @@ def gif_from_video(path: Path, max_seconds: float = 10.0, fps: float = 10.0, wid
     import cv2
     from PIL import Image
 
-    cap = cv2.VideoCapture(str(path))
-    if not cap.isOpened():
-        raise InputError(f"{path}: cannot be read as video")
-    src_fps = cap.get(cv2.CAP_PROP_FPS) or fps
-    step = max(1, int(round(src_fps / fps)))
+    from ..video import VideoReader
+
     frames = []
-    i = 0
-    while len(frames) < max_seconds * fps:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        if i % step == 0:
+    with VideoReader(path, fps=fps) as reader:
+        stop = min(len(reader), max(1, int(max_seconds * fps)))
+        for _, frame in reader.iter_frames(0, stop):
             h, w = frame.shape[:2]
             frame = cv2.resize(frame, (width, int(round(h * width / w))), interpolation=cv2.INTER_AREA)
             frames.append(Image.fromarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)))
-        i += 1
-    cap.release()
-    if not frames:
-        raise InputError(f"{path}: no frames decoded")
+        rate = reader.fps or fps
     buf = io.BytesIO()
-    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=int(1000 * step / src_fps),
+    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=int(1000 / rate),
                    loop=0, optimize=True)
     return buf.getvalue()
 

@@ -2,7 +2,8 @@
 
 Codec by suffix: ``.mp4`` / ``.m4v`` / ``.mov`` H.264 (libx264, yuv420p, ``crf`` 17 by default: visually
 lossless, so features computed on a written video are close to the rendered frames), ``.mkv`` FFV1
-(lossless, for tests), ``.avi`` Motion-JPEG. The file appears under its name only when :meth:`close`
+(lossless, for tests), ``.avi`` Motion-JPEG. Encoding is single-threaded, so the same frames give the
+same bytes on every machine. The file appears under its name only when :meth:`close`
 succeeds; an exception inside ``with VideoWriter(...)`` leaves no file.
 """
 
@@ -70,7 +71,10 @@ class VideoWriter:
             # yuv420p needs even sizes; odd ones keep full chroma instead of being padded or cropped
             even = width % 2 == 0 and height % 2 == 0
             stream.pix_fmt = "yuv420p" if even else "yuv444p"
-            stream.options = {"crf": str(self.crf), "preset": "veryfast"}
+            # one encoder thread: x264's output depends on its thread count (the machine's cores by
+            # default), so a dataset made on another machine, or under load, would not be byte-identical
+            stream.options = {"crf": str(self.crf), "preset": "veryfast", "threads": "1"}
+            stream.codec_context.thread_count = 1
         elif self.codec == "ffv1":
             stream.pix_fmt = "bgr0"
         else:
@@ -99,7 +103,15 @@ class VideoWriter:
         if pts <= self._last_pts:
             raise ValueError(f"frame {self.count}: time {t:.6f} s is not after the previous frame's")
         self._last_pts = pts
-        vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="bgr24")
+        if self._stream.pix_fmt == "yuv420p":  # type: ignore[union-attr]
+            # BGR -> YUV 4:2:0 (BT.601, limited range, what decoders assume) by OpenCV: the same frames
+            # then always give the same file (libswscale's conversion inside PyAV's encode did not)
+            import cv2
+
+            yuv = cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_BGR2YUV_I420)
+            vf = av.VideoFrame.from_ndarray(yuv, format="yuv420p")
+        else:
+            vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="bgr24")
         vf.pts = pts
         vf.time_base = TIME_BASE
         for packet in self._stream.encode(vf):  # type: ignore[union-attr]

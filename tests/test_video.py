@@ -1,0 +1,185 @@
+"""vidstyle.video: frame-exact reading (by decoded index), working rate and size, atomic writing.
+
+Truth is independent of the decoder: every test video shows its own frame number
+(:func:`vidstyle.video.numbered.numbered_frame`), read back from the pixels with ``read_number``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vidstyle.errors import InputError
+from vidstyle.video import CODECS, VideoReader, VideoWriter, probe, write_video
+from vidstyle.video.numbered import numbered_frame, read_number
+
+REAL = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "video" / "real"
+SUFFIXES = (".mp4", ".mkv", ".avi")
+
+
+def numbered_video(path: Path, n: int, fps: float = 30.0, times=None, size=(160, 120)) -> Path:
+    return write_video((numbered_frame(i, *size) for i in range(n)), path, fps, times=times)
+
+
+def numbers(frames) -> list[int]:
+    return [read_number(f) for f in frames]
+
+
+def brute_force_nearest(t: np.ndarray, fps: float) -> np.ndarray:
+    """For each tick k / fps up to the last frame (plus half a native frame), the frame of nearest
+    timestamp (ties to the earlier one), by exhaustive search; repeated picks once."""
+    native = (len(t) - 1) / t[-1]
+    picks = []
+    k = 0
+    while k / fps < t[-1] + 0.5 / native:
+        d = np.abs(t - k / fps)
+        picks.append(int(np.flatnonzero(d <= d.min() + 1e-9)[0]))
+        k += 1
+    return np.unique(picks)
+
+
+@pytest.mark.parametrize("suffix", SUFFIXES)
+def test_constant_rate_sequential_and_random_access(tmp_path, suffix, rng):
+    p = numbered_video(tmp_path / f"n{suffix}", 75, fps=30.0)
+    with VideoReader(p) as r:
+        assert len(r) == 75 and r.info.frames == 75 and (r.width, r.height) == (160, 120)
+        assert r.info.constant_rate and r.fps == pytest.approx(30.0, rel=1e-3)
+        assert np.allclose(r.timestamps, np.arange(75) / 30.0, atol=6e-4)  # Matroska: 1 ms ticks
+        assert numbers(r) == list(range(75))  # sequential
+        order = rng.permutation(75)
+        assert [read_number(r[int(i)]) for i in order] == order.tolist()  # random, both directions
+        assert [i for i, _ in r.iter_frames(70, 200)] == [70, 71, 72, 73, 74]
+        with pytest.raises(IndexError):
+            r.frame(75)
+    # a fresh reader jumping straight to the end (seek before any decoding)
+    with VideoReader(p) as r:
+        assert read_number(r[74]) == 74 and read_number(r[0]) == 0 and read_number(r[40]) == 40
+
+
+@pytest.mark.parametrize("suffix", [".mp4", ".mkv"])
+def test_variable_rate_by_decoded_index_and_nearest_timestamp(tmp_path, suffix, rng):
+    gaps = rng.choice([1 / 60, 1 / 30, 1 / 24, 1 / 12], size=89)
+    times = np.concatenate([[0.0], np.cumsum(gaps)])
+    p = numbered_video(tmp_path / f"vfr{suffix}", 90, fps=30.0, times=times)
+    info = probe(p)
+    assert info.frames == 90 and not info.constant_rate
+    assert np.allclose(info.timestamps, times, atol=6e-4)
+    with VideoReader(p) as r:
+        assert numbers(r) == list(range(90))  # index = decoded order, not time x fps
+        order = rng.permutation(90)[:30]
+        assert [read_number(r[int(i)]) for i in order] == order.tolist()
+    with VideoReader(p, fps=20.0) as w:
+        ref = brute_force_nearest(info.timestamps, 20.0)
+        assert np.array_equal(w.source_index, ref)
+        assert numbers(w) == ref.tolist()
+        assert np.array_equal(w.timestamps, info.timestamps[ref])
+
+
+@pytest.mark.parametrize("suffix", SUFFIXES)
+def test_working_rate_60_to_20_takes_every_third_frame(tmp_path, suffix):
+    p = numbered_video(tmp_path / f"r{suffix}", 60, fps=60.0)
+    with VideoReader(p, fps=20.0) as r:
+        assert np.array_equal(r.source_index, np.arange(0, 60, 3)) and r.fps == 20.0
+        assert numbers(r) == list(range(0, 60, 3))
+        assert read_number(r[7]) == 21
+    with VideoReader(p, fps=120.0) as r:  # never raises the rate
+        assert len(r) == 60
+
+
+def test_working_size_and_gray(tmp_path):
+    p = numbered_video(tmp_path / "s.mkv", 10, size=(320, 240))
+    with VideoReader(p, height=60, gray=True) as r:
+        f = r[3]
+        assert f.shape == (60, 80) and f.dtype == np.uint8 and (r.width, r.height) == (80, 60)
+        assert numbers(r) == list(range(10))
+    import cv2
+
+    with VideoReader(p, height=60) as c, VideoReader(p, height=60, gray=True) as g:
+        assert np.array_equal(g[5], cv2.cvtColor(c[5], cv2.COLOR_BGR2GRAY))  # OpenCV's gray of the BGR
+    with VideoReader(p, height=480, enlarge=False) as r:
+        assert r[0].shape == (240, 320, 3)
+    with VideoReader(p, height=480) as r:
+        assert r[0].shape == (480, 640, 3)
+    with pytest.raises(InputError, match="height"):
+        VideoReader(p, height=3)
+    with pytest.raises(InputError, match="fps"):
+        VideoReader(p, fps=0)
+
+
+def test_lossless_codec_round_trips_pixels(tmp_path, rng):
+    frames = rng.integers(0, 256, (5, 24, 32, 3), dtype=np.uint8)
+    write_video(frames, tmp_path / "x.mkv", 25.0)
+    with VideoReader(tmp_path / "x.mkv") as r:
+        assert np.array_equal(r.read_all(), frames)
+
+
+def test_bad_inputs_name_the_file(tmp_path):
+    good = numbered_video(tmp_path / "good.mp4", 60)
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    empty = tmp_path / "empty.mp4"
+    empty.write_bytes(b"")
+    text = tmp_path / "notes.mp4"
+    text.write_text("this is a text file, not a video\n" * 40)
+    folder = tmp_path / "folder.mp4"
+    folder.mkdir()
+    for bad in (cut, empty, text, folder, tmp_path / "missing.mp4"):
+        with pytest.raises(InputError, match=bad.name):
+            with VideoReader(bad) as r:
+                r.read_all()
+
+
+def test_truncated_stream_with_index_at_the_front(tmp_path):
+    """A Matroska file cut in half: the frames that are there decode, the missing ones are an error."""
+    good = numbered_video(tmp_path / "good.mkv", 60)
+    cut = tmp_path / "cut.mkv"
+    cut.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    try:
+        r = VideoReader(cut)
+    except InputError as e:
+        assert "cut.mkv" in str(e)
+        return
+    with r:
+        assert 0 < len(r) < 60
+        assert numbers(r) == list(range(len(r)))
+
+
+def test_writer_leaves_no_file_on_error(tmp_path):
+    out = tmp_path / "v.mp4"
+    with pytest.raises(RuntimeError):
+        with VideoWriter(out, 20.0) as w:
+            w.write(numbered_frame(0))
+            raise RuntimeError("boom")
+    with pytest.raises(ValueError, match="differs"):
+        with VideoWriter(out, 20.0) as w:
+            w.write(numbered_frame(0))
+            w.write(numbered_frame(1, 80, 60))
+    with pytest.raises(ValueError, match="not after"):
+        write_video([numbered_frame(0), numbered_frame(1)], out, 20.0, times=[0.5, 0.5])
+    with pytest.raises(InputError, match="no frames"):
+        write_video([], out, 20.0)
+    with pytest.raises(InputError, match="must end in"):
+        write_video([numbered_frame(0)], tmp_path / "v.gif", 20.0)
+    assert list(tmp_path.iterdir()) == []
+    assert sorted(CODECS) == [".avi", ".m4v", ".mkv", ".mov", ".mp4"]
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("name", ["pose2sim_single_cam01.mp4", "sports2d_demo.mp4"])
+def test_real_footage_random_access_equals_sequential(name, rng):
+    path = REAL / name
+    if not path.is_file():
+        pytest.skip(f"{path} absent")
+    n = 40
+    with VideoReader(path, height=120, gray=True) as r:
+        assert r.info.frames > 50 and r.height == 120
+        seq = [f.copy() for _, f in r.iter_frames(0, n)]
+    with VideoReader(path, height=120, gray=True) as r:
+        for i in rng.permutation(n)[:8]:
+            assert np.array_equal(r[int(i)], seq[int(i)]), int(i)
+    with VideoReader(path, fps=20.0, height=120, gray=True) as w:
+        assert np.array_equal(w.source_index, brute_force_nearest(w.info.timestamps, 20.0))
+        for k in (9, 1, 5):
+            assert np.array_equal(w[k], seq[int(w.source_index[k])])
