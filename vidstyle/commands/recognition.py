@@ -189,12 +189,19 @@ def train_recognizer(
         log.info("wrote %s", onnx_path)
 
 
+def _runs(mask) -> list[tuple[int, int]]:
+    """Maximal half-open runs ``[a, b)`` where ``mask`` is true."""
+    m = np.concatenate([[False], np.asarray(mask, dtype=bool), [False]])
+    d = np.flatnonzero(np.diff(m.astype(np.int8)))
+    return [(int(a), int(b)) for a, b in zip(d[::2], d[1::2])]
+
+
 def _annotated_training(annotations: list[Path], features: list[Path], features_dir: Optional[Path]):
     """Training pieces from annotation files: for every annotated video with segments, its features file
     (the FEATURES file whose recorded video is that video, or ``<features-dir>/<video stem>.npz``) cut
     into the runs of labelled frames, with the per-frame labels of its segments."""
     from ..formats import FormatError
-    from ..formats.annotations import frame_labels, labelled_runs, read_annotations, resolve_video_path
+    from ..formats.annotations import frame_labels, read_annotations, resolve_video_path
     from ..recognition.io import crop_features, load_features
 
     loaded = {}
@@ -223,11 +230,15 @@ def _annotated_training(annotations: list[Path], features: list[Path], features_
                     raise InputError(f"{a}: videos[{k}] ({v.path}): {len(match)} of the FEATURES files are of "
                                      f"this video (need exactly one)")
                 fp, f = match[0], loaded[match[0]]
-            if f.n_frames != v.frames:
-                raise FormatError(a, f"videos[{k}].frames", f"{v.frames} decoded frames, but {fp} has "
-                                                              f"n_frames={f.n_frames} (features of another video?)")
-            y = frame_labels(v, ann.classes)
-            for s, e in labelled_runs(v):
+            decoded = f.source_frames if f.source_frames is not None else f.n_frames
+            if decoded != v.frames:
+                raise FormatError(a, f"videos[{k}].frames", f"{v.frames} decoded frames, but {fp} was made from "
+                                                              f"{decoded} (features of another video?)")
+            # segments are marked on decoded frames; features run at a working rate: label each working
+            # frame by the decoded frame it was taken from, then train on the runs of labelled frames
+            src = f.source_index if f.source_index is not None else np.arange(f.n_frames)
+            y = frame_labels(v, ann.classes)[src]
+            for s, e in _runs(y >= 0):
                 feats.append(crop_features(f, s, e))
                 ylists.append([ann.classes[i] for i in y[s:e]])
             training.append({"features": str(fp), "labels": f"{a}#videos[{k}]"})

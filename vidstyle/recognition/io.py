@@ -32,6 +32,8 @@ class VideoFeatures:
     variant: str = ""  # descriptor variant recorded by `vidstyle features` ("" when unknown)
     fps: float = 0.0  # working frame rate of the frames (0 when unknown)
     params: dict | None = None  # the features file's parameters (None when unknown)
+    source_index: np.ndarray | None = None  # (n_frames,) decoded video frame of each working frame
+    source_frames: int | None = None  # frames the video decodes to
 
     @property
     def dim(self) -> int:
@@ -61,7 +63,8 @@ def load_features(path: str | Path) -> VideoFeatures:
 
     f = read_features(path)
     return VideoFeatures(f.descriptors, f.frame_index, f.n_frames, video=f.video, path=str(path),
-                         variant=f.variant, fps=f.fps, params=f.params)
+                         variant=f.variant, fps=f.fps, params=f.params, source_index=f.source_index,
+                         source_frames=f.source_frames)
 
 
 def crop_features(f: VideoFeatures, start: int, end: int) -> VideoFeatures:
