@@ -91,6 +91,8 @@ def _literal_help(typer_app: typer.Typer) -> None:
 
     def literal(obj, attr: str, text: str | None) -> None:
         if text and not getattr(obj, "_vidstyle_literal", False):
+            # a docstring's line breaks are not meant for the terminal: reflow each paragraph
+            text = "\n\n".join(" ".join(par.split()) for par in text.split("\n\n") if par.strip())
             setattr(obj, attr, escape(text))
             obj._vidstyle_literal = True
 
