@@ -17,6 +17,7 @@ from annotate_util import numbered_video, session
 from vidstyle.annotate.overlays import load_overlays
 from vidstyle.annotate.server import Running
 from vidstyle.formats.annotations import read_annotations
+from vidstyle.formats.matches import Candidate, FrameMatches, Matches, write_matches
 from vidstyle.formats.poses import PoseFrame, Poses, write_poses
 from vidstyle.video.numbered import read_number
 
@@ -44,10 +45,8 @@ def app(tmp_path):
     pts = [[160 + 20 * np.sin(k), 60 + 10 * k, 0.9] for k in range(15)]
     write_poses(poses, Poses(str(video), "ps", [PoseFrame(32, "front", pts, {"front": 0.9, "left": 0.1})]))
     matches = tmp_path / "matches.json"
-    matches.write_text(json.dumps({"kind": "vidstyle.matches", "schema_version": 1, "video": str(video),
-                                   "frames": [{"frame": 32, "candidates": [
-                                       {"clip": "lib/01_01.bvh", "time": 1.25, "cost": 0.1},
-                                       {"clip": "lib/02_03.bvh", "time": 0.5, "cost": 0.2}]}]}))
+    write_matches(matches, Matches(str(poses), str(video), ["lib/01_01.bvh", "lib/02_03.bvh"], {"k": 2}, [
+        FrameMatches(32, 0.0, [Candidate("lib/01_01.bvh", 1.25, 0.1), Candidate("lib/02_03.bvh", 0.5, 0.2)])]))
     ann = tmp_path / "annotations.json"
     s = session([video], ann)
     s.overlays = load_overlays(s.videos, poses=[poses], matches=[matches])

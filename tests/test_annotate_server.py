@@ -183,7 +183,8 @@ def test_overlays_map_onto_decoded_frames(videos, tmp_path):
         with pytest.raises(FormatError, match=r"frames\[0\].frame"):
             load_overlays(vids, poses=[poses])
         m = tmp_path / "m.json"
-        m.write_text(json.dumps({"kind": "vidstyle.matches", "video": "other.mp4", "frames": []}))
+        m.write_text(json.dumps({"kind": "vidstyle.matches", "schema_version": 1, "poses": "p.json",
+                                 "video": "other.mp4", "library": [], "params": {}, "frames": []}))
         with pytest.raises(FormatError, match="none of the videos"):
             load_overlays(vids, matches=[m])
     finally:

@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 
 from ..formats import FormatError
-from ..formats._base import Fields, read_json_document
 from ..video import working_indices
 
 #: skeleton drawn for the 15 keypoints of the pose stage (pairs of names)
@@ -56,13 +55,13 @@ def _match_video(doc_video: str | None, videos, path) -> Any:
 
 
 def read_labels_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
-    """(video id, {"classes", "spans": [{start, end, action}] in decoded frames, half-open})."""
-    doc = read_json_document(path)
-    f = Fields(doc, path)
-    labels = f.str_list("labels", min_len=1)
-    classes = f.str_list("classes", required=False) or sorted(set(labels))
-    fps = f.number("fps", required=False, default=None, positive=True)
-    v = _match_video(f.str("video", required=False), videos, path)
+    """(video id, {"classes", "spans": [{start, end, action}] in decoded frames, half-open}), read by the
+    owner module :func:`vidstyle.formats.recognised.read_recognised` (plain labels files load too)."""
+    from ..formats.recognised import read_recognised
+
+    track = read_recognised(path)
+    labels, classes, fps = track.labels, list(track.classes), track.fps
+    v = _match_video(track.video, videos, path)
     src = working_indices(v.reader.info.timestamps, fps)
     if len(src) != len(labels):
         # recognize labels its features' frames; a features file at another rate than the video's
@@ -98,22 +97,18 @@ def read_poses_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
 
 
 def read_matches_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
-    """(video id, {"frames": {index: [{"clip", "time", "cost"}, ...]}})."""
-    doc = read_json_document(path)
-    f = Fields(doc, path)
-    if f.has("kind") and doc["kind"] != "vidstyle.matches":
-        raise FormatError(path, "kind", f"expected 'vidstyle.matches', got {doc['kind']!r}")
-    v = _match_video(f.str("video", required=False), videos, path)
+    """(video id, {"frames": {index: [{"clip", "time", "cost"}, ...]}}), read by the owner module
+    :func:`vidstyle.formats.matches.read_matches`."""
+    from ..formats.matches import read_matches
+
+    m = read_matches(path)
+    v = _match_video(m.video or None, videos, path)
     frames = {}
-    for i, fr in enumerate(f.list("frames")):
-        ff = Fields(fr, path, f"frames[{i}]")
-        idx = ff.int("frame", min=0, max=v.frames - 1)
-        cands = []
-        for k, c in enumerate(ff.list("candidates")):
-            cf = Fields(c, path, f"frames[{i}].candidates[{k}]")
-            cands.append({"clip": cf.str("clip", nonempty=True), "time": cf.number("time", min=0),
-                          "cost": cf.number("cost", required=False, default=None)})
-        frames[str(idx)] = cands
+    for i, fr in enumerate(m.frames):
+        if fr.frame >= v.frames:
+            raise FormatError(path, f"frames[{i}].frame", f"frame {fr.frame} is past the end of {v.path.name} "
+                                                          f"({v.frames} frames)")
+        frames[str(fr.frame)] = [{"clip": c.clip, "time": c.time, "cost": c.cost} for c in fr.candidates]
     return v.id, {"frames": frames, "file": Path(path).name}
 
 
