@@ -170,8 +170,8 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
         for name, motion, labels, entry in results:
             bvh = f"clips/{name}.bvh"
             write_bvh(motion, tmp / bvh)
-            write_json(tmp / f"clips/{name}.labels.json",
-                       label_document(labels, float(params.mocap_fps), [], bvh=bvh, performer=entry["performer"]))
+            _write_clip_labels(tmp / f"clips/{name}.labels.json",
+                               label_document(labels, float(params.mocap_fps), [], bvh=bvh, performer=entry["performer"]))
             entries.append({**entry, "bvh": bvh, "labels": f"clips/{name}.labels.json"})
         if cmu_dir is not None and params.cmu_clips != 0:
             entries += _add_cmu(Path(cmu_dir), tmp, params, results[0][1].skeleton)
@@ -186,6 +186,16 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
         raise
     log.info("wrote %s: %d clips", out, len(entries))
     return out / "library.json"
+
+
+def _write_clip_labels(path: Path, doc: dict) -> None:
+    """A clip's labels through their owner; the classes are the demo's plus the clip's own (Dodge, Switch,
+    Stop, CMU labels), so the file validates."""
+    from ..formats.labels import write_labels
+
+    classes = list(doc["classes"])
+    classes += [c for c in dict.fromkeys(doc["labels"]) if c not in classes]
+    write_labels(path, {**doc, "classes": classes})
 
 
 def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[dict]:
@@ -212,8 +222,8 @@ def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[
         name = f"cmu_{f.stem}"
         bvh = f"clips/{name}.bvh"
         write_bvh(m, tmp / bvh)
-        write_json(tmp / f"clips/{name}.labels.json", label_document(labels, float(params.mocap_fps), [], bvh=bvh,
-                                                                     source=str(f)))
+        _write_clip_labels(tmp / f"clips/{name}.labels.json", label_document(labels, float(params.mocap_fps), [],
+                                                                             bvh=bvh, source=str(f)))
         entries.append({"name": name, "performer": f"cmu{f.stem.split('_')[0]}", "kind": "cmu", "holds_pose": None,
                         "frames": m.n_frames, "bvh": bvh, "labels": f"clips/{name}.labels.json", "source": str(f)})
     return entries

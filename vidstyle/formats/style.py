@@ -176,6 +176,13 @@ def parse_style(doc: Any, path: str | os.PathLike | None = None) -> Style:
     fps = f.number("fps", required=False, default=20.0, positive=True)
     performer = None if doc.get("performer") is None else f.str("performer")
     sources = f.list("sources", required=False, default=[])
+    for i, src in enumerate(sources):
+        sf = Fields(src, path, f"sources[{i}]")  # an object of provenance (paths, counts)
+        for key, value in src.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                raise sf.fail(key, f"must be a finite number, got {value}")
+            if isinstance(value, (dict, list)):
+                raise sf.fail(key, "expected a string, number or null")
     n_sequences = f.int("n_sequences", required=False, default=0, min=0)
     ac = f.sub("action_counts")
     counts = np.array([ac.int(n, min=0) for n in actions], dtype=np.int64)
