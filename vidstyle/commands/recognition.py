@@ -19,6 +19,9 @@ from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
 
+_SPLIT_HELP = ("unseen-performer | unseen-view | unseen-camera: sets A (vocabulary), B (classifier), V (validation) "
+               "and T (test) never share a performer or take; unseen-camera trains as unseen-performer.")
+
 
 def register(app: typer.Typer) -> None:
     app.command("vocabulary")(vocabulary)
@@ -27,11 +30,21 @@ def register(app: typer.Typer) -> None:
 
 
 def _dataset_split(dataset: Path, split: str, seed: int, test_view: Optional[str]):
+    """The dataset and its A/B/V/T split. Sets A and B of ``unseen-camera`` are those of
+    ``unseen-performer`` (its test videos come from another dataset, which training does not need)."""
     from ..recognition.io import load_dataset
     from ..recognition.splits import make_split
 
     ds = load_dataset(dataset)
-    return ds, make_split(ds, split, seed=seed, test_view=test_view)
+    kind = "unseen-performer" if split == "unseen-camera" else split
+    return ds, make_split(ds, kind, seed=seed, test_view=test_view)
+
+
+def _split_header(sp, set_name: str) -> dict:
+    """What a model or vocabulary records of the split it was trained on."""
+    return {"kind": sp.kind, "seed": sp.seed, "set": set_name, "params": sp.params, "test": sp.test, "val": sp.val,
+            "test_performers": sp.test_performers, "val_performers": sp.val_performers,
+            "vocab_performers": sp.vocab_performers, "train_performers": sp.train_performers}
 
 
 def _features_files(features: list[Path], features_dir: Optional[Path], dataset: Optional[Path], what: str):
@@ -50,7 +63,7 @@ def vocabulary(
     max_descriptors: int = typer.Option(100_000, "--max-descriptors", help="Fit on at most this many (sampled)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: fit on set A of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     seed: int = typer.Option(0, "--seed", help="Random seed (sampling, k-means, split)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel file loading (-1 = all cores)."),
@@ -66,7 +79,7 @@ def vocabulary(
     if dataset:
         ds, sp = _dataset_split(dataset, split, seed, test_view)
         features = [features_path(features_dir, i) for i in sp.vocab]
-        extra = {"split": {"kind": sp.kind, "seed": sp.seed, "set": "A", "params": sp.params}}
+        extra = {"split": _split_header(sp, "A")}
     t0 = time.perf_counter()
     feats = load_many(features, n_jobs=jobs)
     dims = {f.dim for f in feats if f.descriptors.shape[0]}
@@ -93,7 +106,7 @@ def train_recognizer(
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     context: int = typer.Option(2, "--context", help="Frames each side in a frame's histogram (thesis 2)."),
     grouping: bool = typer.Option(True, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
@@ -129,7 +142,7 @@ def train_recognizer(
         features = [features_path(features_dir, i) for i in sp.train]
         labels = [ds.labels_path(by_id[i]) for i in sp.train]
         classes = ds.classes or None
-        split_info = {"kind": sp.kind, "seed": sp.seed, "set": "B", "params": sp.params, "test": sp.test}
+        split_info = _split_header(sp, "B")
     if len(labels) != len(features):
         raise InputError(f"--labels: {len(labels)} labels files for {len(features)} features files")
     voc = Vocabulary.load(vocab)
@@ -318,7 +331,7 @@ def evaluate_recognition(
         None, "--model", "-m", help="With --labels-dir: the model that made them (its split names the test videos)."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
     ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing | no-mirror."),
     words: int = typer.Option(1000, "--words", help="Vocabulary size (ablation: 500/1000/1500)."),
@@ -331,6 +344,13 @@ def evaluate_recognition(
     window: int = typer.Option(6, "--window", help="Smoothing window."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
     c: float = typer.Option(100.0, "--C", help="SVM cost (100: best on validation performers)."),
+    emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores."),
+    mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
+    test_dataset: Optional[Path] = typer.Option(
+        None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "
+        "(vidstyle demo make-dataset --unseen-camera)."),
+    test_features_dir: Optional[Path] = typer.Option(
+        None, "--test-features-dir", help="unseen-camera: features directory of --test-dataset's videos."),
     seed: int = typer.Option(0, "--seed", help="Random seed (split, vocabulary, sampling)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
 ) -> None:
@@ -357,11 +377,19 @@ def evaluate_recognition(
         params = {
             "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
             "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
-            "smoothing": smoothing, "C": c,
+            "smoothing": smoothing, "C": c, "emission_weight": emission_weight, "mirror": mirror,
         }
+        tds = None
+        if split == "unseen-camera":
+            if test_dataset is None or test_features_dir is None:
+                raise InputError("--split unseen-camera: give --test-dataset and --test-features-dir")
+            tds = load_dataset(test_dataset)
+        elif test_dataset is not None or test_features_dir is not None:
+            raise InputError("--test-dataset/--test-features-dir: only used with --split unseen-camera")
         m = run(
             ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
             recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
+            test_dataset=tds, test_features_dir=test_features_dir,
         )
     write_json(out, m)
     png = out.with_suffix(".png")

@@ -198,14 +198,32 @@ def evaluate_recognition(
     baseline: bool = True,
     test_view: str | None = None,
     n_jobs: int | None = None,
+    test_dataset: Dataset | None = None,
+    test_features_dir: str | Path | None = None,
+    score_set: str = "test",
 ) -> dict[str, Any]:
-    """Train the vocabulary on A and the recognizer on B of a seeded split, test on the held-out set."""
+    """Train the vocabulary on A and the recognizer on B of a seeded split, score the test set T (or, with
+    ``score_set="val"``, the validation set V: what ``scripts/validate_recognition.py`` tunes on).
+
+    ``test_dataset`` / ``test_features_dir``: the unseen-camera videos and their features
+    (``split_kind="unseen-camera"``)."""
     from .recognizer import ActionRecognizer
     from .vocabulary import Vocabulary
 
+    if score_set not in ("test", "val"):
+        raise InputError(f"score_set: must be test or val, got {score_set!r}")
     features_dir = Path(features_dir)
-    split = make_split(dataset, split_kind, seed=seed, test_view=test_view)
-    log.info("split %s: A %d, B %d, test %d videos", split.kind, len(split.vocab), len(split.train), len(split.test))
+    split = make_split(dataset, split_kind, seed=seed, test_view=test_view, test_dataset=test_dataset)
+    log.info("split %s: A %d, B %d, V %d, T %d videos; scoring %s", split.kind, len(split.vocab), len(split.train),
+             len(split.val), len(split.test), "V" if score_set == "val" else "T")
+    if score_set == "val":
+        score_ids, score_ds, score_dir = split.val, dataset, features_dir
+    elif split.kind == "unseen-camera":
+        if test_features_dir is None:
+            raise InputError("unseen-camera: needs the features directory of the unseen-camera videos")
+        score_ids, score_ds, score_dir = split.test, test_dataset, Path(test_features_dir)
+    else:
+        score_ids, score_ds, score_dir = split.test, dataset, features_dir
     params = dict(recognizer_params or {})
     params.update(ablation_params(ablation))
     params.setdefault("random_state", seed)
@@ -226,7 +244,7 @@ def evaluate_recognition(
     t_train = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    feats_t, labels_t = _load_set(dataset, features_dir, split.test, n_jobs)
+    feats_t, labels_t = _load_set(score_ds, score_dir, score_ids, n_jobs)
     unknown = sorted({c for t in labels_t for c in t.labels} - set(rec.classes_))
     if unknown:
         raise InputError(f"test labels: classes not seen in training: {unknown[:5]}")
@@ -234,13 +252,13 @@ def evaluate_recognition(
     outputs = [rec.predict_histograms(H) for H in Hs]
     t_pred = time.perf_counter() - t0
 
-    by_id = dataset.by_id()
-    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.test]
+    by_id = score_ds.by_id()
+    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in score_ids]
     truths = [t.labels for t in labels_t]
-    metrics = score_videos(rec.classes_, truths, outputs, split.test, actions)
+    metrics = score_videos(rec.classes_, truths, outputs, score_ids, actions)
     feature_params = None
     try:
-        with np.load(features_path(features_dir, split.test[0]), allow_pickle=False) as z:
+        with np.load(features_path(features_dir, split.vocab[0]), allow_pickle=False) as z:
             if "params" in z.files:
                 feature_params = json.loads(str(z["params"]))
     except Exception:  # params are informative only
@@ -250,6 +268,7 @@ def evaluate_recognition(
         "schema_version": 1,
         "seed": seed,
         "split": split.to_dict(),
+        "scored_set": "V" if score_set == "val" else "T",
         "ablation": ablation,
         "params": {
             "vocabulary": voc.get_params(),
@@ -268,7 +287,7 @@ def evaluate_recognition(
             feats_b, [t.labels for t in labels_b], classes=classes
         )
         bout = [base.predict_histograms(H) for H in Hs]
-        bm = score_videos(base.classes_, truths, bout, split.test, actions)
+        bm = score_videos(base.classes_, truths, bout, score_ids, actions)
         result["baseline"] = {
             "classifier": "svc-ovr",
             "frame_accuracy": bm["frame_accuracy"],
