@@ -66,6 +66,7 @@ class Search:
         self.ds, self.features, self.split, self.seed, self.jobs = ds, features, split, seed, jobs
         self._sets: dict = {}
         self._vocab: dict = {}
+        self._memo: dict = {}
         self.rows: list[dict] = []
         by_id = ds.by_id()
         self.actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.val]
@@ -93,20 +94,25 @@ class Search:
 
         t0 = time.perf_counter()
         s = self.sets(cfg["variant"])
-        voc = self.vocabulary(cfg["variant"], cfg["words"])
-        feats_b, labels_b = s["B"]
         feats_v, labels_v = s["V"]
-        rec = ActionRecognizer(
-            vocabulary=voc, grouping_threshold=cfg["grouping_threshold"], C=cfg["C"],
-            max_frames_per_class=cfg["max_frames_per_class"], smoothing=cfg["smoothing"],
-            emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"],
-            n_jobs=self.jobs, random_state=self.seed,
-        ).fit(feats_b, [t.labels for t in labels_b], classes=self.ds.classes or None)
-        raw = []
-        for H in rec._histograms_many(feats_v):
-            Z = rec._embed(H)
-            raw.append(rec._scores_full(*rec.clf_.predict_with_scores(Z)))
-        train_s = time.perf_counter() - t0
+        key = tuple(sorted((k, v) for k, v in cfg.items() if k not in ("smoothing", "emission_weight")))
+        if key in self._memo:  # the incumbent of the previous step: same model, no retraining
+            rec, raw, train_s = self._memo[key]
+        else:
+            voc = self.vocabulary(cfg["variant"], cfg["words"])
+            feats_b, labels_b = s["B"]
+            rec = ActionRecognizer(
+                vocabulary=voc, grouping_threshold=cfg["grouping_threshold"], C=cfg["C"],
+                max_frames_per_class=cfg["max_frames_per_class"], smoothing=cfg["smoothing"],
+                emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"],
+                n_jobs=self.jobs, random_state=self.seed,
+            ).fit(feats_b, [t.labels for t in labels_b], classes=self.ds.classes or None)
+            raw = []
+            for H in rec._histograms_many(feats_v):
+                Z = rec._embed(H)
+                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(Z)))
+            train_s = time.perf_counter() - t0
+            self._memo[key] = (rec, raw, train_s)
         rows = []
         for smoothing, weight in smoothers or [(cfg["smoothing"], cfg["emission_weight"])]:
             rec.smoothing = smoothing

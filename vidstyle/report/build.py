@@ -167,6 +167,11 @@ def _style_section(page: Page, run: Path, dataset: dict | None) -> None:
                          fid.get("jsd_2gram_same"), fid.get("jsd_2gram_other"), ll.get("a"), ll.get("b"), ll.get("bigram")])
         body.append(table(rows, ["labels", "transition MAE (a)", "identification (a)", "JSD 2-gram same",
                                  "JSD 2-gram other", "loglik/event (a)", "(b)", "bigram"]))
+        if m.get("recognised_performers"):
+            body.append(f'<p class="note">Recognised labels are scored only for the recognizer\'s test performers '
+                        f'({esc(", ".join(m["recognised_performers"]))}): no video of theirs trained or tuned it. '
+                        f'"ground_truth_test_performers" is the same performers on true labels (identification '
+                        f'among {len(m["recognised_performers"])} performers); "ground_truth" is every performer.</p>')
     page.add("Behaviour style: learned vs true transitions", "".join(body))
 
     gens = sorted((run / "generated").glob("*.json")) if (run / "generated").is_dir() else []
@@ -246,11 +251,14 @@ def headline_metrics(run: Path) -> dict:
         "test_frames": _get(rec, "n_test_frames"),
     }
     style = {}
-    for source, short in (("ground_truth", "truth"), ("recognised", "recognised")):
+    # *_recognised: the recognizer's test performers only; *_truth_test: the same performers' ground truth
+    for source, short in (("ground_truth", "truth"), ("ground_truth_test_performers", "truth_test"),
+                          ("recognised", "recognised")):
         s = _get(sty, "sources", source, "summary")
         style[f"transition_mae_{short}"] = _get(s, "transition_mae", "a")
         style[f"identification_{short}"] = _get(s, "identification", "a", "accuracy_by_heldout_data")
         style[f"heldout_loglik_{short}"] = _get(s, "heldout_loglik_per_event", "a")
+    style["recognised_performers"] = _get(sty, "recognised_performers")
     out["style"] = style
     ms = _get(mot, "summary")
     out["motion"] = {
