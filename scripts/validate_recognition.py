@@ -5,13 +5,14 @@ Every candidate trains the vocabulary on set A and the recognizer on set B of th
 (:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
 never loaded. The search is coordinate-wise, in this order, each step keeping the winners so far:
 
-1. descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
-2. vocabulary size (500 / 1000 / 1500 words),
-3. word-grouping correlation threshold,
-4. SVM cost C,
-5. SVM training frames per class (the cap),
-6. smoother: the thesis' window vote, and Viterbi with several emission weights (scored on the same
-   frame scores, no retraining).
+1. vocabulary size (500 / 1000 / 1500 words),
+2. word-grouping correlation threshold,
+3. SVM cost C,
+4. SVM training frames per class (the cap),
+5. smoother: the thesis' window vote, and Viterbi with several emission weights (scored on the same
+   frame scores, no retraining),
+6. descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
+   at the values chosen so far (then the smoother again when another descriptor wins).
 
 The score is the smoothed frame accuracy on V; ties go to the video accuracy, then to the earlier
 candidate (the current default comes first). Prints the table of every candidate and writes the chosen
@@ -52,9 +53,9 @@ START = {"variant": "scovanner2007", "words": 1000, "grouping_threshold": 0.8, "
          "max_frames_per_class": 3000, "smoothing": "viterbi", "emission_weight": 3.0, "smoothing_window": 6}
 GRID = {
     "words": [1000, 500, 1500],
-    "grouping_threshold": [0.8, 0.7, 0.9],
-    "C": [100.0, 10.0, 1000.0],
-    "max_frames_per_class": [3000, 1500, 6000],
+    "grouping_threshold": [0.8, 0.9],
+    "C": [100.0, 10.0],
+    "max_frames_per_class": [3000, 1500],
     "smoother": [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0), ("viterbi", 2.0), ("viterbi", 5.0), ("viterbi", 8.0)],
 }
 QUICK = {"words": [1000, 500], "grouping_threshold": [0.8], "C": [100.0, 10.0], "max_frames_per_class": [3000],
@@ -183,22 +184,29 @@ def main() -> None:
                        "validation_video_accuracy": win["video_accuracy"],
                        "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in rows}}
 
-    order = [cfg["variant"]] + [v for v in features if v != cfg["variant"]]
-    step("descriptor", "variant", order)
+    def smoother_step():
+        rows = search.run("smoother", cfg, smoothers=grid["smoother"])
+        win = best(rows)
+        cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
+        chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
+                              "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
+                              "validation_video_accuracy": win["video_accuracy"],
+                              "candidates": {f"{r['config']['smoothing']}^{r['config']['emission_weight']:g}"
+                                             if r["config"]["smoothing"] == "viterbi" else "vote window 6":
+                                             r["frame_accuracy_smoothed"] for r in rows}}
+        return win
+
     step("vocabulary size", "words", grid["words"])
     step("grouping threshold", "grouping_threshold", grid["grouping_threshold"])
     step("C", "C", grid["C"])
     step("per-class cap", "max_frames_per_class", grid["max_frames_per_class"])
-    rows = search.run("smoother", cfg, smoothers=grid["smoother"])
-    win = best(rows)
-    cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
-    chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
-                          "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
-                          "validation_video_accuracy": win["video_accuracy"],
-                          "candidates": {f"{r['config']['smoothing']}^{r['config']['emission_weight']:g}"
-                                         if r["config"]["smoothing"] == "viterbi" else "vote window 6":
-                                         r["frame_accuracy_smoothed"] for r in rows}}
-    final = win
+    final = smoother_step()
+    if len(features) > 1:  # the descriptor last: the other variants at the values chosen so far
+        step("descriptor", "variant", [cfg["variant"]] + [v for v in features if v != cfg["variant"]])
+        if chosen["variant"]["value"] != START["variant"]:
+            final = smoother_step()
+        else:
+            final = best([r for r in search.rows if r["config"] == cfg])
     doc = {
         "kind": "vidstyle.validation.recognition", "schema_version": 1,
         "command": "python scripts/validate_recognition.py " + " ".join(sys.argv[1:]),
