@@ -366,7 +366,11 @@ def evaluate_recognition(
     if labels_dir is not None:
         if features_dir is not None:
             raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
-        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view)
+        tds = load_dataset(test_dataset) if test_dataset is not None else None
+        if (split == "unseen-camera") != (tds is not None):
+            raise InputError("--test-dataset: required with, and only used with, --split unseen-camera")
+        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view,
+                             test_dataset=tds)
         ablation = "none" if model is None else "from model"
         words = (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?")
     else:

@@ -305,13 +305,16 @@ def score_labels_dir(
     seed: int = 0,
     test_view: str | None = None,
     ignore: Sequence[str] = IGNORE,
+    test_dataset: Dataset | None = None,
 ) -> dict[str, Any]:
     """Score ``<labels_dir>/<video id>.json`` (written by ``vidstyle recognize``: ``labels`` smoothed,
     ``raw``) against the dataset's ground truth, without training anything.
 
     The test videos are the ``split.test`` recorded in ``model``'s header when it has one (the model knows
     which videos it must not have seen), else the ``split_kind``/``seed``/``test_view`` split of
-    ``dataset``. Every test video needs a labels file; a model whose training files include a test video
+    ``dataset``. With ``split_kind="unseen-camera"`` they are the test performers' videos of
+    ``test_dataset`` (the split of the model's seed; the model must have trained on no test performer).
+    Every test video needs a labels file; a model whose training files include a test video
     is refused (its scores would not be of unseen data)."""
     from ..fileio import read_json
     from .recognizer import read_header
@@ -321,9 +324,19 @@ def score_labels_dir(
         raise InputError(f"{labels_dir}: labels directory not found")
     header = read_header(model) if model is not None else None
     split_doc = (header or {}).get("split") or None
-    if split_doc and split_doc.get("test"):
+    if split_kind == "unseen-camera":
+        if test_dataset is None:
+            raise InputError("unseen-camera: needs the dataset of the unseen-camera videos")
+        sp = make_split(dataset, "unseen-camera", seed=(header or {}).get("seed", seed), test_dataset=test_dataset)
+        if split_doc and split_doc.get("test_performers") and sorted(split_doc["test_performers"]) != sp.test_performers:
+            raise InputError(f"{model}: its test performers {split_doc['test_performers']} are not those of the "
+                             f"unseen-camera split {sp.test_performers}")
+        split_info: dict[str, Any] = {**sp.to_dict(), "from": None if model is None else str(model)}
+        test = sp.test
+        dataset = test_dataset
+    elif split_doc and split_doc.get("test"):
         test = list(split_doc["test"])
-        split_info: dict[str, Any] = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
+        split_info = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
                                       "params": split_doc.get("params"), "from": str(model)}
     else:
         sp = make_split(dataset, split_kind, seed=seed, test_view=test_view)
