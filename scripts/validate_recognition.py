@@ -3,19 +3,21 @@
 
 Every candidate trains the vocabulary on set A and the recognizer on set B of the seeded split
 (:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
-never loaded. The search is coordinate-wise, in this order, each step keeping the winners so far:
+never loaded. The search is one factor at a time from the starting point (the values used before this
+script existed): each candidate changes one of
 
-1. vocabulary size (500 / 1000 / 1500 words),
-2. word-grouping correlation threshold,
-3. SVM cost C,
-4. SVM training frames per class (the cap),
-5. smoother: the thesis' window vote, and Viterbi with several emission weights (scored on the same
-   frame scores, no retraining),
-6. descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
-   at the values chosen so far (then the smoother again when another descriptor wins).
+- the descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
+- the vocabulary size (500 words; the thesis' 1500 with ``--full``),
+- the word-grouping correlation threshold,
+- the SVM cost C,
+- the SVM training frames per class (the cap),
 
-The score is the smoothed frame accuracy on V; ties go to the video accuracy, then to the earlier
-candidate (the current default comes first). Prints the table of every candidate and writes the chosen
+and every trained candidate is also scored with each smoother (the thesis' window vote, Viterbi with
+several emission weights: no retraining). The candidates train in parallel (``--workers``). For each
+factor the best value wins (score: smoothed frame accuracy on V; ties go to the video accuracy, then to
+the starting value); when the winners differ from the starting point, their combination is trained and
+scored on V too, and that is the final configuration only if it scores at least as well as the starting
+point (otherwise the starting point stays). Prints the table of every candidate and writes the chosen
 values, each with the validation score it won with, to ``--out`` (default
 ``pipelines/kickboxing/validation/recognition.json``), which the library defaults and
 ``pipelines/kickboxing/params.yaml`` cite.
@@ -48,18 +50,12 @@ from vidstyle.recognition.splits import make_split  # noqa: E402
 log = logging.getLogger("validate_recognition")
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / "validation" / "recognition.json"
 
-# the starting point (the values before validation existed) and the values tried per step
+# the starting point (the values before validation existed) and the other values tried per factor
 START = {"variant": "scovanner2007", "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
          "max_frames_per_class": 3000, "smoothing": "viterbi", "emission_weight": 3.0, "smoothing_window": 6}
-GRID = {
-    "words": [1000, 500, 1500],
-    "grouping_threshold": [0.8, 0.9],
-    "C": [100.0, 10.0],
-    "max_frames_per_class": [3000, 1500],
-    "smoother": [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0), ("viterbi", 2.0), ("viterbi", 5.0), ("viterbi", 8.0)],
-}
-QUICK = {"words": [1000, 500], "grouping_threshold": [0.8], "C": [100.0, 10.0], "max_frames_per_class": [3000],
-         "smoother": [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0)]}
+FACTORS = {"words": [500], "grouping_threshold": [0.9], "C": [10.0], "max_frames_per_class": [1500]}
+FULL = {"words": [500, 1500], "grouping_threshold": [0.7, 0.9], "C": [10.0, 1000.0], "max_frames_per_class": [1500, 6000]}
+SMOOTHERS = [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0), ("viterbi", 2.0), ("viterbi", 5.0), ("viterbi", 8.0)]
 
 
 class Search:
@@ -152,61 +148,73 @@ def best(rows):
     return top
 
 
+def _candidate(args) -> list[dict]:
+    """One trained candidate (a worker process): rows for every smoother."""
+    dataset, features, seed, step, cfg = args
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    ds = load_dataset(dataset)
+    split = make_split(ds, "unseen-performer", seed=seed)
+    return Search(ds, features, split, seed, 1).run(step, cfg, smoothers=SMOOTHERS)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dataset", required=True, help="dataset.json or its directory")
     ap.add_argument("--features", action="append", default=[], metavar="VARIANT=DIR", required=True,
                     help="features directory of each descriptor variant to compare")
     ap.add_argument("--seed", type=int, default=0, help="split / vocabulary / sampling seed")
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--quick", action="store_true", help="fewer candidates")
+    ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
+    ap.add_argument("--full", action="store_true", help="two more values per factor")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    from joblib import Parallel, delayed
+
     features = dict(f.split("=", 1) for f in args.features)
     ds = load_dataset(args.dataset)
     split = make_split(ds, "unseen-performer", seed=args.seed)
     log.info("validation performers %s (test performers %s are not loaded)", split.val_performers, split.test_performers)
-    grid = QUICK if args.quick else GRID
-    search = Search(ds, features, split, args.seed, args.jobs)
-    cfg = dict(START)
-    if cfg["variant"] not in features:
-        cfg["variant"] = next(iter(features))
+    start = dict(START)
+    if start["variant"] not in features:
+        start["variant"] = next(iter(features))
+    factors = {"variant": [v for v in features if v != start["variant"]], **(FULL if args.full else FACTORS)}
+    jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in factors.items() for v in vals]
+    ctx = (str(args.dataset), features, args.seed)
+    results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg)) for step, cfg in jobs)
+    rows = [r for rs in results for r in rs]
+    base = [r for r in results[0]]
+    at_start = lambda rs: [r for r in rs if (r["config"]["smoothing"], r["config"]["emission_weight"])  # noqa: E731
+                           == (start["smoothing"], start["emission_weight"])][0]
+    start_row = at_start(base)
     chosen: dict = {}
-
-    def step(name, key, values):
-        rows = []
-        for v in values:
-            rows += search.run(name, {**cfg, key: v})
-        win = best(rows)
+    cfg = dict(start)
+    for key, vals in factors.items():
+        cands = [start_row] + [at_start(rs) for (step, _), rs in zip(jobs, results) if step == key]
+        win = best(cands)
         cfg[key] = win["config"][key]
         chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
                        "validation_video_accuracy": win["video_accuracy"],
-                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in rows}}
-
-    def smoother_step():
-        rows = search.run("smoother", cfg, smoothers=grid["smoother"])
-        win = best(rows)
-        cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
-        chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
-                              "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
-                              "validation_video_accuracy": win["video_accuracy"],
-                              "candidates": {f"{r['config']['smoothing']}^{r['config']['emission_weight']:g}"
-                                             if r["config"]["smoothing"] == "viterbi" else "vote window 6":
-                                             r["frame_accuracy_smoothed"] for r in rows}}
-        return win
-
-    step("vocabulary size", "words", grid["words"])
-    step("grouping threshold", "grouping_threshold", grid["grouping_threshold"])
-    step("C", "C", grid["C"])
-    step("per-class cap", "max_frames_per_class", grid["max_frames_per_class"])
-    final = smoother_step()
-    if len(features) > 1:  # the descriptor last: the other variants at the values chosen so far
-        step("descriptor", "variant", [cfg["variant"]] + [v for v in features if v != cfg["variant"]])
-        if chosen["variant"]["value"] != START["variant"]:
-            final = smoother_step()
-        else:
-            final = best([r for r in search.rows if r["config"] == cfg])
+                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
+    win = best(base)
+    cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
+    chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
+                          "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
+                          "validation_video_accuracy": win["video_accuracy"],
+                          "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}
+    final = win
+    if any(cfg[k] != start[k] for k in factors):
+        comb = _candidate((*ctx, "combined winners", cfg))
+        rows += comb
+        c = [r for r in comb if (r["config"]["smoothing"], r["config"]["emission_weight"])
+             == (cfg["smoothing"], cfg["emission_weight"])][0]
+        if _key(c) >= _key(final):
+            final = c
+        else:  # the combination does worse than the starting point with the chosen smoother: keep the start
+            log.info("combined winners score below the starting point on V; keeping the starting values")
+            for k in factors:
+                chosen[k]["value_if_alone"] = chosen[k]["value"]
+                chosen[k]["value"] = start[k]
+                cfg[k] = start[k]
     doc = {
         "kind": "vidstyle.validation.recognition", "schema_version": 1,
         "command": "python scripts/validate_recognition.py " + " ".join(sys.argv[1:]),
@@ -215,10 +223,11 @@ def main() -> None:
                   "train_performers": split.train_performers, "val_performers": split.val_performers,
                   "test_performers_not_used": split.test_performers},
         "score": "smoothed frame accuracy on the validation performers (ties: video accuracy)",
-        "start": START, "chosen": chosen, "final_config": cfg,
+        "search": "one factor at a time from the starting point, then the combination of the winners",
+        "start": start, "factors": factors, "chosen": chosen, "final_config": cfg,
         "final_validation": {k: final[k] for k in ("frame_accuracy_raw", "frame_accuracy_smoothed", "video_accuracy",
                                                   "per_class_recall_smoothed", "n_val_frames")},
-        "rows": search.rows,
+        "rows": rows,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.out.with_suffix(".tmp")
@@ -228,11 +237,19 @@ def main() -> None:
     log.info("wrote %s", args.out)
 
 
+def _smoother(c: dict) -> str:
+    return f"viterbi^{c['emission_weight']:g}" if c["smoothing"] == "viterbi" else f"vote window {c['smoothing_window']}"
+
+
 def table(doc: dict) -> str:
     lines = [f"# Recognition validation (seed {doc['seed']}; validation performers {', '.join(doc['split']['val_performers'])}; "
              "test performers not used)", "",
              "| step | candidate | V frame acc. raw | V frame acc. smoothed | V video acc. |", "|---|---|---:|---:|---:|"]
+    st = doc["start"]
     for r in doc["rows"]:
+        c = r["config"]
+        if r["step"] != "start" and (c["smoothing"], c["emission_weight"]) != (st["smoothing"], st["emission_weight"]):
+            continue  # the other smoothers are listed for the starting model (all are in the JSON)
         va = "n/a" if r["video_accuracy"] is None else f"{100 * r['video_accuracy']:.1f} %"
         lines.append(f"| {r['step']} | {_short(r['config'])} | {100 * r['frame_accuracy_raw']:.1f} % | "
                      f"{100 * r['frame_accuracy_smoothed']:.1f} % | {va} |")
