@@ -87,6 +87,13 @@ def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
         ["frame accuracy, smoothed", fa.get("smoothed"), 0.70],
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
+    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
+    if cam is not None:
+        cams = ", ".join(f"azimuth {a:g}°" + (f" elevation {e:g}°" if e is not None else "")
+                         for a, e in (cam.get("split", {}).get("test_cameras") or []))
+        rows += [[f"unseen camera ({cams}): frame accuracy raw", cam.get("frame_accuracy", {}).get("raw"), None],
+                 ["unseen camera: frame accuracy smoothed", cam.get("frame_accuracy", {}).get("smoothed"), None],
+                 ["unseen camera: video accuracy", cam.get("video_accuracy"), None]]
     split = m.get("split", {})
     owner = {v["id"]: v.get("performer") for v in (dataset or {}).get("videos", [])}
     test_performers = split.get("test_performers") or sorted({owner[v] for v in split.get("test", []) if owner.get(v)})
@@ -94,7 +101,7 @@ def _recognition_section(page: Page, run: Path, dataset: dict | None) -> None:
         f"<p>Split: <b>{esc(split.get('kind', '?'))}</b>; test performers "
         f"{esc(', '.join(test_performers) or '–')}; "
         f"{m.get('n_test_videos', '?')} test videos, {m.get('n_test_frames', '?')} frames.</p>",
-        table([[r[0], r[1] if r[1] is not None else "–", r[2]] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
+        table([[r[0], r[1] if r[1] is not None else "–", r[2] if r[2] is not None else "–"] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
     ]
     conf = m.get("confusion", {})
     if conf.get("smoothed"):
@@ -244,11 +251,14 @@ def headline_metrics(run: Path) -> dict:
     mot = _load(run / "metrics" / "motion.json")
     out: dict = {"kind": "vidstyle.metrics.headline", "schema_version": 1,
                  "seed": _get(rec, "seed") if rec else _get(sty, "seed")}
+    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
     out["recognition"] = {
         "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
         "frame_accuracy_smoothed": _get(rec, "frame_accuracy", "smoothed"),
         "video_accuracy": _get(rec, "video_accuracy"),
         "test_frames": _get(rec, "n_test_frames"),
+        "unseen_camera_frame_accuracy_smoothed": _get(cam, "frame_accuracy", "smoothed"),
+        "unseen_camera_video_accuracy": _get(cam, "video_accuracy"),
     }
     style = {}
     # *_recognised: the recognizer's test performers only; *_truth_test: the same performers' ground truth
