@@ -64,6 +64,7 @@ class Search:
         self._sets: dict = {}
         self._vocab: dict = {}
         self._memo: dict = {}
+        self.start_model, self.start_cfg, self.start_key = None, None, None
         self.rows: list[dict] = []
         by_id = ds.by_id()
         self.actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.val]
@@ -79,6 +80,8 @@ class Search:
         from vidstyle.recognition.vocabulary import Vocabulary
 
         key = (variant, words)
+        if key not in self._vocab and self.start_model is not None and key == self.start_key:
+            self._vocab[key] = self.start_model.vocabulary  # the same fit on the same set A
         if key not in self._vocab:
             feats_a = self.sets(variant)["A"][0]
             desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
@@ -93,7 +96,13 @@ class Search:
         s = self.sets(cfg["variant"])
         feats_v, labels_v = s["V"]
         key = tuple(sorted((k, v) for k, v in cfg.items() if k not in ("smoothing", "emission_weight")))
-        if key in self._memo:  # the incumbent of the previous step: same model, no retraining
+        if key not in self._memo and self.start_model is not None and cfg == self.start_cfg:
+            rec = self.start_model  # trained by `vidstyle train-recognizer` on the same A/B with these values
+            raw = []
+            for H in rec._histograms_many(feats_v):
+                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))))
+            self._memo[key] = (rec, raw, time.perf_counter() - t0)
+        if key in self._memo:  # same model, no retraining
             rec, raw, train_s = self._memo[key]
         else:
             voc = self.vocabulary(cfg["variant"], cfg["words"])
@@ -150,11 +159,40 @@ def best(rows):
 
 def _candidate(args) -> list[dict]:
     """One trained candidate (a worker process): rows for every smoother."""
-    dataset, features, seed, step, cfg = args
+    dataset, features, seed, step, cfg, start_model, start_cfg = args
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     ds = load_dataset(dataset)
     split = make_split(ds, "unseen-performer", seed=seed)
-    return Search(ds, features, split, seed, 1).run(step, cfg, smoothers=SMOOTHERS)
+    search = Search(ds, features, split, seed, 1)
+    if start_model is not None:
+        from vidstyle.recognition.recognizer import load_model
+
+        search.start_model = load_model(start_model)[0]
+        search.start_cfg, search.start_key = start_cfg, (start_cfg["variant"], start_cfg["words"])
+    return search.run(step, cfg, smoothers=SMOOTHERS)
+
+
+def check_start_model(path: Path, start: dict, split, seed: int) -> None:
+    """A ``--start-model`` must be the starting configuration trained on this split's set B."""
+    from vidstyle.recognition.recognizer import read_header
+
+    h = read_header(path)
+    p, sp = h.get("params", {}), h.get("split") or {}
+    want = {"C": start["C"], "max_frames_per_class": start["max_frames_per_class"],
+            "grouping_threshold": start["grouping_threshold"], "smoothing": start["smoothing"],
+            "emission_weight": start["emission_weight"], "smoothing_window": start["smoothing_window"]}
+    got = {k: p.get(k) for k in want}
+    problems = [f"{k} {got[k]} != {v}" for k, v in want.items() if got[k] != v]
+    if h.get("vocabulary", {}).get("n_words") != start["words"]:
+        problems.append(f"words {h.get('vocabulary', {}).get('n_words')} != {start['words']}")
+    if (h.get("features_params") or {}).get("variant", start["variant"]) != start["variant"]:
+        problems.append("descriptor variant differs")
+    if sp.get("kind") != "unseen-performer" or sp.get("seed") != seed or sorted(sp.get("val") or []) != sorted(split.val):
+        problems.append("trained on another split")
+    if h.get("seed") != seed:
+        problems.append(f"seed {h.get('seed')} != {seed}")
+    if problems:
+        raise SystemExit(f"{path}: not the starting configuration on this split: {'; '.join(problems)}")
 
 
 def main() -> None:
@@ -166,6 +204,12 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
     ap.add_argument("--full", action="store_true", help="two more values per factor")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    ap.add_argument("--start-model", type=Path, default=None,
+                    help="a `vidstyle train-recognizer --dataset` model of the starting values on this split: "
+                         "used as the starting candidate (and its vocabulary by the candidates that share it)")
+    ap.add_argument("--only", action="append", default=[],
+                    help="train only the candidates of these factors (variant, words, grouping_threshold, C, "
+                         "max_frames_per_class); the others keep the starting value untested")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     from joblib import Parallel, delayed
@@ -178,9 +222,14 @@ def main() -> None:
     if start["variant"] not in features:
         start["variant"] = next(iter(features))
     factors = {"variant": [v for v in features if v != start["variant"]], **(FULL if args.full else FACTORS)}
+    if args.only:
+        factors = {k: v for k, v in factors.items() if k in args.only}
+    if args.start_model is not None:
+        check_start_model(args.start_model, start, split, args.seed)
     jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in factors.items() for v in vals]
     ctx = (str(args.dataset), features, args.seed)
-    results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg)) for step, cfg in jobs)
+    sm = (None if args.start_model is None else str(args.start_model), start)
+    results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg, *sm)) for step, cfg in jobs)
     rows = [r for rs in results for r in rs]
     base = [r for r in results[0]]
     at_start = lambda rs: [r for r in rs if (r["config"]["smoothing"], r["config"]["emission_weight"])  # noqa: E731
@@ -203,7 +252,7 @@ def main() -> None:
                           "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}
     final = win
     if any(cfg[k] != start[k] for k in factors):
-        comb = _candidate((*ctx, "combined winners", cfg))
+        comb = _candidate((*ctx, "combined winners", cfg, *sm))
         rows += comb
         c = [r for r in comb if (r["config"]["smoothing"], r["config"]["emission_weight"])
              == (cfg["smoothing"], cfg["emission_weight"])][0]
@@ -224,7 +273,8 @@ def main() -> None:
                   "test_performers_not_used": split.test_performers},
         "score": "smoothed frame accuracy on the validation performers (ties: video accuracy)",
         "search": "one factor at a time from the starting point, then the combination of the winners",
-        "start": start, "factors": factors, "chosen": chosen, "final_config": cfg,
+        "start": start, "start_model": None if args.start_model is None else str(args.start_model),
+        "factors": factors, "factors_not_searched": sorted(set(FACTORS) - set(factors)), "chosen": chosen, "final_config": cfg,
         "final_validation": {k: final[k] for k in ("frame_accuracy_raw", "frame_accuracy_smoothed", "video_accuracy",
                                                   "per_class_recall_smoothed", "n_val_frames")},
         "rows": rows,
