@@ -38,7 +38,7 @@ from vidstyle.fileio import write_json  # noqa: E402
 from vidstyle.recognition.io import features_path, load_dataset, load_features, load_labels  # noqa: E402
 from vidstyle.recognition.recognizer import load_model  # noqa: E402
 from vidstyle.recognition.smoothing import smooth_labels, transition_matrix  # noqa: E402
-from vidstyle.style.evaluate import EvalParams, evaluate_dataset  # noqa: E402
+from vidstyle.style.evaluate import EvalParams, evaluate_performers, load_manifest, load_performers  # noqa: E402
 
 log = logging.getLogger("style_viterbi_prior")
 
@@ -83,6 +83,7 @@ def main() -> None:
         scored.append((v, rec._scores_full(*rec.clf_.predict_with_scores(Z))))
     classes = [str(c) for c in rec.classes_]
     results = {}
+    manifest, params = load_manifest(args.dataset), EvalParams()
     with tempfile.TemporaryDirectory() as tmp:
         for name, (method, T) in priors.items():
             d = Path(tmp) / str(len(results))
@@ -95,10 +96,11 @@ def main() -> None:
                                            scores, method, transitions=T, emission_weight=rec.emission_weight)
                 write_json(d / f"{v.id}.json", {"video": v.video, "fps": ds.fps, "classes": classes,
                                                 "labels": [classes[i] for i in lab], "confidence": np.round(c, 4).tolist()})
-            m = evaluate_dataset(args.dataset, EvalParams(), d, sorted(test_perf))
             if not results:
-                results["ground truth (test performers)"] = m["sources"]["ground_truth_test_performers"]["summary"]
-            results[name] = m["sources"]["recognised"]["summary"]
+                results["ground truth (test performers)"] = evaluate_performers(
+                    load_performers(args.dataset, manifest, params, None, sorted(test_perf)), params)["summary"]
+            results[name] = evaluate_performers(
+                load_performers(args.dataset, manifest, params, d, sorted(test_perf)), params)["summary"]
             log.info("%s: identification %.3f", name, results[name]["identification"]["a"]["accuracy_by_heldout_data"])
     rows = []
     for name, s in results.items():
