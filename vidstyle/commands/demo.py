@@ -30,7 +30,7 @@ _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp
 def make_dataset_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
     seed: int = typer.Option(0, "--seed", help="Everything is drawn from this seed (same seed, same files)."),
-    performers: int = typer.Option(None, "--performers", help="Number of performers [10; --small: 3]."),
+    performers: int = typer.Option(None, "--performers", help="Number of performers [10; --small: 4]."),
     views: str = typer.Option(None, "--views", help="Comma-separated views: front,left,right,back or azimuths "
                               "in degrees relative to the performer's facing [front,left,right; --small: front,left]."),
     single_seconds: float = typer.Option(None, "--single-seconds", help="Length of each single-action video "

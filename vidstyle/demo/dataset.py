@@ -62,8 +62,9 @@ class DatasetParams:
 
     @classmethod
     def small(cls, seed: int = 0, **overrides) -> DatasetParams:
-        """Small enough for CI: 3 performers, 2 views, 4 s clips, one 8 s performance each."""
-        base = dict(seed=seed, performers=3, views=("front", "left"), single_seconds=4.0, performances=1,
+        """Small enough for CI: 4 performers (one per recognition set: A, B, validation, test), 2 views,
+        4 s clips, one 8 s performance each."""
+        base = dict(seed=seed, performers=4, views=("front", "left"), single_seconds=4.0, performances=1,
                     performance_seconds=8.0)
         return cls(**{**base, **overrides})
 
