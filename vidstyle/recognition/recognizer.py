@@ -79,9 +79,10 @@ class ActionRecognizer(BaseEstimator):
         normalize: str = "sqrt",
         n_components: int = 128,
         classifier: str = "ova-ovo",
-        # C, the per-class cap, the grouping threshold, the smoother and its emission weight are the values
-        # scripts/validate_recognition.py chose on the validation performers of the demo (never the test
-        # performers); pipelines/kickboxing/validation/recognition.json holds each with the score it won with.
+        # C, the per-class cap, the grouping threshold, the smoother and its emission weight: the starting
+        # values of scripts/validate_recognition.py, which scores candidates on the demo's validation
+        # performers (never the test performers); pipelines/kickboxing/validation/recognition.json records
+        # which were searched, the value chosen and the validation score it won with.
         C: float = 100.0,
         gamma: float | str = "scale",
         max_frames_per_class: int | None = 3000,
