@@ -404,7 +404,8 @@ def evaluate_recognition(
     from rich.console import Console
     from rich.table import Table
 
-    t = Table(title=f"recognition ({split}, ablation {ablation}, {words} words)")
+    kind = (m.get("split") or {}).get("kind") or split
+    t = Table(title=f"recognition ({kind}, ablation {ablation}, {words} words)")
     for col in ("metric", "value"):
         t.add_column(col)
     t.add_row("frame accuracy raw", f"{m['frame_accuracy']['raw']:.3f}")
