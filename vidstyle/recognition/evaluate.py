@@ -337,7 +337,10 @@ def score_labels_dir(
     elif split_doc and split_doc.get("test"):
         test = list(split_doc["test"])
         split_info = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
-                                      "params": split_doc.get("params"), "from": str(model)}
+                      "params": split_doc.get("params"), "from": str(model)}
+        for key in ("test_performers", "val_performers", "vocab_performers", "train_performers"):
+            if split_doc.get(key) is not None:
+                split_info[key] = split_doc[key]
     else:
         sp = make_split(dataset, split_kind, seed=seed, test_view=test_view)
         test = sp.test
