@@ -58,9 +58,12 @@ def main() -> None:
     ap.add_argument("--features-dir", required=True, type=Path)
     ap.add_argument("--model", required=True, type=Path, help="recognizer trained with --dataset (records its split)")
     ap.add_argument("--out", required=True, type=Path)
+    ap.add_argument("--emission-weight", type=float, default=None, help="Viterbi emission weight (default: the model's)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     rec, header = load_model(args.model)
+    if args.emission_weight is not None:
+        rec.emission_weight = args.emission_weight
     split = header.get("split") or {}
     test_perf, val_ids = split.get("test_performers"), split.get("val")
     if not test_perf or not val_ids:
@@ -111,7 +114,7 @@ def main() -> None:
                      "jsd_2gram_same": s["fidelity"]["a"]["jsd_2gram_same"],
                      "jsd_2gram_other": s["fidelity"]["a"]["jsd_2gram_other"]})
     doc = {"kind": "vidstyle.metrics.style_viterbi_prior", "schema_version": 1, "model": str(args.model),
-           "seed": header.get("seed"), "test_performers": sorted(test_perf), "n_videos": len(vids),
+           "seed": header.get("seed"), "emission_weight": rec.emission_weight, "test_performers": sorted(test_perf), "n_videos": len(vids),
            "command": "python scripts/style_viterbi_prior.py " + " ".join(sys.argv[1:]), "rows": rows}
     write_json(args.out, doc)
     lines = [f"Style on the test performers ({', '.join(sorted(test_perf))}; identification among "

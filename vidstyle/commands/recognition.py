@@ -118,7 +118,7 @@ def train_recognizer(
     max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
     window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
-    emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
@@ -234,6 +234,7 @@ def recognize(
     ),
     window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
     smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi (default: the model's)."),
+    emission_weight: Optional[float] = typer.Option(None, "--emission-weight", help="Viterbi: power of the frame scores (default: the model's)."),
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
     jobs: int = typer.Option(1, "--jobs", "-j", help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
     scheduler: Optional[str] = typer.Option(
@@ -252,24 +253,25 @@ def recognize(
         if not p.exists():
             raise InputError(f"{p}: file not found")
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
-    _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
-    items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
+    _load_model_for(str(model), window, smoothing, emission_weight)  # a bad model fails here, once, before any work
+    items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps) for p, t in zip(inputs, targets)]
     parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
     if out_dir is not None:
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 
 
-def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str]):
+def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str], emission_weight: Optional[float] = None):
     """The model, loaded once per process and file version (a retrained file at the same path reloads)."""
     try:
         st = Path(model).stat()
     except OSError:
         raise InputError(f"{model}: model file not found") from None
-    return _load_model_cached(model, st.st_mtime_ns, st.st_size, window, smoothing)
+    return _load_model_cached(model, st.st_mtime_ns, st.st_size, window, smoothing, emission_weight)
 
 
 @functools.lru_cache(maxsize=2)
-def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str]):
+def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str],
+                       emission_weight: Optional[float] = None):
     from ..recognition.recognizer import load_model
 
     rec, header = load_model(Path(model))
@@ -277,13 +279,15 @@ def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[
         rec.smoothing_window = window
     if smoothing is not None:
         rec.smoothing = smoothing
+    if emission_weight is not None:
+        rec.emission_weight = emission_weight
     return rec, header
 
 
 def _recognize_task(item: tuple) -> None:
     """One input of `vidstyle recognize` (module level, so joblib and Dask workers can run it)."""
-    model, window, smoothing, input, target, fps = item
-    rec, header = _load_model_for(model, window, smoothing)
+    model, window, smoothing, emission_weight, input, target, fps = item
+    rec, header = _load_model_for(model, window, smoothing, emission_weight)
     _recognize_one(rec, header, Path(model), Path(input), Path(target), fps)
 
 
@@ -312,6 +316,7 @@ def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: 
         "raw_confidence": np.round(res["confidence"], 4).tolist(),
         "smoothing_window": rec.smoothing_window,
         "smoothing": rec.smoothing,
+        "emission_weight": rec.emission_weight,
         "model": str(model),
         "features": str(input),
     }
@@ -344,7 +349,7 @@ def evaluate_recognition(
     window: int = typer.Option(6, "--window", help="Smoothing window."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
     c: float = typer.Option(100.0, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
-    emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
     test_dataset: Optional[Path] = typer.Option(
         None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "

@@ -359,6 +359,7 @@ def score_labels_dir(
             raise InputError(f"{model}: trained on test videos {leak[:5]}; its labels cannot be scored as unseen")
     classes = list(dataset.classes) if dataset.classes else None
     truths, outputs = [], []
+    decoding: set = set()
     for i in test:
         path = labels_dir / f"{i}.json"
         if not path.is_file():
@@ -381,6 +382,7 @@ def score_labels_dir(
             pred[key] = np.array([index[c] for c in seq], np.int64)
         outputs.append(pred)
         truths.append(truth)
+        decoding.add((doc.get("smoothing"), doc.get("emission_weight"), doc.get("smoothing_window")))
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in test]
     metrics = score_videos(classes, truths, outputs, test, actions, ignore)
     return {
@@ -392,5 +394,7 @@ def score_labels_dir(
         "source": {"labels_dir": str(labels_dir), "model": None if model is None else str(model)},
         "params": None if header is None else {"recognizer": header.get("params"), "features": header.get("features_params")},
         "model_header": header,
+        # how the labels were decoded (recognize can override the model's smoother)
+        "decoding": [{"smoothing": a, "emission_weight": b, "smoothing_window": c} for a, b, c in sorted(decoding, key=str)],
         **metrics,
     }

@@ -88,7 +88,7 @@ class ActionRecognizer(BaseEstimator):
         max_frames_per_class: int | None = 3000,
         smoothing_window: int = 6,
         smoothing: str = "viterbi",
-        emission_weight: float = 3.0,
+        emission_weight: float = 1.0,
         mirror: bool = True,
         n_jobs: int | None = None,
         random_state: int | None = 0,
