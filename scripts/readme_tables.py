@@ -64,6 +64,22 @@ def _rel(p: Path, root: Path) -> str:
         return str(p)
 
 
+def _config(d: dict) -> str:
+    """The recognizer values a metrics file records (the decoding of scored labels when it differs)."""
+    rp = (d.get("params") or {}).get("recognizer") or {}
+    dec = (d.get("decoding") or [{}])[0] if len(d.get("decoding") or []) == 1 else {}
+    sm = dec.get("smoothing") or rp.get("smoothing")
+    ew = dec.get("emission_weight") if dec.get("emission_weight") is not None else rp.get("emission_weight")
+    parts = []
+    if rp.get("C") is not None:
+        parts.append(f"C {rp['C']:g}")
+    if "max_frames_per_class" in rp:
+        parts.append(f"cap {rp['max_frames_per_class']}")
+    if sm:
+        parts.append(f"{sm}" + (f" ^{ew:g}" if sm == "viterbi" and ew is not None else ""))
+    return ", ".join(parts) or "?"
+
+
 def recognition_table(items, root: Path) -> list[str]:
     groups: dict[str, list[tuple[Path, dict]]] = defaultdict(list)
     for p, d in items:
@@ -79,13 +95,14 @@ def recognition_table(items, root: Path) -> list[str]:
         if d.get("scored_set") == "V":
             kind += ", validation set"
         groups[kind].append((p, d))
-    lines = ["| split | seeds | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
-             "|---|---|---:|---:|---:|---:|---|"]
+    lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
+             "|---|---|---|---:|---:|---:|---:|---|"]
     for kind in sorted(groups):
         g = sorted(groups[kind], key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
         seeds = ", ".join(str(d.get("seed")) for _, d in g)
         lines.append(
-            f"| {kind} | {seeds} | {_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
+            f"| {kind} | {seeds} | {'; '.join(sorted({_config(d) for _, d in g}))} | "
+            f"{_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
             f"{_spread([d['frame_accuracy']['smoothed'] for _, d in g])} | "
             f"{_spread([d.get('video_accuracy') for _, d in g])} | "
             f"{sum(int(d.get('n_test_frames') or 0) for _, d in g)} | "
