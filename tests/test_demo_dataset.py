@@ -208,6 +208,6 @@ def test_cli_performer_writes_a_bvh_clip(tmp_path):
 def test_cli_small_dataset(tmp_path):
     assert main(["demo", "make-dataset", "--small", "--out", str(tmp_path / "ds"), "--seed", "0"]) == 0
     d = json.loads((tmp_path / "ds" / "dataset.json").read_text())
-    assert len(d["performers"]) == 3 and len(d["videos"]) == 3 * 7 * 2
+    assert len(d["performers"]) == 4 and len(d["videos"]) == 4 * 7 * 2
     for v in d["videos"]:
         assert (tmp_path / "ds" / v["video"]).stat().st_size > 0 and (tmp_path / "ds" / v["truth"]).is_file()

@@ -94,3 +94,59 @@ def test_bad_parameters():
         SalientParams(n_points=-1)
     with pytest.raises(InputError, match="frames"):
         salient_points(np.zeros((3, 4)))
+
+
+def _flow_magnitude(a, b, flow, dis=[]):
+    """|flow| of frame a towards b straight from OpenCV (the reference the selection must rank by). One
+    DIS object serves a whole video (its results depend on the object's history, as in the library)."""
+    import cv2
+
+    if flow == "farneback":
+        f = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, 3, 15, 3, 5, 1.2, 0)
+    else:
+        f = dis[0].calc(a, b, None)
+    return np.hypot(f[..., 0], f[..., 1])
+
+
+@pytest.mark.parametrize("flow", ["dis", "farneback"])
+def test_points_are_the_largest_flow_silhouette_pixels(flow):
+    """Every frame's points are exactly the greedy choice of largest flow magnitude among silhouette
+    pixels, with the flow computed independently by OpenCV."""
+    frames, _ = moving_disc()
+    p = SalientParams(n_points=10, threshold=0.05, min_distance=4.0, flow=flow)
+    pts = salient_points(frames, p)
+    import cv2
+
+    u8 = [np.clip(np.rint(f * 255), 0, 255).astype(np.uint8) for f in frames]
+    T = len(frames)
+    dis = [cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_FAST)]
+    for t in range(T):
+        mag = _flow_magnitude(u8[t], u8[t + 1] if t < T - 1 else u8[t - 1], flow, dis)
+        score = np.where(silhouette(frames, t, 0.05) & (mag > p.min_flow), mag, -np.inf)
+        want = greedy_reference(score, 10, 4.0)
+        got = pts[pts[:, 0] == t, 1:]
+        assert np.array_equal(got, want), t
+        if len(got):  # and no silhouette pixel left out has more flow than the weakest chosen one,
+            # unless it lies within min_distance of a stronger chosen point
+            weakest = score[got[:, 0], got[:, 1]].min()
+            rr, cc = np.nonzero(score > weakest)
+            for r, c in zip(rr, cc):
+                assert (((got - [r, c]) ** 2).sum(1) < 16.0).any()
+
+
+def test_fast_mover_wins_over_slow_mover():
+    """Two textured discs, one moving 4 px/frame and one 1 px/frame: the few salient points go to the fast one."""
+    T, H, W = 10, 60, 100
+    rng = np.random.default_rng(4)
+    tex = 0.2 * rng.random((H, W))
+    frames = np.full((T, H, W), 0.2, dtype=np.float32)
+    t, r, c = np.meshgrid(np.arange(T), np.arange(H), np.arange(W), indexing="ij")
+    fast = (r - 20) ** 2 + (c - 10 - 4 * t) ** 2 <= 64
+    slow = (r - 45) ** 2 + (c - 60 - 1 * t) ** 2 <= 64
+    for k in range(T):
+        frames[k] = np.where(fast[k], 0.6 + np.roll(tex, 4 * k, axis=1), frames[k])
+        frames[k] = np.where(slow[k], 0.6 + np.roll(tex, k, axis=1), frames[k])
+    pts = salient_points(frames, SalientParams(n_points=3, threshold=0.05, min_distance=2.0, flow="farneback"))
+    inner = pts[(pts[:, 0] > 0) & (pts[:, 0] < T - 1)]
+    assert len(inner) >= 3 * (T - 2) - 2
+    assert (inner[:, 1] < 32).mean() >= 0.9  # rows of the fast disc (centre row 20, radius 8, plus flow spread)

@@ -141,17 +141,33 @@ def test_transitions_are_local_minima_with_consistent_alignment(graph):
     pos = global_positions(graph.motion())
     from vidstyle.motiongraph import align_windows
 
-    for e in blends[:: max(1, len(blends) // 15)]:
-        i, j = graph.edge_src_[e] + 1, graph.edge_dst_[e]
-        p, q = pos[i : i + k], pos[j - k + 1 : j + 1]
-        d, th, x0, z0 = align_windows(p, q, graph.joint_weights_)
-        W = graph.joint_weights_.sum() * k
+    W = graph.joint_weights_.sum() * k
+    clip = graph.frame_clip_
+    N = len(clip)
+
+    def window_ok(s, c):  # a k-frame window starting at s inside clip c
+        return 0 <= s and s + k - 1 < N and clip[s] == c and clip[s + k - 1] == c
+
+    checked_neighbours = 0
+    for e in blends[:: max(1, len(blends) // 25)]:
+        i, j = graph.edge_src_[e] + 1, graph.edge_dst_[e]  # Kovar's transition i -> j is the edge i-1 -> j
+        a, b = i, j - k + 1  # the departing and arriving windows
+        d, th, x0, z0 = align_windows(pos[a : a + k], pos[b : b + k], graph.joint_weights_)
         assert np.isclose(np.sqrt(d / W), graph.edge_cost_[e], rtol=1e-6, atol=1e-6)
         assert np.isclose(np.cos(th - graph.edge_align_[e, 0]), 1.0)
         assert np.allclose([x0, z0], graph.edge_align_[e, 1:], atol=1e-6)
+        # local minimum: no window pair one window earlier or later on either side (same clips) is closer
+        for da in (-1, 0, 1):
+            for db in (-1, 0, 1):
+                if (da, db) == (0, 0) or not (window_ok(a + da, clip[a]) and window_ok(b + db, clip[b])):
+                    continue
+                dn = align_windows(pos[a + da : a + da + k], pos[b + db : b + db + k], graph.joint_weights_)[0]
+                assert d <= dn * (1 + 1e-4) + 1e-6, (e, da, db, d, dn)
+                checked_neighbours += 1
         # transitions never jump within a window of themselves
-        same = graph.frame_clip_[i] == graph.frame_clip_[j]
+        same = clip[i] == clip[j]
         assert not same or abs((j - k + 1) - i) >= 2 * k
+    assert checked_neighbours > 50
 
 
 def test_save_load_roundtrip(graph, tmp_path):
@@ -190,11 +206,54 @@ def test_walk_realises_sequence_and_is_continuous(graph):
     assert all(graph.edge_in_scc_[e] and graph.edge_kind_[e] == EdgeKind.BLEND for e in walk.transitions_used)
 
 
-def test_walk_cost_is_minimal_among_alternatives(graph):
-    """Brute force on a tiny request: the DP cost is <= the cost of every single-clip playback."""
-    steps = [Step("walk", 20)]
+def _reference_walk_cost(graph, req, mismatch=5.0, penalty=0.2):
+    """Least walk cost by a plain frame-by-frame DP over (output frame, graph frame), written from the
+    objective in vidstyle.motiongraph.synthesis' docstring (no blocking, no vectorisation)."""
+    k, lab, clip = graph.window, graph.labels_, graph.frame_clip_
+    scc = np.flatnonzero(graph.scc_)
+    thr = graph.threshold_ or 1.0
+    trans = []
+    for e in np.flatnonzero(graph.edge_in_scc_ & (graph.edge_kind_ == EdgeKind.BLEND)):
+        i, j = int(graph.edge_src_[e]) + 1, int(graph.edge_dst_[e])
+        blend = [lab[i + p] if blend_weight(p, k) >= 0.5 else lab[j - (k - 1) + p] for p in range(k)]
+        trans.append((i - 1, j, graph.edge_cost_[e] / thr + penalty, blend))
+    V = [{i: mismatch * (lab[i] != req[0]) for i in scc}]
+    for t in range(1, len(req)):
+        cur = {}
+        for i in scc:
+            if i - 1 in V[t - 1] and clip[i - 1] == clip[i]:
+                cur[i] = V[t - 1][i - 1] + mismatch * (lab[i] != req[t])
+        if t >= k:
+            for dep, arr, c, blend in trans:
+                if dep in V[t - k]:
+                    v = V[t - k][dep] + c + mismatch * sum(b != r for b, r in zip(blend, req[t - k + 1 : t + 1]))
+                    if v < cur.get(arr, np.inf):
+                        cur[arr] = v
+        V.append(cur)
+    return min(V[-1].values())
+
+
+@pytest.mark.parametrize("steps", [[("walk", 20)], [("walk", 14), ("run", 16)], [("run", 10), ("walk", 12), ("run", 9)]])
+def test_walk_cost_is_minimal_among_alternatives(graph, steps):
+    """The planner's walk costs what a brute-force DP over every (output frame, graph frame) finds, and
+    the walk it returns really costs that much (re-added from its frames and transitions)."""
+    steps = [Step(a, n) for a, n in steps]
     walk = plan_walk(graph, steps)
-    assert walk.cost == 0.0 and not walk.transitions_used
+    names = list(graph.label_names_)
+    req = np.concatenate([np.full(s.frames, names.index(s.action)) for s in steps])
+    assert np.isclose(walk.cost, _reference_walk_cost(graph, req), rtol=1e-9, atol=1e-9)
+    # the returned walk: legal moves only, and its own cost equals the reported optimum
+    thr = graph.threshold_ or 1.0
+    own = 5.0 * float((graph.labels_[walk.frames] != req).sum())
+    own += sum(graph.edge_cost_[e] / thr + 0.2 for e in walk.transitions_used)
+    assert np.isclose(own, walk.cost, rtol=1e-9, atol=1e-9)
+    assert graph.scc_[walk.frames].all()
+    for t in range(1, len(req)):
+        if walk.transition[t] < 0 and walk.transition[t - 1] < 0:
+            assert walk.frames[t] == walk.frames[t - 1] + 1
+            assert graph.frame_clip_[walk.frames[t]] == graph.frame_clip_[walk.frames[t - 1]]
+    if len(steps) > 1:  # the request changes action: the optimum uses transitions and matches most frames
+        assert walk.transitions_used and own < 5.0 * len(req) / 2
 
 
 def test_unrealisable_sequences_name_the_step(graph):

@@ -49,6 +49,16 @@ def reference_distance_matrix(positions, starts, weights, k, upper_only=False) -
     return out
 
 
+def _cost_at(p, q, w, theta):
+    """Weighted squared distance after turning q by theta and the best floor shift for that angle."""
+    k = p.shape[0]
+    wn = np.tile(np.asarray(w, float), k)
+    P, T = p.reshape(-1, 3), _rot_y(q.reshape(-1, 3), theta)
+    shift = (wn[:, None] * (P - T)).sum(0) / wn.sum()
+    shift[1] = 0.0
+    return float((wn * ((P - T - shift) ** 2).sum(1)).sum())
+
+
 def brute_force_pair(p, q, w, n_theta=3600):
     """Minimum over a grid of angles (translation optimal for each angle): independent of any sign."""
     k = p.shape[0]
@@ -80,7 +90,11 @@ def test_closed_form_matches_brute_force_over_theta(rng):
         d, theta, x0, z0 = reference_pair(p, q, w)
         bd, btheta = brute_force_pair(p, q, w)
         assert d <= bd + 1e-9  # the closed form is at least as good as every grid angle
-        assert d == np.float64(d) and bd - d < 1e-3 * max(bd, 1.0)
+        assert bd - d < 1e-3 * max(bd, 1.0)
+        # the closed form's angle is a minimum of the angle-only objective: nearby angles are no better
+        for dt in (-2e-3, 2e-3):
+            assert _cost_at(p, q, w, theta) <= _cost_at(p, q, w, theta + dt) + 1e-9
+        assert np.isclose(_cost_at(p, q, w, theta), d, rtol=1e-9, atol=1e-9)
         assert abs(math.remainder(theta - btheta, 2 * math.pi)) < 2 * math.pi / 3600 * 1.5
 
 

@@ -165,7 +165,9 @@ def test_left_and_right_views_of_symmetric_pose_are_mirror_images():
     _, _, mf = _render(m, view="front")
     left, right, front = ml[0] >= 0, mr[0] >= 0, mf[0] >= 0
     assert _iou(left, right[:, ::-1]) > 0.97
-    assert _iou(left, right) < 0.9 or not np.array_equal(left, right)
+    # ... and not the same picture: the figure faces the other way (a renderer that ignored the view, or
+    # drew both sides alike, gives an IoU near 1 here)
+    assert _iou(left, right) < 0.6
     # the front view of a symmetric pose is itself mirror-symmetric
     assert _iou(front, front[:, ::-1]) > 0.97
     # and front and side views differ a lot (arms out to the sides are visible only from the front)

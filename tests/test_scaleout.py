@@ -48,7 +48,7 @@ def test_features_on_dask_equal_local(cluster, tmp_path):
 
 def test_recognize_on_dask_equals_local(cluster, tmp_path):
     ds = tmp_path / "ds"
-    make_dataset(ds, n_performers=3, views=("front",), seed=SEED, dim=16, reps=(2, 3), n_actions=4)
+    make_dataset(ds, n_performers=4, views=("front",), seed=SEED, dim=16, reps=(2, 3), n_actions=4)
     common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--seed", str(SEED)]
     assert main(["vocabulary", *common, "--words", "30", "--out", str(tmp_path / "v.npz")]) == 0
     assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", "12",

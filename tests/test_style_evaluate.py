@@ -10,6 +10,7 @@ from vidstyle.cli import main
 from vidstyle.style.synthetic import write_fake_dataset
 
 FAST = ["--n-init", "2", "--modes", "1-6"]
+TEST_PERFORMERS = ["p01", "p03", "p04", "p05"]  # the recognizer's unseen performers in this fake dataset
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +25,7 @@ def dataset(tmp_path_factory):
 def metrics(dataset):
     out = dataset / "metrics.json"
     code = main(["evaluate", "style", "--dataset", str(dataset), "--labels-dir", str(dataset / "recognised"),
-                 "--out", str(out), "--seed", "2", *FAST])
+                 "--performers", ",".join(TEST_PERFORMERS), "--out", str(out), "--seed", "2", *FAST])
     assert code == 0
     return json.loads(out.read_text())
 
@@ -32,10 +33,12 @@ def metrics(dataset):
 def test_metrics_document(metrics):
     assert metrics["kind"] == "vidstyle.metrics.style" and metrics["seed"] == 2
     assert metrics["params"]["style"]["n_init"] == 2 and metrics["params"]["style"]["seed"] == 2
-    assert set(metrics["sources"]) == {"ground_truth", "recognised"}
-    for src in metrics["sources"].values():
-        assert len(src["performers"]) == 6
-        assert src["summary"]["n_performers"] == 6
+    assert set(metrics["sources"]) == {"ground_truth", "ground_truth_test_performers", "recognised"}
+    assert metrics["recognised_performers"] == TEST_PERFORMERS
+    for name, src in metrics["sources"].items():
+        want = sorted({f"p{i:02d}" for i in range(6)}) if name == "ground_truth" else TEST_PERFORMERS
+        assert sorted(r["performer"] for r in src["performers"]) == want
+        assert src["summary"]["n_performers"] == len(want)
         for row in src["performers"]:
             assert row["n_train_sequences"] == 2 and row["n_heldout_sequences"] == 1
 
@@ -59,7 +62,7 @@ def test_targets_on_ground_truth(metrics):
 
 
 def test_recognition_errors_are_tolerated(metrics):
-    gt = metrics["sources"]["ground_truth"]["summary"]
+    gt = metrics["sources"]["ground_truth_test_performers"]["summary"]
     rec = metrics["sources"]["recognised"]["summary"]
     assert rec["transition_mae"]["a"] <= 0.07
     # the confusion-aware HMM recovers the true chain at least as well as counting noisy labels
@@ -85,8 +88,12 @@ def test_bad_evaluate_input(dataset, tmp_path, capsys):
     partial = tmp_path / "rec"
     partial.mkdir()
     assert main(["evaluate", "style", "--dataset", str(dataset), "--labels-dir", str(partial),
+                 "--performers", "p01,p02", "--out", str(out), *FAST]) != 0
+    assert "recognised labels of video p01_perf0 (performer p01) not found" in capsys.readouterr().err
+    # recognised labels without naming the unseen performers: refused (they could be training videos)
+    assert main(["evaluate", "style", "--dataset", str(dataset), "--labels-dir", str(dataset / "recognised"),
                  "--out", str(out), *FAST]) != 0
-    assert "recognised labels of video p00_perf0 (performer p00) not found" in capsys.readouterr().err
+    assert "--model" in capsys.readouterr().err
     assert main(["evaluate", "style", "--dataset", str(dataset), "--heldout-fraction", "1.5",
                  "--out", str(out)]) != 0
     assert not out.exists()

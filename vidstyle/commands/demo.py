@@ -30,7 +30,7 @@ _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp
 def make_dataset_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
     seed: int = typer.Option(0, "--seed", help="Everything is drawn from this seed (same seed, same files)."),
-    performers: int = typer.Option(None, "--performers", help="Number of performers [10; --small: 3]."),
+    performers: int = typer.Option(None, "--performers", help="Number of performers [10; --small: 4]."),
     views: str = typer.Option(None, "--views", help="Comma-separated views: front,left,right,back or azimuths "
                               "in degrees relative to the performer's facing [front,left,right; --small: front,left]."),
     single_seconds: float = typer.Option(None, "--single-seconds", help="Length of each single-action video "
@@ -40,7 +40,16 @@ def make_dataset_cmd(
                                               help="Length of each performance [60; --small: 8]."),
     performance_views: str = typer.Option(None, "--performance-views", help="Views the performances are "
                                           "rendered in [same as --views]."),
-    background: str = typer.Option(None, "--background", help="Video background: texture or plain [texture]."),
+    background: str = typer.Option(None, "--background", help="Video background: texture, texture:NAME "
+                                   "(brick, grass, gravel, moon) or plain [texture: brick, grass or gravel]."),
+    elevation: float = typer.Option(None, "--elevation", help="Camera elevation in degrees [10]."),
+    only_performers: str = typer.Option(None, "--only-performers", help="Comma-separated performer ids "
+                                        "(p00, ...): render only these [all]."),
+    unseen_camera: bool = typer.Option(False, "--unseen-camera", help="Test videos for `evaluate recognition "
+                                       "--split unseen-camera`: views 30,150 at elevation 30 before the moon "
+                                       "texture (none used by default datasets), one performance each."),
+    split_seed: int = typer.Option(None, "--split-seed", help="With --unseen-camera: render only the test "
+                                   "performers of the recognition split of this seed."),
     no_video: bool = typer.Option(False, "--no-video", help="Write mocap and labels only (no rendering; the manifest's video and truth paths then do not exist)."),
     small: bool = typer.Option(False, "--small", help="A small dataset for tests and CI (explicit options still apply)."),
     overwrite: bool = _OVERWRITE,
@@ -60,15 +69,26 @@ def make_dataset_cmd(
     view_list = None
     if views is not None:
         view_list = tuple(v.strip() for v in views.split(",") if v.strip())
-    if background is not None and background not in ("plain", "texture"):
-        raise InputError(f"--background: must be plain or texture, got {background!r}")
+    if background is not None:
+        from ..render.background import parse_background
+
+        try:
+            parse_background(background)
+        except ValueError as e:
+            raise InputError(f"--background: {e}") from None
+    if split_seed is not None and not unseen_camera:
+        raise InputError("--split-seed: only used with --unseen-camera")
+    if unseen_camera:
+        base = DatasetParams.unseen_camera(with_overrides(base, performers=performers), split_seed)
     perf_views = None
     if performance_views is not None:
         perf_views = tuple(v.strip() for v in performance_views.split(",") if v.strip())
     params = with_overrides(base, performers=performers, views=view_list, single_seconds=single_seconds,
                             performances=performances, performance_seconds=performance_seconds,
                             performance_views=perf_views,
-                            background=background, render=False if no_video else None)
+                            background=background, render=False if no_video else None, elevation_deg=elevation,
+                            only_performers=None if only_performers is None else
+                            tuple(p.strip() for p in only_performers.split(",") if p.strip()))
     t0 = time.perf_counter()
     manifest = make_dataset(out, params, overwrite=overwrite, jobs=jobs, scheduler=scheduler)
     log.info("dataset %s ready in %.1f s", manifest, time.perf_counter() - t0)

@@ -23,11 +23,10 @@ def register(app: typer.Typer) -> None:
             "cluster instead of local workers; its workers must see the same paths.",
         ),
         variant: str = typer.Option(
-            # scovanner2007 is the default because it recognises far better on the demo: on the validation
-            # performers 88.0 % raw frame accuracy against 54.6 % for the rotation-invariant thesis variant
-            # (test performers: 84 % against 51 %). Turning every neighbourhood to its dominant orientation
-            # discards the direction of motion, which is what tells a jab from a hook; see
-            # scripts/ablation_recognition.py
+            # scovanner2007 is the default because it recognises better on the demo's validation performers
+            # (scripts/validate_recognition.py; pipelines/kickboxing/validation/recognition.json holds the
+            # scores). Turning every neighbourhood to its dominant orientation, as the thesis variant does,
+            # discards the direction of motion, which is what tells a jab from a hook.
             "scovanner2007",
             "--variant",
             help="Descriptor: 'scovanner2007' (default; the authors' released code: no rotation, 80 icosahedral "

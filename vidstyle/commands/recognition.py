@@ -19,6 +19,9 @@ from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
 
+_SPLIT_HELP = ("unseen-performer | unseen-view | unseen-camera: sets A (vocabulary), B (classifier), V (validation) "
+               "and T (test) never share a performer or take; unseen-camera trains as unseen-performer.")
+
 
 def register(app: typer.Typer) -> None:
     app.command("vocabulary")(vocabulary)
@@ -27,11 +30,21 @@ def register(app: typer.Typer) -> None:
 
 
 def _dataset_split(dataset: Path, split: str, seed: int, test_view: Optional[str]):
+    """The dataset and its A/B/V/T split. Sets A and B of ``unseen-camera`` are those of
+    ``unseen-performer`` (its test videos come from another dataset, which training does not need)."""
     from ..formats.dataset import read_dataset
     from ..recognition.splits import make_split
 
     ds = read_dataset(dataset)
-    return ds, make_split(ds, split, seed=seed, test_view=test_view)
+    kind = "unseen-performer" if split == "unseen-camera" else split
+    return ds, make_split(ds, kind, seed=seed, test_view=test_view)
+
+
+def _split_header(sp, set_name: str) -> dict:
+    """What a model or vocabulary records of the split it was trained on."""
+    return {"kind": sp.kind, "seed": sp.seed, "set": set_name, "params": sp.params, "test": sp.test, "val": sp.val,
+            "test_performers": sp.test_performers, "val_performers": sp.val_performers,
+            "vocab_performers": sp.vocab_performers, "train_performers": sp.train_performers}
 
 
 def _features_files(features: list[Path], features_dir: Optional[Path], dataset: Optional[Path], what: str):
@@ -50,7 +63,7 @@ def vocabulary(
     max_descriptors: int = typer.Option(100_000, "--max-descriptors", help="Fit on at most this many (sampled)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: fit on set A of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     seed: int = typer.Option(0, "--seed", help="Random seed (sampling, k-means, split)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel file loading (-1 = all cores)."),
@@ -66,7 +79,7 @@ def vocabulary(
     if dataset:
         ds, sp = _dataset_split(dataset, split, seed, test_view)
         features = [features_path(features_dir, i) for i in sp.vocab]
-        extra = {"split": {"kind": sp.kind, "seed": sp.seed, "set": "A", "params": sp.params}}
+        extra = {"split": _split_header(sp, "A")}
     t0 = time.perf_counter()
     feats = load_many(features, n_jobs=jobs)
     dims = {f.dim for f in feats if f.descriptors.shape[0]}
@@ -97,7 +110,7 @@ def train_recognizer(
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     context: int = typer.Option(2, "--context", help="Frames each side in a frame's histogram (thesis 2)."),
     grouping: bool = typer.Option(True, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
@@ -105,11 +118,11 @@ def train_recognizer(
     normalize: str = typer.Option("sqrt", "--normalize", help="l1 | sqrt | l2 | none."),
     components: int = typer.Option(128, "--components", help="PCA dimensions."),
     classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo (thesis) | svc-ovr (baseline)."),
-    c: float = typer.Option(100.0, "--C", help="SVM cost (100: best on validation performers)."),
+    c: float = typer.Option(100.0, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
     max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
     window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
-    emission_weight: float = typer.Option(3.0, "--emission-weight", help="Viterbi: power of the frame scores (3: best on validation)."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
@@ -144,7 +157,7 @@ def train_recognizer(
         features = [features_path(features_dir, i) for i in sp.train]
         labels = [ds.labels_path(by_id[i]) for i in sp.train]
         classes = ds.classes or None
-        split_info = {"kind": sp.kind, "seed": sp.seed, "set": "B", "params": sp.params, "test": sp.test}
+        split_info = _split_header(sp, "B")
     if len(labels) != len(features):
         raise InputError(f"--labels: {len(labels)} labels files for {len(features)} features files")
     voc = Vocabulary.load(vocab)
@@ -311,6 +324,7 @@ def recognize(
     ),
     window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
     smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi (default: the model's)."),
+    emission_weight: Optional[float] = typer.Option(None, "--emission-weight", help="Viterbi: power of the frame scores (default: the model's)."),
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
     jobs: int = typer.Option(1, "--jobs", "-j", help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
     scheduler: Optional[str] = typer.Option(
@@ -329,8 +343,8 @@ def recognize(
         if not p.exists():
             raise InputError(f"{p}: file not found")
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
-    _load_model_for(str(model), window, smoothing)  # a bad model fails here, once, before any work
-    items = [(str(model), window, smoothing, str(p), str(t), fps) for p, t in zip(inputs, targets)]
+    _load_model_for(str(model), window, smoothing, emission_weight)  # a bad model fails here, once, before any work
+    items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps) for p, t in zip(inputs, targets)]
     from ._flags import as_flags
 
     with as_flags(jobs="--jobs", scheduler="--scheduler"):
@@ -339,17 +353,18 @@ def recognize(
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 
 
-def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str]):
+def _load_model_for(model: str, window: Optional[int], smoothing: Optional[str], emission_weight: Optional[float] = None):
     """The model, loaded once per process and file version (a retrained file at the same path reloads)."""
     try:
         st = Path(model).stat()
     except OSError:
         raise InputError(f"{model}: model file not found") from None
-    return _load_model_cached(model, st.st_mtime_ns, st.st_size, window, smoothing)
+    return _load_model_cached(model, st.st_mtime_ns, st.st_size, window, smoothing, emission_weight)
 
 
 @functools.lru_cache(maxsize=2)
-def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str]):
+def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str],
+                       emission_weight: Optional[float] = None):
     from ..recognition.recognizer import load_model
 
     rec, header = load_model(Path(model))
@@ -357,13 +372,15 @@ def _load_model_cached(model: str, _mtime_ns: int, _size: int, window: Optional[
         rec.smoothing_window = window
     if smoothing is not None:
         rec.smoothing = smoothing
+    if emission_weight is not None:
+        rec.emission_weight = emission_weight
     return rec, header
 
 
 def _recognize_task(item: tuple) -> None:
     """One input of `vidstyle recognize` (module level, so joblib and Dask workers can run it)."""
-    model, window, smoothing, input, target, fps = item
-    rec, header = _load_model_for(model, window, smoothing)
+    model, window, smoothing, emission_weight, input, target, fps = item
+    rec, header = _load_model_for(model, window, smoothing, emission_weight)
     _recognize_one(rec, header, Path(model), Path(input), Path(target), fps)
 
 
@@ -386,7 +403,7 @@ def _recognize_one(rec, header: dict, model: Path, input: Path, out: Path, fps: 
         video=video, confidence=np.clip(np.round(res["smoothed_confidence"], 4), 0, 1),
         raw=[classes[i] for i in res["raw"]], raw_confidence=np.clip(np.round(res["confidence"], 4), 0, 1),
         smoothing=str(rec.smoothing), smoothing_window=int(rec.smoothing_window), model=str(model),
-        features=str(input),
+        features=str(input), extra={"emission_weight": rec.emission_weight},
     )
     write_recognised(out, track)
     n = track.n_frames
@@ -404,7 +421,7 @@ def evaluate_recognition(
         None, "--model", "-m", help="With --labels-dir: the model that made them (its split names the test videos)."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
-    split: str = typer.Option("unseen-performer", "--split", help="unseen-performer | unseen-view."),
+    split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
     ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing | no-mirror."),
     words: int = typer.Option(1000, "--words", help="Vocabulary size (ablation: 500/1000/1500)."),
@@ -416,7 +433,14 @@ def evaluate_recognition(
     max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
     window: int = typer.Option(6, "--window", help="Smoothing window."),
     smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
-    c: float = typer.Option(100.0, "--C", help="SVM cost (100: best on validation performers)."),
+    c: float = typer.Option(100.0, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
+    mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
+    test_dataset: Optional[Path] = typer.Option(
+        None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "
+        "(vidstyle demo make-dataset --unseen-camera)."),
+    test_features_dir: Optional[Path] = typer.Option(
+        None, "--test-features-dir", help="unseen-camera: features directory of --test-dataset's videos."),
     seed: int = typer.Option(0, "--seed", help="Random seed (split, vocabulary, sampling)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
 ) -> None:
@@ -432,7 +456,11 @@ def evaluate_recognition(
     if labels_dir is not None:
         if features_dir is not None:
             raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
-        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view)
+        tds = read_dataset(test_dataset) if test_dataset is not None else None
+        if (split == "unseen-camera") != (tds is not None):
+            raise InputError("--test-dataset: required with, and only used with, --split unseen-camera")
+        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view,
+                             test_dataset=tds)
         ablation = "none" if model is None else "from model"
         words = (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?")
     else:
@@ -443,11 +471,19 @@ def evaluate_recognition(
         params = {
             "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
             "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
-            "smoothing": smoothing, "C": c,
+            "smoothing": smoothing, "C": c, "emission_weight": emission_weight, "mirror": mirror,
         }
+        tds = None
+        if split == "unseen-camera":
+            if test_dataset is None or test_features_dir is None:
+                raise InputError("--split unseen-camera: give --test-dataset and --test-features-dir")
+            tds = read_dataset(test_dataset)
+        elif test_dataset is not None or test_features_dir is not None:
+            raise InputError("--test-dataset/--test-features-dir: only used with --split unseen-camera")
         m = run(
             ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
             recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
+            test_dataset=tds, test_features_dir=test_features_dir,
         )
     write_metrics(out, m)
     png = out.with_suffix(".png")
@@ -458,7 +494,8 @@ def evaluate_recognition(
     from rich.console import Console
     from rich.table import Table
 
-    t = Table(title=f"recognition ({split}, ablation {ablation}, {words} words)")
+    kind = (m.get("split") or {}).get("kind") or split
+    t = Table(title=f"recognition ({kind}, ablation {ablation}, {words} words)")
     for col in ("metric", "value"):
         t.add_column(col)
     t.add_row("frame accuracy raw", f"{m['frame_accuracy']['raw']:.3f}")

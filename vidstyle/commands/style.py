@@ -145,6 +145,12 @@ def evaluate_style(
     labels_dir: Path | None = typer.Option(
         None, "--labels-dir", help="Recognised label files (<video id>.json); evaluated beside ground truth."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Where to write metrics JSON."),
+    model: Path | None = typer.Option(
+        None, "--model", "-m", help="With --labels-dir: the recognizer that made the labels; only its split's test "
+        "performers are scored on recognised labels (they never trained or tuned it)."),
+    performers: str | None = typer.Option(
+        None, "--performers", help="With --labels-dir, instead of --model: comma-separated performers to score "
+        "(they must be unseen by the recognizer)."),
     heldout_fraction: float = typer.Option(0.34, "--heldout-fraction", help="Share of videos (or events) held out."),
     n_generate: int = typer.Option(20, "--n-generate", help="Generated sequences per performer."),
     generate_length: int = typer.Option(40, "--generate-length", help="Events per generated sequence."),
@@ -172,7 +178,22 @@ def evaluate_style(
                        alpha, learn_emission, emission_prior, modes, mode_criterion)
     params = EvalParams(style=sp, heldout_fraction=heldout_fraction, n_generate=n_generate,
                         generate_length=generate_length)
-    metrics = evaluate_dataset(dataset, params, labels_dir)
+    chosen = None
+    if labels_dir is not None:
+        if (model is None) == (performers is None):
+            raise InputError("--labels-dir: give exactly one of --model (its test performers are scored) or --performers")
+        if model is not None:
+            from ..recognition.recognizer import read_header
+
+            split = (read_header(model).get("split") or {})
+            chosen = split.get("test_performers")
+            if not chosen:
+                raise InputError(f"{model}: the model records no test performers (train it with --dataset)")
+        else:
+            chosen = [p.strip() for p in performers.split(",") if p.strip()]
+    elif model is not None or performers is not None:
+        raise InputError("--model/--performers: only used with --labels-dir")
+    metrics = evaluate_dataset(dataset, params, labels_dir, chosen)
     if out is not None:
         write_metrics(out, metrics)
     _print_table(metrics)

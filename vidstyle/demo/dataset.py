@@ -64,11 +64,13 @@ class DatasetParams:
     background: str = "texture"
     noise_sigma: float = 2.0
     render: bool = True
+    only_performers: tuple[str, ...] | None = None  # render only these performer ids (None: all)
 
     @classmethod
     def small(cls, seed: int = 0, **overrides) -> DatasetParams:
-        """Small enough for CI: 3 performers, 2 views, 4 s clips, one 8 s performance each."""
-        base = dict(seed=seed, performers=3, views=("front", "left"), single_seconds=4.0, performances=1,
+        """Small enough for CI: 4 performers (one per recognition set: A, B, validation, test), 2 views,
+        4 s clips, one 8 s performance each."""
+        base = dict(seed=seed, performers=4, views=("front", "left"), single_seconds=4.0, performances=1,
                     performance_seconds=8.0)
         return cls(**{**base, **overrides})
 
@@ -96,7 +98,28 @@ class DatasetParams:
         d["views"] = list(self.views)
         d["performance_views"] = None if self.performance_views is None else list(self.performance_views)
         d["size"] = list(self.size)
+        d["only_performers"] = None if self.only_performers is None else list(self.only_performers)
         return d
+
+    @classmethod
+    def unseen_camera(cls, base: DatasetParams, split_seed: int | None = None) -> DatasetParams:
+        """``base`` filmed from cameras and a background that no dataset made with the defaults uses
+        (:data:`UNSEEN_CAMERA`), with one performance per performer. With ``split_seed``, only the test
+        performers of the recognition split of that seed (``vidstyle.recognition.splits``) are rendered:
+        the only ones an unseen-camera evaluation scores."""
+        only = None
+        if split_seed is not None:
+            from ..recognition.splits import performer_groups
+
+            only = tuple(performer_groups([f"p{i:02d}" for i in range(base.performers)], split_seed)["T"])
+        return replace(base, views=UNSEEN_CAMERA["views"], performance_views=None,
+                       elevation_deg=UNSEEN_CAMERA["elevation_deg"], background=UNSEEN_CAMERA["background"],
+                       performances=min(base.performances, 1), only_performers=only)
+
+
+# Cameras of `vidstyle demo make-dataset --unseen-camera`: azimuths between the front and side views the
+# default dataset uses, from higher up, in front of a texture the default backgrounds never draw.
+UNSEEN_CAMERA = {"views": ("30", "150"), "elevation_deg": 30.0, "background": "texture:moon"}
 
 
 def validate_views(views) -> None:
@@ -209,7 +232,8 @@ def generate_take(job: tuple[DatasetParams, int, int, str]) -> list[dict]:
         entry = {"id": vid, "performer": performer.id, "kind": kind}
         if kind == "single":
             entry["action"] = ACTIONS[take]
-        entry.update({"view": view, "azimuth_deg": azimuth, "video": video_rel, "labels": labels_rel,
+        entry.update({"view": view, "azimuth_deg": azimuth, "elevation_deg": float(params.elevation_deg),
+                      "background": str(params.background), "video": video_rel, "labels": labels_rel,
                       "truth": truth_rel, "bvh": bvh_rel, "bvh_labels": bvh_labels_rel,
                       "frames": len(video_labels)})
         entries.append(entry)
@@ -226,7 +250,8 @@ def dataset_jobs(params: DatasetParams, root: str) -> list[tuple[DatasetParams, 
     takes = list(range(len(ACTIONS))) + [_PERF_TAKE_BASE + k for k in range(params.performances)]
     # performances first: they are the longest, so the pool's tail is short
     takes.sort(key=lambda t: t < _PERF_TAKE_BASE)
-    return [(params, i, t, root) for t in takes for i in range(params.performers)]
+    only = None if params.only_performers is None else set(params.only_performers)
+    return [(params, i, t, root) for t in takes for i in range(params.performers) if only is None or f"p{i:02d}" in only]
 
 
 def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool = False, jobs: int = -1,
@@ -243,6 +268,11 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
             (tmp / sub).mkdir()
         t0 = time.perf_counter()
         performers = [make_performer(params, i) for i in range(params.performers)]
+        if params.only_performers is not None:
+            unknown = sorted(set(params.only_performers) - {p.id for p in performers})
+            if unknown:
+                raise ParameterError("only_performers", f"no such performer {unknown[0]!r} among {params.performers}")
+            performers = [p for p in performers if p.id in set(params.only_performers)]
         results = parallel_map(generate_take, dataset_jobs(params, str(tmp)), jobs=jobs, scheduler=scheduler,
                                description="demo takes")
         videos = sorted((e for entries in results for e in entries), key=lambda e: e["id"])

@@ -93,6 +93,11 @@ class VideoEntry:
 
     _OPTIONAL = ("action", "view", "azimuth_deg", "truth", "bvh", "bvh_labels", "frames")
 
+    @property
+    def raw(self) -> dict:
+        """The manifest entry as a document (every field, known or not)."""
+        return self.to_dict()
+
     def to_dict(self) -> dict:
         d: dict[str, Any] = {"id": self.id, "performer": self.performer, "kind": self.kind}
         for key in self._OPTIONAL:

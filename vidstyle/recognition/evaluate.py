@@ -199,14 +199,32 @@ def evaluate_recognition(
     baseline: bool = True,
     test_view: str | None = None,
     n_jobs: int | None = None,
+    test_dataset: Dataset | None = None,
+    test_features_dir: str | Path | None = None,
+    score_set: str = "test",
 ) -> dict[str, Any]:
-    """Train the vocabulary on A and the recognizer on B of a seeded split, test on the held-out set."""
+    """Train the vocabulary on A and the recognizer on B of a seeded split, score the test set T (or, with
+    ``score_set="val"``, the validation set V: what ``scripts/validate_recognition.py`` tunes on).
+
+    ``test_dataset`` / ``test_features_dir``: the unseen-camera videos and their features
+    (``split_kind="unseen-camera"``)."""
     from .recognizer import ActionRecognizer
     from .vocabulary import Vocabulary
 
+    if score_set not in ("test", "val"):
+        raise InputError(f"score_set: must be test or val, got {score_set!r}")
     features_dir = Path(features_dir)
-    split = make_split(dataset, split_kind, seed=seed, test_view=test_view)
-    log.info("split %s: A %d, B %d, test %d videos", split.kind, len(split.vocab), len(split.train), len(split.test))
+    split = make_split(dataset, split_kind, seed=seed, test_view=test_view, test_dataset=test_dataset)
+    log.info("split %s: A %d, B %d, V %d, T %d videos; scoring %s", split.kind, len(split.vocab), len(split.train),
+             len(split.val), len(split.test), "V" if score_set == "val" else "T")
+    if score_set == "val":
+        score_ids, score_ds, score_dir = split.val, dataset, features_dir
+    elif split.kind == "unseen-camera":
+        if test_features_dir is None:
+            raise InputError("unseen-camera: needs the features directory of the unseen-camera videos")
+        score_ids, score_ds, score_dir = split.test, test_dataset, Path(test_features_dir)
+    else:
+        score_ids, score_ds, score_dir = split.test, dataset, features_dir
     params = dict(recognizer_params or {})
     params.update(ablation_params(ablation))
     params.setdefault("random_state", seed)
@@ -227,7 +245,7 @@ def evaluate_recognition(
     t_train = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    feats_t, labels_t = _load_set(dataset, features_dir, split.test, n_jobs)
+    feats_t, labels_t = _load_set(score_ds, score_dir, score_ids, n_jobs)
     unknown = sorted({c for t in labels_t for c in t.labels} - set(rec.classes_))
     if unknown:
         raise InputError(f"test labels: classes not seen in training: {unknown[:5]}")
@@ -235,15 +253,15 @@ def evaluate_recognition(
     outputs = [rec.predict_histograms(H) for H in Hs]
     t_pred = time.perf_counter() - t0
 
-    by_id = dataset.by_id()
-    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.test]
+    by_id = score_ds.by_id()
+    actions = [by_id[i].action if by_id[i].kind == "single" else None for i in score_ids]
     truths = [t.labels for t in labels_t]
-    metrics = score_videos(rec.classes_, truths, outputs, split.test, actions)
+    metrics = score_videos(rec.classes_, truths, outputs, score_ids, actions)
     feature_params = None
     try:
         from ..formats.features import read_features
 
-        feature_params = read_features(features_path(features_dir, split.test[0])).params or None
+        feature_params = read_features(features_path(features_dir, split.vocab[0])).params or None
     except InputError:  # params are informative only
         feature_params = None
     result: dict[str, Any] = {
@@ -251,6 +269,7 @@ def evaluate_recognition(
         "schema_version": 1,
         "seed": seed,
         "split": split.to_dict(),
+        "scored_set": "V" if score_set == "val" else "T",
         "ablation": ablation,
         "params": {
             "vocabulary": voc.get_params(),
@@ -269,7 +288,7 @@ def evaluate_recognition(
             feats_b, [t.labels for t in labels_b], classes=classes
         )
         bout = [base.predict_histograms(H) for H in Hs]
-        bm = score_videos(base.classes_, truths, bout, split.test, actions)
+        bm = score_videos(base.classes_, truths, bout, score_ids, actions)
         result["baseline"] = {
             "classifier": "svc-ovr",
             "frame_accuracy": bm["frame_accuracy"],
@@ -287,13 +306,16 @@ def score_labels_dir(
     seed: int = 0,
     test_view: str | None = None,
     ignore: Sequence[str] = IGNORE,
+    test_dataset: Dataset | None = None,
 ) -> dict[str, Any]:
     """Score ``<labels_dir>/<video id>.json`` (written by ``vidstyle recognize``: ``labels`` smoothed,
     ``raw``) against the dataset's ground truth, without training anything.
 
     The test videos are the ``split.test`` recorded in ``model``'s header when it has one (the model knows
     which videos it must not have seen), else the ``split_kind``/``seed``/``test_view`` split of
-    ``dataset``. Every test video needs a labels file; a model whose training files include a test video
+    ``dataset``. With ``split_kind="unseen-camera"`` they are the test performers' videos of
+    ``test_dataset`` (the split of the model's seed; the model must have trained on no test performer).
+    Every test video needs a labels file; a model whose training files include a test video
     is refused (its scores would not be of unseen data)."""
     from ..formats import FormatError
     from .recognizer import read_header
@@ -303,10 +325,23 @@ def score_labels_dir(
         raise InputError(f"{labels_dir}: labels directory not found")
     header = read_header(model) if model is not None else None
     split_doc = (header or {}).get("split") or None
-    if split_doc and split_doc.get("test"):
+    if split_kind == "unseen-camera":
+        if test_dataset is None:
+            raise InputError("unseen-camera: needs the dataset of the unseen-camera videos")
+        sp = make_split(dataset, "unseen-camera", seed=(header or {}).get("seed", seed), test_dataset=test_dataset)
+        if split_doc and split_doc.get("test_performers") and sorted(split_doc["test_performers"]) != sp.test_performers:
+            raise InputError(f"{model}: its test performers {split_doc['test_performers']} are not those of the "
+                             f"unseen-camera split {sp.test_performers}")
+        split_info: dict[str, Any] = {**sp.to_dict(), "from": None if model is None else str(model)}
+        test = sp.test
+        dataset = test_dataset
+    elif split_doc and split_doc.get("test"):
         test = list(split_doc["test"])
-        split_info: dict[str, Any] = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
-                                      "params": split_doc.get("params"), "from": str(model)}
+        split_info = {"kind": split_doc.get("kind"), "seed": split_doc.get("seed"), "test": test,
+                      "params": split_doc.get("params"), "from": str(model)}
+        for key in ("test_performers", "val_performers", "vocab_performers", "train_performers"):
+            if split_doc.get(key) is not None:
+                split_info[key] = split_doc[key]
     else:
         sp = make_split(dataset, split_kind, seed=seed, test_view=test_view)
         test = sp.test
@@ -325,6 +360,7 @@ def score_labels_dir(
             raise InputError(f"{model}: trained on test videos {leak[:5]}; its labels cannot be scored as unseen")
     classes = list(dataset.classes) if dataset.classes else None
     truths, outputs = [], []
+    decoding: set = set()
     for i in test:
         path = labels_dir / f"{i}.json"
         if not path.is_file():
@@ -342,6 +378,7 @@ def score_labels_dir(
             pred[key] = np.array([index[c] for c in seq], np.int64)
         outputs.append(pred)
         truths.append(truth)
+        decoding.add((rec.smoothing, rec.extra.get("emission_weight"), rec.smoothing_window))
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in test]
     metrics = score_videos(classes, truths, outputs, test, actions, ignore)
     return {
@@ -353,5 +390,7 @@ def score_labels_dir(
         "source": {"labels_dir": str(labels_dir), "model": None if model is None else str(model)},
         "params": None if header is None else {"recognizer": header.get("params"), "features": header.get("features_params")},
         "model_header": header,
+        # how the labels were decoded (recognize can override the model's smoother)
+        "decoding": [{"smoothing": a, "emission_weight": b, "smoothing_window": c} for a, b, c in sorted(decoding, key=str)],
         **metrics,
     }

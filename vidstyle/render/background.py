@@ -11,7 +11,8 @@ import functools
 import cv2
 import numpy as np
 
-TEXTURES = ("brick", "grass", "gravel")
+TEXTURES = ("brick", "grass", "gravel")  # what "texture" draws from
+HELDOUT_TEXTURES = ("moon",)  # only by name ("texture:moon"): a background no "texture" video shows
 PLAIN_COLOURS = [(205, 205, 200), (180, 190, 195), (150, 160, 150), (215, 200, 185), (120, 125, 130), (190, 175, 160)]
 
 
@@ -46,8 +47,8 @@ def parse_background(spec) -> tuple[str, object]:
             return "plain", col
         return "plain", None
     if kind == "texture":
-        if arg and arg not in TEXTURES:
-            raise ValueError(f"unknown texture {arg!r}; choose from {', '.join(TEXTURES)}")
+        if arg and arg not in TEXTURES + HELDOUT_TEXTURES:
+            raise ValueError(f"unknown texture {arg!r}; choose from {', '.join(TEXTURES + HELDOUT_TEXTURES)}")
         return "texture", arg or None
     raise ValueError(f"background must be 'plain' or 'texture' (optionally ':<colour|name>'), got {spec!r}")
 

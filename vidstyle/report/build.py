@@ -88,6 +88,13 @@ def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None
         ["frame accuracy, smoothed", fa.get("smoothed"), 0.70],
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
+    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
+    if cam is not None:
+        cams = ", ".join(f"azimuth {a:g}°" + (f" elevation {e:g}°" if e is not None else "")
+                         for a, e in (cam.get("split", {}).get("test_cameras") or []))
+        rows += [[f"unseen camera ({cams}): frame accuracy raw", cam.get("frame_accuracy", {}).get("raw"), None],
+                 ["unseen camera: frame accuracy smoothed", cam.get("frame_accuracy", {}).get("smoothed"), None],
+                 ["unseen camera: video accuracy", cam.get("video_accuracy"), None]]
     split = m.get("split", {})
     owner = {v.id: v.performer for v in (dataset.videos if dataset else [])}
     test_performers = split.get("test_performers") or sorted({owner[v] for v in split.get("test", []) if owner.get(v)})
@@ -95,7 +102,7 @@ def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None
         f"<p>Split: <b>{esc(split.get('kind', '?'))}</b>; test performers "
         f"{esc(', '.join(test_performers) or '–')}; "
         f"{m.get('n_test_videos', '?')} test videos, {m.get('n_test_frames', '?')} frames.</p>",
-        table([[r[0], r[1] if r[1] is not None else "–", r[2]] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
+        table([[r[0], r[1] if r[1] is not None else "–", r[2] if r[2] is not None else "–"] for r in rows], ["metric", "vidstyle", "thesis (Chen 2012)"]),
     ]
     conf = m.get("confusion", {})
     if conf.get("smoothed"):
@@ -166,6 +173,11 @@ def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
                          fid.get("jsd_2gram_same"), fid.get("jsd_2gram_other"), ll.get("a"), ll.get("b"), ll.get("bigram")])
         body.append(table(rows, ["labels", "transition MAE (a)", "identification (a)", "JSD 2-gram same",
                                  "JSD 2-gram other", "loglik/event (a)", "(b)", "bigram"]))
+        if m.get("recognised_performers"):
+            body.append(f'<p class="note">Recognised labels are scored only for the recognizer\'s test performers '
+                        f'({esc(", ".join(m["recognised_performers"]))}): no video of theirs trained or tuned it. '
+                        f'"ground_truth_test_performers" is the same performers on true labels (identification '
+                        f'among {len(m["recognised_performers"])} performers); "ground_truth" is every performer.</p>')
     page.add("Behaviour style: learned vs true transitions", "".join(body))
 
     gens = sorted((run / "generated").glob("*.json")) if (run / "generated").is_dir() else []
@@ -237,18 +249,24 @@ def headline_metrics(run: Path) -> dict:
     mot = _metrics(run / "metrics" / "motion.json", MOTION)
     out: dict = {"kind": HEADLINE, "schema_version": 1,
                  "seed": _get(rec, "seed") if rec else _get(sty, "seed")}
+    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
     out["recognition"] = {
         "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
         "frame_accuracy_smoothed": _get(rec, "frame_accuracy", "smoothed"),
         "video_accuracy": _get(rec, "video_accuracy"),
         "test_frames": _get(rec, "n_test_frames"),
+        "unseen_camera_frame_accuracy_smoothed": _get(cam, "frame_accuracy", "smoothed"),
+        "unseen_camera_video_accuracy": _get(cam, "video_accuracy"),
     }
     style = {}
-    for source, short in (("ground_truth", "truth"), ("recognised", "recognised")):
+    # *_recognised: the recognizer's test performers only; *_truth_test: the same performers' ground truth
+    for source, short in (("ground_truth", "truth"), ("ground_truth_test_performers", "truth_test"),
+                          ("recognised", "recognised")):
         s = _get(sty, "sources", source, "summary")
         style[f"transition_mae_{short}"] = _get(s, "transition_mae", "a")
         style[f"identification_{short}"] = _get(s, "identification", "a", "accuracy_by_heldout_data")
         style[f"heldout_loglik_{short}"] = _get(s, "heldout_loglik_per_event", "a")
+    style["recognised_performers"] = _get(sty, "recognised_performers")
     out["style"] = style
     ms = _get(mot, "summary")
     out["motion"] = {

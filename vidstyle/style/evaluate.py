@@ -15,7 +15,10 @@ training part, then (docs/evaluation.md, "style"):
 * held-out log-likelihood per event of models (a), (b) and the bigram baseline.
 
 Run once on ground-truth labels and, with ``labels_dir``, once on recognised labels; the difference
-is the cost of recognition errors.
+is the cost of recognition errors. Recognised labels are scored only for ``performers`` (the recognizer's
+*test* performers: a performer whose videos trained or tuned the recognizer would be recognised from
+seen data), and the ground truth is scored on those performers too (``ground_truth_test_performers``), so
+the two columns differ only by recognition errors.
 """
 
 from __future__ import annotations
@@ -117,12 +120,18 @@ def _split(seqs: list[EventSequence], frac: float, takes: list[str] | None = Non
 
 
 def load_performers(
-    dataset: Dataset, params: EvalParams, labels_dir: str | Path | None = None
+    dataset: Dataset, params: EvalParams, labels_dir: str | Path | None = None, performers: list[str] | None = None,
 ) -> list[PerformerData]:
-    """Events of every performer's performance videos, split into train / held-out."""
+    """Events of every performer's (or only ``performers``') performance videos, split into train / held-out."""
     actions = list(dataset.actions)
     out = []
+    if performers is not None:
+        unknown = sorted(set(performers) - {p.id for p in dataset.performers})
+        if unknown:
+            raise InputError(f"{dataset.path}: no performer {unknown[0]!r}")
     for p in dataset.performers:
+        if performers is not None and p.id not in performers:
+            continue
         files = dataset.performer_label_files(p.id, labels_dir)
         if not files:
             log.warning("performer %s has no performance videos; skipped", p.id)
@@ -271,14 +280,20 @@ def evaluate_performers(perfs: list[PerformerData], params: EvalParams) -> dict[
 
 
 def evaluate_dataset(
-    dataset_dir: str | Path, params: EvalParams, labels_dir: str | Path | None = None
+    dataset_dir: str | Path, params: EvalParams, labels_dir: str | Path | None = None,
+    performers: list[str] | None = None,
 ) -> dict[str, Any]:
-    """Metrics document: ground-truth labels, and recognised labels when ``labels_dir`` is given."""
+    """Metrics document: ground-truth labels of every performer, and with ``labels_dir`` the recognised
+    labels of ``performers`` (required then: the recognizer's test performers) beside their ground truth."""
     manifest = load_manifest(dataset_dir)
+    if labels_dir is not None and not performers:
+        raise InputError("evaluate style: recognised labels need the recognizer's test performers (performers), "
+                         "so that no scored video trained or tuned the recognizer")
     # load every label file before any fitting, so a missing or bad file fails fast
     inputs = {"ground_truth": load_performers(manifest, params)}
     if labels_dir is not None:
-        inputs["recognised"] = load_performers(manifest, params, labels_dir)
+        inputs["ground_truth_test_performers"] = load_performers(manifest, params, None, performers)
+        inputs["recognised"] = load_performers(manifest, params, labels_dir, performers)
     sources = {name: evaluate_performers(perfs, params) for name, perfs in inputs.items()}
     return {
         "kind": "vidstyle.metrics.style",
@@ -288,6 +303,7 @@ def evaluate_dataset(
         "dataset": str(dataset_dir),
         "dataset_seed": manifest.seed,
         "labels_dir": None if labels_dir is None else str(labels_dir),
+        "recognised_performers": None if labels_dir is None else sorted(performers),
         "targets": TARGETS,
         "sources": sources,
     }

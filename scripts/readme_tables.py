@@ -1,0 +1,205 @@
+#!/usr/bin/env python
+"""Regenerate the README's results tables from metrics files, so no published number is typed by hand.
+
+Reads every JSON document under ``--metrics DIR`` (recursively) and recognises them by ``kind``:
+
+- ``vidstyle.metrics.recognition`` (``vidstyle evaluate recognition --out``): one row per split
+  kind, the mean, spread and minimum over the seeds found, the ablation ``none`` only; the mirror-training
+  flag is part of the row name when a file trained without it;
+- ``vidstyle.metrics.style`` (``vidstyle evaluate style --out``): transition error and identification per
+  label source (ground truth, ground truth of the test performers, recognised labels of the test performers);
+- ``vidstyle.metrics.style_viterbi_prior`` (``scripts/style_viterbi_prior.py``): one row per decoder;
+- ``vidstyle.validation.recognition`` (``scripts/validate_recognition.py``): the chosen values with the
+  validation score each won with.
+
+Every row names the file it came from. With ``--readme README.md`` the text between
+``<!-- results:begin -->`` and ``<!-- results:end -->`` is replaced (atomically); without the markers (or
+without ``--readme``) the tables go to stdout. ``--check`` exits 1 when the README is not up to date.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+
+BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+
+
+def _pct(x) -> str:
+    return "n/a" if x is None else f"{100 * x:.1f} %"
+
+
+def _spread(xs) -> str:
+    xs = [x for x in xs if x is not None]
+    if not xs:
+        return "n/a"
+    m = sum(xs) / len(xs)
+    if len(xs) == 1:
+        return _pct(m)
+    sd = (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5
+    return f"{100 * m:.1f} ± {100 * sd:.1f} % (min {100 * min(xs):.1f})"
+
+
+def load_documents(root: Path) -> dict[str, list[tuple[Path, dict]]]:
+    docs: dict[str, list[tuple[Path, dict]]] = defaultdict(list)
+    for p in sorted(root.rglob("*.json")):
+        try:
+            d = json.loads(p.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        if isinstance(d, dict) and isinstance(d.get("kind"), str):
+            docs[d["kind"]].append((p, d))
+    return docs
+
+
+def _rel(p: Path, root: Path) -> str:
+    try:
+        return str(p.relative_to(root))
+    except ValueError:
+        return str(p)
+
+
+def _config(d: dict) -> str:
+    """The recognizer values a metrics file records (the decoding of scored labels when it differs)."""
+    rp = (d.get("params") or {}).get("recognizer") or {}
+    dec = (d.get("decoding") or [{}])[0] if len(d.get("decoding") or []) == 1 else {}
+    sm = dec.get("smoothing") or rp.get("smoothing")
+    ew = dec.get("emission_weight") if dec.get("emission_weight") is not None else rp.get("emission_weight")
+    parts = []
+    if rp.get("C") is not None:
+        parts.append(f"C {rp['C']:g}")
+    if "max_frames_per_class" in rp:
+        parts.append(f"cap {rp['max_frames_per_class']}")
+    if sm:
+        parts.append(f"{sm}" + (f" ^{ew:g}" if sm == "viterbi" and ew is not None else ""))
+    return ", ".join(parts) or "?"
+
+
+def recognition_table(items, root: Path) -> list[str]:
+    groups: dict[str, list[tuple[Path, dict]]] = defaultdict(list)
+    for p, d in items:
+        if d.get("ablation") not in (None, "none", "from model"):
+            continue
+        split = d.get("split") or {}
+        kind = split.get("kind") or "?"
+        if kind == "unseen-view":
+            kind += f" (test view {', '.join(split.get('test_views') or []) or split.get('params', {}).get('test_view') or '?'})"
+        rp = ((d.get("params") or {}).get("recognizer") or {})
+        if rp.get("mirror") is False:
+            kind += ", no mirror training"
+        if d.get("scored_set") == "V":
+            kind += ", validation set"
+        groups[kind].append((p, d))
+    lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
+             "|---|---|---|---:|---:|---:|---:|---|"]
+    for kind in sorted(groups):
+        g = sorted(groups[kind], key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
+        seeds = ", ".join(str(d.get("seed")) for _, d in g)
+        lines.append(
+            f"| {kind} | {seeds} | {'; '.join(sorted({_config(d) for _, d in g}))} | "
+            f"{_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
+            f"{_spread([d['frame_accuracy']['smoothed'] for _, d in g])} | "
+            f"{_spread([d.get('video_accuracy') for _, d in g])} | "
+            f"{sum(int(d.get('n_test_frames') or 0) for _, d in g)} | "
+            f"{', '.join('`' + _rel(p, root) + '`' for p, _ in g)} |")
+    return lines
+
+
+def style_table(items, root: Path) -> list[str]:
+    lines = ["| labels | performers | transition MAE (a) | identification (a) | file |", "|---|---|---:|---:|---|"]
+    names = {"ground_truth": "ground truth, every performer",
+             "ground_truth_test_performers": "ground truth, test performers",
+             "recognised": "recognised, test performers"}
+    for p, d in items:
+        for src, block in (d.get("sources") or {}).items():
+            s = block.get("summary") or {}
+            perf = ", ".join(r.get("performer", "?") for r in block.get("performers", []))
+            lines.append(f"| {names.get(src, src)} (seed {d.get('seed')}) | {perf} | "
+                         f"{s.get('transition_mae', {}).get('a', float('nan')):.3f} | "
+                         f"{_pct(s.get('identification', {}).get('a', {}).get('accuracy_by_heldout_data'))} | "
+                         f"`{_rel(p, root)}` |")
+    return lines
+
+
+def prior_table(items, root: Path) -> list[str]:
+    lines = ["| decoder (test performers) | transition MAE (a) | identification (a) | file |", "|---|---:|---:|---|"]
+    for p, d in items:
+        for r in d.get("rows", []):
+            lines.append(f"| {r['labels']} (seed {d.get('seed')}) | {r['transition_mae_a']:.3f} | "
+                         f"{_pct(r['identification_a'])} | `{_rel(p, root)}` |")
+    return lines
+
+
+def validation_table(items, root: Path) -> list[str]:
+    lines = ["| tuned value | chosen | validation smoothed frame acc. | file |", "|---|---|---:|---|"]
+    for p, d in items:
+        for key, c in (d.get("chosen") or {}).items():
+            lines.append(f"| {key} | {json.dumps(c.get('value'))} | {_pct(c.get('validation_frame_accuracy_smoothed'))} "
+                         f"| `{_rel(p, root)}` |")
+    return lines
+
+
+def tables(root: Path) -> str:
+    docs = load_documents(root)
+    out = []
+    sections = [("vidstyle.metrics.recognition", "Recognition (`vidstyle evaluate recognition`)", recognition_table),
+                ("vidstyle.metrics.style", "Style (`vidstyle evaluate style`)", style_table),
+                ("vidstyle.metrics.style_viterbi_prior", "Viterbi prior and style (`scripts/style_viterbi_prior.py`)",
+                 prior_table),
+                ("vidstyle.validation.recognition", "Tuned on validation performers (`scripts/validate_recognition.py`)",
+                 validation_table)]
+    for kind, title, fn in sections:
+        if docs.get(kind):
+            out += [f"**{title}**", "", *fn(docs[kind], root), ""]
+    if not out:
+        raise SystemExit(f"{root}: no metrics documents found")
+    return "\n".join(["<!-- generated by scripts/readme_tables.py; do not edit by hand -->", "", *out]).rstrip() + "\n"
+
+
+def splice(text: str, table: str) -> str | None:
+    """``text`` with the part between the markers replaced, or None when the markers are absent."""
+    b, e = text.find(BEGIN), text.find(END)
+    if b < 0 or e < 0 or e < b:
+        return None
+    return text[: b + len(BEGIN)] + "\n" + table + text[e:]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--metrics", type=Path, required=True, help="directory of metrics JSON files")
+    ap.add_argument("--readme", type=Path, default=None, help="README to update between the markers")
+    ap.add_argument("--check", action="store_true", help="exit 1 if the README differs from the metrics")
+    args = ap.parse_args(argv)
+    if not args.metrics.is_dir():
+        print(f"{args.metrics}: metrics directory not found", file=sys.stderr)
+        return 2
+    table = tables(args.metrics)
+    if args.readme is None:
+        sys.stdout.write(table)
+        return 0
+    text = args.readme.read_text(encoding="utf-8")
+    new = splice(text, table)
+    if new is None:
+        print(f"{args.readme}: no {BEGIN} ... {END} markers; tables written to stdout", file=sys.stderr)
+        sys.stdout.write(table)
+        return 0
+    if args.check:
+        if new != text:
+            print(f"{args.readme}: results tables are out of date (rerun scripts/readme_tables.py)", file=sys.stderr)
+            return 1
+        return 0
+    if new != text:
+        fd, tmp = tempfile.mkstemp(dir=args.readme.parent, prefix=".readme.")
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(new)
+        os.replace(tmp, args.readme)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

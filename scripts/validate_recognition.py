@@ -1,0 +1,312 @@
+#!/usr/bin/env python
+"""Choose the recognizer's tuned values on the *validation* performers only (issue 12).
+
+Every candidate trains the vocabulary on set A and the recognizer on set B of the seeded split
+(:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
+never loaded. The search is one factor at a time from the starting point (the values used before this
+script existed): each candidate changes one of
+
+- the descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
+- the vocabulary size (500 words; the thesis' 1500 with ``--full``),
+- the word-grouping correlation threshold,
+- the SVM cost C,
+- the SVM training frames per class (the cap),
+
+and every trained candidate is also scored with each smoother (the thesis' window vote, Viterbi with
+several emission weights: no retraining). The candidates train in parallel (``--workers``). For each
+factor the best value wins (score: smoothed frame accuracy on V; ties go to the video accuracy, then to
+the starting value); when the winners differ from the starting point, their combination is trained and
+scored on V too, and that is the final configuration only if it scores at least as well as the starting
+point (otherwise the starting point stays). Prints the table of every candidate and writes the chosen
+values, each with the validation score it won with, to ``--out`` (default
+``pipelines/kickboxing/validation/recognition.json``), which the library defaults and
+``pipelines/kickboxing/params.yaml`` cite.
+
+Usage (the demo pipeline's dataset and features)::
+
+    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \\
+        --features scovanner2007=pipelines/kickboxing/out/features --seed 0
+
+``--quick`` searches fewer values (for a smoke run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from vidstyle.recognition.evaluate import _load_set, score_videos  # noqa: E402
+from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
+from vidstyle.recognition.splits import make_split  # noqa: E402
+
+log = logging.getLogger("validate_recognition")
+DEFAULT_OUT = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / "validation" / "recognition.json"
+
+# the starting point (the values before validation existed) and the other values tried per factor
+START = {"variant": "scovanner2007", "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
+         "max_frames_per_class": 3000, "smoothing": "viterbi", "emission_weight": 3.0, "smoothing_window": 6}
+FACTORS = {"words": [500], "grouping_threshold": [0.9], "C": [10.0], "max_frames_per_class": [1500]}
+FULL = {"words": [500, 1500], "grouping_threshold": [0.7, 0.9], "C": [10.0, 1000.0], "max_frames_per_class": [1500, 6000]}
+SMOOTHERS = [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0), ("viterbi", 2.0), ("viterbi", 5.0), ("viterbi", 8.0)]
+
+
+class Search:
+    def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int):
+        self.ds, self.features, self.split, self.seed, self.jobs = ds, features, split, seed, jobs
+        self._sets: dict = {}
+        self._vocab: dict = {}
+        self._memo: dict = {}
+        self.start_model, self.start_cfg, self.start_key = None, None, None
+        self.rows: list[dict] = []
+        by_id = ds.by_id()
+        self.actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.val]
+
+    def sets(self, variant):
+        if variant not in self._sets:
+            fdir = Path(self.features[variant])
+            self._sets[variant] = {k: _load_set(self.ds, fdir, ids, self.jobs)
+                                   for k, ids in (("A", self.split.vocab), ("B", self.split.train), ("V", self.split.val))}
+        return self._sets[variant]
+
+    def vocabulary(self, variant, words):
+        from vidstyle.recognition.vocabulary import Vocabulary
+
+        key = (variant, words)
+        if key not in self._vocab and self.start_model is not None and key == self.start_key:
+            self._vocab[key] = self.start_model.vocabulary  # the same fit on the same set A
+        if key not in self._vocab:
+            feats_a = self.sets(variant)["A"][0]
+            desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
+            self._vocab[key] = Vocabulary(n_words=words, random_state=self.seed).fit(desc)
+        return self._vocab[key]
+
+    def run(self, step: str, cfg: dict, smoothers=None) -> list[dict]:
+        """Train on A/B with ``cfg`` and score V once per smoother; one row per smoother."""
+        from vidstyle.recognition.recognizer import ActionRecognizer
+
+        t0 = time.perf_counter()
+        s = self.sets(cfg["variant"])
+        feats_v, labels_v = s["V"]
+        key = tuple(sorted((k, v) for k, v in cfg.items() if k not in ("smoothing", "emission_weight")))
+        if key not in self._memo and self.start_model is not None and cfg == self.start_cfg:
+            rec = self.start_model  # trained by `vidstyle train-recognizer` on the same A/B with these values
+            raw = []
+            for H in rec._histograms_many(feats_v):
+                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))))
+            self._memo[key] = (rec, raw, time.perf_counter() - t0)
+        if key in self._memo:  # same model, no retraining
+            rec, raw, train_s = self._memo[key]
+        else:
+            voc = self.vocabulary(cfg["variant"], cfg["words"])
+            feats_b, labels_b = s["B"]
+            rec = ActionRecognizer(
+                vocabulary=voc, grouping_threshold=cfg["grouping_threshold"], C=cfg["C"],
+                max_frames_per_class=cfg["max_frames_per_class"], smoothing=cfg["smoothing"],
+                emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"],
+                n_jobs=self.jobs, random_state=self.seed,
+            ).fit(feats_b, [t.labels for t in labels_b], classes=self.ds.classes or None)
+            raw = []
+            for H in rec._histograms_many(feats_v):
+                Z = rec._embed(H)
+                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(Z)))
+            train_s = time.perf_counter() - t0
+            self._memo[key] = (rec, raw, train_s)
+        rows = []
+        for smoothing, weight in smoothers or [(cfg["smoothing"], cfg["emission_weight"])]:
+            rec.smoothing = smoothing
+            if weight is not None:
+                rec.emission_weight = weight
+            outs = [rec._finish(*r) for r in raw]
+            m = score_videos(rec.classes_, [t.labels for t in labels_v], outs, self.split.val, self.actions)
+            c = {**cfg, "smoothing": smoothing, "emission_weight": weight if weight is not None else cfg["emission_weight"]}
+            row = {"step": step, "config": c, "frame_accuracy_raw": m["frame_accuracy"]["raw"],
+                   "frame_accuracy_smoothed": m["frame_accuracy"]["smoothed"], "video_accuracy": m["video_accuracy"],
+                   "per_class_recall_smoothed": {k: v["recall_smoothed"] for k, v in m["per_class"].items()},
+                   "n_val_frames": m["n_test_frames"], "train_s": train_s}
+            rows.append(row)
+            self.rows.append(row)
+            log.info("%-20s %s: smoothed %.4f raw %.4f video %s (%.0f s)", step, _short(c), row["frame_accuracy_smoothed"],
+                     row["frame_accuracy_raw"], row["video_accuracy"], train_s)
+        return rows
+
+
+def _short(c: dict) -> str:
+    sm = c["smoothing"] + (f"^{c['emission_weight']:g}" if c["smoothing"] == "viterbi" else f" w{c['smoothing_window']}")
+    return (f"{c['variant']} {c['words']}w g{c['grouping_threshold']:g} C{c['C']:g} "
+            f"cap{c['max_frames_per_class']} {sm}")
+
+
+def _key(row):
+    return (row["frame_accuracy_smoothed"], row["video_accuracy"] or 0.0)
+
+
+def best(rows):
+    """Highest score; ties keep the earliest row (the incumbent comes first)."""
+    top = rows[0]
+    for r in rows[1:]:
+        if _key(r) > _key(top):
+            top = r
+    return top
+
+
+def _candidate(args) -> list[dict]:
+    """One trained candidate (a worker process): rows for every smoother."""
+    dataset, features, seed, step, cfg, start_model, start_cfg = args
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    ds = load_dataset(dataset)
+    split = make_split(ds, "unseen-performer", seed=seed)
+    search = Search(ds, features, split, seed, 1)
+    if start_model is not None:
+        from vidstyle.recognition.recognizer import load_model
+
+        search.start_model = load_model(start_model)[0]
+        search.start_cfg, search.start_key = start_cfg, (start_cfg["variant"], start_cfg["words"])
+    return search.run(step, cfg, smoothers=SMOOTHERS)
+
+
+def check_start_model(path: Path, start: dict, split, seed: int) -> None:
+    """A ``--start-model`` must be the starting configuration trained on this split's set B."""
+    from vidstyle.recognition.recognizer import read_header
+
+    h = read_header(path)
+    p, sp = h.get("params", {}), h.get("split") or {}
+    want = {"C": start["C"], "max_frames_per_class": start["max_frames_per_class"],
+            "grouping_threshold": start["grouping_threshold"], "smoothing": start["smoothing"],
+            "emission_weight": start["emission_weight"], "smoothing_window": start["smoothing_window"]}
+    got = {k: p.get(k) for k in want}
+    problems = [f"{k} {got[k]} != {v}" for k, v in want.items() if got[k] != v]
+    if h.get("vocabulary", {}).get("n_words") != start["words"]:
+        problems.append(f"words {h.get('vocabulary', {}).get('n_words')} != {start['words']}")
+    if (h.get("features_params") or {}).get("variant", start["variant"]) != start["variant"]:
+        problems.append("descriptor variant differs")
+    if sp.get("kind") != "unseen-performer" or sp.get("seed") != seed or sorted(sp.get("val") or []) != sorted(split.val):
+        problems.append("trained on another split")
+    if h.get("seed") != seed:
+        problems.append(f"seed {h.get('seed')} != {seed}")
+    if problems:
+        raise SystemExit(f"{path}: not the starting configuration on this split: {'; '.join(problems)}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dataset", required=True, help="dataset.json or its directory")
+    ap.add_argument("--features", action="append", default=[], metavar="VARIANT=DIR", required=True,
+                    help="features directory of each descriptor variant to compare")
+    ap.add_argument("--seed", type=int, default=0, help="split / vocabulary / sampling seed")
+    ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
+    ap.add_argument("--full", action="store_true", help="two more values per factor")
+    ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    ap.add_argument("--start-model", type=Path, default=None,
+                    help="a `vidstyle train-recognizer --dataset` model of the starting values on this split: "
+                         "used as the starting candidate (and its vocabulary by the candidates that share it)")
+    ap.add_argument("--only", action="append", default=[],
+                    help="train only the candidates of these factors (variant, words, grouping_threshold, C, "
+                         "max_frames_per_class); the others keep the starting value untested")
+    args = ap.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    from joblib import Parallel, delayed
+
+    features = dict(f.split("=", 1) for f in args.features)
+    ds = load_dataset(args.dataset)
+    split = make_split(ds, "unseen-performer", seed=args.seed)
+    log.info("validation performers %s (test performers %s are not loaded)", split.val_performers, split.test_performers)
+    start = dict(START)
+    if start["variant"] not in features:
+        start["variant"] = next(iter(features))
+    factors = {"variant": [v for v in features if v != start["variant"]], **(FULL if args.full else FACTORS)}
+    if args.only:
+        factors = {k: v for k, v in factors.items() if k in args.only}
+    if args.start_model is not None:
+        check_start_model(args.start_model, start, split, args.seed)
+    jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in factors.items() for v in vals]
+    ctx = (str(args.dataset), features, args.seed)
+    sm = (None if args.start_model is None else str(args.start_model), start)
+    results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg, *sm)) for step, cfg in jobs)
+    rows = [r for rs in results for r in rs]
+    base = [r for r in results[0]]
+    at_start = lambda rs: [r for r in rs if (r["config"]["smoothing"], r["config"]["emission_weight"])  # noqa: E731
+                           == (start["smoothing"], start["emission_weight"])][0]
+    start_row = at_start(base)
+    chosen: dict = {}
+    cfg = dict(start)
+    for key, vals in factors.items():
+        cands = [start_row] + [at_start(rs) for (step, _), rs in zip(jobs, results) if step == key]
+        win = best(cands)
+        cfg[key] = win["config"][key]
+        chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
+                       "validation_video_accuracy": win["video_accuracy"],
+                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
+    win = best(base)
+    cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
+    chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
+                          "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
+                          "validation_video_accuracy": win["video_accuracy"],
+                          "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}
+    final = win
+    if any(cfg[k] != start[k] for k in factors):
+        comb = _candidate((*ctx, "combined winners", cfg, *sm))
+        rows += comb
+        c = [r for r in comb if (r["config"]["smoothing"], r["config"]["emission_weight"])
+             == (cfg["smoothing"], cfg["emission_weight"])][0]
+        if _key(c) >= _key(final):
+            final = c
+        else:  # the combination does worse than the starting point with the chosen smoother: keep the start
+            log.info("combined winners score below the starting point on V; keeping the starting values")
+            for k in factors:
+                chosen[k]["value_if_alone"] = chosen[k]["value"]
+                chosen[k]["value"] = start[k]
+                cfg[k] = start[k]
+    doc = {
+        "kind": "vidstyle.validation.recognition", "schema_version": 1,
+        "command": "python scripts/validate_recognition.py " + " ".join(sys.argv[1:]),
+        "dataset": str(args.dataset), "dataset_seed": ds.seed, "seed": args.seed, "features": features,
+        "split": {"kind": split.kind, "vocab_performers": split.vocab_performers,
+                  "train_performers": split.train_performers, "val_performers": split.val_performers,
+                  "test_performers_not_used": split.test_performers},
+        "score": "smoothed frame accuracy on the validation performers (ties: video accuracy)",
+        "search": "one factor at a time from the starting point, then the combination of the winners",
+        "start": start, "start_model": None if args.start_model is None else str(args.start_model),
+        "factors": factors, "factors_not_searched": sorted(set(FACTORS) - set(factors)), "chosen": chosen, "final_config": cfg,
+        "final_validation": {k: final[k] for k in ("frame_accuracy_raw", "frame_accuracy_smoothed", "video_accuracy",
+                                                  "per_class_recall_smoothed", "n_val_frames")},
+        "rows": rows,
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_suffix(".tmp")
+    tmp.write_text(json.dumps(doc, indent=1) + "\n")
+    tmp.replace(args.out)
+    print(table(doc))
+    log.info("wrote %s", args.out)
+
+
+def _smoother(c: dict) -> str:
+    return f"viterbi^{c['emission_weight']:g}" if c["smoothing"] == "viterbi" else f"vote window {c['smoothing_window']}"
+
+
+def table(doc: dict) -> str:
+    lines = [f"# Recognition validation (seed {doc['seed']}; validation performers {', '.join(doc['split']['val_performers'])}; "
+             "test performers not used)", "",
+             "| step | candidate | V frame acc. raw | V frame acc. smoothed | V video acc. |", "|---|---|---:|---:|---:|"]
+    st = doc["start"]
+    for r in doc["rows"]:
+        c = r["config"]
+        if r["step"] != "start" and (c["smoothing"], c["emission_weight"]) != (st["smoothing"], st["emission_weight"]):
+            continue  # the other smoothers are listed for the starting model (all are in the JSON)
+        va = "n/a" if r["video_accuracy"] is None else f"{100 * r['video_accuracy']:.1f} %"
+        lines.append(f"| {r['step']} | {_short(r['config'])} | {100 * r['frame_accuracy_raw']:.1f} % | "
+                     f"{100 * r['frame_accuracy_smoothed']:.1f} % | {va} |")
+    lines += ["", "Chosen: " + _short(doc["final_config"]) +
+              f" (V smoothed {100 * doc['final_validation']['frame_accuracy_smoothed']:.1f} %)"]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+"""scripts/readme_tables.py: the README results tables come from metrics files, never typed by hand."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "readme_tables.py"
+spec = importlib.util.spec_from_file_location("readme_tables", SCRIPT)
+rt = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(rt)
+
+
+def _recognition(seed, raw, smoothed, video, kind="unseen-performer", mirror=True, frames=100, **split):
+    return {"kind": "vidstyle.metrics.recognition", "schema_version": 1, "seed": seed, "ablation": "none",
+            "split": {"kind": kind, "seed": seed, **split}, "scored_set": "T",
+            "params": {"recognizer": {"mirror": mirror}},
+            "frame_accuracy": {"raw": raw, "smoothed": smoothed}, "video_accuracy": video, "n_test_frames": frames}
+
+
+@pytest.fixture
+def metrics(tmp_path):
+    d = tmp_path / "metrics"
+    (d / "seeds").mkdir(parents=True)
+    for seed, sm in ((0, 0.9), (1, 0.8), (2, 0.85)):
+        (d / "seeds" / f"rec{seed}.json").write_text(json.dumps(_recognition(seed, sm - 0.05, sm, 1.0)))
+    (d / "cam.json").write_text(json.dumps(_recognition(0, 0.5, 0.55, 0.75, kind="unseen-camera")))
+    (d / "lr.json").write_text(json.dumps(_recognition(0, 0.6, 0.62, None, kind="unseen-view", mirror=False,
+                                                       test_views=["right"])))
+    (d / "abl.json").write_text(json.dumps({**_recognition(0, 0.1, 0.1, 0.1), "ablation": "no-context"}))
+    (d / "notes.json").write_text(json.dumps([1, 2]))  # not a metrics document: ignored
+    (d / "style.json").write_text(json.dumps({"kind": "vidstyle.metrics.style", "seed": 0, "sources": {
+        "recognised": {"summary": {"transition_mae": {"a": 0.0612}, "identification": {"a": {"accuracy_by_heldout_data": 2 / 3}}},
+                       "performers": [{"performer": "p02"}, {"performer": "p04"}, {"performer": "p06"}]}}}))
+    return d
+
+
+def test_tables_carry_the_files_numbers(metrics):
+    text = rt.tables(metrics)
+    rows = {line.split(" | ")[0].strip("| "): line for line in text.splitlines() if line.startswith("| ")}
+    up = rows["unseen-performer"]
+    # mean 85.0, sample sd 5.0, minimum 80.0 over seeds 0, 1, 2
+    assert "| 0, 1, 2 |" in up and "85.0 ± 5.0 % (min 80.0)" in up and "80.0 ± 5.0 % (min 75.0)" in up
+    assert "| 300 |" in up and "`seeds/rec0.json`" in up
+    assert "55.0 %" in rows["unseen-camera"] and "75.0 %" in rows["unseen-camera"]
+    assert "62.0 %" in rows["unseen-view (test view right), no mirror training"]
+    assert not any("10.0 %" in r for r in rows.values())  # ablation rows are not headline results
+    rec = rows["recognised, test performers (seed 0)"]
+    assert "p02, p04, p06" in rec and "0.061" in rec and "66.7 %" in rec
+
+
+def test_readme_rewritten_between_markers_only(metrics, tmp_path, capsys):
+    readme = tmp_path / "README.md"
+    readme.write_text("# Title\n\nintro\n\n<!-- results:begin -->\nold 99 %\n<!-- results:end -->\n\nrest\n")
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme), "--check"]) == 1
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert text.startswith("# Title\n\nintro\n\n<!-- results:begin -->\n") and text.endswith("<!-- results:end -->\n\nrest\n")
+    assert "old 99 %" not in text and "85.0 ± 5.0 %" in text
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme), "--check"]) == 0
+    assert capsys.readouterr().out == ""
+
+
+def test_without_markers_the_tables_go_to_stdout(metrics, tmp_path, capsys):
+    readme = tmp_path / "README.md"
+    readme.write_text("# no markers\n")
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme)]) == 0
+    assert readme.read_text() == "# no markers\n"
+    assert "85.0 ± 5.0 %" in capsys.readouterr().out
+    assert rt.main(["--metrics", str(tmp_path / "missing")]) == 2

@@ -1,0 +1,51 @@
+"""scripts/validate_recognition.py: winners by validation score, ties to the incumbent; only V is scored."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "validate_recognition.py"
+spec = importlib.util.spec_from_file_location("validate_recognition", SCRIPT)
+vr = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(vr)
+
+
+def _row(step, sm, video, **cfg):
+    return {"step": step, "config": {**vr.START, **cfg}, "frame_accuracy_raw": sm - 0.01,
+            "frame_accuracy_smoothed": sm, "video_accuracy": video}
+
+
+def test_best_prefers_score_then_video_then_the_incumbent():
+    inc = _row("start", 0.9, 0.9)
+    assert vr.best([inc, _row("C", 0.9, 0.9, C=10.0)]) is inc  # a tie keeps the starting value
+    better_video = _row("C", 0.9, 1.0, C=10.0)
+    assert vr.best([inc, better_video]) is better_video
+    better = _row("C", 0.91, 0.5, C=10.0)
+    assert vr.best([inc, better_video, better]) is better
+
+
+def test_search_scores_only_the_validation_videos(tmp_path, monkeypatch):
+    """The Search loads sets A, B and V of the split; T's videos are never read."""
+    from vidstyle.recognition.io import load_dataset
+    from vidstyle.recognition.splits import make_split
+    from vidstyle.recognition.synthetic import make_dataset
+
+    make_dataset(tmp_path, n_performers=5, views=("front",), seed=0, dim=16, reps=(2, 3), n_actions=4)
+    ds = load_dataset(tmp_path)
+    split = make_split(ds, seed=0)
+    read = []
+    real = vr._load_set
+
+    def spy(dataset, fdir, ids, jobs):
+        read.extend(ids)
+        return real(dataset, fdir, ids, jobs)
+
+    monkeypatch.setattr(vr, "_load_set", spy)
+    s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1)
+    rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 3.0), ("vote", None)])
+    assert set(read) == set(split.vocab + split.train + split.val) and not set(read) & set(split.test)
+    assert [r["n_val_frames"] for r in rows] == [sum(len(json.loads((tmp_path / "labels" / f"{i}.json").read_text())["labels"])
+                                                      for i in split.val)] * 2
+    assert rows[0]["frame_accuracy_raw"] == rows[1]["frame_accuracy_raw"]  # same model, two smoothers
