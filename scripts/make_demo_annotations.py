@@ -14,7 +14,6 @@ Videos are tied to their sha256 and frame count; the takes are re-rendered here 
 
 from __future__ import annotations
 
-import sys
 import tempfile
 from pathlib import Path
 
@@ -36,10 +35,10 @@ OUT = REPO / "annotations" / "demo.json"
 VIDEO_DIR = "../pipelines/kickboxing/out/dataset/videos"  # relative to annotations/
 
 
-def pipeline_params() -> DatasetParams:
+def pipeline_params(path: Path = REPO / "pipelines/kickboxing/params.yaml") -> DatasetParams:
     import yaml
 
-    p = yaml.safe_load((REPO / "pipelines/kickboxing/params.yaml").read_text())
+    p = yaml.safe_load(Path(path).read_text())
     d = p["dataset"]
     return DatasetParams(seed=int(p["seed"]), performers=int(d["performers"]), views=tuple(d["views"].split(",")),
                          single_seconds=float(d["single_seconds"]), performances=int(d["performances"]),
@@ -58,8 +57,9 @@ def person_frame(pts: np.ndarray, t: dict, ratio: int, rng: np.random.Generator)
     return int(min(max(f, s), e - 1))
 
 
-def main(performers=(3, 4, 5, 6), take: int = 100) -> None:
-    params = pipeline_params()
+def main(performers=(3, 4, 5, 6), take: int = 100, params_path: Path = REPO / "pipelines/kickboxing/params.yaml",
+         out: Path = OUT, video_dir: str = VIDEO_DIR) -> None:
+    params = pipeline_params(params_path)
     rng = np.random.default_rng(np.random.SeedSequence([params.seed, 14, 3]))
     ratio = params.mocap_fps // params.fps
     videos = []
@@ -82,13 +82,22 @@ def main(performers=(3, 4, 5, 6), take: int = 100) -> None:
                     seen.add(f)
                     status = "discarded" if rng.random() < 1 / 6 else "accepted"
                     marks.append(Transition(f, t["from"], t["to"], status))
-                videos.append(VideoAnnotations(f"{VIDEO_DIR}/{Path(entry['video']).name}", file_sha256(video),
+                videos.append(VideoAnnotations(f"{video_dir}/{Path(entry['video']).name}", file_sha256(video),
                                                entry["frames"], float(params.fps), marks))
                 print(f"{entry['id']}: {len(marks)} marks", flush=True)
-    OUT.parent.mkdir(exist_ok=True)
-    write_annotations(OUT, Annotations(list(ACTIONS), videos))
-    print(f"wrote {OUT}")
+    out.parent.mkdir(exist_ok=True)
+    write_annotations(out, Annotations(list(ACTIONS), videos))
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":
-    main(tuple(int(x) for x in sys.argv[1:]) or (3, 4, 5, 6))
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("performers", nargs="*", type=int, default=[3, 4, 5, 6], help="performer indices")
+    ap.add_argument("--params", type=Path, default=REPO / "pipelines/kickboxing/params.yaml",
+                    help="the pipeline's params.yaml (its dataset section and seed)")
+    ap.add_argument("--out", type=Path, default=OUT, help="annotations file to write")
+    ap.add_argument("--video-dir", default=VIDEO_DIR, help="where the videos are, relative to --out's directory")
+    a = ap.parse_args()
+    main(tuple(a.performers), params_path=a.params, out=a.out, video_dir=a.video_dir)

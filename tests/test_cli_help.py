@@ -51,8 +51,8 @@ def test_help_shows_brackets_and_flags_take_no_value(path, capsys, monkeypatch):
 
 def test_demo_make_dataset_help_shows_its_defaults(capsys, monkeypatch):
     text = _help(capsys, monkeypatch, ["demo", "make-dataset"])
-    for shown in ("[front,left,right; --small: front,left]", "[same as --views]", "texture or plain [texture]",
-                  "[10; --small: 3]"):
+    for shown in ("[front,left,right; --small: front,left]", "[same as --views]", "plain [texture: brick, grass or gravel]",
+                  "[10; --small: 4]"):
         assert shown in text, shown
     small = next(ln for ln in text.splitlines() if "--small" in ln and "A small dataset" in ln)
     assert "<" not in small.split("A small dataset")[0]
@@ -74,6 +74,6 @@ def test_option_declarations_shared_by_two_commands_are_escaped_once(capsys, mon
             text = _help(capsys, monkeypatch, args)
             assert "dropped [0.5]." in text and "\\[" not in text, args
         for args in (["demo", "make-dataset"],):
-            assert "[10; --small: 3]" in _help(capsys, monkeypatch, args)  # others not escaped twice
+            assert "[10; --small: 4]" in _help(capsys, monkeypatch, args)  # others not escaped twice
     finally:
         shared.help = original

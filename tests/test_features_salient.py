@@ -97,14 +97,14 @@ def test_bad_parameters():
 
 
 def _flow_magnitude(a, b, flow, dis=[]):
-    """|flow| of frame a towards b straight from OpenCV (the reference the selection must rank by). One
-    DIS object serves a whole video (its results depend on the object's history, as in the library)."""
+    """|flow| of frame a towards b straight from OpenCV (the reference the selection must rank by). A fresh
+    DIS object per frame pair, as in the library (a reused one carries state from call to call)."""
     import cv2
 
     if flow == "farneback":
         f = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, 3, 15, 3, 5, 1.2, 0)
     else:
-        f = dis[0].calc(a, b, None)
+        f = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_FAST).calc(a, b, None)
     return np.hypot(f[..., 0], f[..., 1])
 
 

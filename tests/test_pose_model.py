@@ -42,7 +42,7 @@ def test_model_round_trip_and_fit_on_training_frames(trained):
     # on its own training frames the torso and head are found nearly always
     assert hits[:, 0].mean() >= 0.8 and hits[:, 1].mean() >= 0.7
     same = np.stack([model.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples[:3])])
-    np.testing.assert_allclose(same, preds[:3])
+    np.testing.assert_allclose(same, preds[:3], rtol=1e-5, atol=1e-5)  # float32 score noise only
 
 
 def test_metrics_against_hand_computed_values():

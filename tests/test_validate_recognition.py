@@ -28,7 +28,7 @@ def test_best_prefers_score_then_video_then_the_incumbent():
 
 def test_search_scores_only_the_validation_videos(tmp_path, monkeypatch):
     """The Search loads sets A, B and V of the split; T's videos are never read."""
-    from vidstyle.recognition.io import load_dataset
+    from vidstyle.formats.dataset import read_dataset as load_dataset
     from vidstyle.recognition.splits import make_split
     from vidstyle.recognition.synthetic import make_dataset
 

@@ -224,7 +224,9 @@ def evaluate_augmg_cmd(
         "augmg.transition_error_augmg": main["transition_augmg_mm"],
         "augmg.source": "model" if "model" in metrics["by_source"] else "gt",
     }
-    write_json(out, metrics)
+    from ..formats.metrics import AUGMG, write_metrics
+
+    write_metrics(out, metrics, kind=AUGMG)
     if headline is not None:
         from ..fileio import read_json
 

@@ -75,6 +75,9 @@ def pose(
     model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
     backend: str = typer.Option("ps", "--backend", help="ps (pictorial structures) or blazepose (MediaPipe)."),
     frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
+    annotations: Path | None = typer.Option(
+        None, "--annotations", "-a", help="Annotations file (vidstyle annotate): the frames are this video's "
+        "transition marks (the video must be the annotated one: same sha256)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
@@ -88,8 +91,20 @@ def pose(
         raise InputError(f"--backend: {backend!r} is not ps or blazepose")
     if backend == "ps" and model is None:
         raise InputError("--model: the ps backend needs a pose model (vidstyle train-pose)")
+    if annotations is not None and frames is not None:
+        raise InputError("--frames: not used with --annotations (the marks give the frames)")
     with VideoReader(video) as r:
-        idx = parse_frames(frames, len(r))
+        if annotations is not None:
+            from ..formats.annotations import check_video, read_annotations
+
+            ann = read_annotations(annotations)
+            entry = ann.video_for(video, annotations)
+            check_video(entry, video, r.info.frames, annotations)
+            idx = sorted({t.frame for t in entry.transitions})
+            if not idx:
+                raise InputError(f"{annotations}: no transition marks for {video}")
+        else:
+            idx = parse_frames(frames, len(r))
     poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler)
     write_poses(out, poses)
     log.info("wrote %s (%d frames, backend %s)", out, len(poses.frames), backend)

@@ -43,7 +43,8 @@ RECOGNITION = "vidstyle.metrics.recognition"
 STYLE = "vidstyle.metrics.style"
 MOTION = "vidstyle.metrics.motion"
 HEADLINE = "vidstyle.metrics.headline"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE)
+AUGMG = "vidstyle.metrics.augmg"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG)
 SCHEMA_VERSION = 1
 
 
@@ -140,9 +141,25 @@ def _motion(f: Fields) -> None:
 def _headline(f: Fields) -> None:
     for key in ("recognition", "style", "motion"):
         _numbers_or_null(f, key)
+    if f.obj.get("augmg") is not None:
+        _numbers_or_null(f, "augmg")
 
 
-_CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline}
+def _augmg(f: Fields) -> None:
+    by = f.sub("by_source")
+    if not by.obj:
+        raise by.fail(None, "no 2D source")
+    for name in by.obj:
+        s = by.sub(name)
+        s.int("queries", min=0)
+        for key in ("retrieval_mpjpe_mm", "transition_plain_mm", "transition_augmg_mm"):
+            s.number(key, min=0)
+        for key in ("recall_at_1", "recall_at_10"):
+            s.number(key, min=0, max=1)
+    f.sub("headline")
+
+
+_CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -177,6 +194,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 
 __all__ = [
+    "AUGMG",
     "HEADLINE",
     "KINDS",
     "MOTION",

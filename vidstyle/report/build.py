@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import InputError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from ..formats.metrics import HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
+from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
@@ -232,6 +232,36 @@ def _motion_section(page: Page, run: Path) -> None:
         page.add("Synthesized motion", _missing("motion preview", run / "motion"))
 
 
+def _augmg_section(page: Page, run: Path) -> None:
+    """Method 2: per 2D source, retrieval of the marked transition pose and the transition error of
+    AugMG against the plain motion graph (metrics/augmg.json), and the motion synthesised on the AugMG
+    graph."""
+    path = run / "metrics" / "augmg.json"
+    m = _metrics(path, AUGMG)
+    if m is None:
+        page.add("AugMG: transitions through the performer's own poses", _missing("AugMG metrics", path))
+        return
+    names = {"model": "estimated 2D pose (pose model)", "gt": "true 2D pose", "noisy": "true 2D + 5 % noise"}
+    rows = []
+    for src, r in m["by_source"].items():
+        rows.append([names.get(src, src), r.get("queries"), r.get("retrieval_mpjpe_mm"), r.get("recall_at_1"),
+                     r.get("recall_at_10"), r.get("transition_plain_mm"), r.get("transition_augmg_mm"),
+                     r.get("transition_reduction")])
+    params = m.get("params") or {}
+    body = [table(rows, ["2D source", "queries", "retrieval MPJPE (mm)", "recall@1", "recall@10",
+                         "plain transition error (mm)", "AugMG transition error (mm)", "reduction"]),
+            f'<p class="note">{esc(str(params.get("queries", "?")))} held-out transitions against '
+            f'{esc(str(params.get("library_frames", "?")))} library frames; transition error = mean joint '
+            f'position error against the performer\'s true transition, same endpoints (metrics/augmg.json)</p>']
+    previews = sorted((run / "motion_augmg").glob("*.mp4")) if (run / "motion_augmg").is_dir() else []
+    for p in previews[:1]:
+        gif = gif_from_video(p)
+        body.append(f'<figure><img class="anim" alt="motion on the AugMG graph {esc(p.stem)}" '
+                    f'src="{data_uri(gif, "image/gif")}"><figcaption>{esc(p.stem)}, synthesised on the graph '
+                    f'with enhancement edges</figcaption></figure>')
+    page.add("AugMG: transitions through the performer's own poses", "".join(body))
+
+
 def _get(doc: dict | None, *keys):
     for k in keys:
         if not isinstance(doc, dict) or k not in doc:
@@ -276,6 +306,12 @@ def headline_metrics(run: Path) -> dict:
         "velocity_jump_seam_over_clip": _get(ms, "velocity_jump", "seam_over_original_median"),
         "foot_skid_seam_over_clip": _get(ms, "foot_skid", "seam_over_original_median"),
     }
+    aug = _metrics(run / "metrics" / "augmg.json", AUGMG)
+    if aug is not None:
+        h = aug.get("headline") or {}
+        out["augmg"] = {"retrieval_mpjpe": h.get("augmg.retrieval_mpjpe"),
+                        "transition_error_plain": h.get("augmg.transition_error_plain"),
+                        "transition_error_augmg": h.get("augmg.transition_error_augmg")}
     return out
 
 
@@ -293,4 +329,5 @@ def build_report(run: Path) -> str:
     _recognition_section(page, run, dataset)
     _style_section(page, run, dataset)
     _motion_section(page, run)
+    _augmg_section(page, run)
     return page.render()
