@@ -29,6 +29,7 @@ from vidstyle.formats.annotations import (
     write_annotations,
 )
 from vidstyle.mocap.keypoints import KEYPOINT_INDEX, keypoint_positions
+from vidstyle.parallel import limit_threads
 
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "annotations" / "demo.json"
@@ -67,7 +68,8 @@ def main(performers=(3, 4, 5, 6), take: int = 100, params_path: Path = REPO / "p
         for sub in ("videos", "labels", "mocap"):
             (Path(tmp) / sub).mkdir()
         for i in performers:
-            entries = generate_take((params, i, take, tmp))
+            with limit_threads(1):  # as parallel_map runs make_dataset's takes: the same bytes
+                entries = generate_take((params, i, take, tmp))
             p = make_performer(params, i)
             tk = make_take(params, p, i, take)
             pts = keypoint_positions(tk.motion)

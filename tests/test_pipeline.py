@@ -33,7 +33,7 @@ TINY = {
     "style": {"length": 10},
     "graph": {"clips": "out/dataset/mocap/p00_*.bvh"},
     "synthesize": {"performers": "p00"},
-    "pose": {"demo_performers": 2},
+    "pose": {"demo_performers": 1, "views_per_clip": 12},  # 12 azimuths: every view has frames
     "augmg": {"annotations": "annotations.json", "videos": "p03_perf0_front p04_perf0_front", "synthesize": "p03"},
 }
 

@@ -84,7 +84,9 @@ def parallel_map(
     workers = n if jobs is None or jobs < 0 else jobs
     workers = min(workers, len(items))
     if workers == 1:
-        return list(progress((fn(x) for x in items), description, total=len(items)))
+        # one thread here too, as in the workers: BLAS and OpenCV round differently on several threads, and
+        # a file must not depend on how many workers made it
+        return list(progress((_single_threaded(fn, x) for x in items), description, total=len(items)))
     from joblib import Parallel, delayed
 
     log.info("%s: %d items on %d local workers", description, len(items), workers)

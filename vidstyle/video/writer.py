@@ -73,7 +73,8 @@ class VideoWriter:
             stream.pix_fmt = "yuv420p" if even else "yuv444p"
             # one encoder thread: x264's output depends on its thread count (the machine's cores by
             # default), so a dataset made on another machine, or under load, would not be byte-identical
-            stream.options = {"crf": str(self.crf), "preset": "veryfast", "threads": "1"}
+            stream.options = {"crf": str(self.crf), "preset": "veryfast", "threads": "1",
+                              "x264-params": "threads=1:lookahead-threads=1:sliced-threads=0:mbtree=0:rc-lookahead=0"}
             stream.codec_context.thread_count = 1
         elif self.codec == "ffv1":
             stream.pix_fmt = "bgr0"
