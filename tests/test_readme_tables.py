@@ -71,3 +71,16 @@ def test_without_markers_the_tables_go_to_stdout(metrics, tmp_path, capsys):
     assert readme.read_text() == "# no markers\n"
     assert "85.0 ± 5.0 %" in capsys.readouterr().out
     assert rt.main(["--metrics", str(tmp_path / "missing")]) == 2
+
+
+def test_the_readme_shows_the_committed_results():
+    """The README's results tables are exactly what the script makes of the committed metrics files."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    res = subprocess.run([sys.executable, str(root / "scripts" / "readme_tables.py"), "--metrics",
+                          str(root / "pipelines" / "kickboxing" / "results"), "--readme", str(root / "README.md"),
+                          "--check"], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr
