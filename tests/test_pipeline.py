@@ -27,7 +27,7 @@ BIN = Path(sys.executable).parent
 # 5 performers: the split's test set gets 2 of them, the fewest the style evaluation of recognised labels
 # (test performers only) can compare
 TINY = {
-    "dataset": {"performers": 5, "views": "front,left", "single_seconds": 3, "performances": 1,
+    "dataset": {"performers": 5, "views": "front,left", "single_seconds": 5, "performances": 1,
                 "performance_seconds": 40},
     "recognition": {"words": 150},
     "style": {"length": 10},

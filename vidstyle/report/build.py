@@ -88,7 +88,7 @@ def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None
         ["frame accuracy, smoothed", fa.get("smoothed"), 0.70],
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
-    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
+    cam = _metrics(run / "metrics" / "recognition_unseen_camera.json", RECOGNITION)
     if cam is not None:
         cams = ", ".join(f"azimuth {a:g}°" + (f" elevation {e:g}°" if e is not None else "")
                          for a, e in (cam.get("split", {}).get("test_cameras") or []))
@@ -279,7 +279,7 @@ def headline_metrics(run: Path) -> dict:
     mot = _metrics(run / "metrics" / "motion.json", MOTION)
     out: dict = {"kind": HEADLINE, "schema_version": 1,
                  "seed": _get(rec, "seed") if rec else _get(sty, "seed")}
-    cam = _load(run / "metrics" / "recognition_unseen_camera.json")
+    cam = _metrics(run / "metrics" / "recognition_unseen_camera.json", RECOGNITION)
     out["recognition"] = {
         "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
         "frame_accuracy_smoothed": _get(rec, "frame_accuracy", "smoothed"),

@@ -258,7 +258,17 @@ def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None) ->
         if not files:
             raise InputError(f"{dataset.path or dataset.root}: performer {pid} has no performance video"
                              + (f" in views {','.join(views)}" if views else ""))
-        style = Style.from_tracks([read_labels(p) for _, p in files], params)
+        try:
+            style = Style.from_tracks([read_labels(p) for _, p in files], params)
+        except InputError as e:
+            if labels_dir is None:  # ground truth always holds a chain
+                raise
+            # recognised labels may hold too few events (a weak recognizer): no style for this performer,
+            # the others are still learned
+            log.warning("performer %s: no style learned from its recognised labels (%s)", pid, e)
+            continue
         style.performer = pid  # recognised label files do not name their performer; the dataset does
         out.append((pid, style))
+    if not out:
+        raise InputError(f"{labels_dir}: no performer's recognised labels hold enough events to learn a style")
     return out

@@ -119,6 +119,12 @@ def _split(seqs: list[EventSequence], frac: float, takes: list[str] | None = Non
     return train, held
 
 
+def _nanmean(xs) -> float:
+    """Mean of the finite values; NaN when there is none."""
+    xs = [x for x in xs if np.isfinite(x)]
+    return float(np.mean(xs)) if xs else float("nan")
+
+
 def load_performers(
     dataset: Dataset, params: EvalParams, labels_dir: str | Path | None = None, performers: list[str] | None = None,
 ) -> list[PerformerData]:
@@ -233,16 +239,18 @@ def evaluate_performers(perfs: list[PerformerData], params: EvalParams) -> dict[
         gen = {p: generated[p][which] for p in pids}
         fid = {}
         for n in (2, 3):
+            # NaN where a performer's held-out events hold no n-gram (too few events): left out of the means
             same = [ngram_jsd(gen[p], held_by[p], n) for p in pids]
-            other = [float(np.mean([ngram_jsd(gen[p], held_by[q], n) for q in pids if q != p])) for p in pids]
-            fid[f"jsd_{n}gram_same"] = float(np.mean(same))
-            fid[f"jsd_{n}gram_other"] = float(np.mean(other))
-            fid[f"jsd_{n}gram_same_lt_other_fraction"] = float(np.mean([s < o for s, o in zip(same, other)]))
+            other = [_nanmean([ngram_jsd(gen[p], held_by[q], n) for q in pids if q != p]) for p in pids]
+            fid[f"jsd_{n}gram_same"] = _nanmean(same)
+            fid[f"jsd_{n}gram_other"] = _nanmean(other)
+            pairs = [s < o for s, o in zip(same, other) if np.isfinite(s) and np.isfinite(o)]
+            fid[f"jsd_{n}gram_same_lt_other_fraction"] = float(np.mean(pairs)) if pairs else float("nan")
             for r, s, o in zip(rows, same, other):
                 r.setdefault("jsd", {})[f"{which}_{n}gram"] = {"same": s, "other": o}
         # reference: the real training data of each performer against its own held-out data
-        fid["jsd_2gram_train_vs_heldout"] = float(np.mean(
-            [ngram_jsd([s.actions for s in p.train], held_by[p.pid], 2) for p in perfs]))
+        fid["jsd_2gram_train_vs_heldout"] = _nanmean(
+            [ngram_jsd([s.actions for s in p.train], held_by[p.pid], 2) for p in perfs])
         fidelity[which] = fid
         acc, conf = identify(gen, judges["heldout_bigram"])
         acc_true, _ = identify(gen, judges["true_chain"])

@@ -43,5 +43,9 @@ def jensen_shannon(p: Mapping, q: Mapping) -> float:
 
 
 def ngram_jsd(a: Iterable, b: Iterable, n: int) -> float:
-    """JSD (bits) between the ``n``-gram distributions of two sets of sequences."""
-    return jensen_shannon(ngram_counts(a, n), ngram_counts(b, n))
+    """JSD (bits) between the ``n``-gram distributions of two sets of sequences; NaN when either holds no
+    ``n``-gram (sequences shorter than ``n``: nothing to compare)."""
+    ca, cb = ngram_counts(a, n), ngram_counts(b, n)
+    if not sum(ca.values()) or not sum(cb.values()):
+        return float("nan")
+    return jensen_shannon(ca, cb)
