@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import write_text
+from ..fileio import _json_default, write_text
 
 
 class FormatError(InputError):
@@ -96,16 +96,6 @@ def header(kind: str, version: int) -> dict[str, Any]:
 def write_json_document(path: str | os.PathLike, doc: Any) -> None:
     """Atomic, UTF-8, finite numbers only (``allow_nan=False``), newline at the end."""
     write_text(path, json.dumps(doc, indent=2, allow_nan=False, default=_json_default) + "\n")
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
 def _type(x: Any) -> str:
