@@ -229,10 +229,8 @@ def create_app(session: Session) -> Starlette:
     async def export(request: Request):
         try:
             fmt, v = _fmt_video(request)
-        except _BadRequest as e:
-            return _err(400, str(e))
-        except _NotFound as e:
-            return _err(404, str(e))
+        except _RequestError as e:
+            return _err(e.status, str(e))
         with store.lock:
             data = exchange.export(fmt, store.ann.classes, target(v))
             name = exchange.default_filename(fmt, target(v))
@@ -243,10 +241,8 @@ def create_app(session: Session) -> Starlette:
     async def import_(request: Request):
         try:
             fmt, v = _fmt_video(request)
-        except _BadRequest as e:
-            return _err(400, str(e))
-        except _NotFound as e:
-            return _err(404, str(e))
+        except _RequestError as e:
+            return _err(e.status, str(e))
         raw = await request.body()
         try:
             with store.lock:
@@ -274,12 +270,18 @@ def create_app(session: Session) -> Starlette:
     return app
 
 
-class _BadRequest(Exception):
-    pass
+class _RequestError(Exception):
+    """A request the server answers with ``status`` and the message."""
+
+    status = 400
 
 
-class _NotFound(Exception):
-    pass
+class _BadRequest(_RequestError):
+    status = 400
+
+
+class _NotFound(_RequestError):
+    status = 404
 
 
 def _no_constant(name: str):
