@@ -23,6 +23,7 @@ from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
 from vidstyle.formats.style import parse_style, read_style, style_to_dict, write_style
 from vidstyle.formats.truth import parse_truth, read_truth, write_truth
+from vidstyle.formats.walk import parse_walk_labels, read_walk_labels, write_walk_labels
 
 CLASSES = ["Jab", "Hook", "Guard"]
 
@@ -50,6 +51,16 @@ def _dataset_doc() -> dict:
     return {"kind": "vidstyle.dataset", "schema_version": 2, "seed": 0, "fps": 20, "actions": ["Jab", "Hook"],
             "classes": CLASSES, "performers": [{"id": "p00", "chain": chain}, {"id": "p01", "chain": chain}],
             "videos": videos}
+
+
+def _walk_doc() -> dict:
+    labels = ["Jab", "Jab", "Jab", "Hook", "Hook"]
+    return {"kind": "vidstyle.labels", "schema_version": 2, "bvh": "w.bvh", "fps": 30, "classes": ["Hook", "Jab"],
+            "labels": labels, "events": [{"label": "Jab", "start": 0, "end": 3}, {"label": "Hook", "start": 3, "end": 5}],
+            "source_labels": ["Jab", "Jab", "unlabelled", "Hook", "Hook"], "source_clip": ["a", "a", "a", "b", "b"],
+            "source_frame": [4, 5, 6, 0, 1], "graph_frame": [4, 5, 6, 40, 41], "transition": [-1, -1, -1, 7, -1],
+            "transitions_used": [7], "transition_kinds": ["BLEND"], "transition_segments": [-1], "cost": 1.5,
+            "foot_lock": {"enabled": False}, "planner": {"mismatch_penalty": 2.0}}
 
 
 def _sequence_doc() -> dict:
@@ -193,6 +204,7 @@ READERS = {
     "recognised": (parse_recognised, write_recognised, read_recognised, _recognised_doc),
     "dataset": (parse_dataset, write_dataset, read_dataset, _dataset_doc),
     "sequence": (parse_sequence, write_sequence, read_sequence, _sequence_doc),
+    "walk": (parse_walk_labels, write_walk_labels, read_walk_labels, _walk_doc),
     **{f"metrics_{k}": (parse_metrics, write_metrics, read_metrics, (lambda d=d: d)) for k, d in METRICS.items()},
 }
 

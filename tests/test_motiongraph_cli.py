@@ -59,6 +59,30 @@ def test_synthesize_writes_bvh_labels_and_realises_the_sequence(built):
     res = json.loads(metrics.read_text())
     assert res["summary"]["label_fidelity"] == pytest.approx(fid)
     assert res["summary"]["transitions_used"] == len(doc["transitions_used"])
+    assert doc["kind"] == "vidstyle.labels" and doc["bvh"] == "motion.bvh"  # a labels file build-graph reads too
+    from vidstyle.motiongraph.labels import LabelBook
+
+    assert LabelBook().load(tmp / "motion.labels.json").specs  # (as the labels of its BVH)
+
+
+def test_evaluate_motion_refuses_labels_that_do_not_fit_the_bvh(built, capsys):
+    tmp, out = built
+    seq = tmp / "seq2.json"
+    seq.write_text(json.dumps({"classes": ["walk"], "fps": 20, "sequence": [{"action": 0, "frames": 40}]}))
+    bvh = tmp / "m2.bvh"
+    assert main(["synthesize", "--graph", str(out), "--sequence", str(seq), "--out", str(bvh)]) == 0
+    capsys.readouterr()
+    lab = tmp / "m2.labels.json"
+    doc = json.loads(lab.read_text())
+    doc["transition"] = doc["transition"][:-1]
+    lab.write_text(json.dumps(doc))
+    metrics = tmp / "m2.json"
+    assert main(["evaluate", "motion", "--graph", str(out), str(bvh), "--out", str(metrics)]) == 2
+    err = capsys.readouterr().err
+    assert str(lab) in err and "transition" in err and err.count("\n") == 1 and not metrics.exists()
+    lab.unlink()
+    assert main(["evaluate", "motion", "--graph", str(out), str(bvh), "--out", str(metrics)]) == 2
+    assert str(lab) in capsys.readouterr().err and not metrics.exists()
 
 
 def test_unknown_action_is_a_one_line_error(built, capsys):

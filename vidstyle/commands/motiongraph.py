@@ -93,7 +93,7 @@ def synthesize(
     max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
 ) -> None:
     """Walk the graph to realise an action sequence at minimum transition cost; write BVH (+ labels, preview)."""
-    from ..fileio import write_json
+    from ..formats.walk import parse_walk_labels, write_walk_labels
     from ..mocap import write_bvh
     from ..motiongraph import MotionGraph, plan_walk, read_sequence, render_walk, walk_labels
 
@@ -104,9 +104,10 @@ def synthesize(
         walk = plan_walk(graph, steps, mismatch_penalty, transition_penalty, strict=strict, max_in_degree=max_in_degree)
     motion = render_walk(graph, walk, foot_lock=foot_lock)
     elapsed = time.perf_counter() - t0
-    write_bvh(motion, out)
     doc = walk_labels(graph, walk, out.name)
-    write_json(labels_path(out), doc)
+    parse_walk_labels(doc, labels_path(out))  # checked before anything is written
+    write_bvh(motion, out)
+    write_walk_labels(labels_path(out), doc)
     log.info("wrote %s: %d frames (%.1f s) with %d transitions, %.0fx real time", out, motion.n_frames,
              motion.duration, len(walk.transitions_used), motion.duration / max(elapsed, 1e-9))
     if preview is not None:
@@ -145,7 +146,7 @@ def evaluate_motion(
     from rich.console import Console
     from rich.table import Table
 
-    from ..fileio import read_json
+    from ..formats.walk import read_walk_labels
     from ..mocap import read_bvh
     from ..motiongraph import MotionGraph, Step, plan_walk, render_walk, walk_labels
     from ..motiongraph.evaluate import evaluate_walk, original_stats, summarise
@@ -157,7 +158,7 @@ def evaluate_motion(
     if motions:
         for m in motions:
             motion = read_bvh(m)
-            results.append(evaluate_walk(motion, read_json(labels_path(m))))
+            results.append(evaluate_walk(motion, read_walk_labels(labels_path(m), motion.n_frames).doc))
     elif sequence is not None:
         from ..motiongraph import read_sequence
 

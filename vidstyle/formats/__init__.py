@@ -13,6 +13,8 @@ action sequence (``generate --format       ``vidstyle.sequence`` (1)        :mod
 json``)
 style ``style.json``                       ``vidstyle.style`` (1)           :mod:`vidstyle.formats.style`
 render ground truth ``<video>.truth.npz``  ``vidstyle.render_truth`` (2; 1) :mod:`vidstyle.formats.truth`
+synthesised motion ``<out>.labels.json``   ``vidstyle.labels`` (2) + walk   :mod:`vidstyle.formats.walk`
+(``vidstyle synthesize``)                  fields
 metrics (recognition, style, motion,       ``vidstyle.metrics.<what>`` (1)  :mod:`vidstyle.formats.metrics`
 headline)
 =========================================  ===============================  ==================================
