@@ -183,13 +183,17 @@ def evaluate_augmg_cmd(
     library: Path = typer.Option(..., "--library", "-l", help="Library directory (vidstyle demo make-library)."),
     out: Path = typer.Option(Path("metrics/augmg.json"), "--out", "-o", help="Metrics JSON."),
     annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Query the accepted marks of this annotations file instead of every transition's key frame."),
-    poses_dir: Optional[Path] = typer.Option(None, "--poses-dir", help="poses.json files (<video id>.poses.json) of the pose model: adds the 'model' source."),
+    poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of poses.json files (<video id>.poses.json) of the pose stage: adds an estimated 2D source named by its backend ('model' for ps, 'blazepose'); repeatable."),
     noise: float = typer.Option(0.05, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
     k: int = typer.Option(10, "--k", help="Candidates per query (the reference point is chosen among them)."),
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
-    segment: str = typer.Option("fixed", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition) or nodes (between the enhancement nodes w_z0..w_z2)."),
+    segment: str = typer.Option("adaptive", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
     segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
     enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
+    context: int = typer.Option(2, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
+    scores: bool = typer.Option(True, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
+    max_match_cost: float = typer.Option(-1.0, "--max-match-cost", help="Accept an enhancement only when its match cost is at most this (else keep the plain transition); < 0: no threshold."),
+    max_enh_cost: float = typer.Option(-1.0, "--max-enh-cost", help="Accept an enhancement only when its enhanced distance is at most this (CMU length units); < 0: no threshold."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
     jobs: int = _JOBS,
@@ -202,28 +206,41 @@ def evaluate_augmg_cmd(
     from ..augmg.evaluate import evaluate_augmg
     from ..fileio import write_json
 
-    if segment not in ("fixed", "nodes"):
-        raise InputError(f"--segment: fixed or nodes, got {segment!r}")
+    if segment not in ("fixed", "nodes", "adaptive"):
+        raise InputError(f"--segment: fixed, nodes or adaptive, got {segment!r}")
+    if context < 0:
+        raise InputError(f"--context: must be at least 0, got {context}")
     if enh_window < 1:
         raise InputError(f"--enh-window: must be at least 1, got {enh_window}")
     if not 0 < segment_scale <= 1:
         raise InputError(f"--segment-scale: must be in (0, 1], got {segment_scale}")
     marks = _read_marks(annotations) if annotations else None
-    sources = ["gt", "noisy"]
-    poses = None
-    if poses_dir is not None:
-        poses = _read_poses_dir(poses_dir)
-        sources.insert(0, "model")
+    poses: dict = {}
+    for d in poses_dir:
+        name, doc = _read_poses_dir(d)
+        if name in poses:
+            raise InputError(f"--poses-dir: {d}: a second directory of {name} poses")
+        poses[name] = doc
+    sources = [*poses, "gt", "noisy"]
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
-                             seed=seed, jobs=jobs)
-    main = metrics["by_source"].get("model") or metrics["by_source"].get("gt")
+                             context=context, use_scores=scores,
+                             max_match_cost=max_match_cost if max_match_cost >= 0 else float("inf"),
+                             max_enh_cost=max_enh_cost if max_enh_cost >= 0 else float("inf"), seed=seed, jobs=jobs)
+    # the headline is the thesis' own estimated pose (pictorial structures, 'model') when given,
+    # fixed in advance (not the better of the estimated sources)
+    head = next((x for x in ("model", "blazepose", "gt") if x in metrics["by_source"]), "gt")
+    main = metrics["by_source"][head]
     metrics["headline"] = {
         "augmg.retrieval_mpjpe": main["retrieval_mpjpe_mm"],
         "augmg.transition_error_plain": main["transition_plain_mm"],
         "augmg.transition_error_augmg": main["transition_augmg_mm"],
-        "augmg.source": "model" if "model" in metrics["by_source"] else "gt",
+        "augmg.source": head,
     }
+    for src, r in metrics["by_source"].items():
+        if src != head:
+            metrics["headline"][f"augmg.{src}.retrieval_mpjpe"] = r["retrieval_mpjpe_mm"]
+            metrics["headline"][f"augmg.{src}.transition_error_augmg"] = r["transition_augmg_mm"]
     from ..formats.metrics import AUGMG, write_metrics
 
     write_metrics(out, metrics, kind=AUGMG)
@@ -236,15 +253,24 @@ def evaluate_augmg_cmd(
     table = Table(title=f"AugMG: {metrics['params']['queries']} held-out transitions, "
                         f"{metrics['params']['library_frames']} library frames")
     for col in ("2D source", "queries", "MPJPE top-1 mm", "MPJPE ref mm", "oracle mm", "R@1", "R@10",
-                "plain mm", "AugMG mm", "top-1 mm", "oracle mm ", "reduction"):
+                "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm ", "reduction"):
         table.add_column(col)
     for src, r in metrics["by_source"].items():
         table.add_row(src, str(r["queries"]), f"{r['retrieval_mpjpe_mm']:.1f}", f"{r['reference_mpjpe_mm']:.1f}",
                       f"{r['oracle_mpjpe_mm']:.1f}", f"{r['recall_at_1']:.2f}", f"{r['recall_at_10']:.2f}",
                       f"{r['transition_plain_mm']:.1f}", f"{r['transition_augmg_mm']:.1f}",
-                      f"{r['transition_augmg_top1_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
+                      f"{r['accepted']:.2f}", f"{r['transition_enhanced_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
                       f"{100 * r['transition_reduction']:.0f} %")
-    Console().print(table)
+    kinds = Table(title="AugMG transition error by kind (mm)")
+    for col in ("2D source", "kind", "queries", "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm"):
+        kinds.add_column(col)
+    for src, r in metrics["by_source"].items():
+        for kind, x in r["by_kind"].items():
+            kinds.add_row(src, kind, str(x["queries"]), f"{x['plain_mm']:.1f}", f"{x['augmg_mm']:.1f}",
+                          f"{x['accepted']:.2f}", f"{x['enhanced_mm']:.1f}", f"{x['oracle_mm']:.1f}")
+    console = Console(width=160)
+    console.print(table)
+    console.print(kinds)
     log.info("wrote %s", out)
 
 
@@ -255,17 +281,24 @@ def _read_marks(path: Path) -> list[dict]:
     return read_marks(path)
 
 
-def _read_poses_dir(d: Path) -> dict:
-    from ..augmg.poses_io import read_frame_poses
+def _read_poses_dir(d: Path) -> tuple[str, dict]:
+    """(source name, video id -> {frame: (points, viewpoint_deg, view spread, scores)}) of a directory of
+    poses.json files; the source is named by the backend ('model' for pictorial structures)."""
+    from ..formats.poses import read_poses
     from ..render.camera import parse_view
 
     files = sorted(d.glob("*.poses.json"))
     if not files:
         raise InputError(f"--poses-dir: no *.poses.json in {d}")
     out: dict = {}
+    backends = set()
     for f in files:
-        _, frames = read_frame_poses(f)
+        doc = read_poses(f)
+        backends.add(str(doc.backend))
         vid = f.name[: -len(".poses.json")]
-        out[vid] = {fp.frame: (fp.points, parse_view(fp.viewpoint), 0 if _is_number(fp.viewpoint) else 1)
-                    for fp in frames}
-    return out
+        out[vid] = {int(fp.frame): (fp.xy.copy(), parse_view(fp.viewpoint), 0 if _is_number(fp.viewpoint) else 1,
+                                    fp.scores.copy()) for fp in doc.frames}
+    if len(backends) != 1:
+        raise InputError(f"--poses-dir: {d} mixes pose backends {sorted(backends)}")
+    backend = backends.pop()
+    return ("model" if backend == "ps" else backend), out
