@@ -169,9 +169,12 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
                    place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
                    context: int = 0, use_scores: bool = True, max_match_cost: float = np.inf,
-                   max_enh_cost: float = np.inf, videos=None, seed: int = 0, jobs: int = 1) -> dict:
+                   max_enh_cost: float = np.inf, videos=None, animate: str | None = None, seed: int = 0,
+                   jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
-    viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all).
+    viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all);
+    ``animate``: keep the poses and transitions of that source's queries under ``"animations"``
+    (:func:`transitions_document`).
 
     Robustness (thesis 5.2.5: a bad enhancement node is discarded and the plain transition kept):
     ``context`` > 0 matches the marked frame together with ``context`` video frames either side
@@ -211,6 +214,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
     takes: dict[Path, tuple] = {}
     rows: list[dict] = []
+    animations: list[dict] = []
     for q in progress(queries, "augmg queries"):
         if q.take_bvh not in takes:
             m = read_bvh(q.take_bvh)
@@ -246,7 +250,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             n = len(w)
             return max(0, z - h), min(n - 1, z + h), cost
 
-        def transition_error(cand: int | None) -> float:
+        def transition_error(cand: int | None, keep: bool = False):
             if cand is None:
                 rot, root = plain_transition(motion.rotations[s - 1], motion.root_positions[s - 1],
                                              motion.rotations[e], motion.root_positions[e], L)
@@ -262,7 +266,8 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
                                                 motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
-            return float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+            err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+            return (err, gen) if keep else err
 
         plain = transition_error(None)
         oracle_err = transition_error(oracle)
@@ -281,7 +286,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 ec = choose(int(cand))[2]
                 if ec < best_cost:
                     best, best_cost, best_rank = cand, ec, rank
-            enhanced = transition_error(int(best))
+            enhanced, enhanced_pts = transition_error(int(best), keep=True)
             rows.append({
                 "video": q.video, "performer": q.performer, "view": q.view, "frame": q.frame, "source": source,
                 "kind": q.transition["kind"], "from": q.transition["from"], "to": q.transition["to"],
@@ -293,10 +298,20 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 "reference_mpjpe_mm": float(err_lib[best] * MM_PER_UNIT),
                 "oracle_mpjpe_mm": float(err_lib[oracle] * MM_PER_UNIT),
                 "recall_at_1": bool(near[0]), "recall_at_10": bool(near[:10].any()),
-                "match_cost": float(costs[best_rank]), "enhanced_cost": float(best_cost),
+                "match_cost": float(costs[best_rank]), "enhanced_cost": _finite(best_cost),
                 "transition_plain_mm": plain, "transition_enhanced_mm": enhanced,
                 "transition_augmg_top1_mm": transition_error(int(top[0])), "transition_oracle_mm": oracle_err,
             })
+            if source == animate:
+                from .projection import facing_normalised, facing_of_keypoints, project
+
+                lp = lib.points[int(best):int(best) + 1]
+                lib2d = project(facing_normalised(lp, facing_of_keypoints(lp)), az,
+                                float(manifest["params"]["elevation_deg"]))[0]
+                centre = int(np.flatnonzero(offs == 0)[0])
+                _, plain_pts = transition_error(None, keep=True)
+                animations.append({"row": len(rows) - 1, "pose2d": uv[centre], "library2d": lib2d,
+                                   "truth": truth_seg, "plain": plain_pts, "enhanced": enhanced_pts})
     params = dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                   library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
                   enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale,
@@ -304,7 +319,28 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                   max_match_cost=_finite(max_match_cost), max_enh_cost=_finite(max_enh_cost),
                   sources=list(sources), index=idx_all.get_params(), queries=len(queries),
                   annotations=annotations is not None)
-    return summarise(accept(rows, max_match_cost, max_enh_cost), params)
+    out = summarise(accept(rows, max_match_cost, max_enh_cost), params)
+    if animate is not None:
+        out["animations"] = animations  # not part of the metrics document: :func:`transitions_document`
+    return out
+
+
+def transitions_document(metrics: dict, source: str, fps: float, step: int):
+    """The report's animation data (:mod:`vidstyle.formats.augmg_transitions`) of an
+    :func:`evaluate_augmg` result made with ``animate=source``; transitions subsampled every ``step``
+    mocap frames (to ``fps``)."""
+    from ..formats.augmg_transitions import AugmgTransitions, TransitionEntry
+
+    entries = []
+    for a in metrics.get("animations", []):
+        r = metrics["rows"][a["row"]]
+        aug = a["enhanced"] if r["accepted"] else a["plain"]
+        entries.append(TransitionEntry(
+            r["video"], int(r["frame"]), r["from"], r["to"], r["kind"], bool(r["accepted"]), r["match_cost"],
+            r["enhanced_cost"], r["reference_clip"], r["reference_time_s"], r["viewpoint_deg"], a["pose2d"],
+            a["library2d"], a["truth"][::step], a["plain"][::step], aug[::step], r["transition_plain_mm"],
+            r["transition_augmg_mm"]))
+    return AugmgTransitions(source, fps, entries)
 
 
 def _finite(x: float):
@@ -320,7 +356,7 @@ def accept(rows: list[dict], max_match_cost: float | None = None, max_enh_cost: 
     me = np.inf if max_enh_cost is None else max_enh_cost
     out = []
     for r in rows:
-        ok = bool(r["match_cost"] <= mm and r["enhanced_cost"] <= me)
+        ok = bool(r["match_cost"] <= mm and r["enhanced_cost"] is not None and r["enhanced_cost"] <= me)
         out.append({**r, "accepted": ok,
                     "transition_augmg_mm": r["transition_enhanced_mm"] if ok else r["transition_plain_mm"]})
     return out

@@ -196,6 +196,7 @@ def evaluate_augmg_cmd(
     max_enh_cost: float = typer.Option(-1.0, "--max-enh-cost", help="Accept an enhancement only when its enhanced distance is at most this (CMU length units); < 0: no threshold."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
+    transitions: Optional[Path] = typer.Option(None, "--transitions", help="Also write the headline source's poses and plain / AugMG / true transitions of every query (transitions.json, for the report's animations)."),
     jobs: int = _JOBS,
 ) -> None:
     """Retrieval MPJPE / recall@1/@10 and transition error (AugMG vs plain motion graph against the
@@ -226,7 +227,9 @@ def evaluate_augmg_cmd(
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
                              context=context, use_scores=scores,
                              max_match_cost=max_match_cost if max_match_cost >= 0 else float("inf"),
-                             max_enh_cost=max_enh_cost if max_enh_cost >= 0 else float("inf"), seed=seed, jobs=jobs)
+                             max_enh_cost=max_enh_cost if max_enh_cost >= 0 else float("inf"),
+                             animate=next((x for x in ("model", "blazepose") if x in poses), "gt"), seed=seed, jobs=jobs)
+    animations_source = next((x for x in ("model", "blazepose") if x in poses), "gt")
     # the headline is the thesis' own estimated pose (pictorial structures, 'model') when given,
     # fixed in advance (not the better of the estimated sources)
     head = next((x for x in ("model", "blazepose", "gt") if x in metrics["by_source"]), "gt")
@@ -243,6 +246,17 @@ def evaluate_augmg_cmd(
             metrics["headline"][f"augmg.{src}.transition_error_augmg"] = r["transition_augmg_mm"]
     from ..formats.metrics import AUGMG, write_metrics
 
+    if transitions is not None:
+        from ..augmg.evaluate import transitions_document
+        from ..formats.augmg_transitions import write_augmg_transitions
+
+        import json as _json
+
+        man = _json.loads(((dataset / "dataset.json") if dataset.is_dir() else dataset).read_text())
+        step = max(1, int(man["mocap_fps"] // man["fps"]))
+        write_augmg_transitions(transitions, transitions_document(metrics, animations_source, float(man["fps"]), step))
+        log.info("wrote %s", transitions)
+    metrics.pop("animations", None)
     write_metrics(out, metrics, kind=AUGMG)
     if headline is not None:
         from ..fileio import read_json
