@@ -169,8 +169,8 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
                    place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
                    context: int = 0, use_scores: bool = True, max_match_cost: float = np.inf,
-                   max_enh_cost: float = np.inf, videos=None, animate: str | None = None, seed: int = 0,
-                   jobs: int = 1) -> dict:
+                   max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf, thresholds: dict | None = None,
+                   videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
     viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all);
     ``animate``: keep the poses and transitions of that source's queries under ``"animations"``
@@ -182,7 +182,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     confidence scores; an enhancement is *accepted* only when its match cost is at most
     ``max_match_cost`` and its enhanced distance at most ``max_enh_cost``, else the plain transition is
     kept (``transition_augmg_mm`` is then the plain error; ``transition_enhanced_mm`` is always the
-    enhanced one). Defaults come from ``scripts/validate_augmg.py`` on validation performers, never on
+    enhanced one), and its gain is at least ``min_gain_mm`` (:func:`accept`; ``thresholds``: per source). Defaults come from ``scripts/validate_augmg.py`` on validation performers, never on
     the test performers."""
     if place not in ("first", "both", "drift"):
         raise ValueError(f"place: 'first', 'both' or 'drift', got {place!r}")
@@ -269,8 +269,9 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
             err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
             return (err, gen) if keep else err
 
-        plain = transition_error(None)
+        plain, plain_pts = transition_error(None, keep=True)
         oracle_err = transition_error(oracle)
+        plain_mid = plain_pts[L // 2]
         for source in sources:
             got = _query_2d(q, pts3d, cam, source, rng, noise, poses, context)
             if got is None:
@@ -299,6 +300,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 "oracle_mpjpe_mm": float(err_lib[oracle] * MM_PER_UNIT),
                 "recall_at_1": bool(near[0]), "recall_at_10": bool(near[:10].any()),
                 "match_cost": float(costs[best_rank]), "enhanced_cost": _finite(best_cost),
+                "gain_mm": float(aligned_mpjpe(plain_mid, lib.points[int(best):int(best) + 1] * scale)[0] * MM_PER_UNIT),
                 "transition_plain_mm": plain, "transition_enhanced_mm": enhanced,
                 "transition_augmg_top1_mm": transition_error(int(top[0])), "transition_oracle_mm": oracle_err,
             })
@@ -309,7 +311,6 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 lib2d = project(facing_normalised(lp, facing_of_keypoints(lp)), az,
                                 float(manifest["params"]["elevation_deg"]))[0]
                 centre = int(np.flatnonzero(offs == 0)[0])
-                _, plain_pts = transition_error(None, keep=True)
                 animations.append({"row": len(rows) - 1, "pose2d": uv[centre], "library2d": lib2d,
                                    "truth": truth_seg, "plain": plain_pts, "enhanced": enhanced_pts})
     params = dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
@@ -317,9 +318,11 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                   enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale,
                   max_span=max_span, context=context, use_scores=use_scores,
                   max_match_cost=_finite(max_match_cost), max_enh_cost=_finite(max_enh_cost),
+                  min_gain_mm=_finite(min_gain_mm), thresholds=thresholds,
                   sources=list(sources), index=idx_all.get_params(), queries=len(queries),
                   annotations=annotations is not None)
-    out = summarise(accept(rows, max_match_cost, max_enh_cost), params)
+    out = summarise(accept(rows, _finite(max_match_cost), _finite(max_enh_cost), _finite(min_gain_mm), thresholds),
+                    params)
     if animate is not None:
         out["animations"] = animations  # not part of the metrics document: :func:`transitions_document`
     return out
@@ -348,15 +351,24 @@ def _finite(x: float):
     return None if not np.isfinite(x) else float(x)
 
 
-def accept(rows: list[dict], max_match_cost: float | None = None, max_enh_cost: float | None = None) -> list[dict]:
-    """Rows with ``accepted`` (match cost and enhanced distance within the thresholds; None = no
-    threshold) and ``transition_augmg_mm``: the enhanced transition's error when accepted, else the
-    plain one (the plain transition is kept)."""
-    mm = np.inf if max_match_cost is None else max_match_cost
-    me = np.inf if max_enh_cost is None else max_enh_cost
+def accept(rows: list[dict], max_match_cost: float | None = None, max_enh_cost: float | None = None,
+           min_gain_mm: float | None = None, thresholds: dict | None = None) -> list[dict]:
+    """Rows with ``accepted`` and ``transition_augmg_mm``: the enhanced transition's error when the
+    enhancement is accepted, else the plain one (the plain transition is kept). Accepted: the match
+    cost is at most ``max_match_cost``, the enhanced distance at most ``max_enh_cost`` and the *gain*
+    (how far the reference pose lies from the plain transition's middle frame, mm: an enhancement
+    that the plain blend already passes near adds only risk) at least ``min_gain_mm``; None = no
+    threshold. ``thresholds``: per source ``{"max_match_cost", "max_enh_cost", "min_gain_mm"}``
+    overriding those for that source's rows."""
+    base = {"max_match_cost": max_match_cost, "max_enh_cost": max_enh_cost, "min_gain_mm": min_gain_mm}
     out = []
     for r in rows:
-        ok = bool(r["match_cost"] <= mm and r["enhanced_cost"] is not None and r["enhanced_cost"] <= me)
+        t = {**base, **((thresholds or {}).get(r["source"], {}) if "source" in r else {})}
+        mm = np.inf if t["max_match_cost"] is None else t["max_match_cost"]
+        me = np.inf if t["max_enh_cost"] is None else t["max_enh_cost"]
+        mg = -np.inf if t["min_gain_mm"] is None else t["min_gain_mm"]
+        ok = bool(r["match_cost"] <= mm and r["enhanced_cost"] is not None and r["enhanced_cost"] <= me
+                  and r.get("gain_mm", np.inf) >= mg)
         out.append({**r, "accepted": ok,
                     "transition_augmg_mm": r["transition_enhanced_mm"] if ok else r["transition_plain_mm"]})
     return out

@@ -61,7 +61,14 @@ def project(points_normalised: np.ndarray, azimuth_deg: float, elevation_deg: fl
 def angle_features(points2d: np.ndarray) -> np.ndarray:
     """(F, 2B) float32 bone-direction features of 2D keypoints (F, 15, 2) (column, row). A bone of
     zero length (both ends on one pixel) gets the zero vector, which is equally far from every
-    direction."""
+    direction.
+
+    The neck is taken as the midpoint of the shoulders, for the library and for every query alike:
+    pose estimators place "the neck" differently (BlazePose has none and uses that midpoint, the
+    mocap keypoint sits well above the shoulder line: 0.5 torso lengths of systematic error on the
+    validation frames), while the shoulders are defined the same way by all of them."""
+    points2d = np.array(points2d, dtype=np.float64, copy=True)
+    points2d[:, KP["neck"]] = 0.5 * (points2d[:, KP["left_shoulder"]] + points2d[:, KP["right_shoulder"]])
     v = points2d[:, BONE_INDEX[:, 1]] - points2d[:, BONE_INDEX[:, 0]]
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     u = np.where(n > 1e-9, v / np.maximum(n, 1e-12), 0.0)
