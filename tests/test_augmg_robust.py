@@ -104,3 +104,69 @@ def test_rejected_enhancements_keep_the_plain_transition():
     assert [r["accepted"] for r in out] == [True, False, False, False]
     assert [r["transition_augmg_mm"] for r in out] == [60.0, 100.0, 80.0, 80.0]
     assert [r["accepted"] for r in accept(rows)] == [True, True, True, False]  # no thresholds: any fitting window
+
+
+def test_pca_tree_is_exact_knn_including_its_fallback(rng):
+    from vidstyle.augmg.index import PcaTree
+
+    # features on a low-dimensional manifold plus tiny noise (as projected poses), and an isotropic set
+    # where 3 principal axes bound distances poorly (the certificate must fetch more, finally everything)
+    low = rng.normal(size=(3000, 4)) @ rng.normal(size=(4, 28)) + rng.normal(0, 0.01, (3000, 28))
+    iso = rng.normal(size=(800, 28))
+    for feats, dims in ((low, 6), (iso, 3)):
+        tree = PcaTree(feats.astype(np.float32), dims=dims, ratio=2)
+        q = feats[rng.choice(len(feats), 5)] + rng.normal(0, 0.05, (5, 28))
+        d, i = tree.query(q, k=7)
+        brute = np.linalg.norm(feats.astype(np.float32)[None] - q.astype(np.float32)[:, None], axis=-1)
+        np.testing.assert_array_equal(np.sort(i, axis=1), np.sort(np.argsort(brute, axis=1)[:, :7], axis=1))
+        np.testing.assert_allclose(d, np.sort(brute, axis=1)[:, :7], rtol=1e-4, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_report_shows_one_animated_entry_per_accepted_annotation(tmp_path):
+    """evaluate augmg --annotations --transitions, then the report: one entry (frame + pose, matched
+    library pose, plain / AugMG / true animations) per accepted mark, none for the discarded one."""
+    from typer.testing import CliRunner
+
+    from vidstyle.augmg.library import LibraryParams, make_library
+    from vidstyle.cli import app
+    from vidstyle.demo.dataset import DatasetParams, make_dataset
+    from vidstyle.formats.annotations import Annotations, Transition, VideoAnnotations, write_annotations
+    from vidstyle.formats.augmg_transitions import read_augmg_transitions
+    from vidstyle.report.build import build_report
+
+    run = tmp_path / "out"
+    make_dataset(run / "dataset", DatasetParams.small(performances=1, performance_seconds=30.0, render=False), jobs=1)
+    make_library(run / "augmg" / "library", LibraryParams(performers=1, action_seconds=3.0), jobs=1)
+    manifest = json.loads((run / "dataset" / "dataset.json").read_text())
+    videos, marks = [], []
+    for v in manifest["videos"]:
+        if v["kind"] != "performance":
+            continue
+        styled = json.loads((run / "dataset" / v["labels"]).read_text())["styled_transitions"]
+        ts = [Transition(t["key"], t["from"], t["to"], "accepted") for t in styled[:2]]
+        if len(styled) > 2:
+            ts.append(Transition(styled[2]["key"], styled[2]["from"], styled[2]["to"], "discarded"))
+        marks += [(v["id"], t.frame) for t in ts if t.status == "accepted"]
+        videos.append(VideoAnnotations(f"{v['id']}.mp4", f"{len(videos):064x}", v["frames"], 20.0, ts))
+    assert marks
+    ann = tmp_path / "ann.json"
+    write_annotations(ann, Annotations(manifest["actions"], videos))
+    r = CliRunner().invoke(app, ["evaluate", "augmg", "--dataset", str(run / "dataset"), "--library",
+                                 str(run / "augmg" / "library"), "--annotations", str(ann), "--out",
+                                 str(run / "metrics" / "augmg.json"), "--transitions", str(run / "augmg" / "transitions.json")])
+    assert r.exit_code == 0, r.output
+    doc = read_augmg_transitions(run / "augmg" / "transitions.json")
+    assert sorted((e.video, e.frame) for e in doc.entries) == sorted(marks)
+    e = doc.entries[0]
+    assert e.truth.shape == e.plain.shape == e.augmg.shape and e.truth.shape[1:] == (15, 3)
+    # the plain transition starts and ends between the true endpoints; AugMG = plain when rejected
+    if not e.accepted:
+        np.testing.assert_allclose(e.augmg, e.plain)
+    html = build_report(run)
+    found = [(m.group(1), int(m.group(2))) for m in
+             __import__("re").finditer(r'class="augmg-entry" data-video="([^"]+)" data-frame="(\d+)"', html)]
+    assert sorted(found) == sorted(marks)
+    assert html.count('<canvas class="augmg-anim"') == len(marks)
+    payload = json.loads(html.split('id="augmg-anim-data">')[1].split("</script>")[0].replace("<\\/", "</"))
+    assert len(payload["entries"]) == len(marks)

@@ -42,9 +42,11 @@ def _project_clip(args) -> list[np.ndarray]:
 
 
 def _build_tree(features: np.ndarray):
+    """A balanced, compact kd-tree (median splits): exact like any kd-tree, and on a projected library
+    35x faster per query at 1M frames than sliding-midpoint splits (scripts/bench_augmg.py)."""
     from scipy.spatial import cKDTree
 
-    return cKDTree(features, leafsize=16, balanced_tree=False, compact_nodes=False)
+    return cKDTree(features, leafsize=16, balanced_tree=True, compact_nodes=True)
 
 
 class PcaTree:

@@ -15,6 +15,15 @@ from .demo import demo_app
 
 log = logging.getLogger(__name__)
 
+# Defaults chosen on the validation performers (scripts/validate_augmg.py, bench_results/validate_augmg.json;
+# pipelines/kickboxing/validation/augmg.json): never on the test performers.
+SEGMENT = "adaptive"
+CONTEXT = 2
+SCORES = False
+MAX_MATCH_COST: list = []
+MAX_ENH_COST: list = []
+MIN_GAIN: list = []
+
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
@@ -36,6 +45,9 @@ def augment(
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
     edges_per_side: int = typer.Option(3, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
     enhancement_cost: float = typer.Option(0.5, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
+    context: int = typer.Option(CONTEXT, "--context", help="Match each mark together with the poses of up to this many frames either side (temporal coherence; run vidstyle pose with --context)."),
+    scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the poses' confidence scores."),
+    max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Reject a reference point whose match cost exceeds this (the pair keeps its plain transitions): VALUE, or SOURCE=VALUE per pose source (model = ps, blazepose); repeatable. Default: chosen on validation performers (scripts/validate_augmg.py)."),
     jobs: int = _JOBS,
 ) -> None:
     """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
@@ -64,18 +76,42 @@ def augment(
     if pose_model is not None:
         if video is None:
             raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
-        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] for m in marks}))
+        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] + d for m in marks
+                                                                           for d in range(-context, context + 1)
+                                                                           if m["frame"] + d >= 0}))
+    source = "model" if pose_model is not None else None
     for p in poses:
+        from ..formats.poses import read_poses
+
+        source = source or ("model" if read_poses(p).backend == "ps" else str(read_poses(p).backend))
         vid, frames = read_frame_poses(p)
         by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
     if not by_video and any(m["status"] == "accepted" for m in marks):
         raise InputError("give --poses (poses.json of the marked frames) or --pose-model with --video")
     graph = MotionGraph.load(graph_path)
+    if context < 0:
+        raise InputError(f"--context: must be at least 0, got {context}")
+    limit = per_source(max_match_cost, "--max-match-cost")
+    fps = next((m["fps"] for m in marks), 20.0)
     inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
-                             enhancement_cost=enhancement_cost, jobs=jobs)
+                             enhancement_cost=enhancement_cost, context=context, use_scores=scores,
+                             max_match_cost=limit.get(source, limit.get("*")), video_fps=fps, jobs=jobs)
     graph.save(out)
     log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
              sum(len(i.edges) for i in inserted))
+
+
+def per_source(values: list[str], option: str) -> dict:
+    """``["1.2", "model=1.3", "blazepose=-"]`` -> ``{"*": 1.2, "model": 1.3, "blazepose": None}`` (a
+    threshold for every source, per source; ``-`` = none)."""
+    out: dict = {}
+    for v in values:
+        name, _, num = v.rpartition("=")
+        try:
+            out[name or "*"] = None if num.strip() == "-" else float(num)
+        except ValueError:
+            raise InputError(f"{option}: {v!r} is not VALUE or SOURCE=VALUE") from None
+    return out
 
 
 def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
@@ -187,13 +223,14 @@ def evaluate_augmg_cmd(
     noise: float = typer.Option(0.05, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
     k: int = typer.Option(10, "--k", help="Candidates per query (the reference point is chosen among them)."),
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
-    segment: str = typer.Option("adaptive", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
+    segment: str = typer.Option(SEGMENT, "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
     segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
     enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
-    context: int = typer.Option(2, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
-    scores: bool = typer.Option(True, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
-    max_match_cost: float = typer.Option(-1.0, "--max-match-cost", help="Accept an enhancement only when its match cost is at most this (else keep the plain transition); < 0: no threshold."),
-    max_enh_cost: float = typer.Option(-1.0, "--max-enh-cost", help="Accept an enhancement only when its enhanced distance is at most this (CMU length units); < 0: no threshold."),
+    context: int = typer.Option(CONTEXT, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
+    scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
+    max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Accept an enhancement only when its match cost is at most this, else keep the plain transition: VALUE or SOURCE=VALUE (- = none); repeatable. Default: chosen per source on validation performers (scripts/validate_augmg.py)."),
+    max_enh_cost: List[str] = typer.Option(MAX_ENH_COST, "--max-enh-cost", help="... and its enhanced distance (CMU length units) at most this: VALUE or SOURCE=VALUE; repeatable; default from validation."),
+    min_gain: List[str] = typer.Option(MIN_GAIN, "--min-gain", help="... and the reference pose at least this far (mm) from the plain transition's middle frame: VALUE or SOURCE=VALUE; repeatable; default from validation."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
     transitions: Optional[Path] = typer.Option(None, "--transitions", help="Also write the headline source's poses and plain / AugMG / true transitions of every query (transitions.json, for the report's animations)."),
@@ -225,9 +262,8 @@ def evaluate_augmg_cmd(
     sources = [*poses, "gt", "noisy"]
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
-                             context=context, use_scores=scores,
-                             max_match_cost=max_match_cost if max_match_cost >= 0 else float("inf"),
-                             max_enh_cost=max_enh_cost if max_enh_cost >= 0 else float("inf"),
+                             context=context, use_scores=scores, thresholds=_thresholds(sources, max_match_cost,
+                                                                                        max_enh_cost, min_gain),
                              animate=next((x for x in ("model", "blazepose") if x in poses), "gt"), seed=seed, jobs=jobs)
     animations_source = next((x for x in ("model", "blazepose") if x in poses), "gt")
     # the headline is the thesis' own estimated pose (pictorial structures, 'model') when given,
@@ -286,6 +322,13 @@ def evaluate_augmg_cmd(
     console.print(table)
     console.print(kinds)
     log.info("wrote %s", out)
+
+
+def _thresholds(sources, match: list[str], enh: list[str], gain: list[str]) -> dict:
+    """Per-source acceptance thresholds of evaluate augmg from the repeatable SOURCE=VALUE options."""
+    m, e, g = per_source(match, "--max-match-cost"), per_source(enh, "--max-enh-cost"), per_source(gain, "--min-gain")
+    return {s: {"max_match_cost": m.get(s, m.get("*")), "max_enh_cost": e.get(s, e.get("*")),
+                "min_gain_mm": g.get(s, g.get("*"))} for s in sources}
 
 
 def _read_marks(path: Path) -> list[dict]:
