@@ -83,7 +83,7 @@ def main(library: str, sizes=(10_000, 100_000, 1_000_000), k: int = 10) -> None:
             t = median_ms(lambda: tree.query(queries[next(qi) % len(queries)], k=k))
             rows.append({"n": n, "index": name, "build_s": build, "query_ms": t, "speedup": t_bf / t, "recall": rec})
             print(f"{n:>10} {name:>26} {build:8.2f} {t:9.3f} {t_bf / t:8.1f}x {rec:7.3f}", flush=True)
-            del tree
+
     Path("bench_results").mkdir(exist_ok=True)
     Path("bench_results/bench_augmg.json").write_text(json.dumps(
         {"machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(), "threads": 1},

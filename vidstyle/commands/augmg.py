@@ -284,10 +284,10 @@ def evaluate_augmg_cmd(
     from ..formats.metrics import AUGMG, write_metrics
 
     if transitions is not None:
+        import json as _json
+
         from ..augmg.evaluate import transitions_document
         from ..formats.augmg_transitions import write_augmg_transitions
-
-        import json as _json
 
         man = _json.loads(((dataset / "dataset.json") if dataset.is_dir() else dataset).read_text())
         step = max(1, int(man["mocap_fps"] // man["fps"]))

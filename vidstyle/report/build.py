@@ -312,12 +312,26 @@ def _frame_with_pose(video: Path, frame: int, pose: np.ndarray, scale: int = 2) 
     return buf.tobytes() if ok else None
 
 
+def _view(points: np.ndarray, entry) -> list:
+    """(F, 15, 2) image coordinates of 3D keypoints (F, 15, 3) of a transition seen from the entry's
+    viewpoint relative to the true transition's first frame (its pelvis above the origin, facing +Z):
+    the same camera for the plain, AugMG and true transitions, so their travel is comparable."""
+    from ..augmg.keypoints import KP
+    from ..augmg.projection import facing_of_keypoints, project
+
+    first = entry.truth[:1]
+    f0 = float(facing_of_keypoints(first)[0])
+    rel = points - first[0, KP["pelvis"]] * np.array([1.0, 0.0, 1.0])
+    c, s = np.cos(f0), np.sin(f0)
+    norm = np.stack([c * rel[..., 0] - s * rel[..., 2], rel[..., 1], s * rel[..., 0] + c * rel[..., 2]], axis=-1)
+    return np.round(project(norm, entry.viewpoint_deg, 10.0), 4).tolist()
+
+
 def _augmg_transitions_html(run: Path, dataset: Dataset | None) -> str:
     """Per annotated transition: the video frame with its estimated pose, the matched library pose and
     the plain, AugMG and true transitions side by side (canvas animations of projected keypoints, the
     data embedded as JSON) from RUN/augmg/transitions.json (vidstyle evaluate augmg --transitions)."""
     from ..augmg.keypoints import BONE_INDEX
-    from ..augmg.projection import facing_normalised, facing_of_keypoints, project
     from ..formats.augmg_transitions import read_augmg_transitions
 
     path = run / "augmg" / "transitions.json"
@@ -329,17 +343,8 @@ def _augmg_transitions_html(run: Path, dataset: Dataset | None) -> str:
         videos = {v.id: run / "dataset" / v.video for v in dataset.videos if getattr(v, "video", None)}
     entries, cards = [], []
     for i, e in enumerate(doc.entries):
-        # one view for the three transitions: the truth's first frame faces the camera's azimuth
-        first = e.truth[:1]
-        fac = np.full(len(e.truth), float(facing_of_keypoints(first)[0]))
-        origin = e.truth[0, 2] * np.array([1.0, 0.0, 1.0])
-
-        def view(x: np.ndarray) -> list:
-            norm = facing_normalised(x - origin + first[0, 2] * np.array([1.0, 0.0, 1.0]), fac[:len(x)])
-            return np.round(project(norm, e.viewpoint_deg, 10.0), 4).tolist()
-
-        entries.append({"library": np.round(e.library2d, 4).tolist(), "plain": view(e.plain),
-                        "augmg": view(e.augmg), "truth": view(e.truth), "accepted": e.accepted})
+        entries.append({"library": np.round(e.library2d, 4).tolist(), "plain": _view(e.plain, e),
+                        "augmg": _view(e.augmg, e), "truth": _view(e.truth, e), "accepted": e.accepted})
         png = _frame_with_pose(videos[e.video], e.frame, e.pose2d) if e.video in videos else None
         img = (f'<img alt="frame {e.frame} of {esc(e.video)} with its estimated pose" src="{data_uri(png, "image/png")}">'
                if png is not None else '<p class="missing">video frame not available</p>')
