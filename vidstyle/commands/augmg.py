@@ -16,14 +16,13 @@ from .demo import demo_app
 log = logging.getLogger(__name__)
 
 # Defaults chosen on the validation performers (scripts/validate_augmg.py, recorded in
-# pipelines/kickboxing/validation/augmg.json): never on the test performers. Context 2 gained on true and
-# noisy 2D (29 -> 36 % cross-validated) but not with the estimators (8.2 -> 7.2 %), the criterion.
+# pipelines/kickboxing/validation/augmg.json): never on the test performers.
 SEGMENT = "adaptive"
-CONTEXT = 0
+CONTEXT = 2
 SCORES = False
-MAX_MATCH_COST = ["blazepose=0.965"]
-MAX_ENH_COST = ["model=4.919", "blazepose=5.941"]
-MIN_GAIN = ["model=192.2", "gt=82.2", "noisy=94.1"]
+MAX_MATCH_COST = ["model=2.083", "blazepose=0.839"]
+MAX_ENH_COST = ["model=4.683", "blazepose=5.926"]
+MIN_GAIN = ["model=103.933", "gt=118.534", "noisy=111.448"]
 
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
