@@ -1,12 +1,27 @@
-"""Validation table for the defaults of ``vidstyle evaluate augmg`` (segment mode, segment scale, window).
+"""Validation table for the defaults of ``vidstyle evaluate augmg``: library segment, temporal context,
+confidence weighting, candidates, and the acceptance thresholds of the robust AugMG.
 
-Runs on a *validation* demo dataset (seed 1: other performers than the test dataset of seed 0) and the
-library; prints a table and writes bench_results/validate_augmg.json. The default is the row with the
-lowest AugMG transition error (2D from ground truth).
+Validation performers: the performance videos of the seed-0 demo dataset whose performers the
+bundled annotations (``annotations/demo.json``, the test marks) never mark (p00-p02, p07-p09; the test
+performers are p03-p06). Queries are every styled transition's key frame of those videos. The 2D
+sources are ``gt``, ``noisy`` and the two pose estimators run on the videos at the key frames and
+``context`` frames either side (``vidstyle pose --frames``; pass their directories): ``model``
+(pictorial structures) and ``blazepose``.
 
-    vidstyle demo make-dataset --out /tmp/augmg_val --seed 1 --no-video
-    vidstyle demo make-library --out /tmp/augmg_lib
-    python scripts/validate_augmg.py /tmp/augmg_val /tmp/augmg_lib
+Per configuration (segment, context, scores, k) every source is evaluated once; then the acceptance
+thresholds (match cost, enhanced distance, gain) are searched per source over deciles of the rows' own
+values. A configuration's score is its 2-fold cross-validated reduction (thresholds chosen on the
+perf0 takes decide the perf1 takes and vice versa), averaged over the two *estimated* sources
+(``model``, ``blazepose``); the best configuration's thresholds are then chosen on all validation
+rows. Nothing here reads a test performer.
+
+    vidstyle pose out/dataset/videos/p00_perf0_front.mp4 --backend ps --model out/models/pose.joblib \\
+        --frames <key-2..key+2 of its styled transitions> --out VAL/ps/p00_perf0_front.poses.json
+    (the same with --backend blazepose into VAL/blazepose; scripts/validate_augmg.py --print-frames
+     DATASET VIDEO prints the --frames list)
+    python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose
+
+Prints the tables and writes bench_results/validate_augmg.json.
 """
 
 from __future__ import annotations
@@ -15,29 +30,116 @@ import json
 import sys
 from pathlib import Path
 
-from vidstyle.augmg.evaluate import evaluate_augmg
+import numpy as np
 
-GRID = [("fixed", 1.0, 5, "first"), ("fixed", 1.0, 9, "first"), ("fixed", 0.6, 9, "first"),
-        ("fixed", 0.4, 9, "first"), ("fixed", 0.25, 9, "first"), ("nodes", 1.0, 5, "first"),
-        ("nodes", 1.0, 9, "first"), ("fixed", 1.0, 9, "both")]
+VALIDATION_VIDEOS = [f"{p}_perf{t}_front" for p in ("p00", "p01", "p02", "p07", "p08", "p09") for t in (0, 1)]
+GRID = [  # (segment, context, scores, k)
+    ("fixed", 0, False, 10),  # the previous defaults (single frame, no weights)
+    ("adaptive", 0, False, 10),
+    ("fixed", 2, True, 10),
+    ("adaptive", 1, True, 10),
+    ("adaptive", 2, False, 10),
+    ("adaptive", 2, True, 10),
+    ("adaptive", 2, True, 30),
+]
+ESTIMATED = ("model", "blazepose")
 
 
-def main(dataset: str, library: str) -> None:
-    rows = []
-    print(f"{'segment':8} {'scale':>5} {'window':>6} {'place':>6} {'plain mm':>9} {'AugMG mm':>9} {'reduction':>9}")
-    for seg, scale, win, place in GRID:
-        r = evaluate_augmg(Path(dataset), Path(library), sources=("gt",), segment=seg, segment_scale=scale,
-                           enh_window=win, place=place)["by_source"]["gt"]
-        rows.append({"segment": seg, "segment_scale": scale, "enh_window": win, "place": place,
-                     **{k: v for k, v in r.items() if k != "by_kind"}})
-        print(f"{seg:8} {scale:5.2f} {win:6d} {place:>6} {r['transition_plain_mm']:9.1f} {r['transition_augmg_mm']:9.1f} "
-              f"{100 * r['transition_reduction']:8.1f}%", flush=True)
-    best = min(rows, key=lambda x: x["transition_augmg_mm"])
-    print(f"best: segment={best['segment']} segment_scale={best['segment_scale']} enh_window={best['enh_window']}")
+def print_frames(dataset: str, video: str, context: int = 2) -> None:
+    labels = json.loads((Path(dataset) / "labels" / f"{video}.json").read_text())
+    print(",".join(str(f) for f in sorted({t["key"] + d for t in labels["styled_transitions"]
+                                           for d in range(-context, context + 1)})))
+
+
+def _reduction(rows: list[dict]) -> float:
+    plain = np.mean([r["transition_plain_mm"] for r in rows])
+    return float(1 - np.mean([r["transition_augmg_mm"] for r in rows]) / plain)
+
+
+def search_thresholds(rows: list[dict]) -> tuple[dict, float]:
+    """Thresholds ``{"max_match_cost", "max_enh_cost", "min_gain_mm"}`` maximising the transition-error
+    reduction of ``rows`` (one source); candidates are deciles of the rows' own values (None = no
+    threshold). Returns (thresholds, reduction)."""
+    from vidstyle.augmg.evaluate import accept
+
+    def grid(key: str) -> list:
+        vals = [r[key] for r in rows if r[key] is not None]
+        return [None] + sorted({float(np.quantile(vals, q)) for q in np.linspace(0.1, 0.9, 9)})
+
+    best = ({"max_match_cost": None, "max_enh_cost": None, "min_gain_mm": None}, _reduction(accept(rows)))
+    for a in grid("match_cost"):
+        for b in grid("enhanced_cost"):
+            for g in grid("gain_mm"):
+                red = _reduction(accept(rows, a, b, g))
+                if red > best[1] + 1e-9:
+                    best = ({"max_match_cost": a, "max_enh_cost": b, "min_gain_mm": g}, red)
+    return best
+
+
+def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
+    from vidstyle.augmg.evaluate import accept, evaluate_augmg, summarise  # noqa: F401
+    from vidstyle.commands.augmg import _read_poses_dir
+
+    poses = dict([_read_poses_dir(Path(ps_dir)), _read_poses_dir(Path(bp_dir))])
+    sources = ("model", "blazepose", "gt", "noisy")
+    out_rows = []
+    hdr = f"{'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} | " + " | ".join(f"{s:>13}" for s in sources)
+    print("transition-error reduction on the validation performers, without / with the source's thresholds "
+          "(2-fold cross-validated over the takes)")
+    print(hdr + " | estimated sources' mean (cross-validated)")
+    for seg, ctx, sc, k in GRID:
+        m = evaluate_augmg(Path(dataset), Path(library), sources=sources, poses=poses, segment=seg, context=ctx,
+                           use_scores=sc, k=k, videos=VALIDATION_VIDEOS)
+        rows = m["rows"]
+        thresholds = {s: search_thresholds([r for r in rows if r["source"] == s])[0] for s in sources}
+        thr = summarise(accept(rows, thresholds=thresholds), m["params"])["by_source"]
+        # the score of a configuration: 2-fold cross-validated over the takes (thresholds chosen on perf0
+        # applied to perf1 and vice versa), so in-sample threshold fitting does not pick it
+        cv_rows = []
+        for fit, held in (("perf0", "perf1"), ("perf1", "perf0")):
+            t = {s: search_thresholds([r for r in rows if r["source"] == s and fit in r["video"]])[0] for s in sources}
+            cv_rows += accept([r for r in rows if held in r["video"]], thresholds=t)
+        cv = summarise(cv_rows, m["params"])["by_source"]
+        red = float(np.mean([cv[s]["transition_reduction"] for s in ESTIMATED]))
+        entry = {"segment": seg, "context": ctx, "scores": sc, "k": k,
+                 "no_threshold": {s: {kk: v for kk, v in m["by_source"][s].items()} for s in m["by_source"]},
+                 "thresholds": thresholds, "estimated_reduction": red,
+                 "cross_validated": {s: {kk: v for kk, v in cv[s].items()} for s in cv},
+                 "with_threshold": {s: {kk: v for kk, v in thr[s].items()} for s in thr},
+                 "queries": m["params"]["queries"]}
+        out_rows.append(entry)
+        cells = " | ".join(f"{100 * m['by_source'][s]['transition_reduction']:5.1f}/{100 * cv[s]['transition_reduction']:5.1f} %"
+                           for s in sources)
+        print(f"{seg:8} {ctx:3d} {str(sc):>6} {k:3d} | {cells} | {100 * red:.1f} %", flush=True)
+    best = max(out_rows, key=lambda x: x["estimated_reduction"])
+    print(f"best: segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
+          f"(estimated sources' mean reduction {100 * best['estimated_reduction']:.1f} % on "
+          f"{best['queries']} validation transitions); thresholds:")
+    for s, t in best["thresholds"].items():
+        print(f"  {s:9} " + "  ".join(f"{kk}={'-' if v is None else f'{v:.3f}'}" for kk, v in t.items()))
+    print("best configuration by source and kind (thresholds chosen on all validation rows, in-sample):")
+    for s, r in best["with_threshold"].items():
+        print(f"  {s:9} plain {r['transition_plain_mm']:6.1f}  AugMG {r['transition_augmg_mm']:6.1f} mm  "
+              f"accepted {r['accepted']:.2f}  retrieval {r['retrieval_mpjpe_mm']:6.1f} mm  R@10 {r['recall_at_10']:.2f}")
+        for kind, x in r["by_kind"].items():
+            print(f"      {kind:10} n={x['queries']:3d}  plain {x['plain_mm']:6.1f}  AugMG {x['augmg_mm']:6.1f}  "
+                  f"enhanced {x['enhanced_mm']:6.1f}  oracle {x['oracle_mm']:6.1f}  accepted {x['accepted']:.2f}")
     Path("bench_results").mkdir(exist_ok=True)
-    Path("bench_results/validate_augmg.json").write_text(json.dumps({"dataset": dataset, "library": library,
-                                                                     "rows": rows, "best": best}, indent=2))
+    Path("bench_results/validate_augmg.json").write_text(json.dumps(
+        {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [ps_dir, bp_dir],
+         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("segment", "context", "scores", "k",
+                                                                      "thresholds", "estimated_reduction")}},
+        indent=2))
+    # the chosen defaults, read by `vidstyle evaluate augmg --validation` (pipelines/kickboxing/validation/)
+    Path("bench_results/validation_augmg_chosen.json").write_text(json.dumps(
+        {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
+         "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
+         "thresholds": best["thresholds"], "validation_reduction": {
+             s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]}}, indent=2))
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:3])
+    if sys.argv[1] == "--print-frames":
+        print_frames(sys.argv[2], sys.argv[3])
+    else:
+        main(*sys.argv[1:5])

@@ -58,18 +58,24 @@ def _runs(labels: np.ndarray, clip: np.ndarray, code: int) -> tuple[np.ndarray, 
 
 def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int = 10, n_views: int = 12,
                   elevation_deg: float = 10.0, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
-                  edges_per_side: int = 3, enhancement_cost: float = 0.5, jobs: int = 1) -> list[Insertion]:
+                  edges_per_side: int = 3, enhancement_cost: float = 0.5, context: int = 2,
+                  use_scores: bool = False, max_match_cost: float | None = None, video_fps: float = 20.0,
+                  jobs: int = 1) -> list[Insertion]:
     """Add enhancement segments and edges to ``graph`` in place (module docstring).
 
     ``marks``: :func:`.annotations_io.read_marks` items; ``poses``: video stem -> {frame: FramePose}.
+    The marked frame is matched together with the poses of up to ``context`` frames either side that
+    ``poses`` holds (:func:`.index.window_query`, at ``video_fps``; ``use_scores``: confidence-weighted
+    bones); a reference point whose match cost exceeds ``max_match_cost`` is rejected and the pair keeps
+    its plain transitions (the robust AugMG of ``vidstyle evaluate augmg``, thresholds from
+    ``scripts/validate_augmg.py``).
     """
     from ..mocap import read_bvh
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind
     from ..render.camera import parse_view
     from .enhance import enhanced_distance
-    from .evaluate import _query_views
-    from .index import PoseIndex, library_clips
+    from .index import PoseIndex, library_clips, window_query
     from .keypoints import keypoint_positions
 
     accepted = [m for m in marks if m["status"] == "accepted"]
@@ -94,10 +100,16 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
             raise InputError(f"poses: no pose for {m['video']} frame {m['frame']} (run vidstyle pose with --frames)")
         az = parse_view(fp.viewpoint) if fp.viewpoint != "unknown" else 0.0
         spread = index.n_views // 2 if fp.viewpoint == "unknown" else 1
-        ids, _ = _query_views(index, fp.points, az, k, spread)
+        near = [(d, poses[m["video"]][m["frame"] + d]) for d in range(-context, context + 1)
+                if m["frame"] + d in poses[m["video"]]]
+        ids, match = window_query(index, np.stack([f.points for _, f in near]),
+                                  np.array([d for d, _ in near]) / float(video_fps), az, k, spread,
+                                  np.stack([f.scores for _, f in near]) if use_scores else None)
         discarded = {(c["clip"], round(c["time"], 3)) for c in m.get("candidates", []) if c["status"] == "discarded"}
-        cands = [int(i) for i in ids[0]
-                 if (index.paths_[int(index.clip_[i])], round(float(index.time_of(np.array([i]))[0]), 3)) not in discarded]
+        keep = [r for r, i in enumerate(ids)
+                if (index.paths_[int(index.clip_[i])], round(float(index.time_of(np.array([i]))[0]), 3)) not in discarded]
+        cands = [int(ids[r]) for r in keep]
+        cand_cost = {int(ids[r]): float(match[r]) for r in keep}
         ends_a, _ = _runs(graph.labels_, graph.frame_clip_, names.index(a_name))
         _, starts_b = _runs(graph.labels_, graph.frame_clip_, names.index(b_name))
         ends_a = ends_a[graph.scc_[ends_a]]
@@ -133,6 +145,10 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
             log.warning("%s frame %d: no candidate fits the graph's windows; plain transition kept", m["video"], m["frame"])
             continue
         total, cand, c, z, d_in, d_out, xs, ys = best
+        if max_match_cost is not None and cand_cost[cand] > max_match_cost:
+            log.info("%s frame %d (%s -> %s): reference point rejected (match cost %.3f > %.3f); plain transition "
+                     "kept", m["video"], m["frame"], a_name, b_name, cand_cost[cand], max_match_cost)
+            continue
         lm, _ = motions[c]
         seg_motion, _ = retarget(lm[z - gk + 1:z + gk], graph.skeleton_, clips[c].path)
         t = float(z / graph.fps)

@@ -76,6 +76,31 @@ def enhanced_distance(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.n
     return EnhancedCost(float(d_in[bx] + d_out[by]), float(d_in[bx]), float(d_out[by]), int(xs[bx]), int(ys[by]))
 
 
+def adaptive_halves(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, halves,
+                    k: int = 5) -> tuple[int, int, float] | None:
+    """Eq. 16 with each side's half-length chosen on its own: ``(h1, h2, cost)`` minimising
+    ``d_k(a_{i0-k+1..i0}, w_{z-h1-k+1..z-h1}) + d_k(w_{z+h2..z+h2+k-1}, b_{j0..j0+k-1})`` over
+    ``h1, h2`` in ``halves``. The library segment ``w_{z-h1} .. w_{z+h2}`` then starts where the
+    library clip looks most like the departure and ends where it looks most like the arrival, so a
+    context clip whose motion leaves the transition pose another way (a stance switch after the hop)
+    is cut before it does. None when no half-length fits the windows."""
+    if i0 - k + 1 < 0 or j0 + k > len(dst):
+        return None
+    hs = np.array(sorted({int(x) for x in halves}))
+    h1s = hs[(z - hs - k + 1 >= 0) & (hs >= 1)]
+    h2s = hs[(z + hs + k - 1 < len(w)) & (hs >= 1)]
+    if len(h1s) == 0 or len(h2s) == 0:
+        return None
+    A = src[i0 - k + 1:i0 + 1]
+    B = dst[j0:j0 + k]
+    WA = np.stack([w[z - t - k + 1:z - t + 1] for t in h1s])
+    WB = np.stack([w[z + t:z + t + k] for t in h2s])
+    d1 = window_distance(np.broadcast_to(A, WA.shape), WA)
+    d2 = window_distance(WB, np.broadcast_to(B, WB.shape))
+    a, b = int(np.argmin(d1)), int(np.argmin(d2))
+    return int(h1s[a]), int(h2s[b]), float(d1[a] + d2[b])
+
+
 def enhancement_nodes(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, k: int = 5,
                       max_span: int = 60, lam: float = 0.0, fps: float = 60.0) -> tuple[int, int, float] | None:
     """The nearest transition points ``(z0, z2, cost)`` around reference point ``z`` (thesis 5.2.4: "the
@@ -154,19 +179,30 @@ def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int,
 
 
 def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray, scale: float = 1.0,
-                  arrival_points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  arrival_points: np.ndarray | None = None, drift: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Rotations (m, J, 4) and roots (m, 3) of a library segment moved onto the performer: roots scaled
     by ``scale`` (body size), then the segment's first frame aligned (vertical rotation + floor
     translation, Kovar) onto ``anchor_points`` (15, 3), the departing pose. With ``arrival_points``
     (the arriving pose) the placement is the mean of that one and the last frame's onto the arrival,
-    so the segment drifts from neither end."""
+    so the segment drifts from neither end; with ``drift`` too, the placement moves linearly over the
+    segment from the first frame's alignment onto the departure to the last frame's onto the arrival
+    (the library clip's own travel between its ends is replaced by the performer's, its motion
+    around that line is kept)."""
     from ..motiongraph.distance import align_windows as _align
 
     _, theta, x0, z0 = _align(anchor_points[None], seg_points[:1] * scale, KEYPOINT_WEIGHTS)
     theta, x0, z0 = float(theta), float(x0), float(z0)
+    root = seg_motion.root_positions * scale
     if arrival_points is not None:
         _, t2, x2, z2 = _align(arrival_points[None], seg_points[-1:] * scale, KEYPOINT_WEIGHTS)
+        if drift:
+            r1, p1 = Placement(theta, x0, z0).apply_frames(seg_motion.rotations, root)
+            r2, p2 = Placement(float(t2), float(x2), float(z2)).apply_frames(seg_motion.rotations, root)
+            m = len(root)
+            u = np.linspace(0.0, 1.0, m) if m > 1 else np.zeros(1)
+            rot = r1.copy()
+            rot[:, 0] = slerp(r1[:, 0], r2[:, 0], u)
+            return rot, p1 * (1 - u)[:, None] + p2 * u[:, None]
         theta = float(np.angle(np.exp(1j * theta) + np.exp(1j * float(t2))))
         x0, z0 = (x0 + float(x2)) / 2, (z0 + float(z2)) / 2
-    root = seg_motion.root_positions * scale
     return Placement(theta, x0, z0).apply_frames(seg_motion.rotations, root)

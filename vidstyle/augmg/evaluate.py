@@ -123,26 +123,33 @@ def aligned_mpjpe(true: np.ndarray, cand: np.ndarray) -> np.ndarray:
     return np.linalg.norm(moved - true[None], axis=-1).mean(axis=1)
 
 
-def _query_2d(q: Query, pts3d: np.ndarray, cam, source: str, rng, noise: float, poses: dict | None):
-    """(15, 2) image keypoints and the viewpoint (degrees relative to facing) of query ``q``, or None."""
+def _query_2d(q: Query, pts3d: np.ndarray, cam, source: str, rng, noise: float, poses: dict | None,
+              context: int = 0):
+    """The 2D evidence of query ``q``: (offsets (D,) in video frames, (D, 15, 2) image keypoints, (D, 15)
+    scores or None, viewpoint (degrees relative to facing), view spread), for the marked frame and the
+    frames up to ``context`` either side (an estimated source only has the frames its poses hold; the
+    marked frame must be among them); None when the source has no pose of the marked frame."""
     from .keypoints import KP
     from .projection import facing_of_keypoints, relative_azimuth
 
+    offsets = np.arange(-context, context + 1)
+    if source not in ("gt", "noisy"):
+        doc = (poses or {}).get(source, {}).get(q.video)
+        if doc is None or q.frame not in doc:
+            return None
+        have = [int(d) for d in offsets if q.frame + d in doc]
+        uv = np.stack([doc[q.frame + d][0] for d in have])
+        sc = np.stack([doc[q.frame + d][3] for d in have])
+        _, az, spread, _ = doc[q.frame]
+        return np.array(have), uv, sc, az, spread
+    fs = np.clip((q.frame + offsets) * q.ratio, 0, len(pts3d) - 1)
+    uv = np.stack([cam.project(pts3d[f])[0] for f in fs])
     f = q.frame * q.ratio
-    if source == "model":
-        doc = (poses or {}).get(q.video)
-        if doc is None:
-            return None
-        fr = doc.get(q.frame)
-        if fr is None:
-            return None
-        return fr
-    uv, _ = cam.project(pts3d[f])
     az = float(relative_azimuth(cam.center, pts3d[f:f + 1, KP["pelvis"]], facing_of_keypoints(pts3d[f:f + 1]))[0])
     if source == "noisy":
-        torso = float(np.linalg.norm(uv[KP["neck"]] - uv[KP["pelvis"]]))
-        uv = uv + rng.normal(0.0, noise * torso, uv.shape)
-    return uv, az, 0
+        torso = np.linalg.norm(uv[:, KP["neck"]] - uv[:, KP["pelvis"]], axis=-1)
+        uv = uv + rng.normal(0.0, 1.0, uv.shape) * (noise * torso)[:, None, None]
+    return offsets, uv, None, az, 0
 
 
 def _camera(q: Query, motion, manifest: dict):
@@ -160,27 +167,46 @@ def _camera(q: Query, motion, manifest: dict):
 
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
-                   place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60, seed: int = 0, jobs: int = 1) -> dict:
-    """Metrics dict (module docstring); ``poses``: video id -> {frame: ((15, 2), viewpoint_deg, spread)}.
-    Defaults (``segment="fixed"``, ``segment_scale=1``, ``enh_window=9``) are the best rows of
-    ``scripts/validate_augmg.py`` on a validation dataset (another seed), never on the test data."""
-    if place not in ("first", "both"):
-        raise ValueError(f"place: 'first' or 'both', got {place!r}")
-    if segment not in ("fixed", "nodes"):
-        raise ValueError(f"segment: 'fixed' or 'nodes', got {segment!r}")
+                   place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
+                   context: int = 0, use_scores: bool = True, max_match_cost: float = np.inf,
+                   max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf, thresholds: dict | None = None,
+                   videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1) -> dict:
+    """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
+    viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all);
+    ``animate``: keep the poses and transitions of that source's queries under ``"animations"``
+    (:func:`transitions_document`).
+
+    Robustness (thesis 5.2.5: a bad enhancement node is discarded and the plain transition kept):
+    ``context`` > 0 matches the marked frame together with ``context`` video frames either side
+    (:func:`.index.window_query`, temporal coherence); ``use_scores`` weights bones by the pose's
+    confidence scores; an enhancement is *accepted* only when its match cost is at most
+    ``max_match_cost`` and its enhanced distance at most ``max_enh_cost``, else the plain transition is
+    kept (``transition_augmg_mm`` is then the plain error; ``transition_enhanced_mm`` is always the
+    enhanced one), and its gain is at least ``min_gain_mm`` (:func:`accept`; ``thresholds``: per source). Defaults come from ``scripts/validate_augmg.py`` on validation performers, never on
+    the test performers."""
+    if place not in ("first", "both", "drift"):
+        raise ValueError(f"place: 'first', 'both' or 'drift', got {place!r}")
+    if segment not in ("fixed", "nodes", "adaptive"):
+        raise ValueError(f"segment: 'fixed', 'nodes' or 'adaptive', got {segment!r}")
+    if context < 0:
+        raise ValueError(f"context: must be >= 0, got {context}")
     from ..logutil import progress
     from ..mocap import Motion, read_bvh
     from ..mocap.retarget import leg_length
     from .enhance import (
+        adaptive_halves,
         enhanced_distance,
         enhancement_nodes,
         place_segment,
         plain_transition,
         two_half_transition,
     )
+    from .index import window_query
     from .keypoints import keypoint_positions
 
     manifest, queries = dataset_queries(Path(dataset), annotations)
+    if videos is not None:
+        queries = [q for q in queries if q.video in set(videos)]
     if not queries:
         raise InputError(f"{dataset}: no styled transitions in any performance video to evaluate")
     lib = _Library(Path(library), n_views, float(manifest["params"]["elevation_deg"]), jobs)
@@ -188,6 +214,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     rng = np.random.default_rng(np.random.SeedSequence([seed, 14]))
     takes: dict[Path, tuple] = {}
     rows: list[dict] = []
+    animations: list[dict] = []
     for q in progress(queries, "augmg queries"):
         if q.take_bvh not in takes:
             m = read_bvh(q.take_bvh)
@@ -202,63 +229,149 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         scale = leg_length(motion.skeleton) / leg_length(lib.motion(0).skeleton)
         L = e - s
         h = max(1, int(round(segment_scale * (L // 2))))  # segment="fixed": library half-segment
+        halves = sorted({max(1, int(round(fr * (L // 2)))) for fr in (0.25, 0.5, 0.75, 1.0)})
         truth_seg = pts3d[s:e]
 
-        def transition_error(cand: int | None) -> float:
+        def choose(cand: int):
+            """(lo, hi, enhanced cost) of the library segment through candidate ``cand``."""
+            c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
+            w = lib.clips[c].points
+            if segment == "adaptive":
+                got = adaptive_halves(pts3d, s - 1, w, z, pts3d, e, halves, k=enh_window)
+                if got is not None:
+                    h1, h2, cost = got
+                    return z - h1, z + h2, cost
+            ec = enhanced_distance(pts3d, s - 1, w, z, pts3d, e, h, k=enh_window)
+            cost = np.inf if ec is None else ec.cost
+            if segment == "nodes":
+                nodes = enhancement_nodes(pts3d, s - 1, w, z, pts3d, e, k=enh_window, max_span=max_span)
+                if nodes is not None:
+                    return nodes[0], nodes[1], cost
+            n = len(w)
+            return max(0, z - h), min(n - 1, z + h), cost
+
+        def transition_error(cand: int | None, keep: bool = False):
             if cand is None:
                 rot, root = plain_transition(motion.rotations[s - 1], motion.root_positions[s - 1],
                                              motion.rotations[e], motion.root_positions[e], L)
             else:
                 c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
                 lm = lib.motion(c)
-                nodes = enhancement_nodes(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, k=enh_window,
-                                          max_span=max_span) if segment == "nodes" else None
-                if nodes is not None:
-                    lo, hi = nodes[0], nodes[1]
-                else:
-                    lo, hi = max(0, z - h), min(lm.n_frames - 1, z + h)
+                lo, hi, _ = choose(cand)
+                lo, hi = max(0, lo), min(lm.n_frames - 1, hi)
                 seg = lm[lo:hi + 1]
                 seg_pts = lib.clips[c].points[lo:hi + 1]
-                srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale, pts3d[e] if place == "both" else None)
+                srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale, pts3d[e] if place != "first" else None,
+                                           drift=place == "drift")
                 rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
                                                 motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
-            return float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+            err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+            return (err, gen) if keep else err
 
-        plain = transition_error(None)
+        plain, plain_pts = transition_error(None, keep=True)
         oracle_err = transition_error(oracle)
+        plain_mid = plain_pts[L // 2]
         for source in sources:
-            got = _query_2d(q, pts3d, cam, source, rng, noise, poses)
+            got = _query_2d(q, pts3d, cam, source, rng, noise, poses, context)
             if got is None:
                 continue
-            uv, az, spread = got
-            ii, cc = _query_views(idx_all, uv, az, k, spread)
-            top = ii[0]
+            offs, uv, sc, az, spread = got
+            top, costs = window_query(idx_all, uv, offs / float(manifest["fps"]), az, k, spread,
+                                      sc if use_scores else None)
             same = idx_all.clip_[top] == idx_all.clip_[oracle]
             near = same & (np.abs(idx_all.frame_[top] - idx_all.frame_[oracle]) <= 2 * idx_all.stride)
             # reference point: the enhanced distance over the top-k candidates
-            best, best_cost = top[0], np.inf
-            for cand in top:
-                c, z = int(idx_all.clip_[cand]), int(idx_all.frame_[cand])
-                ec = enhanced_distance(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, h, k=enh_window)
-                if ec is not None and ec.cost < best_cost:
-                    best, best_cost = cand, ec.cost
+            best, best_cost, best_rank = top[0], np.inf, 0
+            for rank, cand in enumerate(top):
+                ec = choose(int(cand))[2]
+                if ec < best_cost:
+                    best, best_cost, best_rank = cand, ec, rank
+            enhanced, enhanced_pts = transition_error(int(best), keep=True)
             rows.append({
                 "video": q.video, "performer": q.performer, "view": q.view, "frame": q.frame, "source": source,
                 "kind": q.transition["kind"], "from": q.transition["from"], "to": q.transition["to"],
-                "viewpoint_deg": round(az, 2),
+                "viewpoint_deg": round(az, 2), "context_frames": int(len(offs)),
                 "top1_clip": Path(lib.clips[int(idx_all.clip_[top[0]])].path).stem,
+                "reference_clip": Path(lib.clips[int(idx_all.clip_[best])].path).stem,
+                "reference_time_s": float(idx_all.time_of(np.array([best]))[0]),
                 "top1_mpjpe_mm": float(err_lib[top[0]] * MM_PER_UNIT),
                 "reference_mpjpe_mm": float(err_lib[best] * MM_PER_UNIT),
                 "oracle_mpjpe_mm": float(err_lib[oracle] * MM_PER_UNIT),
                 "recall_at_1": bool(near[0]), "recall_at_10": bool(near[:10].any()),
-                "transition_plain_mm": plain, "transition_augmg_mm": transition_error(int(best)),
+                "match_cost": float(costs[best_rank]), "enhanced_cost": _finite(best_cost),
+                "gain_mm": float(aligned_mpjpe(plain_mid, lib.points[int(best):int(best) + 1] * scale)[0] * MM_PER_UNIT),
+                "transition_plain_mm": plain, "transition_enhanced_mm": enhanced,
                 "transition_augmg_top1_mm": transition_error(int(top[0])), "transition_oracle_mm": oracle_err,
             })
-    return summarise(rows, dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
-                                library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
-                                enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale, max_span=max_span, sources=list(sources), index=idx_all.get_params(),
-                                queries=len(queries), annotations=annotations is not None))
+            if source == animate:
+                from .projection import facing_normalised, facing_of_keypoints, project
+
+                lp = lib.points[int(best):int(best) + 1]
+                lib2d = project(facing_normalised(lp, facing_of_keypoints(lp)), az,
+                                float(manifest["params"]["elevation_deg"]))[0]
+                centre = int(np.flatnonzero(offs == 0)[0])
+                animations.append({"row": len(rows) - 1, "pose2d": uv[centre], "library2d": lib2d,
+                                   "truth": truth_seg, "plain": plain_pts, "enhanced": enhanced_pts})
+    params = dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
+                  library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
+                  enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale,
+                  max_span=max_span, context=context, use_scores=use_scores,
+                  max_match_cost=_finite(max_match_cost), max_enh_cost=_finite(max_enh_cost),
+                  min_gain_mm=_finite(min_gain_mm), thresholds=thresholds,
+                  sources=list(sources), index=idx_all.get_params(), queries=len(queries),
+                  annotations=annotations is not None)
+    out = summarise(accept(rows, _finite(max_match_cost), _finite(max_enh_cost), _finite(min_gain_mm), thresholds),
+                    params)
+    if animate is not None:
+        out["animations"] = animations  # not part of the metrics document: :func:`transitions_document`
+    return out
+
+
+def transitions_document(metrics: dict, source: str, fps: float, step: int):
+    """The report's animation data (:mod:`vidstyle.formats.augmg_transitions`) of an
+    :func:`evaluate_augmg` result made with ``animate=source``; transitions subsampled every ``step``
+    mocap frames (to ``fps``)."""
+    from ..formats.augmg_transitions import AugmgTransitions, TransitionEntry
+
+    entries = []
+    for a in metrics.get("animations", []):
+        r = metrics["rows"][a["row"]]
+        aug = a["enhanced"] if r["accepted"] else a["plain"]
+        entries.append(TransitionEntry(
+            r["video"], int(r["frame"]), r["from"], r["to"], r["kind"], bool(r["accepted"]), r["match_cost"],
+            r["enhanced_cost"], r["reference_clip"], r["reference_time_s"], r["viewpoint_deg"], a["pose2d"],
+            a["library2d"], a["truth"][::step], a["plain"][::step], aug[::step], r["transition_plain_mm"],
+            r["transition_augmg_mm"]))
+    return AugmgTransitions(source, fps, entries)
+
+
+def _finite(x: float):
+    """A threshold for JSON: None for no threshold (infinity)."""
+    return None if not np.isfinite(x) else float(x)
+
+
+def accept(rows: list[dict], max_match_cost: float | None = None, max_enh_cost: float | None = None,
+           min_gain_mm: float | None = None, thresholds: dict | None = None) -> list[dict]:
+    """Rows with ``accepted`` and ``transition_augmg_mm``: the enhanced transition's error when the
+    enhancement is accepted, else the plain one (the plain transition is kept). Accepted: the match
+    cost is at most ``max_match_cost``, the enhanced distance at most ``max_enh_cost`` and the *gain*
+    (how far the reference pose lies from the plain transition's middle frame, mm: an enhancement
+    that the plain blend already passes near adds only risk) at least ``min_gain_mm``; None = no
+    threshold. ``thresholds``: per source ``{"max_match_cost", "max_enh_cost", "min_gain_mm"}``
+    overriding those for that source's rows."""
+    base = {"max_match_cost": max_match_cost, "max_enh_cost": max_enh_cost, "min_gain_mm": min_gain_mm}
+    out = []
+    for r in rows:
+        t = {**base, **((thresholds or {}).get(r["source"], {}) if "source" in r else {})}
+        mm = np.inf if t["max_match_cost"] is None else t["max_match_cost"]
+        me = np.inf if t["max_enh_cost"] is None else t["max_enh_cost"]
+        mg = -np.inf if t["min_gain_mm"] is None else t["min_gain_mm"]
+        ok = bool(r["match_cost"] <= mm and r["enhanced_cost"] is not None and r["enhanced_cost"] <= me
+                  and r.get("gain_mm", np.inf) >= mg)
+        out.append({**r, "accepted": ok,
+                    "transition_augmg_mm": r["transition_enhanced_mm"] if ok else r["transition_plain_mm"]})
+    return out
 
 
 def _query_views(index, uv: np.ndarray, az: float, k: int, spread: int):
@@ -297,10 +410,15 @@ def summarise(rows: list[dict], params: dict) -> dict:
             "recall_at_1": mean("recall_at_1"), "recall_at_10": mean("recall_at_10"),
             "transition_plain_mm": plain, "transition_augmg_mm": aug,
             "transition_augmg_top1_mm": mean("transition_augmg_top1_mm"),
+            "transition_enhanced_mm": mean("transition_enhanced_mm"),
+            "accepted": mean("accepted"),
             "transition_oracle_mm": mean("transition_oracle_mm"),
             "transition_reduction": float(1.0 - aug / plain) if plain > 0 else 0.0,
             "by_kind": {kind: {"queries": len(rk), "plain_mm": float(np.mean([x["transition_plain_mm"] for x in rk])),
-                               "augmg_mm": float(np.mean([x["transition_augmg_mm"] for x in rk]))}
+                               "augmg_mm": float(np.mean([x["transition_augmg_mm"] for x in rk])),
+                               "enhanced_mm": float(np.mean([x["transition_enhanced_mm"] for x in rk])),
+                               "oracle_mm": float(np.mean([x["transition_oracle_mm"] for x in rk])),
+                               "accepted": float(np.mean([x["accepted"] for x in rk]))}
                         for kind in sorted({x["kind"] for x in r}) for rk in [[x for x in r if x["kind"] == kind]]},
         }
     return out

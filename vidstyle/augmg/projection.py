@@ -61,7 +61,16 @@ def project(points_normalised: np.ndarray, azimuth_deg: float, elevation_deg: fl
 def angle_features(points2d: np.ndarray) -> np.ndarray:
     """(F, 2B) float32 bone-direction features of 2D keypoints (F, 15, 2) (column, row). A bone of
     zero length (both ends on one pixel) gets the zero vector, which is equally far from every
-    direction."""
+    direction.
+
+    The neck is taken as the midpoint of the shoulders and the pelvis as the midpoint of the hips, for
+    the library and for every query alike: pose estimators place "the neck" and "the pelvis"
+    differently (BlazePose has neither and uses those midpoints; the mocap keypoints sit above the
+    shoulder and hip lines: on the validation frames 0.5 torso lengths of systematic neck error and a
+    30-degree bias of the pelvis-hip bones), while shoulders and hips mean the same to all of them."""
+    points2d = np.array(points2d, dtype=np.float64, copy=True)
+    points2d[:, KP["neck"]] = 0.5 * (points2d[:, KP["left_shoulder"]] + points2d[:, KP["right_shoulder"]])
+    points2d[:, KP["pelvis"]] = 0.5 * (points2d[:, KP["left_hip"]] + points2d[:, KP["right_hip"]])
     v = points2d[:, BONE_INDEX[:, 1]] - points2d[:, BONE_INDEX[:, 0]]
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     u = np.where(n > 1e-9, v / np.maximum(n, 1e-12), 0.0)

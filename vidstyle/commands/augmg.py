@@ -15,6 +15,15 @@ from .demo import demo_app
 
 log = logging.getLogger(__name__)
 
+# Defaults chosen on the validation performers (scripts/validate_augmg.py, recorded in
+# pipelines/kickboxing/validation/augmg.json): never on the test performers.
+SEGMENT = "adaptive"
+CONTEXT = 2
+SCORES = False
+MAX_MATCH_COST = ["model=2.083", "blazepose=0.839"]
+MAX_ENH_COST = ["model=4.683", "blazepose=5.926"]
+MIN_GAIN = ["model=103.933", "gt=118.534", "noisy=111.448"]
+
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
@@ -36,6 +45,9 @@ def augment(
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
     edges_per_side: int = typer.Option(3, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
     enhancement_cost: float = typer.Option(0.5, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
+    context: int = typer.Option(CONTEXT, "--context", help="Match each mark together with the poses of up to this many frames either side (temporal coherence; run vidstyle pose with --context)."),
+    scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the poses' confidence scores."),
+    max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Reject a reference point whose match cost exceeds this (the pair keeps its plain transitions): VALUE, or SOURCE=VALUE per pose source (model = ps, blazepose); repeatable. Default: chosen on validation performers (scripts/validate_augmg.py)."),
     jobs: int = _JOBS,
 ) -> None:
     """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
@@ -64,18 +76,42 @@ def augment(
     if pose_model is not None:
         if video is None:
             raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
-        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] for m in marks}))
+        by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] + d for m in marks
+                                                                           for d in range(-context, context + 1)
+                                                                           if m["frame"] + d >= 0}))
+    source = "model" if pose_model is not None else None
     for p in poses:
+        from ..formats.poses import read_poses
+
+        source = source or ("model" if read_poses(p).backend == "ps" else str(read_poses(p).backend))
         vid, frames = read_frame_poses(p)
         by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
     if not by_video and any(m["status"] == "accepted" for m in marks):
         raise InputError("give --poses (poses.json of the marked frames) or --pose-model with --video")
     graph = MotionGraph.load(graph_path)
+    if context < 0:
+        raise InputError(f"--context: must be at least 0, got {context}")
+    limit = per_source(max_match_cost, "--max-match-cost")
+    fps = next((m["fps"] for m in marks), 20.0)
     inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
-                             enhancement_cost=enhancement_cost, jobs=jobs)
+                             enhancement_cost=enhancement_cost, context=context, use_scores=scores,
+                             max_match_cost=limit.get(source, limit.get("*")), video_fps=fps, jobs=jobs)
     graph.save(out)
     log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
              sum(len(i.edges) for i in inserted))
+
+
+def per_source(values: list[str], option: str) -> dict:
+    """``["1.2", "model=1.3", "blazepose=-"]`` -> ``{"*": 1.2, "model": 1.3, "blazepose": None}`` (a
+    threshold for every source, per source; ``-`` = none)."""
+    out: dict = {}
+    for v in values:
+        name, _, num = v.rpartition("=")
+        try:
+            out[name or "*"] = None if num.strip() == "-" else float(num)
+        except ValueError:
+            raise InputError(f"{option}: {v!r} is not VALUE or SOURCE=VALUE") from None
+    return out
 
 
 def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
@@ -183,15 +219,21 @@ def evaluate_augmg_cmd(
     library: Path = typer.Option(..., "--library", "-l", help="Library directory (vidstyle demo make-library)."),
     out: Path = typer.Option(Path("metrics/augmg.json"), "--out", "-o", help="Metrics JSON."),
     annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Query the accepted marks of this annotations file instead of every transition's key frame."),
-    poses_dir: Optional[Path] = typer.Option(None, "--poses-dir", help="poses.json files (<video id>.poses.json) of the pose model: adds the 'model' source."),
+    poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of poses.json files (<video id>.poses.json) of the pose stage: adds an estimated 2D source named by its backend ('model' for ps, 'blazepose'); repeatable."),
     noise: float = typer.Option(0.05, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
     k: int = typer.Option(10, "--k", help="Candidates per query (the reference point is chosen among them)."),
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
-    segment: str = typer.Option("fixed", "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition) or nodes (between the enhancement nodes w_z0..w_z2)."),
+    segment: str = typer.Option(SEGMENT, "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
     segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
     enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
+    context: int = typer.Option(CONTEXT, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
+    scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
+    max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Accept an enhancement only when its match cost is at most this, else keep the plain transition: VALUE or SOURCE=VALUE (- = none); repeatable. Default: chosen per source on validation performers (scripts/validate_augmg.py)."),
+    max_enh_cost: List[str] = typer.Option(MAX_ENH_COST, "--max-enh-cost", help="... and its enhanced distance (CMU length units) at most this: VALUE or SOURCE=VALUE; repeatable; default from validation."),
+    min_gain: List[str] = typer.Option(MIN_GAIN, "--min-gain", help="... and the reference pose at least this far (mm) from the plain transition's middle frame: VALUE or SOURCE=VALUE; repeatable; default from validation."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
+    transitions: Optional[Path] = typer.Option(None, "--transitions", help="Also write the headline source's poses and plain / AugMG / true transitions of every query (transitions.json, for the report's animations)."),
     jobs: int = _JOBS,
 ) -> None:
     """Retrieval MPJPE / recall@1/@10 and transition error (AugMG vs plain motion graph against the
@@ -202,30 +244,55 @@ def evaluate_augmg_cmd(
     from ..augmg.evaluate import evaluate_augmg
     from ..fileio import write_json
 
-    if segment not in ("fixed", "nodes"):
-        raise InputError(f"--segment: fixed or nodes, got {segment!r}")
+    if segment not in ("fixed", "nodes", "adaptive"):
+        raise InputError(f"--segment: fixed, nodes or adaptive, got {segment!r}")
+    if context < 0:
+        raise InputError(f"--context: must be at least 0, got {context}")
     if enh_window < 1:
         raise InputError(f"--enh-window: must be at least 1, got {enh_window}")
     if not 0 < segment_scale <= 1:
         raise InputError(f"--segment-scale: must be in (0, 1], got {segment_scale}")
     marks = _read_marks(annotations) if annotations else None
-    sources = ["gt", "noisy"]
-    poses = None
-    if poses_dir is not None:
-        poses = _read_poses_dir(poses_dir)
-        sources.insert(0, "model")
+    poses: dict = {}
+    for d in poses_dir:
+        name, doc = _read_poses_dir(d)
+        if name in poses:
+            raise InputError(f"--poses-dir: {d}: a second directory of {name} poses")
+        poses[name] = doc
+    sources = [*poses, "gt", "noisy"]
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
-                             seed=seed, jobs=jobs)
-    main = metrics["by_source"].get("model") or metrics["by_source"].get("gt")
+                             context=context, use_scores=scores, thresholds=_thresholds(sources, max_match_cost,
+                                                                                        max_enh_cost, min_gain),
+                             animate=next((x for x in ("model", "blazepose") if x in poses), "gt"), seed=seed, jobs=jobs)
+    animations_source = next((x for x in ("model", "blazepose") if x in poses), "gt")
+    # the headline is the thesis' own estimated pose (pictorial structures, 'model') when given,
+    # fixed in advance (not the better of the estimated sources)
+    head = next((x for x in ("model", "blazepose", "gt") if x in metrics["by_source"]), "gt")
+    main = metrics["by_source"][head]
     metrics["headline"] = {
         "augmg.retrieval_mpjpe": main["retrieval_mpjpe_mm"],
         "augmg.transition_error_plain": main["transition_plain_mm"],
         "augmg.transition_error_augmg": main["transition_augmg_mm"],
-        "augmg.source": "model" if "model" in metrics["by_source"] else "gt",
+        "augmg.source": head,
     }
+    for src, r in metrics["by_source"].items():
+        if src != head:
+            metrics["headline"][f"augmg.{src}.retrieval_mpjpe"] = r["retrieval_mpjpe_mm"]
+            metrics["headline"][f"augmg.{src}.transition_error_augmg"] = r["transition_augmg_mm"]
     from ..formats.metrics import AUGMG, write_metrics
 
+    if transitions is not None:
+        import json as _json
+
+        from ..augmg.evaluate import transitions_document
+        from ..formats.augmg_transitions import write_augmg_transitions
+
+        man = _json.loads(((dataset / "dataset.json") if dataset.is_dir() else dataset).read_text())
+        step = max(1, int(man["mocap_fps"] // man["fps"]))
+        write_augmg_transitions(transitions, transitions_document(metrics, animations_source, float(man["fps"]), step))
+        log.info("wrote %s", transitions)
+    metrics.pop("animations", None)
     write_metrics(out, metrics, kind=AUGMG)
     if headline is not None:
         from ..fileio import read_json
@@ -236,16 +303,32 @@ def evaluate_augmg_cmd(
     table = Table(title=f"AugMG: {metrics['params']['queries']} held-out transitions, "
                         f"{metrics['params']['library_frames']} library frames")
     for col in ("2D source", "queries", "MPJPE top-1 mm", "MPJPE ref mm", "oracle mm", "R@1", "R@10",
-                "plain mm", "AugMG mm", "top-1 mm", "oracle mm ", "reduction"):
+                "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm ", "reduction"):
         table.add_column(col)
     for src, r in metrics["by_source"].items():
         table.add_row(src, str(r["queries"]), f"{r['retrieval_mpjpe_mm']:.1f}", f"{r['reference_mpjpe_mm']:.1f}",
                       f"{r['oracle_mpjpe_mm']:.1f}", f"{r['recall_at_1']:.2f}", f"{r['recall_at_10']:.2f}",
                       f"{r['transition_plain_mm']:.1f}", f"{r['transition_augmg_mm']:.1f}",
-                      f"{r['transition_augmg_top1_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
+                      f"{r['accepted']:.2f}", f"{r['transition_enhanced_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
                       f"{100 * r['transition_reduction']:.0f} %")
-    Console().print(table)
+    kinds = Table(title="AugMG transition error by kind (mm)")
+    for col in ("2D source", "kind", "queries", "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm"):
+        kinds.add_column(col)
+    for src, r in metrics["by_source"].items():
+        for kind, x in r["by_kind"].items():
+            kinds.add_row(src, kind, str(x["queries"]), f"{x['plain_mm']:.1f}", f"{x['augmg_mm']:.1f}",
+                          f"{x['accepted']:.2f}", f"{x['enhanced_mm']:.1f}", f"{x['oracle_mm']:.1f}")
+    console = Console(width=160)
+    console.print(table)
+    console.print(kinds)
     log.info("wrote %s", out)
+
+
+def _thresholds(sources, match: list[str], enh: list[str], gain: list[str]) -> dict:
+    """Per-source acceptance thresholds of evaluate augmg from the repeatable SOURCE=VALUE options."""
+    m, e, g = per_source(match, "--max-match-cost"), per_source(enh, "--max-enh-cost"), per_source(gain, "--min-gain")
+    return {s: {"max_match_cost": m.get(s, m.get("*")), "max_enh_cost": e.get(s, e.get("*")),
+                "min_gain_mm": g.get(s, g.get("*"))} for s in sources}
 
 
 def _read_marks(path: Path) -> list[dict]:
@@ -255,17 +338,24 @@ def _read_marks(path: Path) -> list[dict]:
     return read_marks(path)
 
 
-def _read_poses_dir(d: Path) -> dict:
-    from ..augmg.poses_io import read_frame_poses
+def _read_poses_dir(d: Path) -> tuple[str, dict]:
+    """(source name, video id -> {frame: (points, viewpoint_deg, view spread, scores)}) of a directory of
+    poses.json files; the source is named by the backend ('model' for pictorial structures)."""
+    from ..formats.poses import read_poses
     from ..render.camera import parse_view
 
     files = sorted(d.glob("*.poses.json"))
     if not files:
         raise InputError(f"--poses-dir: no *.poses.json in {d}")
     out: dict = {}
+    backends = set()
     for f in files:
-        _, frames = read_frame_poses(f)
+        doc = read_poses(f)
+        backends.add(str(doc.backend))
         vid = f.name[: -len(".poses.json")]
-        out[vid] = {fp.frame: (fp.points, parse_view(fp.viewpoint), 0 if _is_number(fp.viewpoint) else 1)
-                    for fp in frames}
-    return out
+        out[vid] = {int(fp.frame): (fp.xy.copy(), parse_view(fp.viewpoint), 0 if _is_number(fp.viewpoint) else 1,
+                                    fp.scores.copy()) for fp in doc.frames}
+    if len(backends) != 1:
+        raise InputError(f"--poses-dir: {d} mixes pose backends {sorted(backends)}")
+    backend = backends.pop()
+    return ("model" if backend == "ps" else backend), out

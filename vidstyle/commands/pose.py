@@ -78,6 +78,8 @@ def pose(
     annotations: Path | None = typer.Option(
         None, "--annotations", "-a", help="Annotations file (vidstyle annotate): the frames are this video's "
         "transition marks (the video must be the annotated one: same sha256)."),
+    context: int = typer.Option(0, "--context", help="With --annotations: also the frames up to this many "
+                                "either side of every mark (AugMG's temporal coherence matches them too)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
@@ -100,7 +102,10 @@ def pose(
             ann = read_annotations(annotations)
             entry = ann.video_for(video, annotations)
             check_video(entry, video, r.info.frames, annotations)
-            idx = sorted({t.frame for t in entry.transitions})
+            if context < 0:
+                raise InputError(f"--context: must be at least 0, got {context}")
+            idx = sorted({t.frame + d for t in entry.transitions for d in range(-context, context + 1)
+                          if 0 <= t.frame + d < r.info.frames})
             if not idx:
                 raise InputError(f"{annotations}: no transition marks for {video}")
         else:

@@ -232,7 +232,7 @@ def _motion_section(page: Page, run: Path) -> None:
         page.add("Synthesized motion", _missing("motion preview", run / "motion"))
 
 
-def _augmg_section(page: Page, run: Path) -> None:
+def _augmg_section(page: Page, run: Path, dataset: Dataset | None = None) -> None:
     """Method 2: per 2D source, retrieval of the marked transition pose and the transition error of
     AugMG against the plain motion graph (metrics/augmg.json), and the motion synthesised on the AugMG
     graph."""
@@ -241,15 +241,17 @@ def _augmg_section(page: Page, run: Path) -> None:
     if m is None:
         page.add("AugMG: transitions through the performer's own poses", _missing("AugMG metrics", path))
         return
-    names = {"model": "estimated 2D pose (pose model)", "gt": "true 2D pose", "noisy": "true 2D + 5 % noise"}
+    names = {"model": "estimated 2D pose (pictorial structures)", "blazepose": "estimated 2D pose (BlazePose)",
+             "gt": "true 2D pose", "noisy": "true 2D + 5 % noise"}
     rows = []
     for src, r in m["by_source"].items():
         rows.append([names.get(src, src), r.get("queries"), r.get("retrieval_mpjpe_mm"), r.get("recall_at_1"),
                      r.get("recall_at_10"), r.get("transition_plain_mm"), r.get("transition_augmg_mm"),
-                     r.get("transition_reduction")])
+                     r.get("accepted"), r.get("transition_reduction")])
     params = m.get("params") or {}
     body = [table(rows, ["2D source", "queries", "retrieval MPJPE (mm)", "recall@1", "recall@10",
-                         "plain transition error (mm)", "AugMG transition error (mm)", "reduction"]),
+                         "plain transition error (mm)", "AugMG transition error (mm)", "accepted",
+                         "reduction"]),
             f'<p class="note">{esc(str(params.get("queries", "?")))} held-out transitions against '
             f'{esc(str(params.get("library_frames", "?")))} library frames; transition error = mean joint '
             f'position error against the performer\'s true transition, same endpoints (metrics/augmg.json)</p>']
@@ -259,7 +261,106 @@ def _augmg_section(page: Page, run: Path) -> None:
         body.append(f'<figure><img class="anim" alt="motion on the AugMG graph {esc(p.stem)}" '
                     f'src="{data_uri(gif, "image/gif")}"><figcaption>{esc(p.stem)}, synthesised on the graph '
                     f'with enhancement edges</figcaption></figure>')
+    body.append(_augmg_transitions_html(run, dataset))
     page.add("AugMG: transitions through the performer's own poses", "".join(body))
+
+
+ANIM_JS = """
+(function(){var data=JSON.parse(document.getElementById('augmg-anim-data').textContent);
+var bones=data.bones,colors={library:'#6a3d9a',plain:'#999999',augmg:'#d95f02',truth:'#1b9e77'};
+function draw(ctx,pose,box,color){var s=box.s,ox=box.ox,oy=box.oy;ctx.strokeStyle=color;ctx.lineWidth=2;
+ ctx.beginPath();for(var b=0;b<bones.length;b++){var p=pose[bones[b][0]],q=pose[bones[b][1]];
+ ctx.moveTo(ox+s*p[0],oy+s*p[1]);ctx.lineTo(ox+s*q[0],oy+s*q[1]);}ctx.stroke();}
+function fit(frames,w,h){var x0=1e9,x1=-1e9,y0=1e9,y1=-1e9;frames.forEach(function(f){f.forEach(function(p){
+ x0=Math.min(x0,p[0]);x1=Math.max(x1,p[0]);y0=Math.min(y0,p[1]);y1=Math.max(y1,p[1]);});});
+ var s=0.85*Math.min(w/Math.max(x1-x0,1e-6),h/Math.max(y1-y0,1e-6));
+ return {s:s,ox:w/2-s*(x0+x1)/2,oy:h/2-s*(y0+y1)/2};}
+var canvases=document.querySelectorAll('canvas.augmg-anim');var t=0;
+function tick(){canvases.forEach(function(c){var e=data.entries[+c.dataset.entry],ctx=c.getContext('2d');
+ var W=c.width/4,H=c.height;ctx.clearRect(0,0,c.width,c.height);var n=e.truth.length,f=t%(n+6);if(f>=n)f=n-1;
+ var all=e.truth.concat(e.plain,e.augmg),box=fit(all,W,H-16),lb=fit([e.library],W,H-16);
+ draw(ctx,e.library,lb,colors.library);
+ [['plain',1],['augmg',2],['truth',3]].forEach(function(k){ctx.save();ctx.translate(k[1]*W,0);
+  draw(ctx,e[k[0]][f],box,colors[k[0]]);ctx.restore();});
+ ctx.fillStyle='#333';ctx.font='11px sans-serif';
+ ['matched library pose','plain','AugMG'+(e.accepted?'':' (= plain)'),'true'].forEach(function(l,i){
+  ctx.fillText(l,i*W+4,H-4);});});t++;}
+tick();setInterval(tick,100);})();
+"""
+
+
+def _frame_with_pose(video: Path, frame: int, pose: np.ndarray, scale: int = 2) -> bytes | None:
+    """PNG of ``video``'s frame ``frame`` (decoded index) with the 2D pose (15, 2) drawn on it."""
+    import cv2
+
+    from ..augmg.keypoints import BONE_INDEX
+    from ..video import VideoReader
+
+    if not video.is_file():
+        return None
+    with VideoReader(video) as reader:
+        if frame >= len(reader):
+            return None
+        img = reader.frame(frame)
+    img = cv2.resize(img, (img.shape[1] * scale, img.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
+    pts = np.round(np.asarray(pose) * scale).astype(int)
+    for a, b in BONE_INDEX:
+        cv2.line(img, tuple(pts[a]), tuple(pts[b]), (0, 200, 255), 2, cv2.LINE_AA)
+    for p in pts:
+        cv2.circle(img, tuple(p), 2, (0, 0, 255), -1, cv2.LINE_AA)
+    ok, buf = cv2.imencode(".png", img)
+    return buf.tobytes() if ok else None
+
+
+def _view(points: np.ndarray, entry) -> list:
+    """(F, 15, 2) image coordinates of 3D keypoints (F, 15, 3) of a transition seen from the entry's
+    viewpoint relative to the true transition's first frame (its pelvis above the origin, facing +Z):
+    the same camera for the plain, AugMG and true transitions, so their travel is comparable."""
+    from ..augmg.keypoints import KP
+    from ..augmg.projection import facing_of_keypoints, project
+
+    first = entry.truth[:1]
+    f0 = float(facing_of_keypoints(first)[0])
+    rel = points - first[0, KP["pelvis"]] * np.array([1.0, 0.0, 1.0])
+    c, s = np.cos(f0), np.sin(f0)
+    norm = np.stack([c * rel[..., 0] - s * rel[..., 2], rel[..., 1], s * rel[..., 0] + c * rel[..., 2]], axis=-1)
+    return np.round(project(norm, entry.viewpoint_deg, 10.0), 4).tolist()
+
+
+def _augmg_transitions_html(run: Path, dataset: Dataset | None) -> str:
+    """Per annotated transition: the video frame with its estimated pose, the matched library pose and
+    the plain, AugMG and true transitions side by side (canvas animations of projected keypoints, the
+    data embedded as JSON) from RUN/augmg/transitions.json (vidstyle evaluate augmg --transitions)."""
+    from ..augmg.keypoints import BONE_INDEX
+    from ..formats.augmg_transitions import read_augmg_transitions
+
+    path = run / "augmg" / "transitions.json"
+    doc = _load(path, read_augmg_transitions)
+    if doc is None:
+        return _missing("AugMG transitions", path)
+    videos = {}
+    if dataset is not None:
+        videos = {v.id: run / "dataset" / v.video for v in dataset.videos if getattr(v, "video", None)}
+    entries, cards = [], []
+    for i, e in enumerate(doc.entries):
+        entries.append({"library": np.round(e.library2d, 4).tolist(), "plain": _view(e.plain, e),
+                        "augmg": _view(e.augmg, e), "truth": _view(e.truth, e), "accepted": e.accepted})
+        png = _frame_with_pose(videos[e.video], e.frame, e.pose2d) if e.video in videos else None
+        img = (f'<img alt="frame {e.frame} of {esc(e.video)} with its estimated pose" src="{data_uri(png, "image/png")}">'
+               if png is not None else '<p class="missing">video frame not available</p>')
+        status = ("enhancement accepted" if e.accepted else "enhancement rejected: plain transition kept")
+        cards.append(
+            f'<figure class="augmg-entry" data-video="{esc(e.video)}" data-frame="{e.frame}">{img}'
+            f'<canvas class="augmg-anim" data-entry="{i}" width="520" height="150"></canvas>'
+            f'<figcaption>{esc(e.video)} frame {e.frame}: {esc(e.from_action)} &rarr; {esc(e.to_action)} '
+            f'(true kind: {esc(e.kind)}); reference {esc(e.reference_clip)} @ {e.reference_time:.2f} s; '
+            f'{status}; error plain {e.plain_mm:.0f} mm, AugMG {e.augmg_mm:.0f} mm</figcaption></figure>')
+    payload = json.dumps({"bones": BONE_INDEX.tolist(), "entries": entries}, separators=(",", ":"))
+    payload = payload.replace("</", "<\\/")
+    return (f'<h3>Annotated transitions ({len(doc.entries)}, 2D source: {esc(doc.source)})</h3>'
+            f'<div class="row">{"".join(cards)}</div>'
+            f'<script type="application/json" id="augmg-anim-data">{payload}</script>'
+            f'<script>{ANIM_JS}</script>')
 
 
 def _get(doc: dict | None, *keys):
@@ -312,6 +413,9 @@ def headline_metrics(run: Path) -> dict:
         out["augmg"] = {"retrieval_mpjpe": h.get("augmg.retrieval_mpjpe"),
                         "transition_error_plain": h.get("augmg.transition_error_plain"),
                         "transition_error_augmg": h.get("augmg.transition_error_augmg")}
+        for key in ("retrieval_mpjpe", "transition_error_augmg"):
+            if h.get(f"augmg.blazepose.{key}") is not None:
+                out["augmg"][f"blazepose_{key}"] = h[f"augmg.blazepose.{key}"]
     return out
 
 
@@ -329,5 +433,5 @@ def build_report(run: Path) -> str:
     _recognition_section(page, run, dataset)
     _style_section(page, run, dataset)
     _motion_section(page, run)
-    _augmg_section(page, run)
+    _augmg_section(page, run, dataset)
     return page.render()
