@@ -24,7 +24,7 @@ import numpy as np
 from sklearn.linear_model import LogisticRegression
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS, PART_NAMES, PART_PARENT_INDEX
-from .dt import BIG, brute_dt2d, dt2d
+from .dt import BIG, brute_dt2d, dt2d, min_plus
 from .features import RotatedFeatures, orientation_bin, orientations
 
 N_PARTS = len(PART_NAMES)
@@ -240,9 +240,13 @@ class PictorialStructures:
     # ------------------------------------------------------------------ inference
     def _rounded(self, off: np.ndarray) -> np.ndarray:
         """(K, 2) integer (dx, dy) cell offsets of a part-frame offset at each orientation."""
-        ang = orientations(self.n_orient)
-        v = _from_frame(np.broadcast_to(off, (self.n_orient, 2)), ang)
-        return np.rint(v).astype(np.int64)
+        key = (self.n_orient, float(off[0]), float(off[1]))
+        cache = self.__dict__.setdefault("_offset_cache", {})
+        if key not in cache:
+            ang = orientations(self.n_orient)
+            v = _from_frame(np.broadcast_to(off, (self.n_orient, 2)), ang)
+            cache[key] = np.rint(v).astype(np.int64)
+        return cache[key]
 
     def infer(self, scores: np.ndarray) -> dict:
         """Exact minimum of the energy given ``scores`` (10, K, H, W). Returns states (10, 3) as
@@ -271,9 +275,7 @@ class PictorialStructures:
                 # orientation: E(ki, q) = min_kj D(kj, q) + wt wrap(kj - ki - mu)^2
                 dev = (kk[None, :] - kk[:, None] - self.mu_[j] + K / 2) % K - K / 2  # [ki, kj]
                 pen = self.wt_[j] * dev ** 2
-                tot = D[n][None] + pen[:, :, None, None]  # (ki, kj, H, W)
-                kbest = tot.argmin(axis=1)
-                E = np.take_along_axis(tot, kbest[:, None], axis=1)[:, 0]
+                E, kbest = min_plus(D[n], pen)  # (ki, H, W)
                 b = self._rounded(self.offsets_[j])
                 msg = np.stack([_shift(E[k], b[k, 1], b[k, 0]) for k in range(K)])
                 total[i] += msg
