@@ -394,7 +394,7 @@ _GRID_CACHE: dict = {}
 def _canvas_maps(f: RotatedFeatures, cell: int):
     """Per orientation k: float32 (col, row) canvas cell coordinates under every frame cell centre
     (for ``cv2.remap``)."""
-    key = (f.H, f.W, f.S, f.n_orient, cell)
+    key = (f.H, f.W, f.S, f.n_orient, cell, getattr(f, "rotate", True))
     if key not in _GRID_CACHE:
         Hc, Wc = f.H // cell, f.W // cell
         gy, gx = np.mgrid[0:Hc, 0:Wc]
