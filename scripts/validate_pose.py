@@ -12,6 +12,9 @@ One factor at a time from the starting point (the values before this script exis
 - factors that need no retraining, scored for every trained model: the viewpoint classifier
   (``svm`` = the thesis' torso-score SVMs, ``logistic`` = every part's best score, ``hog`` = linear
   SVM on a whole-person HOG) and the unary weight alpha;
+- the person prior of video input (``fg_weight``: foreground of each clip's median background
+  added to the part scores), for the chosen configuration (retrained; ``--prior-only`` runs just
+  this stage on an existing ``--out``);
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -126,6 +129,51 @@ def orientation_comparison(train, val, n_orient: int, seed: int) -> list[dict]:
     return rows
 
 
+FG_WEIGHTS = [0.0, 1.0, 2.0, 4.0, 8.0]
+
+
+def prior_comparison(model: PoseModel, val, weights) -> list[dict]:
+    """PCP of the chosen configuration with the person prior (per-clip median backgrounds of the
+    validation clips) at each weight; 0 = single images."""
+    from vidstyle.pose.evaluate import _frame_of, clip_backgrounds
+
+    gt = np.stack([s.keypoints for s in val])
+    bgs = clip_backgrounds(val)
+    model.set_inference(fg_weight=1.0)
+    pts = {w: [] for w in weights}
+    for s in val:
+        f, scale = model.prepare(s.image)
+        feats, maps = model.view_features(f)
+        view = model.classify_view(feats)[0]
+        S = maps[view] if view in maps else model.models_[view].score_maps(f)
+        fg = model.foreground_map(_frame_of(s), bgs.get(s.clip), f)
+        for w in weights:
+            pts[w].append(model.solve(view, S, scale, fg, f, fg_weight=w))
+    rows = []
+    for w in weights:
+        hits = strict_pcp(np.stack(pts[w]), gt)
+        rows.append({"fg_weight": w, "pcp_mean": float(hits.mean()), "pcp_per_part": hits.mean(axis=0).round(4).tolist()})
+        log.info("person prior weight %.1f: PCP %.3f", w, rows[-1]["pcp_mean"])
+    return rows
+
+
+def prior_stage(args, train, doc: dict) -> dict:
+    ch = doc["chosen"]
+    model = PoseModel(n_orient=ch["n_orient"], hard_rounds=ch["hard_rounds"], viewpoint=ch["viewpoint"],
+                      unary_weight=ch["unary_weight"], seed=args.seed).fit(train, jobs=args.jobs)
+    val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
+                                    args.cmu_dir), jobs=args.jobs, keep_bgr=True)
+    rows = prior_comparison(model, val, FG_WEIGHTS)
+    best = max(rows, key=lambda r: (r["pcp_mean"], -r["fg_weight"]))
+    doc["person_prior"] = rows
+    doc["chosen"]["fg_weight"] = best["fg_weight"]
+    doc["scores"]["pcp_mean_with_prior"] = best["pcp_mean"]
+    print("\nperson prior (median background of each validation clip):")
+    for r in rows:
+        print(f"  fg_weight {r['fg_weight']:4.1f}: PCP {r['pcp_mean']:.3f}")
+    return doc
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cmu-dir", type=Path, default=DEFAULT_CMU if DEFAULT_CMU.is_dir() else None)
@@ -137,6 +185,8 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    ap.add_argument("--prior-only", action="store_true", help="Only the person-prior stage, for the configuration "
+                    "already chosen in --out (which it updates).")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
     t_all = time.time()
@@ -145,6 +195,11 @@ def main() -> int:
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
                                     args.cmu_dir), jobs=args.jobs)
     log.info("%d training frames, %d validation frames", len(train), len(val))
+    if args.prior_only:
+        doc = prior_stage(args, train, json.loads(args.out.read_text()))
+        args.out.write_text(json.dumps(doc, indent=2) + "\n")
+        print(f"chosen: {json.dumps(doc['chosen'])} -> {args.out}")
+        return 0
     configs = [dict(START)]
     for k, values in TRAINED.items():
         configs += [{**START, k: v} for v in values]
@@ -183,6 +238,7 @@ def main() -> int:
                       "val": {"demo": args.val_demo, "cmu": args.val_cmu, "frames": len(val)},
                       "views_per_clip": args.views_per_clip},
            "table": table, "orientation": orient_rows, "wall_s": round(time.time() - t_all, 1)}
+    doc = prior_stage(args, train, doc)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2) + "\n")
     print(f"{'n_orient':>8s} {'hard':>4s} {'viewpoint':>9s} {'alpha':>5s} {'PCP':>6s} {'minpart':>7s} "

@@ -13,6 +13,7 @@ from vidstyle.pose.data import TRAIN_CMU_SUBJECTS, VAL_CMU_SUBJECTS, make_specs
 from vidstyle.pose.dt import min_plus
 from vidstyle.pose.estimator import HOG_DROP, HOG_WIN, ViewpointHOG, person_crop, person_hog
 from vidstyle.pose.features import RotatedFeatures
+from vidstyle.pose.foreground import background_model, foreground
 from vidstyle.pose.model import N_PARTS, PictorialStructures, score_models
 
 from test_pose_dt import _toy_model
@@ -142,3 +143,34 @@ def test_splits_share_no_source_and_hold_out_azimuths(cmu_dir: Path):
     for sp in va + te:
         gap = np.abs((train_az - sp.azimuth + 180) % 360 - 180)
         assert gap.min() >= 9.99
+
+
+def test_background_median_and_foreground(rng):
+    bg = rng.integers(60, 200, (40, 50, 3)).astype(np.uint8)
+    frames = []
+    for t in range(5):  # a bright square moving across: every pixel is background in most frames
+        fr = bg.copy()
+        fr[10:20, 5 + 9 * t:15 + 9 * t] = 255
+        frames.append(fr)
+    B = background_model(frames)
+    np.testing.assert_array_equal(B, bg.astype(np.float32))
+    fg = foreground(frames[2], B)
+    assert fg[13:17, 25:29].min() > 0.99 and fg[30:, :].max() == 0.0
+
+
+def test_part_coverage_is_the_window_mean(rng):
+    from vidstyle.pose.foreground import part_coverage
+
+    K, cell = 8, 4
+    f = RotatedFeatures(_random_frame(rng, 60, 80), K, cell, rotate=True)
+    m = PictorialStructures(n_orient=K, cell=cell)
+    m.sizes_ = [(5, 3)] * N_PARTS
+    ones = part_coverage(m, f, np.ones((60, 80), np.float32))
+    np.testing.assert_allclose(ones[:, :, 5:10, 5:15], 1.0, atol=1e-5)  # windows inside the frame
+    half = np.zeros((60, 80), np.float32)
+    half[:, :40] = 1.0
+    cov = part_coverage(m, f, half)
+    # upright orientation: a 3-cell wide window centred on cell column x covers x-1..x+1
+    k = K // 4
+    assert cov[0, k, 7, 3] == pytest.approx(1.0, abs=1e-4) and cov[0, k, 7, 16] == pytest.approx(0.0, abs=1e-4)
+    assert cov[0, k, 7, 9] == pytest.approx(2 / 3, abs=1e-4)  # columns 8, 9 inside, 10 outside

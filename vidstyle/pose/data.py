@@ -57,7 +57,8 @@ class Spec:
 
 @dataclass
 class Sample:
-    """One labelled frame: gray image (H, W) uint8, keypoints (15, 2) px, view, azimuth, source."""
+    """One labelled frame: gray image (H, W) uint8, keypoints (15, 2) px, view, azimuth, source,
+    optionally the BGR frame, and the clip it belongs to."""
 
     image: np.ndarray
     keypoints: np.ndarray
@@ -65,6 +66,7 @@ class Sample:
     azimuth: float
     source: str
     bgr: np.ndarray | None = None
+    clip: int = -1  # the spec's seed: frames of one rendered clip (one camera, look and background)
 
 
 def _demo_motion(index: int, seconds: float, seed: int):
@@ -117,7 +119,7 @@ def render_spec(spec: Spec, keep_bgr: bool = False) -> list[Sample]:
     for f in range(len(frames)):
         g = cv2.cvtColor(frames[f], cv2.COLOR_BGR2GRAY)
         out.append(Sample(g, uv[f].astype(np.float32), view_of(spec.azimuth), float(spec.azimuth), spec.source,
-                          frames[f] if keep_bgr else None))
+                          frames[f] if keep_bgr else None, int(spec.seed)))
     return out
 
 

@@ -298,17 +298,19 @@ class PoseModel:
 
     Parameters (stored as given): ``n_orient``, ``cell``, ``C`` (part logistic regressions),
     ``neg_per_pos``, ``hard_rounds`` (0 or 1), ``viewpoint`` ("svm" = the thesis' torso-score SVMs,
-    "logistic" = logistic regression on every part's best score), ``dt`` ("envelope" or "brute"),
-    ``seed``.
+    "logistic" = logistic regression on every part's best score, "hog" = linear SVM on a
+    whole-person HOG), ``dt`` ("envelope" or "brute"), ``unary_weight`` (detectors vs tree prior),
+    ``hog_C``, ``fg_weight`` (person prior from a video's background, 0 = off), ``seed``.
+    Defaults: :mod:`vidstyle.pose.defaults` (chosen by ``scripts/validate_pose.py``).
     Learned: ``models_`` (view name or "generic" -> :class:`PictorialStructures`),
     ``viewpoint_`` (the chosen classifier), ``viewpoint_svm_``, ``viewpoint_logistic_``,
-    ``n_train_frames_``.
+    ``viewpoint_hog_``, ``n_train_frames_``.
     """
 
     def __init__(self, n_orient: int = DEFAULTS["n_orient"], cell: int = 4, C: float = 0.05, neg_per_pos: int = 12,
                  hard_rounds: int = DEFAULTS["hard_rounds"], viewpoint: str = DEFAULTS["viewpoint"],
                  dt: str = "envelope", unary_weight: float = DEFAULTS["unary_weight"], hog_C: float = 0.01,
-                 seed: int = 0) -> None:
+                 fg_weight: float = DEFAULTS["fg_weight"], seed: int = 0) -> None:
         self.n_orient = n_orient
         self.cell = cell
         self.C = C
@@ -318,16 +320,21 @@ class PoseModel:
         self.dt = dt
         self.unary_weight = unary_weight
         self.hog_C = hog_C
+        self.fg_weight = fg_weight
         self.seed = seed
 
     PARAMS = ("n_orient", "cell", "C", "neg_per_pos", "hard_rounds", "viewpoint", "dt", "unary_weight", "hog_C",
-              "seed")
+              "fg_weight", "seed")
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
 
-    def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None) -> PoseModel:
-        """Change what needs no retraining: the viewpoint classifier used, the unary weight."""
+    def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
+                      fg_weight: float | None = None) -> PoseModel:
+        """Change what needs no retraining: the viewpoint classifier used, the unary weight, the
+        person prior's weight."""
+        if fg_weight is not None:
+            self.fg_weight = float(fg_weight)
         if viewpoint is not None:
             if viewpoint not in VIEWPOINT_METHODS:
                 raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {viewpoint!r}")
@@ -464,21 +471,49 @@ class PoseModel:
         return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
 
     def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
-                 detectors: str | None = None) -> PoseFrame:
+                 detectors: str | None = None, background: np.ndarray | None = None) -> PoseFrame:
         """Pose of one frame (BGR or gray, any size: it is resized to the working height). ``view``
         forces a viewpoint (else the classifier decides); ``detectors="generic"`` uses the generic
-        set."""
+        set. ``background`` (same size and channels as ``frame``: the median of frames of a
+        static-camera video, :func:`vidstyle.pose.foreground.background_model`) adds the person
+        prior, weighted by ``fg_weight``."""
         f, s = self.prepare(frame)
         feats, maps = self.view_features(f)
         vname, vscores = self.classify_view(feats)
         if view is not None:
             vname = view
         model_name = GENERIC if detectors == GENERIC else vname
-        m = self.models_[model_name]
-        S = maps[model_name] if model_name in maps else score_models({model_name: m}, f)[model_name]
-        r = m.infer(S)
-        pts = m.keypoints(r["states"], r["unary"], scale=s)
+        S = maps[model_name] if model_name in maps else score_models({model_name: self.models_[model_name]},
+                                                                      f)[model_name]
+        fg = self.foreground_map(frame, background, f)
+        pts = self.solve(model_name, S, s, fg, f)
         return PoseFrame(index, vname, pts, vscores)
+
+    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
+        """The frame's foreground at the working size (None without a background or a prior)."""
+        if background is None or not getattr(self, "fg_weight", 0.0):
+            return None
+        from .foreground import foreground
+
+        if background.shape != frame.shape:
+            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
+        fg = foreground(frame, background)
+        if fg.shape != (f.H, f.W):
+            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
+        return fg
+
+    def solve(self, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
+              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
+        with the person prior when ``fg`` is given."""
+        m = self.models_[model_name]
+        w = getattr(self, "fg_weight", 0.0) if fg_weight is None else fg_weight
+        if fg is not None and w:
+            from .foreground import part_coverage
+
+            S = S + np.float32(w) * part_coverage(m, f, fg)
+        r = m.infer(S)
+        return m.keypoints(r["states"], r["unary"], scale=scale)
 
 
 # ---------------------------------------------------------------- files

@@ -68,6 +68,21 @@ def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
     return rows
 
 
+def _frame_of(s):
+    return s.bgr if s.bgr is not None else s.image
+
+
+def clip_backgrounds(samples) -> dict:
+    """Clip id -> median background of that clip's frames (clips of at least 3 frames): the person
+    prior of a static-camera video, as ``vidstyle pose`` computes it over a whole video."""
+    from .foreground import background_model
+
+    groups: dict = {}
+    for s in samples:
+        groups.setdefault(s.clip, []).append(_frame_of(s))
+    return {c: background_model(fr) for c, fr in groups.items() if len(fr) >= 3 and c != -1}
+
+
 def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     """Run every method on the same held-out frames; return the metrics dict."""
     from .blazepose import BlazePoseEstimator
@@ -75,6 +90,10 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     gt = np.stack([s.keypoints for s in samples])
     views = [s.view for s in samples]
     methods = {"ps": [], "ps_generic": [], "ps_oracle_view": []}
+    prior = bool(getattr(model, "fg_weight", 0.0))
+    if prior:
+        methods["ps_single_image"] = []
+    backgrounds = clip_backgrounds(samples) if prior else {}
     vpred = {w: [] for w in VIEWPOINT_METHODS}
     for s in samples:
         f, scale = model.prepare(s.image)
@@ -82,14 +101,15 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
         for w in VIEWPOINT_METHODS:
             vpred[w].append(model.classify_view(feats, w)[0])
         chosen = vpred[model.viewpoint][-1]
+        fg = model.foreground_map(_frame_of(s), backgrounds.get(s.clip), f)
         for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
-            m = model.models_[mname]
-            r = m.infer(maps[mname])
-            methods[name].append(m.keypoints(r["states"], r["unary"], scale))
+            methods[name].append(model.solve(mname, maps[mname], scale, fg, f))
+        if prior:
+            methods["ps_single_image"].append(model.solve(chosen, maps[chosen], scale))
     times = []
     for s in samples[:: max(1, len(samples) // 20)]:  # the pose command's path (only the chosen classifier)
         t0 = time.process_time()
-        model.estimate(s.image)
+        model.estimate(_frame_of(s), background=backgrounds.get(s.clip))
         times.append(time.process_time() - t0)
     if blazepose:
         est = BlazePoseEstimator()
@@ -115,6 +135,8 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
         out["viewpoint"][name] = confusion(views, pred)
     out["ps_cpu_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
     out["ps_viewpoint_method"] = model.viewpoint
+    out["ps_person_prior"] = {"fg_weight": float(getattr(model, "fg_weight", 0.0)),
+                              "clips_with_background": len(backgrounds)}
     return out
 
 
