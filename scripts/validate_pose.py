@@ -12,9 +12,10 @@ One factor at a time from the starting point (the values before this script exis
 - factors that need no retraining, scored for every trained model: the viewpoint classifier
   (``svm`` = the thesis' torso-score SVMs, ``logistic`` = every part's best score, ``hog`` = linear
   SVM on a whole-person HOG) and the unary weight alpha;
-- the person prior of video input (``fg_weight``: foreground of each clip's median background
-  added to the part scores), for the chosen configuration (retrained; ``--prior-only`` runs just
-  this stage on an existing ``--out``);
+- second stage, on the first stage's best configuration (retrained): every viewpoint classifier
+  again, plus ``combined`` (product of logistic and hog), with its CPU ms/frame; then the person
+  prior of video input (``fg_weight``: foreground of each clip's median background added to the
+  part scores). ``--second-stage-only`` runs just this stage on an existing ``--out``;
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -132,43 +133,65 @@ def orientation_comparison(train, val, n_orient: int, seed: int) -> list[dict]:
 FG_WEIGHTS = [0.0, 1.0, 2.0, 4.0, 8.0]
 
 
-def prior_comparison(model: PoseModel, val, weights) -> list[dict]:
-    """PCP of the chosen configuration with the person prior (per-clip median backgrounds of the
-    validation clips) at each weight; 0 = single images."""
+def stage_one_choice(table: list[dict]) -> dict:
+    """The trained factors, alpha and viewpoint classifier of the best validation PCP."""
+    best = max(table, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    return {"n_orient": best["n_orient"], "hard_rounds": best["hard_rounds"], "unary_weight": best["unary_weight"],
+            "viewpoint": best["viewpoint"], "pcp_mean": best["pcp_mean"]}
+
+
+def second_stage(args, train, doc: dict) -> dict:
+    """Retrain the stage-one choice; score every viewpoint classifier (with ``combined``, the product
+    of logistic and hog) at its alpha, then the person prior's weight (median background of each
+    validation clip) with the best classifier."""
     from vidstyle.pose.evaluate import _frame_of, clip_backgrounds
 
-    gt = np.stack([s.keypoints for s in val])
-    bgs = clip_backgrounds(val)
-    model.set_inference(fg_weight=1.0)
-    pts = {w: [] for w in weights}
-    for s in val:
-        f, scale = model.prepare(s.image)
-        feats, maps = model.view_features(f)
-        view = model.classify_view(feats)[0]
-        S = maps[view] if view in maps else model.models_[view].score_maps(f)
-        fg = model.foreground_map(_frame_of(s), bgs.get(s.clip), f)
-        for w in weights:
-            pts[w].append(model.solve(view, S, scale, fg, f, fg_weight=w))
-    rows = []
-    for w in weights:
-        hits = strict_pcp(np.stack(pts[w]), gt)
-        rows.append({"fg_weight": w, "pcp_mean": float(hits.mean()), "pcp_per_part": hits.mean(axis=0).round(4).tolist()})
-        log.info("person prior weight %.1f: PCP %.3f", w, rows[-1]["pcp_mean"])
-    return rows
-
-
-def prior_stage(args, train, doc: dict) -> dict:
-    ch = doc["chosen"]
+    ch = stage_one_choice(doc["table"])
     model = PoseModel(n_orient=ch["n_orient"], hard_rounds=ch["hard_rounds"], viewpoint=ch["viewpoint"],
                       unary_weight=ch["unary_weight"], seed=args.seed).fit(train, jobs=args.jobs)
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
                                     args.cmu_dir), jobs=args.jobs, keep_bgr=True)
-    rows = prior_comparison(model, val, FG_WEIGHTS)
+    gt = np.stack([s.keypoints for s in val])
+    views = [s.view for s in val]
+    bgs = clip_backgrounds(val)
+    cache = []
+    for s in val:
+        f, scale = model.prepare(s.image)
+        feats, maps = model.view_features(f, full=True)
+        pred = {w: model.classify_view(feats, w)[0] for w in VIEWPOINT_METHODS}
+        cache.append((f, scale, maps, pred, model.foreground_map(_frame_of(s), bgs.get(s.clip), f)))
+    vrows = []
+    for w in VIEWPOINT_METHODS:
+        conf = confusion(views, [c[3][w] for c in cache])
+        pts = [model.solve(c[3][w], c[2][c[3][w]], c[1]) for c in cache]
+        hits = strict_pcp(np.stack(pts), gt)
+        vrows.append({"viewpoint": w, "pcp_mean": float(hits.mean()), "view_acc": conf["per_view_accuracy"],
+                      "view_acc_mean": float(np.mean(list(conf["per_view_accuracy"].values()))),
+                      "cpu_ms_per_frame": cpu_ms(model, val, w, ch["unary_weight"])})
+        log.info("viewpoint %s: PCP %.3f, view accuracy %.3f, %.1f ms/frame", w, vrows[-1]["pcp_mean"],
+                 vrows[-1]["view_acc_mean"], vrows[-1]["cpu_ms_per_frame"])
+    vbest = max(vrows, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    rows = []
+    for fw in FG_WEIGHTS:
+        pts = [model.solve(c[3][vbest["viewpoint"]], c[2][c[3][vbest["viewpoint"]]], c[1], c[4], c[0], fg_weight=fw)
+               for c in cache]
+        hits = strict_pcp(np.stack(pts), gt)
+        rows.append({"fg_weight": fw, "pcp_mean": float(hits.mean()), "pcp_per_part": hits.mean(axis=0).round(4).tolist()})
+        log.info("person prior weight %.1f: PCP %.3f", fw, rows[-1]["pcp_mean"])
     best = max(rows, key=lambda r: (r["pcp_mean"], -r["fg_weight"]))
+    doc["viewpoint_stage"] = vrows
     doc["person_prior"] = rows
-    doc["chosen"]["fg_weight"] = best["fg_weight"]
-    doc["scores"]["pcp_mean_with_prior"] = best["pcp_mean"]
-    print("\nperson prior (median background of each validation clip):")
+    doc["chosen"] = {**{k: ch[k] for k in ("n_orient", "hard_rounds", "unary_weight")},
+                     "viewpoint": vbest["viewpoint"], "fg_weight": best["fg_weight"],
+                     "orient": doc["chosen"].get("orient", "rotate")}
+    doc["scores"] = {"stage_one_pcp_mean": ch["pcp_mean"], "pcp_mean_single_image": vbest["pcp_mean"],
+                     "pcp_mean_with_prior": best["pcp_mean"], "viewpoint_acc": vbest["view_acc"],
+                     "viewpoint_acc_mean": vbest["view_acc_mean"], "cpu_ms_per_frame": vbest["cpu_ms_per_frame"]}
+    print("\nviewpoint classifiers (retrained stage-one choice):")
+    for r in vrows:
+        print(f"  {r['viewpoint']:9s} PCP {r['pcp_mean']:.3f}  view accuracy {r['view_acc_mean']:.3f} "
+              f"{json.dumps({k: round(v, 2) for k, v in r['view_acc'].items()})}  {r['cpu_ms_per_frame']:.1f} ms/frame")
+    print("person prior (median background of each validation clip):")
     for r in rows:
         print(f"  fg_weight {r['fg_weight']:4.1f}: PCP {r['pcp_mean']:.3f}")
     return doc
@@ -185,18 +208,20 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    ap.add_argument("--prior-only", action="store_true", help="Only the person-prior stage, for the configuration "
-                    "already chosen in --out (which it updates).")
+    ap.add_argument("--second-stage-only", action="store_true", help="Only the second stage (viewpoint "
+                    "classifiers, person prior), from the first stage's table already in --out (which it updates).")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
     t_all = time.time()
+    if args.second_stage_only and not args.out.is_file():
+        ap.error(f"--second-stage-only: {args.out} does not exist")
     train = render_samples(make_specs("train", args.train_demo, args.train_cmu, args.views_per_clip, args.seed,
                                       args.cmu_dir), jobs=args.jobs)
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
                                     args.cmu_dir), jobs=args.jobs)
     log.info("%d training frames, %d validation frames", len(train), len(val))
-    if args.prior_only:
-        doc = prior_stage(args, train, json.loads(args.out.read_text()))
+    if args.second_stage_only:
+        doc = second_stage(args, train, json.loads(args.out.read_text()))
         args.out.write_text(json.dumps(doc, indent=2) + "\n")
         print(f"chosen: {json.dumps(doc['chosen'])} -> {args.out}")
         return 0
@@ -222,23 +247,17 @@ def main() -> int:
         log.info("n_orient %d hard %d: best PCP %.3f (%s, alpha %.1f), %.1f ms/frame; fit %.0f s wall",
                  cfg["n_orient"], cfg["hard_rounds"], best["pcp_mean"], best["viewpoint"], best["unary_weight"],
                  best_ms, fit_wall)
-    best = max(table, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
-    same_model = [r for r in table if r["n_orient"] == best["n_orient"] and r["hard_rounds"] == best["hard_rounds"]
-                  and r["unary_weight"] == best["unary_weight"]]
-    best_view = max(same_model, key=lambda r: r["view_acc_mean"])
-    orient_rows = orientation_comparison(train, val, best["n_orient"], args.seed)
-    chosen = {"n_orient": best["n_orient"], "hard_rounds": best["hard_rounds"], "unary_weight": best["unary_weight"],
-              "viewpoint": best_view["viewpoint"],
-              "orient": max(orient_rows, key=lambda r: r["pcp_mean"])["orient"]}
+    ch = stage_one_choice(table)
+    orient_rows = orientation_comparison(train, val, ch["n_orient"], args.seed)
+    chosen = {**ch, "orient": max(orient_rows, key=lambda r: r["pcp_mean"])["orient"]}
     doc = {"kind": "vidstyle.validation", "what": "pose model defaults", "seed": args.seed,
            "start": START, "chosen": chosen,
-           "scores": {"pcp_mean": best["pcp_mean"], "viewpoint_acc_mean": best_view["view_acc_mean"],
-                      "viewpoint_acc": best_view["view_acc"]},
+           "scores": {},
            "splits": {"train": {"demo": args.train_demo, "cmu": args.train_cmu, "frames": len(train)},
                       "val": {"demo": args.val_demo, "cmu": args.val_cmu, "frames": len(val)},
                       "views_per_clip": args.views_per_clip},
            "table": table, "orientation": orient_rows, "wall_s": round(time.time() - t_all, 1)}
-    doc = prior_stage(args, train, doc)
+    doc = second_stage(args, train, doc)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2) + "\n")
     print(f"{'n_orient':>8s} {'hard':>4s} {'viewpoint':>9s} {'alpha':>5s} {'PCP':>6s} {'minpart':>7s} "

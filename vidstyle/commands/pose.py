@@ -45,8 +45,9 @@ def train_pose(
     hard_rounds: int = typer.Option(DEFAULTS["hard_rounds"], "--hard-rounds",
                                     help="Rounds of hard-negative mining (0 or 1)."),
     viewpoint: str = typer.Option(DEFAULTS["viewpoint"], "--viewpoint", help="Viewpoint classifier: svm (thesis: "
-                                  "torso scores, one-vs-all + one-vs-one SVMs), logistic (every part's score) or "
-                                  "hog (linear SVM on a whole-person HOG). All three are trained; this one is used."),
+                                  "torso scores, one-vs-all + one-vs-one SVMs), logistic (every part's score), "
+                                  "hog (linear SVM on a whole-person HOG) or combined (product of logistic and "
+                                  "hog). All are trained; this one is used."),
     unary_weight: float = typer.Option(DEFAULTS["unary_weight"], "--unary-weight",
                                        help="Weight of the part detectors against the tree prior."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),

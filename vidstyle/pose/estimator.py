@@ -168,6 +168,25 @@ class ViewpointHOG(ViewpointLogistic):
 
 
 
+class ViewpointProduct:
+    """Product of the all-parts logistic's probabilities and the whole-person HOG SVM's softmax
+    (both trained as above; nothing else is learned). Input: (parts row, hog) of one frame."""
+
+    def __init__(self, logistic: ViewpointLogistic, hog: ViewpointHOG) -> None:
+        self.logistic = logistic
+        self.hog = hog
+
+    def _proba(self, x):
+        p = self.logistic._proba(x[0][None]) * self.hog._proba(x[1][None])
+        return p / p.sum(axis=1, keepdims=True)
+
+    def predict(self, x):
+        return np.array(VIEW_NAMES)[self._proba(x).argmax(axis=1)]
+
+    def scores(self, x):
+        return [{v: float(round(p, 4)) for v, p in zip(VIEW_NAMES, row)} for row in self._proba(x)]
+
+
 # ---------------------------------------------------------------- parallel training jobs
 @dataclass
 class _WindowJob:
@@ -416,6 +435,8 @@ class PoseModel:
         self.viewpoint_ = self._classifier(self.viewpoint)
 
     def _classifier(self, which: str):
+        if which == "combined":
+            return ViewpointProduct(self.viewpoint_logistic_, self.viewpoint_hog_)
         return {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_,
                 "hog": self.viewpoint_hog_}[which]
 
@@ -440,19 +461,19 @@ class PoseModel:
         viewpoint (default: only what ``which``, default the model's classifier, needs). Also
         returns the score maps computed (model name -> maps; only complete maps)."""
         which = which or self.viewpoint
-        full = which == "logistic" if full is None else full
+        views_full = bool(full) or which in ("logistic", "combined")
         row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
         out = {"parts": row, "hog": None}
         maps: dict = {}
-        if full or which != "hog":
+        if views_full or which == "svm":
             views = {v: self.models_[v] for v in VIEW_NAMES}
-            got = score_models(views, f, None if full else [0])
+            got = score_models(views, f, None if views_full else [0])
             for n, name in enumerate(VIEW_NAMES):
                 best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
                 row[n * N_PARTS: n * N_PARTS + len(best)] = best
-            if full:
+            if views_full:
                 maps.update(got)
-        if full or which == "hog":
+        if full or which in ("hog", "combined"):
             g = score_models({GENERIC: self.models_[GENERIC]}, f, None if full else [0])[GENERIC]
             if full:
                 maps[GENERIC] = g
@@ -464,10 +485,14 @@ class PoseModel:
         clf = self._classifier(which)
         if which == "hog":
             x = feats["hog"]
+        elif which == "combined":
+            x = (feats["parts"], feats["hog"])
         elif which == "logistic":
             x = feats["parts"]
         else:
             x = feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        if which == "combined":
+            return str(clf.predict(x)[0]), clf.scores(x)[0]
         return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
 
     def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
