@@ -174,3 +174,29 @@ def test_part_coverage_is_the_window_mean(rng):
     k = K // 4
     assert cov[0, k, 7, 3] == pytest.approx(1.0, abs=1e-4) and cov[0, k, 7, 16] == pytest.approx(0.0, abs=1e-4)
     assert cov[0, k, 7, 9] == pytest.approx(2 / 3, abs=1e-4)  # columns 8, 9 inside, 10 outside
+
+
+def test_video_background_marks_the_performer(tmp_path, rng):
+    """On a static-camera render, the median background of the whole video leaves the moving
+    performer as foreground: the moving joints of a frame are foreground, the corners are not."""
+    from vidstyle.demo import Performer, build_take, performance_plan
+    from vidstyle.formats.truth import read_truth
+    from vidstyle.pose.run import video_background
+    from vidstyle.render import render_to_file
+    from vidstyle.video import VideoReader
+
+    p = Performer.random("p07", rng, video_fps=20)
+    motion = build_take(p, performance_plan(p, 60, rng), rng, video_fps=20).motion.resample(10)[:30]
+    video = tmp_path / "clip.mkv"
+    side = render_to_file(motion, video, view=30.0, size=(160, 120), fps=10, background="texture", seed=3)
+    joints = read_truth(side).joints2d[15]  # (31, 2) skeleton joints of frame 15
+    with VideoReader(video) as r:
+        bg = video_background(r)
+        frame = np.asarray(r.frame(15))
+    assert bg.shape == frame.shape
+    fg = foreground(frame, bg)
+    assert fg[:10, :10].max() < 0.2 and fg[-10:, -10:].max() < 0.2
+    inside = [fg[int(round(y)), int(round(x))] for x, y in joints[:, :2]
+              if 0 <= round(x) < 160 and 0 <= round(y) < 120]
+    # the moving upper body is foreground; feet planted for most of the clip join the median
+    assert np.mean(np.array(inside) > 0.5) > 0.4

@@ -50,6 +50,8 @@ def train_pose(
                                   "hog). All are trained; this one is used."),
     unary_weight: float = typer.Option(DEFAULTS["unary_weight"], "--unary-weight",
                                        help="Weight of the part detectors against the tree prior."),
+    fg_weight: float = typer.Option(DEFAULTS["fg_weight"], "--fg-weight", help="Weight of the person prior on video "
+                                    "input (foreground against the video's median background; 0 = off)."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
@@ -63,6 +65,8 @@ def train_pose(
         raise InputError(f"--viewpoint: {viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
     if not unary_weight > 0:
         raise InputError("--unary-weight: must be positive")
+    if not fg_weight >= 0:
+        raise InputError("--fg-weight: must be 0 or positive")
     if hard_rounds not in (0, 1):
         raise InputError("--hard-rounds: must be 0 or 1")
     if n_orient < 4 or n_orient > 36:
@@ -70,7 +74,7 @@ def train_pose(
     cmu = _cmu(cmu_dir)
     specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
     model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
-                      seed=seed)
+                      fg_weight=fg_weight, seed=seed)
     model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
     save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
                                               "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,
