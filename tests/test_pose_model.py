@@ -35,7 +35,8 @@ def test_model_round_trip_and_fit_on_training_frames(trained):
     loaded, header = load_pose_model(path)
     assert header["params"] == model.get_params() and header["seed"] == 3
     assert loaded.get_params() == {"n_orient": 8, "cell": 4, "C": 0.05, "neg_per_pos": 6, "hard_rounds": 0,
-                                   "viewpoint": "svm", "dt": "envelope", "seed": 3}
+                                   "viewpoint": "hog", "dt": "envelope", "unary_weight": 2.0,
+                                   "hog_C": 0.01, "fg_weight": 2.0, "seed": 3}
     preds = np.stack([loaded.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples)])
     gt = np.stack([s.keypoints for s in samples])
     hits = strict_pcp(preds, gt)

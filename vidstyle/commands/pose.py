@@ -10,6 +10,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..pose.defaults import DEFAULTS, VIEWPOINT_METHODS
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
@@ -40,10 +41,17 @@ def train_pose(
     views_per_clip: int = typer.Option(4, "--views-per-clip", help="Camera azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
     fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
-    n_orient: int = typer.Option(12, "--orientations", help="Part orientation bins."),
-    hard_rounds: int = typer.Option(1, "--hard-rounds", help="Rounds of hard-negative mining (0 or 1)."),
-    viewpoint: str = typer.Option("svm", "--viewpoint", help="Viewpoint classifier: svm (thesis: torso scores, "
-                                  "one-vs-all + one-vs-one SVMs) or logistic (every part's score)."),
+    n_orient: int = typer.Option(DEFAULTS["n_orient"], "--orientations", help="Part orientation bins."),
+    hard_rounds: int = typer.Option(DEFAULTS["hard_rounds"], "--hard-rounds",
+                                    help="Rounds of hard-negative mining (0 or 1)."),
+    viewpoint: str = typer.Option(DEFAULTS["viewpoint"], "--viewpoint", help="Viewpoint classifier: svm (thesis: "
+                                  "torso scores, one-vs-all + one-vs-one SVMs), logistic (every part's score), "
+                                  "hog (linear SVM on a whole-person HOG) or combined (product of logistic and "
+                                  "hog). All are trained; this one is used."),
+    unary_weight: float = typer.Option(DEFAULTS["unary_weight"], "--unary-weight",
+                                       help="Weight of the part detectors against the tree prior."),
+    fg_weight: float = typer.Option(DEFAULTS["fg_weight"], "--fg-weight", help="Weight of the person prior on video "
+                                    "input (foreground against the video's median background; 0 = off)."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
@@ -53,15 +61,20 @@ def train_pose(
     from ..pose.data import make_specs
     from ..pose.estimator import PoseModel, save_pose_model
 
-    if viewpoint not in ("svm", "logistic"):
-        raise InputError(f"--viewpoint: {viewpoint!r} is not svm or logistic")
+    if viewpoint not in VIEWPOINT_METHODS:
+        raise InputError(f"--viewpoint: {viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
+    if not unary_weight > 0:
+        raise InputError("--unary-weight: must be positive")
+    if not fg_weight >= 0:
+        raise InputError("--fg-weight: must be 0 or positive")
     if hard_rounds not in (0, 1):
         raise InputError("--hard-rounds: must be 0 or 1")
     if n_orient < 4 or n_orient > 36:
         raise InputError("--orientations: must be between 4 and 36")
     cmu = _cmu(cmu_dir)
     specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
-    model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, seed=seed)
+    model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
+                      fg_weight=fg_weight, seed=seed)
     model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
     save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
                                               "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,

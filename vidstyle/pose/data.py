@@ -7,10 +7,15 @@ Specs are rendered through :func:`vidstyle.parallel.parallel_map` (the project's
 
 Split for evaluation (nothing held out is ever used for training, tuning or selection):
 
-- demo performers: training ``p00..p{n-1}``; held out: performers 50.. (different seeds);
-- CMU subjects: training the subjects listed in ``TRAIN_CMU_SUBJECTS``, held out the others;
+- demo performers: training ``p00..p{n-1}``; validation performers 30..; test performers 50..
+  (different seeds);
+- CMU subjects: training the subjects listed in ``TRAIN_CMU_SUBJECTS``, validation those in
+  ``VAL_CMU_SUBJECTS``, test all the others;
 - azimuths: training every 30 degrees from 0 (0, 30, ..., 330) plus jitter of at most 5 degrees;
-  held out: 15 + 30 k degrees (never closer than 10 degrees to a training azimuth).
+  validation and test: 15 + 30 k degrees (never closer than 10 degrees to a training azimuth).
+
+The validation split (``scripts/validate_pose.py`` chooses the defaults on it) and the test split
+(``vidstyle evaluate pose``) share no performer and no CMU subject.
 
 The viewpoint label of a frame is the nearest of front (0), left (+90), right (-90), back (180).
 """
@@ -26,7 +31,9 @@ from ..mocap.keypoints import keypoint_positions
 
 VIEW_NAMES = ("front", "left", "right", "back")
 VIEW_AZ = {"front": 0.0, "left": 90.0, "right": -90.0, "back": 180.0}
-TRAIN_CMU_SUBJECTS = ("01", "02", "05", "06", "07", "08", "09", "10", "12", "13", "14", "15", "16")
+TRAIN_CMU_SUBJECTS = ("01", "02", "05", "06", "07", "09", "10", "12", "13", "14", "15", "16")
+VAL_CMU_SUBJECTS = ("08",)
+FIRST_PERFORMER = {"train": 0, "val": 30, "test": 50}
 FIGURE_FRACTION = 0.7  # standing figure height / frame height at the nominal camera distance
 
 
@@ -50,7 +57,8 @@ class Spec:
 
 @dataclass
 class Sample:
-    """One labelled frame: gray image (H, W) uint8, keypoints (15, 2) px, view, azimuth, source."""
+    """One labelled frame: gray image (H, W) uint8, keypoints (15, 2) px, view, azimuth, source,
+    optionally the BGR frame, and the clip it belongs to."""
 
     image: np.ndarray
     keypoints: np.ndarray
@@ -58,6 +66,7 @@ class Sample:
     azimuth: float
     source: str
     bgr: np.ndarray | None = None
+    clip: int = -1  # the spec's seed: frames of one rendered clip (one camera, look and background)
 
 
 def _demo_motion(index: int, seconds: float, seed: int):
@@ -110,7 +119,7 @@ def render_spec(spec: Spec, keep_bgr: bool = False) -> list[Sample]:
     for f in range(len(frames)):
         g = cv2.cvtColor(frames[f], cv2.COLOR_BGR2GRAY)
         out.append(Sample(g, uv[f].astype(np.float32), view_of(spec.azimuth), float(spec.azimuth), spec.source,
-                          frames[f] if keep_bgr else None))
+                          frames[f] if keep_bgr else None, int(spec.seed)))
     return out
 
 
@@ -131,16 +140,19 @@ def cmu_clips(cmu_dir: str | Path | None, subjects: tuple[str, ...] | None, excl
 
 def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: int,
                cmu_dir: str | Path | None, fps: float = 4.0, seconds: float = 2.0) -> list[Spec]:
-    """Specs for ``split`` ``"train"`` or ``"test"`` (see the module docstring for what is held out)."""
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 0 if split == "train" else 1]))
+    """Specs for ``split`` ``"train"``, ``"val"`` or ``"test"`` (see the module docstring for what is
+    held out)."""
+    if split not in FIRST_PERFORMER:
+        raise ValueError(f"split must be train, val or test, got {split!r}")
+    rng = np.random.default_rng(np.random.SeedSequence([seed, {"train": 0, "test": 1, "val": 2}[split]]))
+    demo_ids = list(range(FIRST_PERFORMER[split], FIRST_PERFORMER[split] + n_demo))
     if split == "train":
-        demo_ids = list(range(n_demo))
         clips = cmu_clips(cmu_dir, TRAIN_CMU_SUBJECTS)
         base = np.arange(0, 360, 30.0)
         jitter = 5.0
     else:
-        demo_ids = list(range(50, 50 + n_demo))
-        clips = cmu_clips(cmu_dir, None, exclude=TRAIN_CMU_SUBJECTS)
+        clips = (cmu_clips(cmu_dir, VAL_CMU_SUBJECTS) if split == "val"
+                 else cmu_clips(cmu_dir, None, exclude=TRAIN_CMU_SUBJECTS + VAL_CMU_SUBJECTS))
         base = np.arange(15, 360, 30.0)
         jitter = 0.0
     if clips:

@@ -3,9 +3,8 @@ Functions", 2012): ``D(q) = min_p f(p) + w (q - p)^2`` in linear time by the low
 parabolas rooted at every sample, and its 2D separable form (along x, then along y) with arg-min
 tracking for backtracking the max-product (min-sum) solution of pictorial structures.
 
-The 1D transform runs in lockstep over many rows at once (numpy over rows, a Python loop over the
-samples of a row), which is what makes it fast on the small grids of the pose model (a few dozen
-samples per row, hundreds of rows: one call per part and parent orientation set).
+The 1D transform's loops are compiled by numba (``cache=True``: compiled once per installation),
+one call per batch of rows; without numba the same function runs as plain Python (slow, same result).
 """
 
 from __future__ import annotations
@@ -15,9 +14,66 @@ import numpy as np
 BIG = 1e12  # stands for +inf in cost maps (the envelope arithmetic needs finite numbers)
 
 
+def _envelope_rows(F, W, D, arg):  # pragma: no cover - compiled by numba (tested through dt1d)
+    """Felzenszwalb-Huttenlocher lower envelope, row by row: F (R, n) costs, W (R,) weights."""
+    R, n = F.shape
+    v = np.empty(n, dtype=np.int64)
+    z = np.empty(n + 1)
+    g = np.empty(n)
+    for r in range(R):
+        w = W[r]
+        for q in range(n):
+            g[q] = F[r, q] / w + q * q  # f/w + q^2: the envelope only needs these
+        k = 0
+        v[0] = 0
+        z[0] = -np.inf
+        z[1] = np.inf
+        for q in range(1, n):
+            s = (g[q] - g[v[k]]) / (2.0 * (q - v[k]))
+            while s <= z[k]:
+                k -= 1
+                s = (g[q] - g[v[k]]) / (2.0 * (q - v[k]))
+            k += 1
+            v[k] = q
+            z[k] = s
+            z[k + 1] = np.inf
+        k = 0
+        for q in range(n):
+            while z[k + 1] < q:
+                k += 1
+            p = v[k]
+            arg[r, q] = p
+            D[r, q] = w * (q - p) * (q - p) + F[r, p]
+
+
+def _minplus_rows(D, pen, E, best):  # pragma: no cover - compiled by numba (tested through min_plus)
+    K, M = D.shape
+    for i in range(K):
+        for m in range(M):
+            b = 0
+            e = D[0, m] + pen[i, 0]
+            for j in range(1, K):
+                c = D[j, m] + pen[i, j]
+                if c < e:
+                    e = c
+                    b = j
+            E[i, m] = e
+            best[i, m] = b
+
+
+try:  # the inner loops compiled (numba); the same Python functions run without it
+    from numba import njit
+
+    _envelope_rows = njit(cache=True, nogil=True)(_envelope_rows)
+    _minplus_rows = njit(cache=True, nogil=True)(_minplus_rows)
+except ImportError:  # pragma: no cover
+    pass
+
+
 def dt1d(f: np.ndarray, w: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lower-envelope distance transform along the last axis of ``f`` (..., n), weight ``w > 0``
-    (a scalar or one per row, broadcastable to ``f.shape[:-1]``).
+    (a scalar or one per row, broadcastable to ``f.shape[:-1]``). Linear time per row: each
+    sample's parabola enters the envelope once and leaves it at most once.
 
     Returns ``(D, arg)``: ``D[..., q] = min_p f[..., p] + w (q - p)^2`` and ``arg[..., q]`` the
     minimising ``p`` (ties: the envelope's choice).
@@ -25,46 +81,28 @@ def dt1d(f: np.ndarray, w: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     f = np.asarray(f, dtype=np.float64)
     shape = f.shape
     n = shape[-1]
-    F = np.minimum(f.reshape(-1, n), BIG)
-    R = F.shape[0]
-    W = np.broadcast_to(np.asarray(w, dtype=np.float64), shape[:-1]).reshape(-1)
+    F = np.ascontiguousarray(np.minimum(f.reshape(-1, n), BIG))
+    W = np.ascontiguousarray(np.broadcast_to(np.asarray(w, dtype=np.float64), shape[:-1]).reshape(-1))
     if np.any(W <= 0):
         raise ValueError("w must be positive")
-    rows = np.arange(R)
-    v = np.zeros((R, n), dtype=np.int64)  # parabola roots of the envelope
-    z = np.empty((R, n + 1))  # boundaries between envelope parabolas
-    z[:, 0] = -np.inf
-    z[:, 1] = np.inf
-    k = np.zeros(R, dtype=np.int64)
-    qq = np.arange(n, dtype=np.float64)
-    g = F / W[:, None] + qq[None, :] ** 2  # f/w + q^2: the envelope only needs these
-    for q in range(1, n):
-        gq = g[:, q]
-        vk = v[rows, k]
-        s = (gq - g[rows, vk]) / (2.0 * (q - vk))
-        pop = s <= z[rows, k]
-        while pop.any():
-            idx = np.flatnonzero(pop)
-            k[idx] -= 1
-            vk = v[idx, k[idx]]
-            s[idx] = (gq[idx] - g[idx, vk]) / (2.0 * (q - vk))
-            pop[idx] = s[idx] <= z[idx, k[idx]]
-        k += 1
-        v[rows, k] = q
-        z[rows, k] = s
-        z[rows, k + 1] = np.inf
-    D = np.empty((R, n))
-    arg = np.empty((R, n), dtype=np.int64)
-    k[:] = 0
-    for q in range(n):
-        adv = z[rows, k + 1] < q
-        while adv.any():
-            k[adv] += 1
-            adv = z[rows, k + 1] < q
-        vk = v[rows, k]
-        arg[:, q] = vk
-        D[:, q] = W * (q - vk) ** 2 + F[rows, vk]
+    D = np.empty_like(F)
+    arg = np.empty(F.shape, dtype=np.int64)
+    if F.size:
+        _envelope_rows(F, W, D, arg)
     return D.reshape(shape), arg.reshape(shape)
+
+
+def min_plus(D: np.ndarray, pen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Min-plus product over a small discrete axis (the part orientations): ``D`` (K, ...),
+    ``pen`` (K', K) -> ``E[i, ...] = min_j D[j, ...] + pen[i, j]`` and the minimising ``j``."""
+    D = np.asarray(D, dtype=np.float64)
+    K = D.shape[0]
+    pen = np.ascontiguousarray(pen, dtype=np.float64)
+    flat = np.ascontiguousarray(D.reshape(K, -1))
+    E = np.empty((pen.shape[0], flat.shape[1]))
+    best = np.empty(E.shape, dtype=np.int64)
+    _minplus_rows(flat, pen, E, best)
+    return E.reshape((pen.shape[0],) + D.shape[1:]), best.reshape((pen.shape[0],) + D.shape[1:])
 
 
 def dt2d(f: np.ndarray, wx, wy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

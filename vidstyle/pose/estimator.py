@@ -27,6 +27,7 @@ from ..errors import InputError
 from ..formats.poses import PoseFrame
 from ..mocap.keypoints import PART_NAMES
 from .data import VIEW_NAMES, Sample, Spec, render_samples
+from .defaults import DEFAULTS, VIEWPOINT_METHODS
 from .features import RotatedFeatures, orientation_bin
 from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
@@ -112,6 +113,80 @@ class ViewpointLogistic(ViewpointSVM):
         return [{v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, row)} for row in self._proba(X)]
 
 
+HOG_WIN = (64, 112)  # whole-person window (w, h) in working pixels (the figure is ~84 px tall at 120)
+HOG_DROP = 10  # window centre below the generic torso detection, in working pixels
+_MIRROR = {"front": "front", "back": "back", "left": "right", "right": "left"}
+
+
+def person_crop(gray: np.ndarray, centre_xy) -> np.ndarray:
+    """The HOG_WIN window of a working-size gray frame centred ``HOG_DROP`` px below ``centre_xy``
+    (replicated border outside the frame)."""
+    w, h = HOG_WIN
+    cx, cy = float(centre_xy[0]), float(centre_xy[1]) + HOG_DROP
+    M = np.array([[1.0, 0.0, w / 2.0 - cx], [0.0, 1.0, h / 2.0 - cy]])
+    return cv2.warpAffine(gray, M, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+_HOG = None
+
+
+def person_hog(crop: np.ndarray) -> np.ndarray:
+    """Dalal-Triggs HOG (16 px blocks of 2x2 8-px cells, 9 bins, stride 8) of a person crop."""
+    global _HOG
+    if _HOG is None:
+        _HOG = cv2.HOGDescriptor(HOG_WIN, (16, 16), (8, 8), (8, 8), 9)
+    return _HOG.compute(np.ascontiguousarray(crop)).ravel().astype(np.float32)
+
+
+class ViewpointHOG(ViewpointLogistic):
+    """Alternative viewpoint classifier: a linear SVM (one-vs-rest, squared hinge) on the HOG of a
+    whole-person window centred on the generic torso detection. Training frames are used twice,
+    as rendered and mirrored (left and right swap, front and back stay). ``scores`` are the
+    decision values turned into a softmax."""
+
+    def __init__(self, C: float = 0.01, seed: int = 0) -> None:
+        self.C = C
+        self.seed = seed
+
+    def fit(self, X, y, X_mirror=None):
+        from sklearn.svm import LinearSVC
+
+        y = list(y)
+        if X_mirror is not None:
+            X = np.vstack([X, X_mirror])
+            y = y + [_MIRROR[v] for v in y]
+        self.classes_ = np.array(VIEW_NAMES)
+        self.clf_ = LinearSVC(C=self.C, random_state=self.seed, max_iter=5000).fit(
+            np.asarray(X, np.float64), [VIEW_NAMES.index(v) for v in y])
+        return self
+
+    def _proba(self, X):
+        d = np.full((len(np.atleast_2d(X)), len(VIEW_NAMES)), -10.0)
+        d[:, self.clf_.classes_] = self.clf_.decision_function(np.atleast_2d(X).astype(np.float64))
+        p = np.exp(3.0 * (d - d.max(axis=1, keepdims=True)))
+        return p / p.sum(axis=1, keepdims=True)
+
+
+
+class ViewpointProduct:
+    """Product of the all-parts logistic's probabilities and the whole-person HOG SVM's softmax
+    (both trained as above; nothing else is learned). Input: (parts row, hog) of one frame."""
+
+    def __init__(self, logistic: ViewpointLogistic, hog: ViewpointHOG) -> None:
+        self.logistic = logistic
+        self.hog = hog
+
+    def _proba(self, x):
+        p = self.logistic._proba(x[0][None]) * self.hog._proba(x[1][None])
+        return p / p.sum(axis=1, keepdims=True)
+
+    def predict(self, x):
+        return np.array(VIEW_NAMES)[self._proba(x).argmax(axis=1)]
+
+    def scores(self, x):
+        return [{v: float(round(p, 4)) for v, p in zip(VIEW_NAMES, row)} for row in self._proba(x)]
+
+
 # ---------------------------------------------------------------- parallel training jobs
 @dataclass
 class _WindowJob:
@@ -161,20 +236,31 @@ class _MineJob:
 def _mine(job: _MineJob) -> dict:
     """Hard negatives (per model, part) and viewpoint features (per frame) with the current models."""
     hard = {name: [[] for _ in range(N_PARTS)] for name in job.models}
-    vfeat = []
+    vfeat, hog, hog_m = [], [], []
     for img, kp, view in job.samples:
         f = RotatedFeatures(img, next(iter(job.models.values())).n_orient, next(iter(job.models.values())).cell)
         row = []
-        maps = score_models(job.models if job.n_hard else {v: job.models[v] for v in VIEW_NAMES}, f)
+        maps = score_models(job.models, f)
         for name in VIEW_NAMES:
             row.extend(maps[name].reshape(N_PARTS, -1).max(axis=1))
         if job.n_hard:
             for name in (view, GENERIC):
                 hard[name] = _merge(hard[name], _hard_windows(job.models[name], f, maps[name], kp, job.n_hard))
+        else:
+            crop = person_crop(img, torso_centre(job.models[GENERIC], maps[GENERIC][0]))
+            hog.append(person_hog(crop))
+            hog_m.append(person_hog(cv2.flip(crop, 1)))
         vfeat.append(row)
     return {"hard": {k: [np.array(v, np.float32).reshape(len(v), -1) if v else None for v in parts]
                      for k, parts in hard.items()},
-            "vfeat": np.array(vfeat, np.float64)}
+            "vfeat": np.array(vfeat, np.float64), "hog": np.array(hog, np.float32),
+            "hog_mirror": np.array(hog_m, np.float32)}
+
+
+def torso_centre(m: PictorialStructures, torso_maps: np.ndarray) -> np.ndarray:
+    """Working-pixel (x, y) of the best torso detection in a (K, Hc, Wc) torso score map."""
+    _k, y, x = np.unravel_index(int(np.argmax(torso_maps)), torso_maps.shape)
+    return np.array([x * m.cell + (m.cell - 1) / 2.0, y * m.cell + (m.cell - 1) / 2.0])
 
 
 def _merge(acc, new):
@@ -225,20 +311,25 @@ def _chunks(seq, n):
 
 
 # ---------------------------------------------------------------- the model
+
 class PoseModel:
     """Viewpoint-specific + generic pictorial structures and a viewpoint classifier.
 
     Parameters (stored as given): ``n_orient``, ``cell``, ``C`` (part logistic regressions),
     ``neg_per_pos``, ``hard_rounds`` (0 or 1), ``viewpoint`` ("svm" = the thesis' torso-score SVMs,
-    "logistic" = logistic regression on every part's best score), ``dt`` ("envelope" or "brute"),
-    ``seed``.
+    "logistic" = logistic regression on every part's best score, "hog" = linear SVM on a
+    whole-person HOG), ``dt`` ("envelope" or "brute"), ``unary_weight`` (detectors vs tree prior),
+    ``hog_C``, ``fg_weight`` (person prior from a video's background, 0 = off), ``seed``.
+    Defaults: :mod:`vidstyle.pose.defaults` (chosen by ``scripts/validate_pose.py``).
     Learned: ``models_`` (view name or "generic" -> :class:`PictorialStructures`),
     ``viewpoint_`` (the chosen classifier), ``viewpoint_svm_``, ``viewpoint_logistic_``,
-    ``n_train_frames_``.
+    ``viewpoint_hog_``, ``n_train_frames_``.
     """
 
-    def __init__(self, n_orient: int = 12, cell: int = 4, C: float = 0.05, neg_per_pos: int = 12,
-                 hard_rounds: int = 1, viewpoint: str = "svm", dt: str = "envelope", seed: int = 0) -> None:
+    def __init__(self, n_orient: int = DEFAULTS["n_orient"], cell: int = 4, C: float = 0.05, neg_per_pos: int = 12,
+                 hard_rounds: int = DEFAULTS["hard_rounds"], viewpoint: str = DEFAULTS["viewpoint"],
+                 dt: str = "envelope", unary_weight: float = DEFAULTS["unary_weight"], hog_C: float = 0.01,
+                 fg_weight: float = DEFAULTS["fg_weight"], seed: int = 0) -> None:
         self.n_orient = n_orient
         self.cell = cell
         self.C = C
@@ -246,11 +337,33 @@ class PoseModel:
         self.hard_rounds = hard_rounds
         self.viewpoint = viewpoint
         self.dt = dt
+        self.unary_weight = unary_weight
+        self.hog_C = hog_C
+        self.fg_weight = fg_weight
         self.seed = seed
 
+    PARAMS = ("n_orient", "cell", "C", "neg_per_pos", "hard_rounds", "viewpoint", "dt", "unary_weight", "hog_C",
+              "fg_weight", "seed")
+
     def get_params(self) -> dict:
-        return {k: getattr(self, k) for k in ("n_orient", "cell", "C", "neg_per_pos", "hard_rounds", "viewpoint",
-                                              "dt", "seed")}
+        return {k: getattr(self, k) for k in self.PARAMS}
+
+    def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
+                      fg_weight: float | None = None) -> PoseModel:
+        """Change what needs no retraining: the viewpoint classifier used, the unary weight, the
+        person prior's weight."""
+        if fg_weight is not None:
+            self.fg_weight = float(fg_weight)
+        if viewpoint is not None:
+            if viewpoint not in VIEWPOINT_METHODS:
+                raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {viewpoint!r}")
+            self.viewpoint = viewpoint
+            self.viewpoint_ = self._classifier(viewpoint)
+        if unary_weight is not None:
+            self.unary_weight = float(unary_weight)
+            for m in self.models_.values():
+                m.unary_weight = float(unary_weight)
+        return self
 
     # ---------------------------------------------------------- training
     def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
@@ -260,8 +373,8 @@ class PoseModel:
     def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         from ..parallel import parallel_map
 
-        if self.viewpoint not in ("svm", "logistic"):
-            raise ValueError(f"viewpoint must be 'svm' or 'logistic', got {self.viewpoint!r}")
+        if self.viewpoint not in VIEWPOINT_METHODS:
+            raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {self.viewpoint!r}")
         views = {s.view for s in samples}
         missing = [v for v in VIEW_NAMES if v not in views]
         if missing:
@@ -271,7 +384,7 @@ class PoseModel:
         self.models_ = {}
         for name in VIEW_NAMES + (GENERIC,):
             m = PictorialStructures(self.n_orient, self.cell, self.C, self.neg_per_pos, self.hard_rounds, self.seed,
-                                    self.dt)
+                                    self.dt, self.unary_weight)
             self.models_[name] = m.fit_geometry(kp[name])
         for m in self.models_.values():  # one template size per part: window gathers are shared
             m.sizes_ = list(self.models_[GENERIC].sizes_)
@@ -300,7 +413,7 @@ class PoseModel:
                           description="viewpoint features")
         X = np.vstack([r["vfeat"] for r in vf])
         y = np.array([t[2] for t in triples])
-        self._fit_viewpoint(X, y)
+        self._fit_viewpoint(X, y, np.vstack([r["hog"] for r in vf]), np.vstack([r["hog_mirror"] for r in vf]))
         self.n_train_frames_ = len(samples)
         return self
 
@@ -314,11 +427,18 @@ class PoseModel:
             m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
             m.bias_[j] = float(clf.intercept_[0])
 
-    def _fit_viewpoint(self, X: np.ndarray, y: np.ndarray) -> None:
+    def _fit_viewpoint(self, X: np.ndarray, y: np.ndarray, hog: np.ndarray, hog_mirror: np.ndarray) -> None:
         torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
         self.viewpoint_svm_ = ViewpointSVM(seed=self.seed).fit(torso, y)
         self.viewpoint_logistic_ = ViewpointLogistic(seed=self.seed).fit(X, y)
-        self.viewpoint_ = self.viewpoint_svm_ if self.viewpoint == "svm" else self.viewpoint_logistic_
+        self.viewpoint_hog_ = ViewpointHOG(C=self.hog_C, seed=self.seed).fit(hog, y, hog_mirror)
+        self.viewpoint_ = self._classifier(self.viewpoint)
+
+    def _classifier(self, which: str):
+        if which == "combined":
+            return ViewpointProduct(self.viewpoint_logistic_, self.viewpoint_hog_)
+        return {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_,
+                "hog": self.viewpoint_hog_}[which]
 
     # ---------------------------------------------------------- inference
     def work_scale(self, frame_shape) -> float:
@@ -329,43 +449,96 @@ class PoseModel:
         s = self.work_scale(g.shape)
         if abs(s - 1.0) > 1e-6:
             g = cv2.resize(g, (max(8, round(g.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
-        return RotatedFeatures(g, self.n_orient, self.cell), s
+        f = RotatedFeatures(g, self.n_orient, self.cell)
+        f.gray = g
+        return f, s
 
-    def view_features(self, f: RotatedFeatures, full: bool | None = None) -> tuple[np.ndarray, dict]:
-        """Viewpoint features of a frame: the best score of every part detector of every viewpoint
-        (40 values, view-major; with ``full=False`` only the torso detectors are run and the other
-        entries are NaN). Also returns the score maps computed (view name -> maps)."""
-        full = self.viewpoint == "logistic" if full is None else full
-        views = {v: self.models_[v] for v in VIEW_NAMES}
-        maps = score_models(views, f, None if full else [0])
-        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
-        for n, name in enumerate(VIEW_NAMES):
-            best = maps[name].reshape(maps[name].shape[0], -1).max(axis=1)
-            row[n * N_PARTS: n * N_PARTS + len(best)] = best
-        return row, (maps if full else {})
-
-    def classify_view(self, feats: np.ndarray, which: str | None = None) -> tuple[str, dict]:
+    def view_features(self, f: RotatedFeatures, full: bool | None = None,
+                      which: str | None = None) -> tuple[dict, dict]:
+        """Viewpoint features of a frame (``f`` from :meth:`prepare`): ``"parts"``, the best score of
+        every part detector of every viewpoint (40 values, view-major; NaN where not run), and
+        ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
+        viewpoint (default: only what ``which``, default the model's classifier, needs). Also
+        returns the score maps computed (model name -> maps; only complete maps)."""
         which = which or self.viewpoint
-        clf = {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_}[which]
-        x = feats if which == "logistic" else feats[[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        views_full = bool(full) or which in ("logistic", "combined")
+        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
+        out = {"parts": row, "hog": None}
+        maps: dict = {}
+        if views_full or which == "svm":
+            views = {v: self.models_[v] for v in VIEW_NAMES}
+            got = score_models(views, f, None if views_full else [0])
+            for n, name in enumerate(VIEW_NAMES):
+                best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
+                row[n * N_PARTS: n * N_PARTS + len(best)] = best
+            if views_full:
+                maps.update(got)
+        if full or which in ("hog", "combined"):
+            g = score_models({GENERIC: self.models_[GENERIC]}, f, None if full else [0])[GENERIC]
+            if full:
+                maps[GENERIC] = g
+            out["hog"] = person_hog(person_crop(f.gray, torso_centre(self.models_[GENERIC], g[0])))
+        return out, maps
+
+    def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
+        which = which or self.viewpoint
+        clf = self._classifier(which)
+        if which == "hog":
+            x = feats["hog"]
+        elif which == "combined":
+            x = (feats["parts"], feats["hog"])
+        elif which == "logistic":
+            x = feats["parts"]
+        else:
+            x = feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        if which == "combined":
+            return str(clf.predict(x)[0]), clf.scores(x)[0]
         return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
 
     def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
-                 detectors: str | None = None) -> PoseFrame:
+                 detectors: str | None = None, background: np.ndarray | None = None) -> PoseFrame:
         """Pose of one frame (BGR or gray, any size: it is resized to the working height). ``view``
         forces a viewpoint (else the classifier decides); ``detectors="generic"`` uses the generic
-        set."""
+        set. ``background`` (same size and channels as ``frame``: the median of frames of a
+        static-camera video, :func:`vidstyle.pose.foreground.background_model`) adds the person
+        prior, weighted by ``fg_weight``."""
         f, s = self.prepare(frame)
         feats, maps = self.view_features(f)
         vname, vscores = self.classify_view(feats)
         if view is not None:
             vname = view
         model_name = GENERIC if detectors == GENERIC else vname
-        m = self.models_[model_name]
-        S = maps[model_name] if model_name in maps else score_models({model_name: m}, f)[model_name]
-        r = m.infer(S)
-        pts = m.keypoints(r["states"], r["unary"], scale=s)
+        S = maps[model_name] if model_name in maps else score_models({model_name: self.models_[model_name]},
+                                                                      f)[model_name]
+        fg = self.foreground_map(frame, background, f)
+        pts = self.solve(model_name, S, s, fg, f)
         return PoseFrame(index, vname, pts, vscores)
+
+    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
+        """The frame's foreground at the working size (None without a background or a prior)."""
+        if background is None or not getattr(self, "fg_weight", 0.0):
+            return None
+        from .foreground import foreground
+
+        if background.shape != frame.shape:
+            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
+        fg = foreground(frame, background)
+        if fg.shape != (f.H, f.W):
+            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
+        return fg
+
+    def solve(self, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
+              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
+        with the person prior when ``fg`` is given."""
+        m = self.models_[model_name]
+        w = getattr(self, "fg_weight", 0.0) if fg_weight is None else fg_weight
+        if fg is not None and w:
+            from .foreground import part_coverage
+
+            S = S + np.float32(w) * part_coverage(m, f, fg)
+        r = m.infer(S)
+        return m.keypoints(r["states"], r["unary"], scale=scale)
 
 
 # ---------------------------------------------------------------- files

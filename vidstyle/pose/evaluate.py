@@ -18,7 +18,7 @@ import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
 from .data import VIEW_NAMES
-from .model import score_models
+from .estimator import VIEWPOINT_METHODS
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +68,21 @@ def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
     return rows
 
 
+def _frame_of(s):
+    return s.bgr if s.bgr is not None else s.image
+
+
+def clip_backgrounds(samples) -> dict:
+    """Clip id -> median background of that clip's frames (clips of at least 3 frames): the person
+    prior of a static-camera video, as ``vidstyle pose`` computes it over a whole video."""
+    from .foreground import background_model
+
+    groups: dict = {}
+    for s in samples:
+        groups.setdefault(s.clip, []).append(_frame_of(s))
+    return {c: background_model(fr) for c, fr in groups.items() if len(fr) >= 3 and c != -1}
+
+
 def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     """Run every method on the same held-out frames; return the metrics dict."""
     from .blazepose import BlazePoseEstimator
@@ -75,24 +90,27 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     gt = np.stack([s.keypoints for s in samples])
     views = [s.view for s in samples]
     methods = {"ps": [], "ps_generic": [], "ps_oracle_view": []}
-    vpred = {"svm": [], "logistic": []}
-    times = []
+    prior = bool(getattr(model, "fg_weight", 0.0))
+    if prior:
+        methods["ps_single_image"] = []
+    backgrounds = clip_backgrounds(samples) if prior else {}
+    vpred = {w: [] for w in VIEWPOINT_METHODS}
     for s in samples:
-        t0 = time.perf_counter()
         f, scale = model.prepare(s.image)
         feats, maps = model.view_features(f, full=True)
-        v_svm, _ = model.classify_view(feats, "svm")
-        v_log, _ = model.classify_view(feats, "logistic")
-        vpred["svm"].append(v_svm)
-        vpred["logistic"].append(v_log)
-        chosen = v_svm if model.viewpoint == "svm" else v_log
+        for w in VIEWPOINT_METHODS:
+            vpred[w].append(model.classify_view(feats, w)[0])
+        chosen = vpred[model.viewpoint][-1]
+        fg = model.foreground_map(_frame_of(s), backgrounds.get(s.clip), f)
         for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
-            m = model.models_[mname]
-            S = maps[mname] if mname in maps else score_models({mname: m}, f)[mname]
-            r = m.infer(S)
-            methods[name].append(m.keypoints(r["states"], r["unary"], scale))
-            if name == "ps":
-                times.append(time.perf_counter() - t0)  # includes all 40 detectors (both classifiers)
+            methods[name].append(model.solve(mname, maps[mname], scale, fg, f))
+        if prior:
+            methods["ps_single_image"].append(model.solve(chosen, maps[chosen], scale))
+    times = []
+    for s in samples[:: max(1, len(samples) // 20)]:  # the pose command's path (only the chosen classifier)
+        t0 = time.process_time()
+        model.estimate(_frame_of(s), background=backgrounds.get(s.clip))
+        times.append(time.process_time() - t0)
     if blazepose:
         est = BlazePoseEstimator()
         bp, bview = [], []
@@ -115,7 +133,10 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
         out["pck@0.2"][name] = {"all": float(k.mean()), **{kp: float(k[:, i].mean()) for i, kp in enumerate(KEYPOINTS)}}
     for name, pred in vpred.items():
         out["viewpoint"][name] = confusion(views, pred)
-    out["ps_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
+    out["ps_cpu_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
+    out["ps_viewpoint_method"] = model.viewpoint
+    out["ps_person_prior"] = {"fg_weight": float(getattr(model, "fg_weight", 0.0)),
+                              "clips_with_background": len(backgrounds)}
     return out
 
 

@@ -5,6 +5,9 @@ histogram over ``B`` unsigned orientation bins (linear soft binning), normalised
 3x3 cell neighbourhood (a cheap stand-in for HOG's overlapping 2x2 blocks), then clipped at 0.4 and
 square-rooted; plus one channel with the cell's mean normalised gradient energy.
 
+With ``rotate=False`` only the unrotated frame's cells are computed and every orientation reads them:
+the per-orientation mixture templates of Yang & Ramanan instead of rotated copies.
+
 ``RotatedFeatures`` computes the cells of the frame rotated by each of ``n_orient`` angles so that a
 part of orientation ``theta_k`` (direction proximal -> distal, image angle ``atan2(dy, dx)``) points
 straight down (+y) in copy ``k``: part templates are then learned and applied upright only (the
@@ -77,14 +80,14 @@ class RotatedFeatures:
     pixels of copy ``k``; ``grid`` (Hc, Wc) is the frame's own cell grid used for part states.
     """
 
-    def __init__(self, gray: np.ndarray, n_orient: int, cell: int = 4) -> None:
+    def __init__(self, gray: np.ndarray, n_orient: int, cell: int = 4, rotate: bool = True) -> None:
         H, W = gray.shape
-        self.H, self.W, self.cell, self.n_orient = H, W, cell, n_orient
+        self.H, self.W, self.cell, self.n_orient, self.rotate = H, W, cell, n_orient, rotate
         S = math.ceil(math.hypot(H, W) / cell) * cell
         self.S = S
         self.mats = []
         self.feats = []
-        for th in orientations(n_orient):
+        for th in (orientations(n_orient) if rotate else [math.pi / 2]):
             alpha = math.pi / 2 - th  # rotate direction th onto +y
             c, s = math.cos(alpha), math.sin(alpha)
             # p' = Rot(alpha) (p - centre) + canvas centre  (image axes: x right, y down)
@@ -94,7 +97,13 @@ class RotatedFeatures:
             self.mats.append(M)
             rot = cv2.warpAffine(gray, M, (S, S), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
             self.feats.append(cell_features(rot, cell))
-        self.feats = np.stack(self.feats)  # (K, S/c, S/c, B+1)
+        self.feats = np.stack(self.feats)  # (K, S/c, S/c, B+1); (1, ...) unrotated when not rotate
+        if not rotate:
+            self.mats = self.mats * n_orient
+
+    def copy_index(self, k: int) -> int:
+        """Which feature copy orientation ``k`` reads (0 for all when the frame is not rotated)."""
+        return k if self.rotate else 0
 
     def to_canvas(self, k: int, xy: np.ndarray) -> np.ndarray:
         M = self.mats[k]
@@ -107,7 +116,7 @@ class RotatedFeatures:
         cx, cy = (self.to_canvas(k, centre_xy) - (self.cell - 1) / 2.0) / self.cell
         r0 = round(cy - (h - 1) / 2.0)
         c0 = round(cx - (w - 1) / 2.0)
-        f = self.feats[k]
+        f = self.feats[self.copy_index(k)]
         if r0 < 0 or c0 < 0 or r0 + h > f.shape[0] or c0 + w > f.shape[1]:
             return None
         return f[r0:r0 + h, c0:c0 + w].ravel()

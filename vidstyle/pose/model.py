@@ -6,7 +6,7 @@ Part state ``(x, y, theta)`` with x, y on the feature cell grid (stride ``cell``
 of ``n_orient`` directions; scale is the figure's, handled by the caller (image resizing). The
 energy of a configuration is
 
-    E(L) = sum_i -s_i(l_i) + sum_(i,j) [ wxy_ij |T_ij(l_i) - T_ji(l_j)|^2 + wt_ij wrap(k_j - k_i - mu_ij)^2 ]
+    E(L) = sum_i -alpha s_i(l_i) + sum_(i,j) [ wxy_ij |T_ij(l_i) - T_ji(l_j)|^2 + wt_ij wrap(k_j - k_i - mu_ij)^2 ]
            + prior(k_root)
 
 where ``s_i`` is part i's calibrated detector log-odds, ``T_ij(l_i) = p_i + R(theta_i) b_ij`` the
@@ -24,7 +24,7 @@ import numpy as np
 from sklearn.linear_model import LogisticRegression
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS, PART_NAMES, PART_PARENT_INDEX
-from .dt import BIG, brute_dt2d, dt2d
+from .dt import BIG, brute_dt2d, dt2d, min_plus
 from .features import RotatedFeatures, orientation_bin, orientations
 
 N_PARTS = len(PART_NAMES)
@@ -75,14 +75,18 @@ class PictorialStructures:
     Parameters (stored as given): ``n_orient`` orientation bins, ``cell`` stride in pixels, ``C``
     logistic regularisation, ``neg_per_pos`` random negatives per positive, ``hard_rounds`` rounds of
     hard-negative mining, ``seed``, ``dt`` ("envelope" = Felzenszwalb-Huttenlocher, "brute" =
-    separable enumeration, same result).
+    separable enumeration, same result), ``unary_weight`` (alpha: the unary terms' weight against
+    the prior, chosen on validation), ``orient`` ("rotate": one upright template per part applied
+    to rotated copies of the frame, Andriluka et al.; "mixture": one template per part and
+    orientation on the unrotated frame, Yang & Ramanan; :meth:`fit` only).
     Learned: ``templates_`` (list of (h, w, C) arrays), ``bias_``, ``offsets_`` (parent-side joint
     offsets b), ``child_offsets_`` (a), ``distal_`` (distal end offsets), ``wxy_``, ``wt_``, ``mu_``,
     ``root_prior_``.
     """
 
     def __init__(self, n_orient: int = 12, cell: int = 4, C: float = 0.05, neg_per_pos: int = 12,
-                 hard_rounds: int = 1, seed: int = 0, dt: str = "envelope") -> None:
+                 hard_rounds: int = 1, seed: int = 0, dt: str = "envelope", unary_weight: float = 1.0,
+                 orient: str = "rotate") -> None:
         self.n_orient = n_orient
         self.cell = cell
         self.C = C
@@ -90,6 +94,8 @@ class PictorialStructures:
         self.hard_rounds = hard_rounds
         self.seed = seed
         self.dt = dt
+        self.unary_weight = unary_weight
+        self.orient = orient
 
     # ------------------------------------------------------------------ training
     def fit_geometry(self, keypoints: np.ndarray) -> PictorialStructures:
@@ -168,8 +174,12 @@ class PictorialStructures:
         rng = np.random.default_rng(self.seed)
         kp = np.asarray(keypoints, dtype=np.float64)
         self.fit_geometry(kp)
+        if self.orient not in ("rotate", "mixture"):
+            raise ValueError(f"orient must be 'rotate' or 'mixture', got {self.orient!r}")
         if feats is None:
-            feats = [RotatedFeatures(im, self.n_orient, self.cell) for im in images]
+            feats = [RotatedFeatures(im, self.n_orient, self.cell, rotate=self.orient == "rotate") for im in images]
+        if self.orient == "mixture":
+            return self._fit_mixture(feats, kp, rng)
         self.templates_ = []
         self.bias_ = np.zeros(N_PARTS)
         for j in range(N_PARTS):
@@ -188,6 +198,39 @@ class PictorialStructures:
             self.bias_[j] = float(clf.intercept_[0])
         for _ in range(self.hard_rounds):
             self._mine_hard(feats, kp, rng)
+        return self
+
+    def _fit_mixture(self, feats, kp, rng) -> PictorialStructures:
+        """Per part and orientation bin k a logistic template on the unrotated cells (square windows
+        of the part's length): positives are the part's windows of bins k-1..k+1, negatives random
+        windows plus the part's own windows at orientations at least 3 bins away."""
+        K = self.n_orient
+        self.sizes_ = [(h, h) for h, _w in self.sizes_]
+        self.templates_, self.bias_ = [], np.zeros((N_PARTS, K))
+        for j in range(N_PARTS):
+            h, w = self.sizes_[j]
+            P, bins, Nn = [], [], []
+            for f, k in zip(feats, kp):
+                p, n = self._samples(f, k, j, rng, self.neg_per_pos)
+                if p is not None:
+                    P.append(p)
+                    bins.append(int(orientation_bin(part_geometry(k[None])[1][0, j], K)))
+                Nn.extend(n)
+            P, bins, Nn = np.array(P), np.array(bins), np.array(Nn)
+            temps = []
+            for k in range(K):
+                dk = np.minimum((bins - k) % K, (k - bins) % K)
+                pos, far = P[dk <= 1], P[dk >= 3]
+                if len(pos) < 3:
+                    temps.append(np.zeros((h, w, feats[0].feats.shape[-1]), np.float32))
+                    self.bias_[j, k] = -10.0
+                    continue
+                X = np.vstack([pos, Nn, far])
+                y = np.r_[np.ones(len(pos)), np.zeros(len(Nn) + len(far))]
+                clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced").fit(X, y)
+                temps.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
+                self.bias_[j, k] = float(clf.intercept_[0])
+            self.templates_.append(temps)
         return self
 
     def _mine_hard(self, feats, kp, rng) -> None:
@@ -240,16 +283,20 @@ class PictorialStructures:
     # ------------------------------------------------------------------ inference
     def _rounded(self, off: np.ndarray) -> np.ndarray:
         """(K, 2) integer (dx, dy) cell offsets of a part-frame offset at each orientation."""
-        ang = orientations(self.n_orient)
-        v = _from_frame(np.broadcast_to(off, (self.n_orient, 2)), ang)
-        return np.rint(v).astype(np.int64)
+        key = (self.n_orient, float(off[0]), float(off[1]))
+        cache = self.__dict__.setdefault("_offset_cache", {})
+        if key not in cache:
+            ang = orientations(self.n_orient)
+            v = _from_frame(np.broadcast_to(off, (self.n_orient, 2)), ang)
+            cache[key] = np.rint(v).astype(np.int64)
+        return cache[key]
 
     def infer(self, scores: np.ndarray) -> dict:
         """Exact minimum of the energy given ``scores`` (10, K, H, W). Returns states (10, 3) as
         (k, y, x), the energy, and the unary scores at the states."""
         K = self.n_orient
         H, W = scores.shape[-2:]
-        cost = -np.asarray(scores, dtype=np.float64)
+        cost = -float(getattr(self, "unary_weight", 1.0)) * np.asarray(scores, dtype=np.float64)
         total = cost.copy()
         back = {}
         dtf = dt2d if self.dt == "envelope" else brute_dt2d
@@ -271,9 +318,7 @@ class PictorialStructures:
                 # orientation: E(ki, q) = min_kj D(kj, q) + wt wrap(kj - ki - mu)^2
                 dev = (kk[None, :] - kk[:, None] - self.mu_[j] + K / 2) % K - K / 2  # [ki, kj]
                 pen = self.wt_[j] * dev ** 2
-                tot = D[n][None] + pen[:, :, None, None]  # (ki, kj, H, W)
-                kbest = tot.argmin(axis=1)
-                E = np.take_along_axis(tot, kbest[:, None], axis=1)[:, 0]
+                E, kbest = min_plus(D[n], pen)  # (ki, H, W)
                 b = self._rounded(self.offsets_[j])
                 msg = np.stack([_shift(E[k], b[k, 1], b[k, 0]) for k in range(K)])
                 total[i] += msg
@@ -307,7 +352,7 @@ class PictorialStructures:
             k, y, x = states[j]
             if not (0 <= y < H and 0 <= x < W):
                 return math.inf
-            e -= scores[j, k, y, x]
+            e -= float(getattr(self, "unary_weight", 1.0)) * scores[j, k, y, x]
         e += self.root_prior_[states[0, 0]]
         for j in range(1, N_PARTS):
             i = int(PART_PARENT_INDEX[j])
@@ -349,7 +394,7 @@ _GRID_CACHE: dict = {}
 def _canvas_maps(f: RotatedFeatures, cell: int):
     """Per orientation k: float32 (col, row) canvas cell coordinates under every frame cell centre
     (for ``cv2.remap``)."""
-    key = (f.H, f.W, f.S, f.n_orient, cell)
+    key = (f.H, f.W, f.S, f.n_orient, cell, getattr(f, "rotate", True))
     if key not in _GRID_CACHE:
         Hc, Wc = f.H // cell, f.W // cell
         gy, gx = np.mgrid[0:Hc, 0:Wc]
@@ -376,16 +421,17 @@ def score_models(models: dict, f: RotatedFeatures, parts: list[int] | None = Non
     out = {}
     for name, m in models.items():
         res = np.empty((len(parts), K, Hc, Wc), dtype=np.float32)
+        mixture = getattr(m, "orient", "rotate") == "mixture"
         for n, j in enumerate(parts):
-            T = m.templates_[j]
             for k in range(K):
-                F = f.feats[k]
+                T = m.templates_[j][k] if mixture else m.templates_[j]
+                F = f.feats[f.copy_index(k)]
                 R = np.zeros(F.shape[:2], dtype=np.float32)
                 for ch in range(F.shape[2]):
                     R += cv2.filter2D(F[..., ch], cv2.CV_32F, T[..., ch], borderType=cv2.BORDER_CONSTANT)
                 mx, my = maps[k]
                 res[n, k] = cv2.remap(R, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=-20.0)
-            res[n] += m.bias_[j]
+            res[n] += (m.bias_[j][:, None, None] if mixture else m.bias_[j])
         out[name] = res
     return out
 

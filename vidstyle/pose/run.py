@@ -58,15 +58,31 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
     h = working_height(chunk.backend, in_size[1])
     out = []
     with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
+        bg = video_background(reader) if chunk.backend == "ps" and getattr(est, "fg_weight", 0.0) else None
         for i in chunk.frames:
             frame = np.asarray(reader.frame(i))
-            pf = est.estimate(frame, i)
+            pf = est.estimate(frame, i, background=bg) if bg is not None else est.estimate(frame, i)
             pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
             pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
             out.append(pf)
     if hasattr(est, "close"):
         est.close()
     return out
+
+
+BACKGROUND_FRAMES = 25
+
+
+def video_background(reader) -> np.ndarray | None:
+    """Static-camera background of a whole video: the per-pixel median of ``BACKGROUND_FRAMES``
+    frames spread evenly over it (memory: those frames only). None for videos under 3 frames."""
+    from .foreground import background_model
+
+    n = len(reader)
+    if n < 3:
+        return None
+    idx = sorted(set(np.linspace(0, n - 1, min(n, BACKGROUND_FRAMES)).round().astype(int).tolist()))
+    return background_model(np.asarray(reader.frame(i)) for i in idx)
 
 
 def parse_frames(text: str | None, n_frames: int) -> list[int]:

@@ -1,0 +1,6 @@
+"""Defaults of the pose model (:class:`vidstyle.pose.estimator.PoseModel`, ``vidstyle train-pose``),
+chosen on validation renders by ``scripts/validate_pose.py`` (table and scores:
+``pipelines/kickboxing/validation/pose.json``). A light module: the CLI reads it at start-up."""
+
+VIEWPOINT_METHODS = ("svm", "logistic", "hog", "combined")
+DEFAULTS = {"n_orient": 8, "hard_rounds": 1, "viewpoint": "hog", "unary_weight": 2.0, "fg_weight": 2.0}
