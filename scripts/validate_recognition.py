@@ -3,31 +3,47 @@
 
 Every candidate trains the vocabulary on set A and the recognizer on set B of the seeded split
 (:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
-never loaded. The search is one factor at a time from the starting point (the values used before this
-script existed): each candidate changes one of
+never loaded. Factors (``ALL_FACTORS``):
 
-- the descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
-- the vocabulary size (500 words; the thesis' 1500 with ``--full``),
-- the word-grouping correlation threshold,
-- the SVM cost C,
-- the SVM training frames per class (the cap),
+- ``variant``: the descriptor (one features directory per variant: ``--features scovanner2007=DIR
+  --features thesis=DIR``; the variant's own features of sets A, B and V are enough),
+- ``words``: the vocabulary size,
+- ``grouping_threshold``: the word-grouping correlation threshold,
+- ``C``: the SVM cost,
+- ``max_frames_per_class``: the SVM training frames per class (the cap),
+- ``coarse_context``: the multi-scale temporal context (0 = the thesis' single 5-frame context),
 
-and every trained candidate is also scored with each smoother (the thesis' window vote, Viterbi with
-several emission weights: no retraining). The candidates train in parallel (``--workers``). For each
-factor the best value wins (score: smoothed frame accuracy on V; ties go to the video accuracy, then to
-the starting value); when the winners differ from the starting point, their combination is trained and
-scored on V too, and that is the final configuration only if it scores at least as well as the starting
-point (otherwise the starting point stays). Prints the table of every candidate and writes the chosen
-values, each with the validation score it won with, to ``--out`` (default
-``pipelines/kickboxing/validation/recognition.json``), which the library defaults and
-``pipelines/kickboxing/params.yaml`` cite.
+and the smoother (``SMOOTHERS``: the thesis' window vote, Viterbi and the explicit-duration Viterbi with
+several emission weights), which needs no retraining: every trained candidate is scored with each.
+
+Search: (1) the smoother is chosen on the starting model; (2) one factor at a time from the starting
+point (``START``), every candidate scored with that smoother; for each factor the best value wins
+(score: smoothed frame accuracy on V; ties go to the video accuracy, then to the starting value);
+(3) when the winners differ from the starting point, their combination is trained and scored on V, and
+it is the final configuration only if it scores at least as well as the starting point (otherwise the
+starting values stay). The default grid tries one other value per factor (``FACTORS``; ``--full`` more,
+``--quick`` two factors for a smoke run). Candidates train in parallel (``--workers``); with
+``--cache-dir`` every trained candidate is kept, so a rerun (another smoother, another factor) trains only
+what is new.
+
+Output (``--out``, default ``pipelines/kickboxing/validation/recognition.json``; the library defaults,
+the CLI defaults and ``pipelines/kickboxing/params.yaml`` cite it), ``kind``
+``vidstyle.validation.recognition``, ``schema_version`` 2: ``command``, ``dataset``, ``dataset_seed``,
+``seed``, ``features`` (variant -> directory), ``split`` (performers of A, B, V; the test performers,
+not used), ``score``, ``search``, ``start``, ``start_model``, ``factors`` (factor -> values tried besides
+the start), ``factors_not_searched``, ``smoothers`` ([method, emission weight]), ``chosen`` (per factor
+and ``smoother``: ``value``, ``validation_frame_accuracy_smoothed``, ``validation_video_accuracy``,
+``candidates`` value -> V smoothed accuracy, and ``value_if_alone`` when the combination lost),
+``final_config``, ``final_validation`` (raw / smoothed / video accuracy, per-class smoothed recall, V
+frames) and ``rows`` (every candidate x smoother: ``step``, ``config``, the V scores, ``train_s``).
+Schema 1 (before the duration smoother and the coarse context) had the same fields without
+``smoothers``.
 
 Usage (the demo pipeline's dataset and features)::
 
-    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \\
-        --features scovanner2007=pipelines/kickboxing/out/features --seed 0
-
-``--quick`` searches fewer values (for a smoke run).
+    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \
+        --features scovanner2007=pipelines/kickboxing/out/features --features thesis=THESIS_FEATURES \
+        --start-model pipelines/kickboxing/out/models/recognizer.joblib --cache-dir /tmp/vcache --seed 0
 """
 
 from __future__ import annotations
