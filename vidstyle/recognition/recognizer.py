@@ -86,15 +86,15 @@ class ActionRecognizer(BaseEstimator):
         normalize: str = "sqrt",
         n_components: int = 128,
         classifier: str = "ova-ovo",
-        # C, the per-class cap, the grouping threshold, the smoother and its emission weight: the starting
-        # values of scripts/validate_recognition.py, which scores candidates on the demo's validation
+        # C, the per-class cap, the grouping threshold, the coarse context, the smoother and its emission
+        # weight: chosen by scripts/validate_recognition.py, which scores candidates on the demo's validation
         # performers (never the test performers); pipelines/kickboxing/validation/recognition.json records
-        # which were searched, the value chosen and the validation score it won with.
+        # every candidate, the value chosen and the validation score it won with.
         C: float = 100.0,
         gamma: float | str = "scale",
-        max_frames_per_class: int | None = 3000,
+        max_frames_per_class: int | None = 1500,
         smoothing_window: int = 6,
-        smoothing: str = "viterbi",
+        smoothing: str = "duration",
         emission_weight: float = 1.0,
         mirror: bool = True,
         n_jobs: int | None = None,
