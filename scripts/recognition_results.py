@@ -70,8 +70,12 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
     tv = ["--test-view", test_view] if test_view else []
     model = w / "recognizer.joblib"
     if not model.is_file():
-        _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
-                   "--words", str(rp["words"]), "--seed", str(seed), "--out", str(w / "vocab.npz")])
+        # one vocabulary per split, seed and size (the mirror and no-mirror runs share theirs)
+        vocab = args.work / f"vocab_{split}{'_' + test_view if test_view else ''}_{rp['words']}w_seed{seed}.npz"
+        if not vocab.is_file():
+            _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
+                       "--words", str(rp["words"]), "--seed", str(seed), "--out", str(vocab)])
+        shutil.copyfile(vocab, w / "vocab.npz")
         _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
                    "--vocab", str(w / "vocab.npz"), *_train_args(rp), "--mirror" if mirror else "--no-mirror",
                    "--seed", str(seed), "--jobs", str(args.jobs), "--out", str(model)])
@@ -97,7 +101,7 @@ def main() -> None:
     ap.add_argument("--features", type=Path, required=True, help="its features directory")
     ap.add_argument("--camera-dataset", type=Path, default=None, help="unseen-camera dataset directory")
     ap.add_argument("--camera-features", type=Path, default=None, help="its features directory")
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0], help="split seeds (unseen performer [+ camera])")
+    ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
     ap.add_argument("--left-right", type=int, nargs="*", default=[],
                     help="seeds of the unseen-view split (test view right), with and without mirror training")
     ap.add_argument("--params", type=Path, default=ROOT / "pipelines" / "kickboxing" / "params.yaml")
