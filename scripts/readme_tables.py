@@ -75,8 +75,10 @@ def _config(d: dict) -> str:
         parts.append(f"C {rp['C']:g}")
     if "max_frames_per_class" in rp:
         parts.append(f"cap {rp['max_frames_per_class']}")
+    if rp.get("coarse_context"):
+        parts.append(f"context {rp.get('context', 2)}+{rp['coarse_context']}")
     if sm:
-        parts.append(f"{sm}" + (f" ^{ew:g}" if sm == "viterbi" and ew is not None else ""))
+        parts.append(f"{sm}" + (f" ^{ew:g}" if sm in ("viterbi", "duration") and ew is not None else ""))
     return ", ".join(parts) or "?"
 
 

@@ -1,11 +1,14 @@
 #!/usr/bin/env python
 """How much does the Viterbi smoother's transition prior move style identification? (issue 12)
 
-The default smoother decodes with the frame-to-frame label chain counted in set B's training labels,
-which pulls every recognised chain toward the training performers' pooled chain. This script recognises
-the *test* performers' performance videos once (frame scores of the model) and decodes them with
+The Viterbi smoothers decode with statistics of set B's training labels (the frame-to-frame label chain;
+for the explicit-duration smoother, the default, the run lengths and class changes), which pulls every
+recognised chain toward the training performers' pooled chain. This script recognises the *test*
+performers' performance videos once (frame scores of the model) and decodes them with
 
-- ``viterbi, prior from B``: the model as trained (the default);
+- ``duration, from B``: the explicit-duration smoother as trained (the default);
+- ``duration, from V``: its run lengths and class changes from the validation performers' labels;
+- ``viterbi, prior from B``: the plain Viterbi smoother with the model's chain;
 - ``viterbi, prior from V``: the chain counted in the validation performers' labels instead;
 - ``viterbi, flat prior``: every transition equally likely except staying (no chain information: the
   diagonal carries the same self-transition share as B's chain, off-diagonal mass spread evenly);
@@ -38,7 +41,7 @@ from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
 from vidstyle.formats.labels import read_labels as load_labels  # noqa: E402
 from vidstyle.recognition.io import features_path, load_features  # noqa: E402
 from vidstyle.recognition.recognizer import load_model  # noqa: E402
-from vidstyle.recognition.smoothing import smooth_labels, transition_matrix  # noqa: E402
+from vidstyle.recognition.smoothing import duration_model, smooth_labels, transition_matrix  # noqa: E402
 from vidstyle.style.evaluate import EvalParams, evaluate_performers, load_performers  # noqa: E402
 
 log = logging.getLogger("style_viterbi_prior")
@@ -72,13 +75,17 @@ def main() -> None:
     ds = load_dataset(args.dataset)
     by_id = ds.by_id()
     index = {c: i for i, c in enumerate(rec.classes_)}
-    T_val = transition_matrix([np.array([index[c] for c in load_labels(ds.labels_path(by_id[i])).labels])
-                               for i in val_ids], len(rec.classes_))
-    priors = {"viterbi, prior from B (default)": ("viterbi", rec.transitions_),
+    seq_val = [np.array([index[c] for c in load_labels(ds.labels_path(by_id[i])).labels]) for i in val_ids]
+    T_val = transition_matrix(seq_val, len(rec.classes_))
+    priors = {}
+    if getattr(rec, "durations_", None) is not None:
+        priors["duration, from B" + (" (default)" if rec.smoothing == "duration" else "")] = ("duration", rec.durations_)
+        priors["duration, from V"] = ("duration", duration_model(seq_val, len(rec.classes_)))
+    priors.update({"viterbi, prior from B" + (" (default)" if rec.smoothing == "viterbi" else ""): ("viterbi", rec.transitions_),
               "viterbi, prior from V": ("viterbi", T_val),
               "viterbi, flat prior": ("viterbi", flat_prior(rec.transitions_)),
               "vote window 6 (no prior)": ("vote", None),
-              "raw (no smoothing)": ("raw", None)}
+              "raw (no smoothing)": ("raw", None)})
     vids = [v for v in ds.videos if v.performer in test_perf and v.kind == "performance"]
     scored = []
     for v in vids:
@@ -96,8 +103,10 @@ def main() -> None:
                 if method == "raw":
                     lab, c = raw, conf
                 else:
-                    lab, c = smooth_labels(raw, len(classes), rec.smoothing_window if method == "viterbi" else 6, conf,
-                                           scores, method, transitions=T, emission_weight=rec.emission_weight)
+                    lab, c = smooth_labels(raw, len(classes), rec.smoothing_window if method != "vote" else 6, conf,
+                                           scores, method, transitions=T if method == "viterbi" else None,
+                                           emission_weight=rec.emission_weight,
+                                           durations=T if method == "duration" else None)
                 write_json(d / f"{v.id}.json", {"video": v.video, "fps": ds.fps, "classes": classes,
                                                 "labels": [classes[i] for i in lab], "confidence": np.round(c, 4).tolist()})
             if not results:

@@ -3,36 +3,53 @@
 
 Every candidate trains the vocabulary on set A and the recognizer on set B of the seeded split
 (:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
-never loaded. The search is one factor at a time from the starting point (the values used before this
-script existed): each candidate changes one of
+never loaded. Factors (``ALL_FACTORS``):
 
-- the descriptor (one features directory per variant: ``--features scovanner2007=DIR --features thesis=DIR``),
-- the vocabulary size (500 words; the thesis' 1500 with ``--full``),
-- the word-grouping correlation threshold,
-- the SVM cost C,
-- the SVM training frames per class (the cap),
+- ``variant``: the descriptor (one features directory per variant: ``--features scovanner2007=DIR
+  --features thesis=DIR``; the variant's own features of sets A, B and V are enough),
+- ``words``: the vocabulary size,
+- ``grouping_threshold``: the word-grouping correlation threshold,
+- ``C``: the SVM cost,
+- ``max_frames_per_class``: the SVM training frames per class (the cap),
+- ``coarse_context``: the multi-scale temporal context (0 = the thesis' single 5-frame context),
 
-and every trained candidate is also scored with each smoother (the thesis' window vote, Viterbi with
-several emission weights: no retraining). The candidates train in parallel (``--workers``). For each
-factor the best value wins (score: smoothed frame accuracy on V; ties go to the video accuracy, then to
-the starting value); when the winners differ from the starting point, their combination is trained and
-scored on V too, and that is the final configuration only if it scores at least as well as the starting
-point (otherwise the starting point stays). Prints the table of every candidate and writes the chosen
-values, each with the validation score it won with, to ``--out`` (default
-``pipelines/kickboxing/validation/recognition.json``), which the library defaults and
-``pipelines/kickboxing/params.yaml`` cite.
+and the smoother (``SMOOTHERS``: the thesis' window vote, Viterbi and the explicit-duration Viterbi with
+several emission weights), which needs no retraining: every trained candidate is scored with each.
+
+Search: (1) the smoother is chosen on the starting model; (2) one factor at a time from the starting
+point (``START``), every candidate scored with that smoother; for each factor the best value wins
+(score: smoothed frame accuracy on V; ties go to the video accuracy, then to the starting value);
+(3) when the winners differ from the starting point, their combination is trained and scored on V, and
+it is the final configuration only if it scores at least as well as the starting point (otherwise the
+starting values stay). The default grid tries one other value per factor (``FACTORS``; ``--full`` more,
+``--quick`` two factors for a smoke run). Candidates train in parallel (``--workers``); with
+``--cache-dir`` every trained candidate is kept, so a rerun (another smoother, another factor) trains only
+what is new.
+
+Output (``--out``, default ``pipelines/kickboxing/validation/recognition.json``; the library defaults,
+the CLI defaults and ``pipelines/kickboxing/params.yaml`` cite it), ``kind``
+``vidstyle.validation.recognition``, ``schema_version`` 2: ``command``, ``dataset``, ``dataset_seed``,
+``seed``, ``features`` (variant -> directory), ``split`` (performers of A, B, V; the test performers,
+not used), ``score``, ``search``, ``start``, ``start_model``, ``factors`` (factor -> values tried besides
+the start), ``factors_not_searched``, ``smoothers`` ([method, emission weight]), ``chosen`` (per factor
+and ``smoother``: ``value``, ``validation_frame_accuracy_smoothed``, ``validation_video_accuracy``,
+``candidates`` value -> V smoothed accuracy, and ``value_if_alone`` when the combination lost),
+``final_config``, ``final_validation`` (raw / smoothed / video accuracy, per-class smoothed recall, V
+frames) and ``rows`` (every candidate x smoother: ``step``, ``config``, the V scores, ``train_s``).
+Schema 1 (before the duration smoother and the coarse context) had the same fields without
+``smoothers``.
 
 Usage (the demo pipeline's dataset and features)::
 
-    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \\
-        --features scovanner2007=pipelines/kickboxing/out/features --seed 0
-
-``--quick`` searches fewer values (for a smoke run).
+    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \
+        --features scovanner2007=pipelines/kickboxing/out/features --features thesis=THESIS_FEATURES \
+        --start-model pipelines/kickboxing/out/models/recognizer.joblib --cache-dir /tmp/vcache --seed 0
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import logging
 import sys
@@ -50,17 +67,34 @@ from vidstyle.recognition.splits import make_split  # noqa: E402
 log = logging.getLogger("validate_recognition")
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / "validation" / "recognition.json"
 
-# the starting point (the values before validation existed) and the other values tried per factor
+# the starting point (the values before this search; the smoother's emission weight 1 was chosen by an
+# earlier run of this script) and the other values tried per factor
 START = {"variant": "scovanner2007", "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
-         "max_frames_per_class": 3000, "smoothing": "viterbi", "emission_weight": 3.0, "smoothing_window": 6}
-FACTORS = {"words": [500], "grouping_threshold": [0.9], "C": [10.0], "max_frames_per_class": [1500]}
-FULL = {"words": [500, 1500], "grouping_threshold": [0.7, 0.9], "C": [10.0, 1000.0], "max_frames_per_class": [1500, 6000]}
-SMOOTHERS = [("viterbi", 3.0), ("vote", None), ("viterbi", 1.0), ("viterbi", 2.0), ("viterbi", 5.0), ("viterbi", 8.0)]
+         "max_frames_per_class": 3000, "coarse_context": 0, "smoothing": "viterbi", "emission_weight": 1.0,
+         "smoothing_window": 6}
+# the default grid: one other value per factor (what two shared cores allow in an hour: every candidate
+# is a full SVM training), two for the cap (after 1500 beat 3000 on V, 800 was added to see whether the
+# trend goes on); --full searches more values per factor
+FACTORS = {"words": [500], "grouping_threshold": [0.7], "C": [30.0], "max_frames_per_class": [1500, 800],
+           "coarse_context": [8]}
+QUICK = {"words": [500], "C": [30.0]}
+FULL = {"words": [500, 1500], "grouping_threshold": [0.7, 0.9], "C": [30.0, 300.0],
+        "max_frames_per_class": [800, 1500, 5000], "coarse_context": [5, 8, 12]}
+# every factor the search knows (the descriptor variant's values are the --features directories given)
+ALL_FACTORS = ("variant", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context")
+SMOOTHERS = [("viterbi", 1.0), ("vote", None), ("viterbi", 2.0), ("viterbi", 3.0), ("viterbi", 5.0),
+             ("duration", 1.0), ("duration", 2.0), ("duration", 3.0)]
+MODEL_KEYS = ("variant", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context", "smoothing_window")
 
 
 class Search:
-    def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int):
+    """Trains candidates on sets A/B of ``split`` and scores them on V. With ``cache_dir``, every trained
+    candidate (the model and its raw V outputs) is kept there under a key of its training values, so a
+    rerun (e.g. with another smoother) retrains nothing it has already trained."""
+
+    def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int, cache_dir: Path | None = None):
         self.ds, self.features, self.split, self.seed, self.jobs = ds, features, split, seed, jobs
+        self.cache_dir = None if cache_dir is None else Path(cache_dir)
         self._sets: dict = {}
         self._vocab: dict = {}
         self._memo: dict = {}
@@ -88,37 +122,60 @@ class Search:
             self._vocab[key] = Vocabulary(n_words=words, random_state=self.seed).fit(desc)
         return self._vocab[key]
 
-    def run(self, step: str, cfg: dict, smoothers=None) -> list[dict]:
-        """Train on A/B with ``cfg`` and score V once per smoother; one row per smoother."""
+    def _cache_file(self, cfg: dict) -> Path | None:
+        if self.cache_dir is None:
+            return None
+        ident = json.dumps({"dataset": str(self.ds.root) if hasattr(self.ds, "root") else None,
+                            "features": str(Path(self.features[cfg["variant"]]).resolve()),
+                            "seed": self.seed, "val": sorted(self.split.val), "train": sorted(self.split.train),
+                            **{k: cfg.get(k, START[k]) for k in MODEL_KEYS}}, sort_keys=True)
+        return self.cache_dir / (hashlib.sha256(ident.encode()).hexdigest()[:20] + ".joblib")
+
+    def trained(self, cfg: dict):
+        """(model, raw V outputs, training seconds) of the candidate ``cfg`` (memo, cache, start model or a fit)."""
+        import joblib
+
         from vidstyle.recognition.recognizer import ActionRecognizer
 
+        key = tuple((k, cfg.get(k, START[k])) for k in MODEL_KEYS)
+        if key in self._memo:
+            return self._memo[key]
+        cache = self._cache_file(cfg)
+        if cache is not None and cache.is_file():
+            d = joblib.load(cache)
+            self._memo[key] = (d["model"], d["raw"], d["train_s"])
+            return self._memo[key]
         t0 = time.perf_counter()
-        s = self.sets(cfg["variant"])
-        feats_v, labels_v = s["V"]
-        key = tuple(sorted((k, v) for k, v in cfg.items() if k not in ("smoothing", "emission_weight")))
-        if key not in self._memo and self.start_model is not None and cfg == self.start_cfg:
+        feats_v, _ = self.sets(cfg["variant"])["V"]
+        same_as_start = self.start_model is not None and all(cfg.get(k, START[k]) == self.start_cfg.get(k, START[k])
+                                                              for k in MODEL_KEYS)
+        if same_as_start:
             rec = self.start_model  # trained by `vidstyle train-recognizer` on the same A/B with these values
-            raw = []
-            for H in rec._histograms_many(feats_v):
-                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))))
-            self._memo[key] = (rec, raw, time.perf_counter() - t0)
-        if key in self._memo:  # same model, no retraining
-            rec, raw, train_s = self._memo[key]
         else:
             voc = self.vocabulary(cfg["variant"], cfg["words"])
-            feats_b, labels_b = s["B"]
+            feats_b, labels_b = self.sets(cfg["variant"])["B"]
             rec = ActionRecognizer(
                 vocabulary=voc, grouping_threshold=cfg["grouping_threshold"], C=cfg["C"],
-                max_frames_per_class=cfg["max_frames_per_class"], smoothing=cfg["smoothing"],
-                emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"],
-                n_jobs=self.jobs, random_state=self.seed,
+                max_frames_per_class=cfg["max_frames_per_class"], coarse_context=cfg.get("coarse_context", 0),
+                smoothing=cfg["smoothing"], emission_weight=cfg["emission_weight"],
+                smoothing_window=cfg["smoothing_window"], n_jobs=self.jobs, random_state=self.seed,
             ).fit(feats_b, [t.labels for t in labels_b], classes=self.ds.classes or None)
-            raw = []
-            for H in rec._histograms_many(feats_v):
-                Z = rec._embed(H)
-                raw.append(rec._scores_full(*rec.clf_.predict_with_scores(Z)))
-            train_s = time.perf_counter() - t0
-            self._memo[key] = (rec, raw, train_s)
+        raw = [rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))) for H in rec._histograms_many(feats_v)]
+        train_s = time.perf_counter() - t0
+        self._memo[key] = (rec, raw, train_s)
+        if cache is not None:
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            tmp = cache.with_suffix(".tmp")
+            joblib.dump({"model": rec, "raw": raw, "train_s": train_s, "config": dict(key)}, tmp)
+            tmp.replace(cache)
+        return self._memo[key]
+
+    def run(self, step: str, cfg: dict, smoothers=None) -> list[dict]:
+        """Train on A/B with ``cfg`` and score V once per smoother; one row per smoother."""
+        rec, raw, train_s = self.trained(cfg)
+        labels_v = self.sets(cfg["variant"])["V"][1]
+        if not hasattr(rec, "durations_") and hasattr(rec, "fit_durations"):  # trained before the duration smoother
+            rec.fit_durations([t.labels for t in self.sets(cfg["variant"])["B"][1]])
         rows = []
         for smoothing, weight in smoothers or [(cfg["smoothing"], cfg["emission_weight"])]:
             rec.smoothing = smoothing
@@ -139,9 +196,9 @@ class Search:
 
 
 def _short(c: dict) -> str:
-    sm = c["smoothing"] + (f"^{c['emission_weight']:g}" if c["smoothing"] == "viterbi" else f" w{c['smoothing_window']}")
+    ctx = f" ctx2+{c['coarse_context']}" if c.get("coarse_context") else ""
     return (f"{c['variant']} {c['words']}w g{c['grouping_threshold']:g} C{c['C']:g} "
-            f"cap{c['max_frames_per_class']} {sm}")
+            f"cap{c['max_frames_per_class']}{ctx} {_smoother(c)}")
 
 
 def _key(row):
@@ -157,19 +214,25 @@ def best(rows):
     return top
 
 
+def _smoothers():
+    from vidstyle.recognition.smoothing import METHODS
+
+    return [(m, w) for m, w in SMOOTHERS if m in METHODS]
+
+
 def _candidate(args) -> list[dict]:
     """One trained candidate (a worker process): rows for every smoother."""
-    dataset, features, seed, step, cfg, start_model, start_cfg = args
+    dataset, features, seed, cache_dir, step, cfg, start_model, start_cfg = args
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     ds = load_dataset(dataset)
     split = make_split(ds, "unseen-performer", seed=seed)
-    search = Search(ds, features, split, seed, 1)
+    search = Search(ds, features, split, seed, 1, cache_dir)
     if start_model is not None:
         from vidstyle.recognition.recognizer import load_model
 
         search.start_model = load_model(start_model)[0]
         search.start_cfg, search.start_key = start_cfg, (start_cfg["variant"], start_cfg["words"])
-    return search.run(step, cfg, smoothers=SMOOTHERS)
+    return search.run(step, cfg, smoothers=_smoothers())
 
 
 def check_start_model(path: Path, start: dict, split, seed: int) -> None:
@@ -179,9 +242,9 @@ def check_start_model(path: Path, start: dict, split, seed: int) -> None:
     h = read_header(path)
     p, sp = h.get("params", {}), h.get("split") or {}
     want = {"C": start["C"], "max_frames_per_class": start["max_frames_per_class"],
-            "grouping_threshold": start["grouping_threshold"], "smoothing": start["smoothing"],
-            "emission_weight": start["emission_weight"], "smoothing_window": start["smoothing_window"]}
-    got = {k: p.get(k) for k in want}
+            "grouping_threshold": start["grouping_threshold"], "smoothing_window": start["smoothing_window"],
+            "coarse_context": start["coarse_context"]}
+    got = {k: p.get(k, 0 if k == "coarse_context" else None) for k in want}
     problems = [f"{k} {got[k]} != {v}" for k, v in want.items() if got[k] != v]
     if h.get("vocabulary", {}).get("n_words") != start["words"]:
         problems.append(f"words {h.get('vocabulary', {}).get('n_words')} != {start['words']}")
@@ -195,21 +258,30 @@ def check_start_model(path: Path, start: dict, split, seed: int) -> None:
         raise SystemExit(f"{path}: not the starting configuration on this split: {'; '.join(problems)}")
 
 
+def _at(rows, smoother):
+    return [r for r in rows if (r["config"]["smoothing"], r["config"]["emission_weight"]) == smoother][0]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dataset", required=True, help="dataset.json or its directory")
     ap.add_argument("--features", action="append", default=[], metavar="VARIANT=DIR", required=True,
-                    help="features directory of each descriptor variant to compare")
+                    help="features directory of each descriptor variant to compare (the first is the starting one "
+                         "unless scovanner2007 is given)")
     ap.add_argument("--seed", type=int, default=0, help="split / vocabulary / sampling seed")
     ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
-    ap.add_argument("--full", action="store_true", help="two more values per factor")
+    grid = ap.add_mutually_exclusive_group()
+    grid.add_argument("--full", action="store_true", help="more values per factor")
+    grid.add_argument("--quick", action="store_true", help="one value per factor (a smoke run)")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    ap.add_argument("--cache-dir", type=Path, default=None,
+                    help="keep every trained candidate here; a rerun retrains only what is not there")
     ap.add_argument("--start-model", type=Path, default=None,
                     help="a `vidstyle train-recognizer --dataset` model of the starting values on this split: "
                          "used as the starting candidate (and its vocabulary by the candidates that share it)")
     ap.add_argument("--only", action="append", default=[],
-                    help="train only the candidates of these factors (variant, words, grouping_threshold, C, "
-                         "max_frames_per_class); the others keep the starting value untested")
+                    help="train only the candidates of these factors (" + ", ".join(ALL_FACTORS) + "); the others "
+                         "keep the starting value untested and are listed under factors_not_searched")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     from joblib import Parallel, delayed
@@ -221,41 +293,42 @@ def main() -> None:
     start = dict(START)
     if start["variant"] not in features:
         start["variant"] = next(iter(features))
-    factors = {"variant": [v for v in features if v != start["variant"]], **(FULL if args.full else FACTORS)}
+    grid_values = FULL if args.full else QUICK if args.quick else FACTORS
+    # the descriptor variant last: its candidates need other features files (often computed meanwhile)
+    factors = {**grid_values, "variant": [v for v in features if v != start["variant"]]}
+    factors = {k: v for k, v in factors.items() if v}
     if args.only:
         factors = {k: v for k, v in factors.items() if k in args.only}
     if args.start_model is not None:
         check_start_model(args.start_model, start, split, args.seed)
     jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in factors.items() for v in vals]
-    ctx = (str(args.dataset), features, args.seed)
+    ctx = (str(args.dataset), features, args.seed, args.cache_dir)
     sm = (None if args.start_model is None else str(args.start_model), start)
     results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg, *sm)) for step, cfg in jobs)
     rows = [r for rs in results for r in rs]
-    base = [r for r in results[0]]
-    at_start = lambda rs: [r for r in rs if (r["config"]["smoothing"], r["config"]["emission_weight"])  # noqa: E731
-                           == (start["smoothing"], start["emission_weight"])][0]
-    start_row = at_start(base)
-    chosen: dict = {}
+    base = results[0]
+    # 1. the smoother, on the starting model (no retraining); 2. each factor under that smoother
+    win = best([_at(base, (start["smoothing"], start["emission_weight"]))] + base)
     cfg = dict(start)
-    for key, vals in factors.items():
-        cands = [start_row] + [at_start(rs) for (step, _), rs in zip(jobs, results) if step == key]
-        win = best(cands)
-        cfg[key] = win["config"][key]
-        chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
-                       "validation_video_accuracy": win["video_accuracy"],
-                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
-    win = best(base)
     cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
-    chosen["smoother"] = {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
-                          "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
-                          "validation_video_accuracy": win["video_accuracy"],
-                          "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}
-    final = win
+    chosen: dict = {"smoother": {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
+                                 "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
+                                 "validation_video_accuracy": win["video_accuracy"],
+                                 "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}}
+    smoother = (cfg["smoothing"], cfg["emission_weight"])
+    start_row = _at(base, smoother)
+    for key, vals in factors.items():
+        cands = [start_row] + [_at(rs, smoother) for (step, _), rs in zip(jobs, results) if step == key]
+        w = best(cands)
+        cfg[key] = w["config"][key]
+        chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": w["frame_accuracy_smoothed"],
+                       "validation_video_accuracy": w["video_accuracy"],
+                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
+    final = start_row
     if any(cfg[k] != start[k] for k in factors):
         comb = _candidate((*ctx, "combined winners", cfg, *sm))
         rows += comb
-        c = [r for r in comb if (r["config"]["smoothing"], r["config"]["emission_weight"])
-             == (cfg["smoothing"], cfg["emission_weight"])][0]
+        c = _at(comb, smoother)
         if _key(c) >= _key(final):
             final = c
         else:  # the combination does worse than the starting point with the chosen smoother: keep the start
@@ -265,16 +338,19 @@ def main() -> None:
                 chosen[k]["value"] = start[k]
                 cfg[k] = start[k]
     doc = {
-        "kind": "vidstyle.validation.recognition", "schema_version": 1,
+        "kind": "vidstyle.validation.recognition", "schema_version": 2,
         "command": "python scripts/validate_recognition.py " + " ".join(sys.argv[1:]),
         "dataset": str(args.dataset), "dataset_seed": ds.seed, "seed": args.seed, "features": features,
         "split": {"kind": split.kind, "vocab_performers": split.vocab_performers,
                   "train_performers": split.train_performers, "val_performers": split.val_performers,
                   "test_performers_not_used": split.test_performers},
-        "score": "smoothed frame accuracy on the validation performers (ties: video accuracy)",
-        "search": "one factor at a time from the starting point, then the combination of the winners",
+        "score": "smoothed frame accuracy on the validation performers (ties: video accuracy, then the starting value)",
+        "search": "the smoother on the starting model first; then one factor at a time from the starting point, "
+                  "scored with that smoother; then the combination of the winners (kept only if it scores at least "
+                  "as well as the starting point)",
         "start": start, "start_model": None if args.start_model is None else str(args.start_model),
-        "factors": factors, "factors_not_searched": sorted(set(FACTORS) - set(factors)), "chosen": chosen, "final_config": cfg,
+        "factors": factors, "factors_not_searched": sorted(set(ALL_FACTORS) - set(factors)),
+        "smoothers": [list(x) for x in _smoothers()], "chosen": chosen, "final_config": cfg,
         "final_validation": {k: final[k] for k in ("frame_accuracy_raw", "frame_accuracy_smoothed", "video_accuracy",
                                                   "per_class_recall_smoothed", "n_val_frames")},
         "rows": rows,
@@ -288,18 +364,20 @@ def main() -> None:
 
 
 def _smoother(c: dict) -> str:
-    return f"viterbi^{c['emission_weight']:g}" if c["smoothing"] == "viterbi" else f"vote window {c['smoothing_window']}"
+    if c["smoothing"] in ("viterbi", "duration"):
+        return f"{c['smoothing']}^{c['emission_weight']:g}"
+    return f"{c['smoothing']} window {c['smoothing_window']}"
 
 
 def table(doc: dict) -> str:
     lines = [f"# Recognition validation (seed {doc['seed']}; validation performers {', '.join(doc['split']['val_performers'])}; "
              "test performers not used)", "",
              "| step | candidate | V frame acc. raw | V frame acc. smoothed | V video acc. |", "|---|---|---:|---:|---:|"]
-    st = doc["start"]
+    st = doc["chosen"]["smoother"]["value"]
     for r in doc["rows"]:
         c = r["config"]
         if r["step"] != "start" and (c["smoothing"], c["emission_weight"]) != (st["smoothing"], st["emission_weight"]):
-            continue  # the other smoothers are listed for the starting model (all are in the JSON)
+            continue  # the other smoothers are listed for the starting model only (all are in the JSON)
         va = "n/a" if r["video_accuracy"] is None else f"{100 * r['video_accuracy']:.1f} %"
         lines.append(f"| {r['step']} | {_short(r['config'])} | {100 * r['frame_accuracy_raw']:.1f} % | "
                      f"{100 * r['frame_accuracy_smoothed']:.1f} % | {va} |")

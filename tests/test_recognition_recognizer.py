@@ -140,3 +140,42 @@ def test_evaluation_run_and_ablation(data):
     m2 = evaluate_recognition(data["ds"], data["root"] / "features", seed=SEED, n_words=80, ablation="no-grouping",
                               recognizer_params={"n_components": 32}, baseline=False)
     assert m2["model"]["n_groups"] == 80 and m2["params"]["recognizer"]["grouping"] is False
+
+
+@pytest.fixture(scope="module")
+def multiscale(data):
+    """The recognizer with a coarse context block and the explicit-duration smoother."""
+    split, root = data["split"], data["root"]
+    f = [root / "features" / f"{i}.npz" for i in split.train]
+    lab = [load_labels(root / "labels" / f"{i}.json").labels for i in split.train]
+    return ActionRecognizer(vocabulary=data["voc"], n_components=48, coarse_context=6, smoothing="duration",
+                            random_state=SEED).fit(f, lab, classes=data["ds"].classes)
+
+
+def test_coarse_context_histograms_are_window_counts(data, multiscale):
+    """Block 2 of a frame's histogram counts the words of frames n-6..n+6, computed here by hand."""
+    v = load_features(data["test"][0])
+    words = data["voc"].transform(v.descriptors)
+    H = multiscale.histograms(v).toarray()
+    W = data["voc"].n_words_
+    assert H.shape == (v.n_frames, 2 * W)
+    for n in (0, 3, v.n_frames // 2, v.n_frames - 1):
+        for block, c in ((0, 2), (1, 6)):
+            m = (v.frame_index >= n - c) & (v.frame_index <= n + c)
+            np.testing.assert_array_equal(H[n, block * W:(block + 1) * W], np.bincount(words[m], minlength=W))
+
+
+def test_multiscale_duration_model_accuracy_and_onnx(data, multiscale, tmp_path):
+    rec = multiscale
+    assert rec.durations_.n_classes == len(rec.classes_)
+    idx = {c: i for i, c in enumerate(rec.classes_)}
+    sm = n = 0
+    export_onnx(rec, tmp_path / "ms.onnx")
+    onx = OnnxRecognizer(tmp_path / "ms.onnx")
+    for p, lab in zip(data["test"], data["test_labels"]):
+        H = rec.histograms(p)
+        a, b = rec.predict_histograms(H), onx.predict_histograms(H)
+        assert np.array_equal(a["raw"], b["raw"]) and np.array_equal(a["smoothed"], b["smoothed"])
+        sm += (a["smoothed"] == np.array([idx[c] for c in lab])).sum()
+        n += len(lab)
+    assert sm / n > 0.85

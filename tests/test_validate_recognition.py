@@ -6,6 +6,8 @@ import importlib.util
 import json
 from pathlib import Path
 
+import pytest
+
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "validate_recognition.py"
 spec = importlib.util.spec_from_file_location("validate_recognition", SCRIPT)
 vr = importlib.util.module_from_spec(spec)
@@ -49,3 +51,34 @@ def test_search_scores_only_the_validation_videos(tmp_path, monkeypatch):
     assert [r["n_val_frames"] for r in rows] == [sum(len(json.loads((tmp_path / "labels" / f"{i}.json").read_text())["labels"])
                                                       for i in split.val)] * 2
     assert rows[0]["frame_accuracy_raw"] == rows[1]["frame_accuracy_raw"]  # same model, two smoothers
+
+
+def test_cache_retrains_nothing_and_rescores_smoothers(tmp_path, monkeypatch):
+    """A second search over the same cache gives the same rows without fitting anything."""
+    from vidstyle.formats.dataset import read_dataset as load_dataset
+    from vidstyle.recognition.recognizer import ActionRecognizer
+    from vidstyle.recognition.splits import make_split
+    from vidstyle.recognition.synthetic import make_dataset
+
+    make_dataset(tmp_path / "d", n_performers=5, views=("front",), seed=0, dim=16, reps=(2, 3), n_actions=4)
+    ds = load_dataset(tmp_path / "d")
+    split = make_split(ds, seed=0)
+    feats = {"scovanner2007": str(tmp_path / "d" / "features")}
+    cfg = {**vr.START, "words": 40}
+    sm = [("viterbi", 1.0), ("duration", 1.0)]
+    first = vr.Search(ds, feats, split, 0, 1, tmp_path / "cache").run("start", cfg, smoothers=sm)
+    assert len(list((tmp_path / "cache").glob("*.joblib"))) == 1
+
+    def no_fit(*a, **k):
+        raise AssertionError("retrained a cached candidate")
+
+    monkeypatch.setattr(ActionRecognizer, "fit", no_fit)
+    again = vr.Search(ds, feats, split, 0, 1, tmp_path / "cache").run("start", cfg, smoothers=sm)
+    assert [r["frame_accuracy_smoothed"] for r in again] == [r["frame_accuracy_smoothed"] for r in first]
+    with pytest.raises(AssertionError, match="retrained"):  # another C is another candidate
+        vr.Search(ds, feats, split, 0, 1, tmp_path / "cache").run("C", {**cfg, "C": 30.0}, smoothers=sm)
+
+
+def test_factors_not_searched_names_every_factor_left_out():
+    assert set(vr.ALL_FACTORS) >= set(vr.FACTORS) | {"variant"}
+    assert all(m in ("viterbi", "vote", "duration") for m, _ in vr.SMOOTHERS)

@@ -113,16 +113,17 @@ def train_recognizer(
     split: str = typer.Option("unseen-performer", "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     context: int = typer.Option(2, "--context", help="Frames each side in a frame's histogram (thesis 2)."),
+    coarse_context: int = typer.Option(0, "--coarse-context", help="Frames each side of a second, coarser histogram appended to each frame's (multi-scale context; 0 = off, the thesis)."),
     grouping: bool = typer.Option(True, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
     grouping_threshold: float = typer.Option(0.8, "--grouping-threshold", help="Correlation above which words pool."),
     normalize: str = typer.Option("sqrt", "--normalize", help="l1 | sqrt | l2 | none."),
     components: int = typer.Option(128, "--components", help="PCA dimensions."),
     classifier: str = typer.Option("ova-ovo", "--classifier", help="ova-ovo (thesis) | svc-ovr (baseline)."),
     c: float = typer.Option(100.0, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
-    max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
     window: int = typer.Option(6, "--window", help="Smoothing window in frames (thesis 6)."),
-    smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
-    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
+    smoothing: str = typer.Option("duration", "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
@@ -179,7 +180,7 @@ def train_recognizer(
                 if t.classes != classes:
                     classes = sorted(set(classes) | set(t.classes))
     rec = ActionRecognizer(
-        vocabulary=voc, context=context, grouping=grouping, grouping_threshold=grouping_threshold,
+        vocabulary=voc, context=context, coarse_context=coarse_context, grouping=grouping, grouping_threshold=grouping_threshold,
         normalize=normalize, n_components=components, classifier=classifier, C=c,
         max_frames_per_class=max_frames_per_class or None, smoothing_window=window, smoothing=smoothing,
         emission_weight=emission_weight, mirror=mirror, n_jobs=jobs, random_state=seed,
@@ -323,8 +324,8 @@ def recognize(
         None, "--out-dir", help="Output directory: <input stem>.json per input (any number of inputs)."
     ),
     window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
-    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi (default: the model's)."),
-    emission_weight: Optional[float] = typer.Option(None, "--emission-weight", help="Viterbi: power of the frame scores (default: the model's)."),
+    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi | duration (default: the model's)."),
+    emission_weight: Optional[float] = typer.Option(None, "--emission-weight", help="viterbi / duration: power of the frame scores (default: the model's)."),
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
     jobs: int = typer.Option(1, "--jobs", "-j", help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
     scheduler: Optional[str] = typer.Option(
@@ -430,11 +431,12 @@ def evaluate_recognition(
     baseline: bool = typer.Option(True, "--baseline/--no-baseline", help="Also score a plain SVC on the same features."),
     grouping_threshold: float = typer.Option(0.8, "--grouping-threshold", help="Word grouping correlation threshold."),
     components: int = typer.Option(128, "--components", help="PCA dimensions."),
-    max_frames_per_class: int = typer.Option(3000, "--max-frames-per-class", help="SVM training frames per class (0 = all)."),
+    coarse_context: int = typer.Option(0, "--coarse-context", help="Multi-scale context: frames each side of a second histogram (0 = off)."),
+    max_frames_per_class: int = typer.Option(1500, "--max-frames-per-class", help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
     window: int = typer.Option(6, "--window", help="Smoothing window."),
-    smoothing: str = typer.Option("viterbi", "--smoothing", help="viterbi (HMM over frame scores, default) | vote (thesis) | mean."),
+    smoothing: str = typer.Option("duration", "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
     c: float = typer.Option(100.0, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
-    emission_weight: float = typer.Option(1.0, "--emission-weight", help="Viterbi: power of the frame scores (default: chosen on validation performers)."),
+    emission_weight: float = typer.Option(1.0, "--emission-weight", help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(True, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
     test_dataset: Optional[Path] = typer.Option(
         None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "
@@ -470,6 +472,7 @@ def evaluate_recognition(
             raise InputError("--model: only used with --labels-dir")
         params = {
             "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
+            "coarse_context": coarse_context,
             "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
             "smoothing": smoothing, "C": c, "emission_weight": emission_weight, "mirror": mirror,
         }

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import InputError
 from .classifier import OvaOvoSVC, combine_ova_ovo, softmax
-from .smoothing import smooth_labels
+from .smoothing import DurationModel, smooth_labels
 
 log = logging.getLogger(__name__)
 
@@ -63,22 +63,15 @@ def build_onnx(model) -> "onnx.ModelProto":  # noqa: F821
     initializers = [numpy_helper.from_array(v, name=k) for k, v in inits.items()]
     n = []
     n.append(helper.make_node("Cast", ["counts"], ["c64"], to=TensorProto.DOUBLE))
-    n.append(helper.make_node("MatMul", ["c64", "G"], ["grouped"]))
-    norm = model.normalize
-    if norm == "none":
-        n.append(helper.make_node("Identity", ["grouped"], ["normed"]))
-    elif norm in ("l1", "sqrt"):
-        n.append(helper.make_node("ReduceSum", ["grouped", "axis1"], ["rsum"], keepdims=1))
-        # counts are >= 0: an all-zero row divided by the tiny floor stays zero, as in the Python path
-        n.append(helper.make_node("Max", ["rsum", "tiny"], ["rsum_safe"]))
-        n.append(helper.make_node("Div", ["grouped", "rsum_safe"], ["l1" if norm == "sqrt" else "normed"]))
-        if norm == "sqrt":
-            n.append(helper.make_node("Sqrt", ["l1"], ["normed"]))
-    else:  # l2
-        n.append(helper.make_node("ReduceSumSquare", ["grouped", "axis1"], ["rss"], keepdims=1))
-        n.append(helper.make_node("Sqrt", ["rss"], ["rnorm"]))
-        n.append(helper.make_node("Max", ["rnorm", "tiny"], ["rnorm_safe"]))
-        n.append(helper.make_node("Div", ["grouped", "rnorm_safe"], ["normed"]))
+    nb = int(getattr(model, "n_blocks", 1))
+    if nb == 1:
+        n += _group_and_normalise(helper, model.normalize, "c64", "normed", "")
+    else:  # multi-scale context: one block per context, grouped and normalised separately
+        initializers.append(numpy_helper.from_array(np.full(nb, V, np.int64), name="blocks"))
+        n.append(helper.make_node("Split", ["c64", "blocks"], [f"c64_{b}" for b in range(nb)], axis=1))
+        for b in range(nb):
+            n += _group_and_normalise(helper, model.normalize, f"c64_{b}", f"normed_{b}", f"_{b}")
+        n.append(helper.make_node("Concat", [f"normed_{b}" for b in range(nb)], ["normed"], axis=1))
     n.append(helper.make_node("Sub", ["normed", "pca_mean"], ["centred"]))
     n.append(helper.make_node("MatMul", ["centred", "pca_W"], ["features"]))
     # ||x - s||^2 = ||x||^2 - 2 x.s + ||s||^2, clipped at 0 against rounding, as in rbf_kernel
@@ -96,7 +89,7 @@ def build_onnx(model) -> "onnx.ModelProto":  # noqa: F821
     graph = helper.make_graph(
         n,
         "vidstyle_recognizer",
-        [helper.make_tensor_value_info("counts", TensorProto.FLOAT, ["frames", V])],
+        [helper.make_tensor_value_info("counts", TensorProto.FLOAT, ["frames", V * nb])],
         [
             helper.make_tensor_value_info("ova", TensorProto.DOUBLE, ["frames", K]),
             helper.make_tensor_value_info("ovo", TensorProto.DOUBLE, ["frames", len(clf.pairs_)]),
@@ -113,18 +106,41 @@ def build_onnx(model) -> "onnx.ModelProto":  # noqa: F821
         "claim_threshold": clf.claim_threshold,
         "n_competitors": clf.n_competitors,
         "context": model.context,
+        "coarse_context": int(getattr(model, "coarse_context", 0)),
         "n_words": V,
         "normalize": model.normalize,
         "smoothing_window": model.smoothing_window,
         "smoothing": model.smoothing,
         "emission_weight": float(getattr(model, "emission_weight", 1.0)),
         "transitions": None if getattr(model, "transitions_", None) is None else np.asarray(model.transitions_).tolist(),
+        "durations": None if getattr(model, "durations_", None) is None else model.durations_.to_dict(),
         "rules": "claims = ova > claim_threshold; one claim -> that class; several -> the claimants, none -> the "
         "n_competitors best ova play one-vs-one (ovo[:, p] > 0 -> pairs[p][0]); most wins, draw -> higher ova",
     }
     onnx.helper.set_model_props(m, {"vidstyle": json.dumps(meta)})
     onnx.checker.check_model(m)
     return m
+
+
+def _group_and_normalise(helper, norm: str, src: str, dst: str, sfx: str) -> list:
+    """Nodes: ``dst`` = rows of ``src`` @ G, normalised by ``norm`` (as :func:`normalize_rows`)."""
+    g = f"grouped{sfx}"
+    n = [helper.make_node("MatMul", [src, "G"], [g])]
+    if norm == "none":
+        n.append(helper.make_node("Identity", [g], [dst]))
+    elif norm in ("l1", "sqrt"):
+        n.append(helper.make_node("ReduceSum", [g, "axis1"], [f"rsum{sfx}"], keepdims=1))
+        # counts are >= 0: an all-zero row divided by the tiny floor stays zero, as in the Python path
+        n.append(helper.make_node("Max", [f"rsum{sfx}", "tiny"], [f"rsum_safe{sfx}"]))
+        n.append(helper.make_node("Div", [g, f"rsum_safe{sfx}"], [f"l1{sfx}" if norm == "sqrt" else dst]))
+        if norm == "sqrt":
+            n.append(helper.make_node("Sqrt", [f"l1{sfx}"], [dst]))
+    else:  # l2
+        n.append(helper.make_node("ReduceSumSquare", [g, "axis1"], [f"rss{sfx}"], keepdims=1))
+        n.append(helper.make_node("Sqrt", [f"rss{sfx}"], [f"rnorm{sfx}"]))
+        n.append(helper.make_node("Max", [f"rnorm{sfx}", "tiny"], [f"rnorm_safe{sfx}"]))
+        n.append(helper.make_node("Div", [g, f"rnorm_safe{sfx}"], [dst]))
+    return n
 
 
 def export_onnx(model, path: str | Path) -> None:
@@ -171,5 +187,6 @@ class OnnxRecognizer:
             raw, len(self.classes_), self.meta["smoothing_window"], conf, scores, self.meta["smoothing"],
             transitions=None if self.meta.get("transitions") is None else np.asarray(self.meta["transitions"]),
             emission_weight=self.meta.get("emission_weight", 1.0),
+            durations=None if self.meta.get("durations") is None else DurationModel.from_dict(self.meta["durations"]),
         )
         return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}

@@ -21,9 +21,10 @@ from sklearn.base import BaseEstimator
 
 from ..errors import InputError, ParameterError
 from .classifier import OvaOvoSVC, OvrSVC
-from .histograms import NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, normalize_rows
+from .histograms import (NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, context_sum, frame_word_counts,
+                         normalize_rows)
 from .io import VideoFeatures, load_features
-from .smoothing import smooth_labels, transition_matrix
+from .smoothing import duration_model, smooth_labels, transition_matrix
 from .vocabulary import Vocabulary
 
 log = logging.getLogger(__name__)
@@ -52,6 +53,10 @@ class ActionRecognizer(BaseEstimator):
     ----------
     vocabulary: a fitted :class:`Vocabulary` (fitted on set A). ``fit`` refuses to run without one.
     context: frames on each side counted into a frame's histogram (thesis 2 -> frames n-2..n+2; 0 = ablation).
+    coarse_context: when > 0, a second histogram of the frames n-coarse_context..n+coarse_context is
+        appended to each frame's (multi-scale temporal context: a short action seen with what surrounds
+        it); both blocks go through the same word grouping (fitted on the fine block) and are normalised
+        separately before the PCA. 0 (default) = the thesis' single context.
     grouping: pool contextually related words (:class:`WordGrouping`); False = ablation.
     grouping_threshold, grouping_distribution, grouping_pooling: see :class:`WordGrouping`.
     normalize: ``l1``, ``sqrt`` (Hellinger), ``l2`` or ``none``, after grouping.
@@ -60,7 +65,8 @@ class ActionRecognizer(BaseEstimator):
     C, gamma: of the RBF SVMs.
     max_frames_per_class: training frames sampled per class (RBF SVM training is O(n^2)); None = all.
     smoothing_window, smoothing, emission_weight: see :func:`smooth_labels` (``viterbi`` decodes with the
-        frame-to-frame label transitions counted in the training labels, ``transitions_``).
+        frame-to-frame label transitions counted in the training labels, ``transitions_``; ``duration``
+        with the per-class run lengths and class changes of the training labels, ``durations_``).
     mirror: also train on the left-right mirror image of every training video (a southpaw seen from the
         mirrored view), computed in descriptor space (:func:`~vidstyle.features.scovanner2007.mirror_descriptors`);
         only scovanner2007 descriptors have an exact-enough mirror, other variants train without it (logged).
@@ -72,6 +78,7 @@ class ActionRecognizer(BaseEstimator):
         self,
         vocabulary: Vocabulary | None = None,
         context: int = 2,
+        coarse_context: int = 0,
         grouping: bool = True,
         grouping_threshold: float = 0.8,
         grouping_distribution: str = "frames",
@@ -79,15 +86,15 @@ class ActionRecognizer(BaseEstimator):
         normalize: str = "sqrt",
         n_components: int = 128,
         classifier: str = "ova-ovo",
-        # C, the per-class cap, the grouping threshold, the smoother and its emission weight: the starting
-        # values of scripts/validate_recognition.py, which scores candidates on the demo's validation
+        # C, the per-class cap, the grouping threshold, the coarse context, the smoother and its emission
+        # weight: chosen by scripts/validate_recognition.py, which scores candidates on the demo's validation
         # performers (never the test performers); pipelines/kickboxing/validation/recognition.json records
-        # which were searched, the value chosen and the validation score it won with.
+        # every candidate, the value chosen and the validation score it won with.
         C: float = 100.0,
         gamma: float | str = "scale",
-        max_frames_per_class: int | None = 3000,
+        max_frames_per_class: int | None = 1500,
         smoothing_window: int = 6,
-        smoothing: str = "viterbi",
+        smoothing: str = "duration",
         emission_weight: float = 1.0,
         mirror: bool = True,
         n_jobs: int | None = None,
@@ -95,6 +102,7 @@ class ActionRecognizer(BaseEstimator):
     ):
         self.vocabulary = vocabulary
         self.context = context
+        self.coarse_context = coarse_context
         self.grouping = grouping
         self.grouping_threshold = grouping_threshold
         self.grouping_distribution = grouping_distribution
@@ -122,11 +130,19 @@ class ActionRecognizer(BaseEstimator):
             raise ParameterError("normalize", f"must be one of {', '.join(NORMS)}, got {self.normalize!r}")
         if self.context < 0:
             raise ParameterError("context", f"must be >= 0, got {self.context}")
+        if self.coarse_context < 0:
+            raise ParameterError("coarse_context", f"must be >= 0, got {self.coarse_context}")
         if self.n_components < 1:
             raise ParameterError("n_components", f"must be >= 1, got {self.n_components}")
 
+    @property
+    def n_blocks(self) -> int:
+        """Histogram blocks per frame: 1, or 2 with a coarse context."""
+        return 2 if getattr(self, "coarse_context", 0) else 1
+
     def histograms(self, video: VideoFeatures | str | Path) -> sp.csr_matrix:
-        """(n_frames, n_words) context word counts of one video (the ONNX model's input)."""
+        """(n_frames, n_words * n_blocks) context word counts of one video (the ONNX model's input): the
+        context histogram, then (with ``coarse_context``) the coarse-context one."""
         v = _as_features(video)
         voc = self.vocabulary
         if v.descriptors.shape[0] and v.dim != voc.n_features_in_:
@@ -135,7 +151,18 @@ class ActionRecognizer(BaseEstimator):
                 " (features from a different descriptor variant?)"
             )
         words = voc.transform(v.descriptors) if v.descriptors.shape[0] else np.zeros(0, np.int32)
-        return FrameFeaturizer(voc.n_words_, self.context).transform_video(words, v.frame_index, v.n_frames)
+        fine = FrameFeaturizer(voc.n_words_, self.context).transform_video(words, v.frame_index, v.n_frames)
+        if self.n_blocks == 1:
+            return fine
+        counts = frame_word_counts(words, v.frame_index, v.n_frames, voc.n_words_)
+        return sp.hstack([fine, context_sum(counts, self.coarse_context)], format="csr")
+
+    def _grouped(self, H: sp.spmatrix) -> np.ndarray:
+        """Grouped and normalised rows, block by block (each block is one context's histogram)."""
+        W = self.vocabulary.n_words_
+        blocks = [normalize_rows(self.grouping_.transform(H[:, b * W:(b + 1) * W]), self.normalize)
+                  for b in range(self.n_blocks)]
+        return blocks[0] if len(blocks) == 1 else np.hstack(blocks)
 
     def _histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
         from joblib import Parallel, delayed
@@ -145,8 +172,7 @@ class ActionRecognizer(BaseEstimator):
         return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.histograms)(v) for v in videos)
 
     def _embed(self, H: sp.spmatrix) -> np.ndarray:
-        X = normalize_rows(self.grouping_.transform(H), self.normalize)
-        return self.pca_.transform(X)
+        return self.pca_.transform(self._grouped(H))
 
     def transform(self, video) -> np.ndarray:
         """PCA frame features (n_frames, n_components) of one video."""
@@ -165,6 +191,7 @@ class ActionRecognizer(BaseEstimator):
             if len(lab) != v.n_frames:
                 raise InputError(f"{v.path or v.video}: {len(lab)} labels for n_frames={v.n_frames}")
         y = list(y)
+        y_original = list(y)
         self.n_mirrored_videos_ = 0
         if self.mirror:
             mirrored = [mirrored_features(v) for v in videos]
@@ -187,6 +214,7 @@ class ActionRecognizer(BaseEstimator):
             [yi[a:b] for a, b in zip(bounds[:-1], bounds[1:])], len(self.classes_)
         )
 
+        self.fit_durations(y_original)
         Hs = self._histograms_many(videos)
         H = sp.vstack(Hs).tocsr()
         rng = np.random.default_rng(self.random_state)
@@ -196,8 +224,8 @@ class ActionRecognizer(BaseEstimator):
             self.grouping_ = WordGrouping(self.grouping_threshold, self.grouping_distribution, self.grouping_pooling)
         else:
             self.grouping_ = IdentityGrouping()
-        self.grouping_.fit(H, y=yi, groups=vid)
-        Xg = normalize_rows(self.grouping_.transform(H[rows]), self.normalize)
+        self.grouping_.fit(H[:, : self.vocabulary.n_words_], y=yi, groups=vid)
+        Xg = self._grouped(H[rows])
         n_comp = int(min(self.n_components, Xg.shape[0], Xg.shape[1]))
         self.pca_ = PCA(n_components=n_comp, random_state=self.random_state).fit(Xg)
         Z = self.pca_.transform(Xg)
@@ -212,6 +240,14 @@ class ActionRecognizer(BaseEstimator):
             "recognizer: %d frames (%d used for the SVMs), %d words -> %d bins -> %d PCA dims, %d classes",
             self.n_train_frames_, self.n_fit_frames_, H.shape[1], self.grouping_.n_groups_, n_comp, len(self.classes_),
         )
+        return self
+
+    def fit_durations(self, y: Sequence[Sequence[str]]):
+        """Learn ``durations_`` (the run lengths and class changes the ``duration`` smoother decodes with,
+        :func:`~vidstyle.recognition.smoothing.duration_model`) from per-frame label sequences (set B)."""
+        index = {str(c): i for i, c in enumerate(self.classes_)}
+        seqs = [np.array([index[str(c)] for c in lab], np.int64) for lab in y]
+        self.durations_ = duration_model(seqs, len(self.classes_))
         return self
 
     # ------------------------------------------------------------- predict
@@ -235,6 +271,7 @@ class ActionRecognizer(BaseEstimator):
         sm, sconf = smooth_labels(
             raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing,
             transitions=getattr(self, "transitions_", None), emission_weight=self.emission_weight,
+            durations=getattr(self, "durations_", None),
         )
         return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}
 

@@ -1,0 +1,125 @@
+#!/usr/bin/env python
+"""Write the committed recognition results (``pipelines/kickboxing/results/``) for some split seeds.
+
+For every seed S this runs the pipeline's own commands with the recognizer values of
+``pipelines/kickboxing/params.yaml`` (the values ``scripts/validate_recognition.py`` chose on the
+validation performers):
+
+1. ``vidstyle vocabulary`` on set A and ``vidstyle train-recognizer`` on set B of the unseen-performer
+   split of seed S;
+2. ``vidstyle recognize`` of the split's test videos and ``vidstyle evaluate recognition --labels-dir``
+   -> ``recognition_unseen_performer_seedS.json`` (+ PNGs);
+3. with ``--camera-dataset``: the same model on the test performers re-filmed from the unseen cameras
+   (``vidstyle demo make-dataset --unseen-camera``, any superset of the test performers) ->
+   ``recognition_unseen_camera_seedS.json``;
+4. with ``--left-right``: the unseen-view split (test view right) trained with and without mirror images
+   -> ``recognition_unseen_view_right_{mirror,nomirror}_seedS.json``.
+
+The test split is scored once per file, by ``evaluate recognition``; nothing here tunes anything. Work
+files go to ``--work`` (models, labels). The dataset and features are the demo pipeline's (one dataset,
+the seed only changes the performer split)::
+
+    python scripts/recognition_results.py --dataset pipelines/kickboxing/out/dataset \\
+        --features pipelines/kickboxing/out/features --camera-dataset CAM --camera-features CAMF \\
+        --seeds 0 1 2 3 4 --left-right 0 --work /tmp/results_work
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+log = logging.getLogger("recognition_results")
+
+
+def _run(cmd: list[str]) -> None:
+    log.info("$ %s", " ".join(cmd))
+    subprocess.run(cmd, check=True)
+
+
+def _train_args(rp: dict) -> list[str]:
+    return ["--C", str(rp["C"]), "--max-frames-per-class", str(rp["max_frames_per_class"]),
+            "--grouping-threshold", str(rp["grouping_threshold"]), "--window", str(rp["window"]),
+            "--smoothing", rp["smoothing"], "--emission-weight", str(rp["emission_weight"]),
+            "--coarse-context", str(rp.get("coarse_context", 0))]
+
+
+def _test_ids(dataset: Path, split: str, seed: int, test_dataset: Path | None = None, test_view: str | None = None):
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.recognition.splits import make_split
+
+    tds = read_dataset(test_dataset) if test_dataset is not None else None
+    return make_split(read_dataset(dataset), split, seed=seed, test_dataset=tds, test_view=test_view).test
+
+
+def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, test_view: str | None = None,
+        camera: bool = False) -> None:
+    vs = [str(args.vidstyle)] if args.vidstyle else [sys.executable, "-m", "vidstyle"]
+    w = args.work / f"{name}_seed{seed}"
+    w.mkdir(parents=True, exist_ok=True)
+    ds = str(args.dataset / "dataset.json")
+    tv = ["--test-view", test_view] if test_view else []
+    model = w / "recognizer.joblib"
+    if not model.is_file():
+        # one vocabulary per split, seed and size (the mirror and no-mirror runs share theirs)
+        vocab = args.work / f"vocab_{split}{'_' + test_view if test_view else ''}_{rp['words']}w_seed{seed}.npz"
+        if not vocab.is_file():
+            _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
+                       "--words", str(rp["words"]), "--seed", str(seed), "--out", str(vocab)])
+        shutil.copyfile(vocab, w / "vocab.npz")
+        _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
+                   "--vocab", str(w / "vocab.npz"), *_train_args(rp), "--mirror" if mirror else "--no-mirror",
+                   "--seed", str(seed), "--jobs", str(args.jobs), "--out", str(model)])
+    outs = [(split, name, args.features, None)]
+    if camera:
+        outs.append(("unseen-camera", "unseen_camera", args.camera_features, args.camera_dataset / "dataset.json"))
+    for sp, nm, fdir, tds in outs:
+        ids = _test_ids(args.dataset, sp, seed, tds, test_view)
+        labels = w / f"labels_{nm}"
+        if labels.exists():
+            shutil.rmtree(labels)
+        labels.mkdir()
+        _run(vs + ["recognize", *[str(Path(fdir) / f"{i}.npz") for i in ids], "--model", str(model),
+                   "--out-dir", str(labels), "--jobs", str(args.jobs)])
+        extra = ["--split", sp] + (["--test-dataset", str(tds)] if tds else []) + tv
+        _run(vs + ["evaluate", "recognition", "--dataset", ds, "--labels-dir", str(labels), "--model", str(model),
+                   *extra, "--seed", str(seed), "--out", str(args.results / f"recognition_{nm}_seed{seed}.json")])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dataset", type=Path, required=True, help="the demo dataset directory")
+    ap.add_argument("--features", type=Path, required=True, help="its features directory")
+    ap.add_argument("--camera-dataset", type=Path, default=None, help="unseen-camera dataset directory")
+    ap.add_argument("--camera-features", type=Path, default=None, help="its features directory")
+    ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
+    ap.add_argument("--left-right", type=int, nargs="*", default=[],
+                    help="seeds of the unseen-view split (test view right), with and without mirror training")
+    ap.add_argument("--params", type=Path, default=ROOT / "pipelines" / "kickboxing" / "params.yaml")
+    ap.add_argument("--results", type=Path, default=ROOT / "pipelines" / "kickboxing" / "results")
+    ap.add_argument("--work", type=Path, required=True, help="models and labels go here")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--vidstyle", type=Path, default=None, help="the vidstyle executable (default: python -m vidstyle)")
+    args = ap.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    rp = yaml.safe_load(args.params.read_text())["recognition"]
+    args.results.mkdir(parents=True, exist_ok=True)
+    for seed in args.seeds:
+        one(args, rp, seed, "unseen-performer", "unseen_performer", camera=args.camera_dataset is not None)
+    for seed in args.left_right:
+        for mirror in (True, False):
+            one(args, rp, seed, "unseen-view", f"unseen_view_right_{'mirror' if mirror else 'nomirror'}",
+                mirror=mirror, test_view="right")
+
+
+if __name__ == "__main__":
+    main()
