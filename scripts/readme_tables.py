@@ -10,7 +10,13 @@ Reads every JSON document under ``--metrics DIR`` (recursively) and recognises t
   label source (ground truth, ground truth of the test performers, recognised labels of the test performers);
 - ``vidstyle.metrics.style_viterbi_prior`` (``scripts/style_viterbi_prior.py``): one row per decoder;
 - ``vidstyle.validation.recognition`` (``scripts/validate_recognition.py``): the chosen values with the
-  validation score each won with.
+  validation score each won with;
+- ``vidstyle.metrics.pose`` (``vidstyle evaluate pose --out``): mean strict PCP, PCK@0.2 and viewpoint
+  accuracy per backend / pictorial-structures variant;
+- ``vidstyle.metrics.augmg`` (``vidstyle evaluate augmg --out``): retrieval and transition error per 2D
+  source;
+- ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes --out``): the share of a real mocap clip's
+  action frames recognised as punches, per camera.
 
 Every row names the file it came from. With ``--readme README.md`` the text between
 ``<!-- results:begin -->`` and ``<!-- results:end -->`` is replaced (atomically); without the markers (or
@@ -146,6 +152,69 @@ def validation_table(items, root: Path) -> list[str]:
     return lines
 
 
+def _mean_pcp(block: dict) -> float | None:
+    """Frame-weighted mean strict PCP over the viewpoint rows of one backend."""
+    num = den = 0.0
+    for row in block.values():
+        if not isinstance(row, dict) or not row.get("n"):
+            continue
+        parts = [v for k, v in row.items() if k != "n" and isinstance(v, (int, float))]
+        if parts:
+            num += row["n"] * sum(parts) / len(parts)
+            den += row["n"]
+    return num / den if den else None
+
+
+def pose_table(items, root: Path) -> list[str]:
+    names = {"ps": "pictorial structures (default)", "ps_single_image": "pictorial structures, single image",
+             "ps_generic": "pictorial structures, generic detectors", "ps_oracle_view": "pictorial structures, true viewpoint",
+             "blazepose": "BlazePose"}
+    lines = ["| backend (held-out renders) | frames | mean strict PCP | PCK@0.2 | viewpoint accuracy | file |",
+             "|---|---:|---:|---:|---:|---|"]
+    for p, d in items:
+        vp = d.get("viewpoint") or {}
+        for key, block in (d.get("pcp") or {}).items():
+            if key == "ps":
+                acc = (vp.get(d.get("ps_viewpoint_method") or "") or {}).get("accuracy")
+            else:
+                acc = (vp.get(key) or {}).get("accuracy")
+            lines.append(f"| {names.get(key, key)} | {d.get('n_frames')} | {_mean_pcp(block) or float('nan'):.3f} | "
+                         f"{((d.get('pck@0.2') or {}).get(key) or {}).get('all', float('nan')):.3f} | {_pct(acc)} | "
+                         f"`{_rel(p, root)}` |")
+        for key in sorted(vp):
+            if key not in (d.get("pcp") or {}):
+                lines.append(f"| viewpoint classifier `{key}` | {d.get('n_frames')} | | | "
+                             f"{_pct(vp[key].get('accuracy'))} | `{_rel(p, root)}` |")
+    return lines
+
+
+def augmg_table(items, root: Path) -> list[str]:
+    names = {"model": "pictorial structures", "blazepose": "BlazePose", "gt": "true 2D", "noisy": "true 2D + 5 % noise"}
+    lines = ["| 2D source | marks | retrieval MPJPE | recall@10 | plain | AugMG | lower by | accepted | file |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for p, d in items:
+        for src, b in (d.get("by_source") or {}).items():
+            red = b.get("transition_reduction")
+            lines.append(f"| {names.get(src, src)} (seed {d.get('seed')}) | {b.get('queries')} | "
+                         f"{b['retrieval_mpjpe_mm']:.1f} mm | {_pct(b.get('recall_at_10'))} | "
+                         f"{b['transition_plain_mm']:.1f} mm | {b['transition_augmg_mm']:.1f} mm | {_pct(red)} | "
+                         f"{_pct(b.get('accepted'))} | `{_rel(p, root)}` |")
+    return lines
+
+
+def strikes_table(items, root: Path) -> list[str]:
+    lines = ["| clip, camera | action frames | punch (smoothed) | kick (smoothed) | punch share smoothed | raw | file |",
+             "|---|---:|---:|---:|---:|---:|---|"]
+    for p, d in items:
+        clip = Path(str(d.get("bvh") or "?")).stem
+        for c in [*(d.get("cameras") or []), {"name": "all cameras", **(d.get("overall") or {})}]:
+            sm, raw = c.get("smoothed") or {}, c.get("raw") or {}
+            frames = c.get("action_video_frames", sum(int(sm.get(k) or 0) for k in ("punch", "kick", "other")))
+            lines.append(f"| {clip}, {c.get('name')} | {frames} | {sm.get('punch')} | {sm.get('kick')} | "
+                         f"{_pct(sm.get('punch_fraction'))} | {_pct(raw.get('punch_fraction'))} | `{_rel(p, root)}` |")
+    return lines
+
+
 def tables(root: Path) -> str:
     docs = load_documents(root)
     out = []
@@ -154,7 +223,11 @@ def tables(root: Path) -> str:
                 ("vidstyle.metrics.style_viterbi_prior", "Viterbi prior and style (`scripts/style_viterbi_prior.py`)",
                  prior_table),
                 ("vidstyle.validation.recognition", "Tuned on validation performers (`scripts/validate_recognition.py`)",
-                 validation_table)]
+                 validation_table),
+                ("vidstyle.metrics.strikes", "Real mocap strikes through the demo-trained recognizer (`vidstyle evaluate strikes`)",
+                 strikes_table),
+                ("vidstyle.metrics.pose", "2D pose (`vidstyle evaluate pose`)", pose_table),
+                ("vidstyle.metrics.augmg", "AugMG (`vidstyle evaluate augmg`, held-out performers' marks)", augmg_table)]
     for kind, title, fn in sections:
         if docs.get(kind):
             out += [f"**{title}**", "", *fn(docs[kind], root), ""]
