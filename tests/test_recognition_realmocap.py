@@ -199,3 +199,18 @@ def test_command_bad_input(tmp_path, cmu_dir):
     assert main(["evaluate", "strikes", "--bvh", bvh, "--model", str(tmp_path / "none.joblib"),
                  "--cameras", "0:10", "--out", str(tmp_path / "o.json")]) == 2
     assert not (tmp_path / "o.json").exists()
+
+
+def test_labelled_action_frames(tmp_path):
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.errors import InputError
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.recognition.realmocap import labelled_action_frames
+
+    labels = ["Guard"] * 5 + ["Jab"] * 4 + ["Guard"] * 3 + ["LowKick"] * 2 + ["Uppercut"] * 3
+    write_labels(tmp_path / "l.json", label_document(labels, 60.0, ["Jab", "LowKick", "Uppercut"], bvh="t.bvh"))
+    mask = labelled_action_frames(tmp_path / "l.json", 12, ("Jab", "Hook", "Uppercut"), start=3)
+    assert np.flatnonzero(mask).tolist() == [2, 3, 4, 5]
+    assert labelled_action_frames(tmp_path / "l.json", 17, ("Uppercut",))[14:].all()
+    with pytest.raises(InputError):
+        labelled_action_frames(tmp_path / "l.json", 16, ("Jab",), start=2)

@@ -46,6 +46,11 @@ def evaluate_strikes_cmd(
     actions_out: Path = typer.Option(None, "--actions-out", help="Also write the action frames as a labels "
                                      "JSON (vidstyle.labels, one label Rest/Strike per motion frame)."),
     plot: Path = typer.Option(None, "--plot", help="Also write a PNG of the action-frame rule's signals."),
+    actions: Path = typer.Option(None, "--actions", help="Take the action frames from this labels JSON "
+                                 "(vidstyle.labels, one label per frame of the whole BVH, e.g. a demo take's "
+                                 "mocap/<take>.labels.json) instead of the rule."),
+    action_labels: str = typer.Option("Strike,Jab,Hook,Uppercut", "--action-labels",
+                                      help="With --actions: the labels that mark action frames, comma-separated."),
 ) -> None:
     """Render BVH (real mocap of punches) from several cameras with the demo's renderer, looks and
     backgrounds, run MODEL on each video, and report how many of the clip's action frames come out as
@@ -67,10 +72,14 @@ def evaluate_strikes_cmd(
     if start < 0 or stop < 0 or (stop and stop <= start):
         raise InputError("--start must be >= 0 and --stop 0 or above --start")
     params = StrikeEvalParams(variant=variant, points=points, start=start, stop=stop or None)
-    doc = evaluate_strikes(bvh, model, cams, rule, params, seed=seed, work_dir=work_dir)
+    labels_list = [x.strip() for x in action_labels.split(",") if x.strip()]
+    if actions is not None and not labels_list:
+        raise InputError("--action-labels: give at least one label")
+    doc = evaluate_strikes(bvh, model, cams, rule, params, seed=seed, work_dir=work_dir, actions=actions,
+                           action_labels=labels_list)
     doc["command"] = "vidstyle evaluate strikes"
     write_metrics(out, doc, kind=STRIKES)
-    if actions_out is not None or plot is not None:
+    if (actions_out is not None or plot is not None) and actions is None:
         motion = read_bvh(bvh)[start:(stop or None)]
         mask = action_frames(motion, rule)
         if actions_out is not None:

@@ -21,8 +21,8 @@ computed, e.g. video accuracy without single-action test videos):
   ``graph_stats`` an object.
 * ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes``): ``cameras`` a non-empty list, each with
   ``name``, ``action_video_frames`` >= 0 and ``smoothed`` / ``raw`` holding ``punch``, ``kick``,
-  ``other`` counts >= 0 and ``punch_fraction`` in [0, 1] or null; ``overall`` alike; ``rule`` and
-  ``params`` objects; ``action_frames.segments`` a list.
+  ``other`` counts >= 0 and ``punch_fraction`` in [0, 1] or null; ``overall`` alike; ``rule`` (the
+  action-frame rule's thresholds, or the labels file it was replaced by) and ``params`` objects; ``action_frames.segments`` a list.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """

@@ -315,13 +315,32 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     return out
 
 
+def labelled_action_frames(path: str | os.PathLike, n_frames: int, action_labels: Sequence[str],
+                           start: int = 0) -> np.ndarray:
+    """(n_frames,) bool from a :mod:`vidstyle.formats.labels` file with one label per motion frame of the
+    whole clip (e.g. a demo take's ``mocap/<take>.labels.json``, or a hand-checked file): the frames
+    ``start .. start + n_frames`` whose label is one of ``action_labels``."""
+    from ..formats._base import FormatError
+    from ..formats.labels import read_labels
+
+    track = read_labels(path)
+    labels = np.asarray(track.labels, dtype=str)
+    if len(labels) < start + n_frames:
+        raise FormatError(path, "labels", f"{len(labels)} labels, the motion needs {start + n_frames}")
+    return np.isin(labels[start:start + n_frames], list(action_labels))
+
+
 def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, cameras: Sequence[StrikeCamera] = DEFAULT_CAMERAS,
                      rule: StrikeRule | None = None, params: StrikeEvalParams | None = None, seed: int = 0,
-                     work_dir: str | os.PathLike | None = None) -> dict[str, Any]:
+                     work_dir: str | os.PathLike | None = None, actions: str | os.PathLike | None = None,
+                     action_labels: Sequence[str] = ("Strike", "Jab", "Hook", "Uppercut")) -> dict[str, Any]:
     """The strikes metrics document (kind ``vidstyle.metrics.strikes``, :mod:`vidstyle.formats.metrics`):
     per camera and overall, how many action frames (video frames showing a strike frame of the motion)
-    the recognizer labels a punch, a kick or anything else (smoothed and raw labels). ``work_dir`` keeps
-    the rendered videos and features (default: a temporary directory, removed)."""
+    the recognizer labels a punch, a kick or anything else (smoothed and raw labels). Action frames come
+    from ``rule`` (:func:`action_frames`) or, with ``actions``, from that labels file
+    (:func:`labelled_action_frames` with ``action_labels``). ``work_dir`` keeps the rendered videos and
+    features (default: a temporary directory, removed)."""
+    from ..formats.annotations import file_sha256
     from ..logutil import progress
     from ..mocap import read_bvh
     from .recognizer import load_model
@@ -333,7 +352,10 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     if not 0 <= params.start < stop:
         raise ParameterError("start", f"the frame range [{params.start}, {stop}) of {bvh} is empty")
     motion = motion_all[params.start:stop]
-    mask = action_frames(motion, rule)
+    if actions is None:
+        mask = action_frames(motion, rule)
+    else:
+        mask = labelled_action_frames(actions, motion.n_frames, action_labels, params.start)
     model, header = load_model(model_path)
     model.n_jobs = 1
     missing = [c for c in PUNCHES + KICKS if c not in set(map(str, model.classes_))]
@@ -366,10 +388,12 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
         "seed": int(seed),
         "goal": {"punch_fraction": GOAL},
         "bvh": str(bvh),
-        "model": {"path": str(model_path), "seed": header.get("seed"), "split": (header.get("split") or {}).get("kind"),
+        "bvh_sha256": file_sha256(bvh),
+        "model": {"path": str(model_path), "sha256": file_sha256(model_path), "seed": header.get("seed"), "split": (header.get("split") or {}).get("kind"),
                   "params": header.get("params")},
         "params": params.to_dict(),
-        "rule": rule.to_dict(),
+        "rule": rule.to_dict() if actions is None else {"labels_file": str(actions), "action_labels": list(action_labels)},
+        "action_source": "rule" if actions is None else "labels",
         "punches": list(PUNCHES),
         "kicks": list(KICKS),
         "classes": classes,
