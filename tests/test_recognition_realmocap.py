@@ -210,7 +210,7 @@ def test_labelled_action_frames(tmp_path):
     labels = ["Guard"] * 5 + ["Jab"] * 4 + ["Guard"] * 3 + ["LowKick"] * 2 + ["Uppercut"] * 3
     write_labels(tmp_path / "l.json", label_document(labels, 60.0, ["Jab", "LowKick", "Uppercut"], bvh="t.bvh"))
     mask = labelled_action_frames(tmp_path / "l.json", 12, ("Jab", "Hook", "Uppercut"), start=3)
-    assert np.flatnonzero(mask).tolist() == [2, 3, 4, 5]
+    assert np.flatnonzero(mask).tolist() == [2, 3, 4, 5, 11]  # Jab at 5..8, Uppercut from 14
     assert labelled_action_frames(tmp_path / "l.json", 17, ("Uppercut",))[14:].all()
     with pytest.raises(InputError):
         labelled_action_frames(tmp_path / "l.json", 16, ("Jab",), start=2)
