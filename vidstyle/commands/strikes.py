@@ -52,8 +52,10 @@ def evaluate_strikes_cmd(
     action_labels: str = typer.Option("Strike,Jab,Hook,Uppercut", "--action-labels",
                                       help="With --actions: the labels that mark action frames, comma-separated."),
 ) -> None:
-    """Render BVH (real mocap of punches) from several cameras with the demo's renderer, looks and
-    backgrounds, run MODEL on each video, and report how many of the clip's action frames come out as
+    """Real mocap of punches, filmed from several cameras, through a recognizer: punches or kicks?
+
+    Renders BVH from several cameras with the demo's renderer, looks and backgrounds, runs MODEL on each
+    video, and reports how many of the clip's action frames come out as
     punches (Jab, Hook, Uppercut) rather than kicks (LowKick, RoundhouseKick). Action frames come from
     the mocap alone (an arm extended and reaching forward; vidstyle.recognition.realmocap), never from
     the recognizer; the clip trains, tunes and selects nothing. Prints a Markdown table."""
