@@ -9,6 +9,8 @@ recomputed on the variant's own motion):
 * ``mirrored``  - its left-right mirror image (a southpaw throwing left-hand rear punches);
 * ``arms_only`` - only the arms move: pelvis, legs, spine and head frozen at the clip's first frame
   (is it the real body's sway and footwork that reads as kicks?);
+* ``upper_body`` - pelvis and legs frozen (and the root in place), spine, head and arms as captured
+  (the torso's turn into the punch kept, the footwork and weight shift gone);
 * ``slower`` / ``faster`` - played at 0.67x / 1.5x speed (is it the speed of real punches?);
 * ``demo_<take>`` - procedural test-performer punches of the demo dataset (never trained on), their
   action frames from the take's ground-truth labels: the same harness on the motion the recognizer
@@ -57,6 +59,21 @@ def arms_only(m: Motion) -> Motion:
     return Motion(m.skeleton, rot, tr, m.fps)
 
 
+LEG_PREFIXES = ("LHipJoint", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToe", "RHipJoint", "RightUpLeg", "RightLeg",
+                "RightFoot", "RightToe")
+
+
+def upper_body(m: Motion) -> Motion:
+    """Root (rotation and position) and legs frozen at frame 0; spine, head and arms as captured."""
+    rot = m.rotations.copy()
+    tr = m.translations.copy()
+    for j, name in enumerate(m.skeleton.names):
+        if j == 0 or name.startswith(LEG_PREFIXES):
+            rot[:, j] = rot[0, j]
+    tr[:, 0] = tr[0, 0]
+    return Motion(m.skeleton, rot, tr, m.fps)
+
+
 def retimed(m: Motion, speed: float) -> Motion:
     """Played ``speed`` times as fast (resampled back to the clip's rate)."""
     return Motion(m.skeleton, m.rotations, m.translations, m.fps * speed).resample(m.fps)
@@ -75,6 +92,7 @@ def main(argv: list[str] | None = None) -> int:
 
     real = read_bvh(a.bvh)[1:]  # frame 0 of a CMU file is a T-pose
     variants = {"original": real, "mirrored": real.mirror(), "arms_only": arms_only(real),
+                "upper_body": upper_body(real),
                 "slower": retimed(real, 0.67), "faster": retimed(real, 1.5)}
     docs = {}
     with tempfile.TemporaryDirectory(prefix="strikes-diag-") as tmp:
