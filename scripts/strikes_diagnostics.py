@@ -34,13 +34,11 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.fileio import atomic_path  # noqa: E402
-from vidstyle.mocap import Motion, read_bvh, write_bvh  # noqa: E402
-from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes  # noqa: E402
+from vidstyle.fileio import atomic_path
+from vidstyle.mocap import Motion, read_bvh, write_bvh
+from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
 
 log = logging.getLogger("strikes_diagnostics")
 

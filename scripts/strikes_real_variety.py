@@ -38,7 +38,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.fileio import atomic_path  # noqa: E402
+from vidstyle.fileio import atomic_path
 
 log = logging.getLogger("strikes_real_variety")
 
@@ -73,7 +73,7 @@ def render_extra(cmu: Path, work: Path, seed: int) -> list[tuple[Path, Path]]:
             from vidstyle.recognition.io import load_features
 
             n = load_features(feats).n_frames
-            assert set(["Guard"]) <= set(CLASSES)
+            assert "Guard" in CLASSES
             write_labels(labels, label_document(["Guard"] * n, 20.0, [], video=str(video)))
             out.append((feats, labels))
     return out
@@ -109,11 +109,9 @@ def render_cameras(pipeline: Path, work: Path, seed: int, views: tuple[str, ...]
 
 
 def train(pipeline: Path, extra: list[tuple[Path, Path]], seed: int, out: Path):
-    from vidstyle.recognition.io import load_features
     from vidstyle.formats.labels import read_labels
-    from vidstyle.recognition.recognizer import load_model, save_model
-    from vidstyle.recognition.vocabulary import Vocabulary
-    from vidstyle.recognition.recognizer import ActionRecognizer
+    from vidstyle.recognition.io import load_features
+    from vidstyle.recognition.recognizer import ActionRecognizer, load_model, save_model
 
     base, header = load_model(pipeline / "out/models/recognizer.joblib")
     files = [(pipeline / f["features"], pipeline / f["labels"]) for f in header["training_files"]] + extra

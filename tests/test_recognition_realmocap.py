@@ -88,7 +88,7 @@ def test_rule_finds_the_known_strikes(yaw):
 
 
 def test_rule_thresholds_are_parameters():
-    motion, truth = _arm_motion(KINDS)
+    motion, _ = _arm_motion(KINDS)
     # with no forward-reach condition a straight hanging or sideways arm counts as a strike too
     loose = action_frames(motion, StrikeRule(reach_min=-1.0))
     assert loose[150:180].all() and loose[200:230].all() and not loose[:60].any()
@@ -134,10 +134,10 @@ def test_committed_02_05_labels_are_the_rule_output(cmu_dir):
 def _toy_model(path: Path, rng) -> None:
     """A recognizer of the demo's classes on random scovanner-sized descriptors: its labels are arbitrary,
     what the test checks is the counting."""
+    from vidstyle.demo.actions import CLASSES
     from vidstyle.recognition.io import VideoFeatures
     from vidstyle.recognition.recognizer import ActionRecognizer, save_model
     from vidstyle.recognition.vocabulary import Vocabulary
-    from vidstyle.demo.actions import CLASSES
 
     vids, labels = [], []
     for v in range(4):

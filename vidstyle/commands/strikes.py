@@ -63,8 +63,16 @@ def evaluate_strikes_cmd(
     from ..formats.labels import write_labels
     from ..formats.metrics import STRIKES, write_metrics
     from ..mocap import read_bvh
-    from ..recognition.realmocap import (StrikeEvalParams, StrikeRule, action_frames, action_labels_document,
-                                         evaluate_strikes, parse_cameras, plot_action_frames, strikes_table)
+    from ..recognition.realmocap import (
+        StrikeEvalParams,
+        StrikeRule,
+        action_frames,
+        action_labels_document,
+        evaluate_strikes,
+        parse_cameras,
+        plot_action_frames,
+        strikes_table,
+    )
 
     try:
         cams = parse_cameras(cameras)

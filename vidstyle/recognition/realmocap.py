@@ -24,6 +24,7 @@ The clip never trains, tunes or selects anything: the recognizer is used as give
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 import os
@@ -113,11 +114,11 @@ def clean_mask(mask: np.ndarray, fps: float, min_seconds: float, merge_seconds: 
     dropped."""
     mask = np.asarray(mask, bool).copy()
     runs = _runs(mask)
-    gap = int(round(merge_seconds * fps))
-    for (a0, b0), (a1, _) in zip(runs[:-1], runs[1:]):
+    gap = round(merge_seconds * fps)
+    for (_, b0), (a1, _) in itertools.pairwise(runs):
         if a1 - b0 < gap:
             mask[b0:a1] = True
-    keep = int(round(min_seconds * fps))
+    keep = round(min_seconds * fps)
     for a, b in _runs(mask):
         if b - a < keep:
             mask[a:b] = False
@@ -407,8 +408,8 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
 
 def strikes_table(doc: dict[str, Any]) -> str:
     """A Markdown table of a strikes metrics document: per camera and overall."""
-    rows = ["| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
-            "punch share of punch+kick | punch (raw) |", "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
+    rows = [("| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
+             "punch share of punch+kick | punch (raw) |"), "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
 
     def pct(v):
         return "n/a" if v is None else f"{100 * v:.1f} %"
