@@ -19,6 +19,10 @@ computed, e.g. video accuracy without single-action test videos):
   ``summary`` with ``label_fidelity`` in [0, 1] or null, ``transitions_per_second`` >= 0 or null, and
   per seam metric (``velocity_jump``, ``jerk``, ``foot_skid``) an object of numbers or null;
   ``graph_stats`` an object.
+* ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes``): ``cameras`` a non-empty list, each with
+  ``name``, ``action_video_frames`` >= 0 and ``smoothed`` / ``raw`` holding ``punch``, ``kick``,
+  ``other`` counts >= 0 and ``punch_fraction`` in [0, 1] or null; ``overall`` alike; ``rule`` (the
+  action-frame rule's thresholds, or the labels file it was replaced by) and ``params`` objects; ``action_frames.segments`` a list.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """
@@ -44,7 +48,8 @@ STYLE = "vidstyle.metrics.style"
 MOTION = "vidstyle.metrics.motion"
 HEADLINE = "vidstyle.metrics.headline"
 AUGMG = "vidstyle.metrics.augmg"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG)
+STRIKES = "vidstyle.metrics.strikes"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES)
 SCHEMA_VERSION = 1
 
 
@@ -159,7 +164,32 @@ def _augmg(f: Fields) -> None:
     f.sub("headline")
 
 
-_CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg}
+def _strike_counts(s: Fields) -> None:
+    for key in ("punch", "kick", "other"):
+        s.int(key, min=0)
+    _opt_number(s, "punch_fraction", 0, 1)
+
+
+def _strikes(f: Fields) -> None:
+    f.sub("rule")
+    f.sub("params")
+    f.sub("action_frames").list("segments")
+    cams = f.list("cameras")
+    if not cams:
+        raise f.fail("cameras", "no camera")
+    for i in range(len(cams)):
+        c = Fields(cams[i], f.path, f"cameras[{i}]")
+        c.str("name")
+        c.int("action_video_frames", min=0)
+        for key in ("smoothed", "raw"):
+            _strike_counts(c.sub(key))
+    o = f.sub("overall")
+    for key in ("smoothed", "raw"):
+        _strike_counts(o.sub(key))
+
+
+_CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
+           STRIKES: _strikes}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -199,6 +229,7 @@ __all__ = [
     "KINDS",
     "MOTION",
     "RECOGNITION",
+    "STRIKES",
     "STYLE",
     "Metrics",
     "check_array",
