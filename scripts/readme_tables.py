@@ -153,16 +153,8 @@ def validation_table(items, root: Path) -> list[str]:
 
 
 def _mean_pcp(block: dict) -> float | None:
-    """Frame-weighted mean strict PCP over the viewpoint rows of one backend."""
-    num = den = 0.0
-    for row in block.values():
-        if not isinstance(row, dict) or not row.get("n"):
-            continue
-        parts = [v for k, v in row.items() if k != "n" and isinstance(v, (int, float))]
-        if parts:
-            num += row["n"] * sum(parts) / len(parts)
-            den += row["n"]
-    return num / den if den else None
+    """Mean strict PCP over every part and frame of one backend (its ``all`` row)."""
+    return (block.get("all") or {}).get("mean")
 
 
 def pose_table(items, root: Path) -> list[str]:
@@ -179,7 +171,7 @@ def pose_table(items, root: Path) -> list[str]:
             else:
                 acc = (vp.get(key) or {}).get("accuracy")
             lines.append(f"| {names.get(key, key)} | {d.get('n_frames')} | {_mean_pcp(block) or float('nan'):.3f} | "
-                         f"{((d.get('pck@0.2') or {}).get(key) or {}).get('all', float('nan')):.3f} | {_pct(acc)} | "
+                         f"{((d.get('pck@0.2') or {}).get(key) or {}).get('all', float('nan')):.3f} | {'' if acc is None else _pct(acc)} | "
                          f"`{_rel(p, root)}` |")
         for key in sorted(vp):
             if key not in (d.get("pcp") or {}):
@@ -195,7 +187,8 @@ def augmg_table(items, root: Path) -> list[str]:
     for p, d in items:
         for src, b in (d.get("by_source") or {}).items():
             red = b.get("transition_reduction")
-            lines.append(f"| {names.get(src, src)} (seed {d.get('seed')}) | {b.get('queries')} | "
+            seed = d.get("seed", (d.get("params") or {}).get("seed"))
+            lines.append(f"| {names.get(src, src)} (seed {seed}) | {b.get('queries')} | "
                          f"{b['retrieval_mpjpe_mm']:.1f} mm | {_pct(b.get('recall_at_10'))} | "
                          f"{b['transition_plain_mm']:.1f} mm | {b['transition_augmg_mm']:.1f} mm | {_pct(red)} | "
                          f"{_pct(b.get('accepted'))} | `{_rel(p, root)}` |")

@@ -93,3 +93,35 @@ def test_pose_command_ps_and_errors(tmp_path, trained, capsys):
     assert "bad.joblib" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
     assert main(["pose", str(video), "--out", str(tmp_path / "x.json")]) == 2
     assert "--model" in capsys.readouterr().err
+
+
+def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, trained, capsys):
+    """evaluate pose on a few held-out renders: a vidstyle.metrics.pose file whose true-viewpoint PCP row is
+    recomputed here, frame by frame, from the same renders through the model's public estimate()."""
+    import copy
+
+    from vidstyle.cli import main
+    from vidstyle.formats.metrics import POSE, read_metrics
+    from vidstyle.pose.data import make_specs
+
+    model, _, _ = trained
+    model = copy.deepcopy(model)
+    model.fg_weight = 0.0  # single-image estimates: no person prior from the clips' backgrounds
+    path = tmp_path / "pose_noprior.joblib"
+    save_pose_model(path, model)
+    out = tmp_path / "pose_metrics.json"
+    args = ["evaluate", "pose", "--model", str(path), "--out", str(out), "--demo-performers", "1", "--cmu-clips", "0",
+            "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none", "--seed", "5", "-j", "1"]
+    assert main(args) == 0
+    m = read_metrics(out, POSE)
+    assert m.seed == 5 and m.doc["params"]["seed"] == 5
+    from vidstyle.commands.pose import _cmu  # the CMU folder the command defaults to (it seeds the specs)
+
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    assert m.doc["n_frames"] == len(samples) > 0
+    pred = np.stack([model.estimate(s.image, view=s.view).points for s in samples])  # the gray render, as scored
+    hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))
+    assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))
+    views = [s.view for s in samples]
+    assert m.doc["viewpoint"]["blazepose"]["counts"] and sum(map(sum, m.doc["viewpoint"]["hog"]["counts"])) == len(views)
+    assert "PCP" in capsys.readouterr().out  # the tables go to stdout

@@ -54,30 +54,36 @@ class Query:
 def dataset_queries(dataset: Path, annotations=None) -> tuple[dict, list[Query]]:
     """The manifest and one query per styled transition x performance video (or per accepted mark of
     ``annotations``: a list of ``{"video", "frame", "from", "to", "status"}``)."""
-    import json
+    from ..formats.dataset import read_dataset
+    from ..formats.labels import read_labels
 
     manifest_path = dataset / "dataset.json" if dataset.is_dir() else dataset
     if not manifest_path.is_file():
         raise InputError(f"{manifest_path}: no demo dataset manifest")
-    root = manifest_path.parent
-    manifest = json.loads(manifest_path.read_text())
+    ds = read_dataset(manifest_path)
+    root = ds.root
+    manifest = {**ds.extra, "fps": ds.fps}
+    for key in ("mocap_fps", "params", "size"):
+        if key not in manifest:
+            raise InputError(f"{manifest_path}: {key}: missing (not a demo dataset rendered by vidstyle demo make-dataset)")
     ratio = int(manifest["mocap_fps"] // manifest["fps"])
     marks: dict[str, list[dict]] = {}
     for a in annotations or []:
         if a.get("status", "accepted") == "accepted":
             marks.setdefault(a["video"], []).append(a)
     out = []
-    for v in manifest["videos"]:
-        if v["kind"] != "performance":
+    for v in ds.videos:
+        if v.kind != "performance":
             continue
-        labels = json.loads((root / v["labels"]).read_text())
-        styled = labels.get("styled_transitions", [])
-        base = dict(video=v["id"], performer=v["performer"], take_bvh=root / v["bvh"], truth=root / v["truth"],
-                    view=v["view"], azimuth=float(v["azimuth_deg"]), ratio=ratio)
+        if v.bvh is None or v.truth is None:
+            raise InputError(f"{manifest_path}: video {v.id}: needs 'bvh' and 'truth' (the demo's mocap and render truth)")
+        styled = read_labels(ds.labels_path(v)).extra.get("styled_transitions", [])
+        base = dict(video=v.id, performer=v.performer, take_bvh=root / v.bvh, truth=root / v.truth,
+                    view=v.view, azimuth=float(v.azimuth_deg or 0.0), ratio=ratio)
         if annotations is None:
             out += [Query(**base, frame=int(t["key"]), transition=t) for t in styled]
             continue
-        for a in marks.get(v["id"], []):
+        for a in marks.get(v.id, []):
             t = next((t for t in styled if t["start"] <= a["frame"] < t["end"]), None)
             if t is None:
                 log.warning("%s frame %d: no styled transition there; skipped", v["id"], a["frame"])

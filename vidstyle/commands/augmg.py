@@ -283,16 +283,16 @@ def evaluate_augmg_cmd(
     from ..formats.metrics import AUGMG, write_metrics
 
     if transitions is not None:
-        import json as _json
-
         from ..augmg.evaluate import transitions_document
         from ..formats.augmg_transitions import write_augmg_transitions
+        from ..formats.dataset import read_dataset
 
-        man = _json.loads(((dataset / "dataset.json") if dataset.is_dir() else dataset).read_text())
-        step = max(1, int(man["mocap_fps"] // man["fps"]))
-        write_augmg_transitions(transitions, transitions_document(metrics, animations_source, float(man["fps"]), step))
+        man = read_dataset(dataset)
+        step = max(1, int(man.extra["mocap_fps"] // man.fps))
+        write_augmg_transitions(transitions, transitions_document(metrics, animations_source, float(man.fps), step))
         log.info("wrote %s", transitions)
     metrics.pop("animations", None)
+    metrics = {"seed": seed, **metrics}
     write_metrics(out, metrics, kind=AUGMG)
     if headline is not None:
         from ..fileio import read_json

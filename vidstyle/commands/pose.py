@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import sys
 from pathlib import Path
@@ -147,7 +146,7 @@ def evaluate_pose(
 ) -> None:
     """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
     held-out renders for both backends; backend agreement and overlays on real footage."""
-    from ..formats import write_json_document
+    from ..formats.metrics import POSE, write_metrics
     from ..pose.data import make_specs, render_samples
     from ..pose.estimator import load_pose_model
     from ..pose.evaluate import evaluate_real, evaluate_renders, format_tables
@@ -167,5 +166,5 @@ def evaluate_pose(
         videos = sorted(p for p in rd.iterdir() if p.suffix.lower() in (".mp4", ".mkv", ".avi", ".mov"))
         metrics["real"] = evaluate_real(str(model), videos, overlay_dir, real_frames, jobs=1)
     if out is not None:
-        write_json_document(out, json.loads(json.dumps(metrics, allow_nan=True).replace("NaN", "null")))
+        write_metrics(out, {"seed": seed, **metrics}, kind=POSE)
     sys.stdout.write(format_tables(metrics) + "\n")

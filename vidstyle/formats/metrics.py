@@ -23,6 +23,10 @@ computed, e.g. video accuracy without single-action test videos):
   ``name``, ``action_video_frames`` >= 0 and ``smoothed`` / ``raw`` holding ``punch``, ``kick``,
   ``other`` counts >= 0 and ``punch_fraction`` in [0, 1] or null; ``overall`` alike; ``rule`` (the
   action-frame rule's thresholds, or the labels file it was replaced by) and ``params`` objects; ``action_frames.segments`` a list.
+* ``vidstyle.metrics.pose`` (``vidstyle evaluate pose``): ``n_frames`` >= 0; ``pcp``: per backend (``ps``,
+  ``blazepose``, ...) per viewpoint an object of per-part strict PCP in [0, 1] or null and ``n`` >= 0;
+  ``pck@0.2``: per backend an object of numbers in [0, 1] or null (``all`` and one per keypoint);
+  ``viewpoint``: per classifier ``accuracy`` in [0, 1] or null; ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """
@@ -49,7 +53,8 @@ MOTION = "vidstyle.metrics.motion"
 HEADLINE = "vidstyle.metrics.headline"
 AUGMG = "vidstyle.metrics.augmg"
 STRIKES = "vidstyle.metrics.strikes"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES)
+POSE = "vidstyle.metrics.pose"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE)
 SCHEMA_VERSION = 1
 
 
@@ -188,8 +193,31 @@ def _strikes(f: Fields) -> None:
         _strike_counts(o.sub(key))
 
 
+def _pose(f: Fields) -> None:
+    f.int("n_frames", min=0)
+    pcp = f.sub("pcp")
+    for backend in pcp.obj:
+        views = pcp.sub(backend)
+        for view in views.obj:
+            row = views.sub(view)
+            for part in row.obj:
+                if part == "n":
+                    row.int("n", min=0)
+                else:
+                    _opt_number(row, part, 0, 1)
+    pck = f.sub("pck@0.2")
+    for backend in pck.obj:
+        b = pck.sub(backend)
+        for key in b.obj:
+            _opt_number(b, key, 0, 1)
+    vp = f.sub("viewpoint")
+    for name in vp.obj:
+        _opt_number(vp.sub(name), "accuracy", 0, 1)
+    f.sub("params")
+
+
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
-           STRIKES: _strikes}
+           STRIKES: _strikes, POSE: _pose}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -225,6 +253,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 __all__ = [
     "AUGMG",
+    "POSE",
     "HEADLINE",
     "KINDS",
     "MOTION",
