@@ -210,6 +210,33 @@ def _cube_cell(u1: np.ndarray, u2: np.ndarray, u3: np.ndarray) -> np.ndarray:
     return ((axis * 2 + sign) * n + x) * n + y
 
 
+def _libm_pow_py(a: np.ndarray, p: float) -> np.ndarray:
+    return np.array([x**p for x in a.tolist()], dtype=np.float64)
+
+
+def _libm_pow_loop(a, p):  # compiled by numba: a[i] ** p with a float exponent is one call to the C pow
+    out = np.empty_like(a)
+    for i in range(a.size):
+        out[i] = a[i] ** p
+    return out
+
+
+@cache
+def _pow_kernel():
+    """The compiled ``_libm_pow_loop`` (numba, cached per installation), or the Python loop without numba.
+    Both call the C library's pow once per element, so the results are the same to the last bit."""
+    try:
+        from numba import njit
+    except ImportError:  # pragma: no cover
+        return _libm_pow_py
+    return njit(cache=True, nogil=True)(_libm_pow_loop)
+
+
+def _libm_pow(a: np.ndarray, p: float) -> np.ndarray:
+    """``a ** p`` elementwise (float64, float exponent) exactly as Python's float power computes it."""
+    return _pow_kernel()(np.ascontiguousarray(a, dtype=np.float64), float(p))
+
+
 def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per voxel (flat arrays): magnitude (V,), top-3 bins (V, 3) and their weights (V, 3).
 
@@ -241,9 +268,9 @@ def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndar
         top[:, k] = cc[rows, j]
         dv[:, k] = d[rows, j]
         d[rows, j] = -np.inf
-    # d ** 20 through the C library's pow (Python floats), as the literal definition; numpy's SIMD pow
-    # differs from it in the last bit for a few % of arguments
-    p = np.array([x**POWER for x in dv.reshape(-1).tolist()], dtype=np.float64).reshape(-1, 3)
+    # d ** 20 through the C library's pow, as the literal definition (Python floats) computes it; numpy's
+    # SIMD pow differs from it in the last bit for a few % of arguments
+    p = _libm_pow(dv.reshape(-1), float(POWER)).reshape(-1, 3)
     total = (p[:, 0] + p[:, 1]) + p[:, 2]
     bins[nz] = top
     wts[nz] = p / total[:, None]
