@@ -152,11 +152,6 @@ def validation_table(items, root: Path) -> list[str]:
     return lines
 
 
-def _mean_pcp(block: dict) -> float | None:
-    """Mean strict PCP over every part and frame of one backend (its ``all`` row)."""
-    return (block.get("all") or {}).get("mean")
-
-
 def pose_table(items, root: Path) -> list[str]:
     names = {"ps": "pictorial structures (default)", "ps_single_image": "pictorial structures, single image",
              "ps_generic": "pictorial structures, generic detectors", "ps_oracle_view": "pictorial structures, true viewpoint",
@@ -170,7 +165,7 @@ def pose_table(items, root: Path) -> list[str]:
                 acc = (vp.get(d.get("ps_viewpoint_method") or "") or {}).get("accuracy")
             else:
                 acc = (vp.get(key) or {}).get("accuracy")
-            lines.append(f"| {names.get(key, key)} | {d.get('n_frames')} | {_mean_pcp(block) or float('nan'):.3f} | "
+            lines.append(f"| {names.get(key, key)} | {d.get('n_frames')} | {(block.get('all') or {}).get('mean', float('nan')):.3f} | "
                          f"{((d.get('pck@0.2') or {}).get(key) or {}).get('all', float('nan')):.3f} | {'' if acc is None else _pct(acc)} | "
                          f"`{_rel(p, root)}` |")
         for key in sorted(vp):

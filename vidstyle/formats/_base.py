@@ -98,6 +98,16 @@ def write_json_document(path: str | os.PathLike, doc: Any) -> None:
     write_text(path, json.dumps(doc, indent=2, allow_nan=False, default=_json_default) + "\n")
 
 
+def write_checked(path: str | os.PathLike, doc: dict, parse, what: str) -> None:
+    """Write ``doc`` (built in memory) after ``parse(doc, path)`` accepts it, as its reader would. A document
+    the reader would refuse is a programming error, so it raises ``ValueError`` ("invalid <what>: ...")."""
+    try:
+        parse(doc, path)
+    except FormatError as e:
+        raise ValueError(f"invalid {what}: {e.field}: {e.problem}") from None
+    write_json_document(path, doc)
+
+
 def _type(x: Any) -> str:
     return {dict: "an object", list: "a list", str: "a string", bool: "a boolean", type(None): "null",
             int: "an integer", float: "a number"}.get(type(x), type(x).__name__)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
+from ._base import Fields, check_header, header, read_json_document, write_checked
 
 KIND = "vidstyle.augmg_transitions"
 SCHEMA_VERSION = 1
@@ -105,9 +105,4 @@ def read_augmg_transitions(path: str | os.PathLike) -> AugmgTransitions:
 
 def write_augmg_transitions(path: str | os.PathLike, doc: AugmgTransitions) -> None:
     """Validate ``doc`` (as the reader would) and write it atomically."""
-    d = doc.to_dict()
-    try:
-        _parse(d, path)
-    except FormatError as e:
-        raise ValueError(f"invalid augmg transitions: {e.field}: {e.problem}") from None
-    write_json_document(path, d)
+    write_checked(path, doc.to_dict(), _parse, "augmg transitions")

@@ -20,7 +20,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
-from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
+from ._base import Fields, check_header, header, read_json_document, write_checked
 
 KIND = "vidstyle.matches"
 SCHEMA_VERSION = 1
@@ -81,9 +81,4 @@ def read_matches(path: str | os.PathLike) -> Matches:
 
 def write_matches(path: str | os.PathLike, matches: Matches) -> None:
     """Validate ``matches`` (as the reader would) and write it atomically."""
-    doc = matches.to_dict()
-    try:
-        _parse(doc, path)
-    except FormatError as e:
-        raise ValueError(f"invalid matches: {e.field}: {e.problem}") from None
-    write_json_document(path, doc)
+    write_checked(path, matches.to_dict(), _parse, "matches")

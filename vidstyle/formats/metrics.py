@@ -253,10 +253,10 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 __all__ = [
     "AUGMG",
-    "POSE",
     "HEADLINE",
     "KINDS",
     "MOTION",
+    "POSE",
     "RECOGNITION",
     "STRIKES",
     "STYLE",

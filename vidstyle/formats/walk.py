@@ -30,8 +30,8 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from ._base import Fields, FormatError, check_int, read_json_document, write_json_document
-from .labels import FrameLabels, check_length, parse_labels
+from ._base import Fields, FormatError, check_int, header, read_json_document, write_json_document
+from .labels import KIND, SCHEMA_VERSION, FrameLabels, check_length, parse_labels
 
 #: the walk's own per-frame lists (each of the BVH's length)
 _PER_FRAME_STR = ("source_labels", "source_clip")
@@ -104,9 +104,6 @@ def read_walk_labels(path: str | os.PathLike, n_frames: int | None = None) -> Wa
 
 def write_walk_labels(path: str | os.PathLike, walk: WalkLabels | dict) -> None:
     """Validate ``walk`` (as its reader would) and write it atomically; a dict is given the labels header."""
-    from .labels import KIND, SCHEMA_VERSION
-    from ._base import header
-
     doc = walk.to_dict() if isinstance(walk, WalkLabels) else dict(walk)
     doc = {**header(KIND, SCHEMA_VERSION), **{k: v for k, v in doc.items() if k not in ("kind", "schema_version")}}
     parse_walk_labels(doc, path)
