@@ -21,7 +21,10 @@ rows. Nothing here reads a test performer.
      DATASET VIDEO prints the --frames list)
     python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose
 
-Prints the tables and writes bench_results/validate_augmg.json.
+Prints the tables and writes bench_results/validate_augmg.json (every row) and
+bench_results/validation_augmg_chosen.json (the chosen defaults with the table they won on; it is
+committed as ``pipelines/kickboxing/validation/augmg.json``, and the defaults of ``vidstyle augment`` /
+``evaluate augmg`` in :mod:`vidstyle.commands.augmg` are its values).
 """
 
 from __future__ import annotations
@@ -43,6 +46,8 @@ GRID = [  # (segment, context, scores, k)
     ("adaptive", 2, True, 30),
 ]
 ESTIMATED = ("model", "blazepose")
+COMMAND = ("python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose (seed-0 pipeline "
+           "output; VAL = vidstyle pose --frames <key-2..key+2> of the validation videos, both backends)")
 
 
 def print_frames(dataset: str, video: str, context: int = 2) -> None:
@@ -135,7 +140,15 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
         {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
          "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
          "thresholds": best["thresholds"], "validation_reduction": {
-             s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]}}, indent=2))
+             s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]},
+         "command": COMMAND, "queries": best["queries"],
+         "table": [{"segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
+                    "reduction_no_threshold": {s: round(r["no_threshold"][s]["transition_reduction"], 4)
+                                               for s in r["no_threshold"]},
+                    "reduction_cross_validated": {s: round(r["cross_validated"][s]["transition_reduction"], 4)
+                                                  for s in r["cross_validated"]},
+                    "estimated_mean_cross_validated": round(r["estimated_reduction"], 4)} for r in out_rows]},
+        indent=1))
 
 
 if __name__ == "__main__":

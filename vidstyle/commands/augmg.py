@@ -17,12 +17,12 @@ log = logging.getLogger(__name__)
 
 # Defaults chosen on the validation performers (scripts/validate_augmg.py, recorded in
 # pipelines/kickboxing/validation/augmg.json): never on the test performers.
-SEGMENT = "adaptive"
+SEGMENT = "fixed"
 CONTEXT = 2
-SCORES = False
-MAX_MATCH_COST = ["model=2.083", "blazepose=0.839"]
-MAX_ENH_COST = ["model=4.683", "blazepose=5.926"]
-MIN_GAIN = ["model=103.933", "gt=118.534", "noisy=111.448"]
+SCORES = True
+MAX_MATCH_COST = ["model=0.732", "blazepose=0.720"]
+MAX_ENH_COST = ["blazepose=5.926"]
+MIN_GAIN = ["model=209.367", "gt=128.227", "noisy=111.448"]
 
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
