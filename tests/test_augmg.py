@@ -18,6 +18,7 @@ from vidstyle.augmg.enhance import (
 )
 from vidstyle.augmg.index import LibraryClip, PoseIndex, coherent_ranking
 from vidstyle.augmg.keypoints import KP, keypoint_positions
+from vidstyle.formats.library import read_library
 from vidstyle.augmg.projection import (
     angle_features,
     facing_normalised,
@@ -97,7 +98,7 @@ def test_single_action_takes_are_those_of_a_performer_without_styles():
 
 # ------------------------------------------------------------------------------------------ library
 def test_library_holds_each_pose_in_a_context_clip_but_no_action_to_action_transition(library):
-    doc = json.loads((library / "library.json").read_text())
+    doc = read_library(library / "library.json")
     holds = {c["holds_pose"] for c in doc["clips"] if c["holds_pose"]}
     assert holds == set(TRANSITION_KINDS)
     for c in doc["clips"]:

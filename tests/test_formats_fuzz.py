@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from vidstyle.formats import FormatError
 from vidstyle.formats.dataset import parse_dataset, read_dataset, write_dataset
 from vidstyle.formats.labels import FrameLabels, parse_labels, read_labels, write_labels
+from vidstyle.formats.library import parse_library, read_library, write_library
 from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
@@ -61,6 +62,18 @@ def _walk_doc() -> dict:
             "source_frame": [4, 5, 6, 0, 1], "graph_frame": [4, 5, 6, 40, 41], "transition": [-1, -1, -1, 7, -1],
             "transitions_used": [7], "transition_kinds": ["BLEND"], "transition_segments": [-1], "cost": 1.5,
             "foot_lock": {"enabled": False}, "planner": {"mismatch_penalty": 2.0}}
+
+
+def _library_doc() -> dict:
+    return {"kind": "vidstyle.library", "schema_version": 1,
+            "params": {"seed": 0, "performers": 1, "action_seconds": 6.0, "fps": 20, "mocap_fps": 60, "cmu_clips": 1},
+            "performers": [{"id": "lib00", "body": {"height": 1.7}, "style": {"amplitude": [1.0, 0.9]}}],
+            "clips": [{"name": "lib00_jab", "performer": "lib00", "kind": "action", "holds_pose": None, "frames": 360,
+                       "bvh": "clips/lib00_jab.bvh", "labels": "clips/lib00_jab.labels.json"},
+                      {"name": "lib00_stop", "performer": "lib00", "kind": "context", "holds_pose": "step_back",
+                       "frames": 873, "bvh": "clips/lib00_stop.bvh", "labels": "clips/lib00_stop.labels.json"},
+                      {"name": "cmu_02_05", "performer": "cmu02", "kind": "cmu", "holds_pose": None, "frames": 400,
+                       "bvh": "clips/cmu_02_05.bvh", "labels": "clips/cmu_02_05.labels.json", "source": "x/02_05.bvh"}]}
 
 
 def _sequence_doc() -> dict:
@@ -192,6 +205,8 @@ def _to_doc(obj):
         return style_to_dict(obj)
     if hasattr(obj, "to_dict"):
         return obj.to_dict()
+    if isinstance(obj, dict):
+        return obj
     return obj.doc
 
 
@@ -205,6 +220,7 @@ READERS = {
     "dataset": (parse_dataset, write_dataset, read_dataset, _dataset_doc),
     "sequence": (parse_sequence, write_sequence, read_sequence, _sequence_doc),
     "walk": (parse_walk_labels, write_walk_labels, read_walk_labels, _walk_doc),
+    "library": (parse_library, write_library, read_library, _library_doc),
     **{f"metrics_{k}": (parse_metrics, write_metrics, read_metrics, (lambda d=d: d)) for k, d in METRICS.items()},
 }
 

@@ -17,6 +17,7 @@ Real CMU clips can be added (``cmu_dir``); they are retargeted onto the library 
 Layout of ``DIR``::
 
     library.json                 manifest: seed, params, performers, one entry per clip
+                                 (owner: :mod:`vidstyle.formats.library`)
     clips/<name>.bvh             60 fps, CMU 31-joint skeleton
     clips/<name>.labels.json     per-frame labels (the motion graph reads them beside the BVH)
 """
@@ -33,11 +34,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, staging_dir, write_json
+from ..fileio import replace_dir, staging_dir
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 CONTEXT_KINDS = {"dodge": "crouch", "switch": "hop", "stop": "step_back"}
 """Library context clip -> the transition pose (:mod:`vidstyle.demo.transitions`) it holds."""
 
@@ -156,6 +156,7 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
                  overwrite: bool = False, jobs: int = -1, scheduler: str | None = None) -> Path:
     """Write the library into ``out`` (see the module docstring); returns the manifest path."""
     from ..demo.dataset import label_document
+    from ..formats.library import library_document, write_library
     from ..mocap import write_bvh
     from ..parallel import parallel_map
 
@@ -175,11 +176,8 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
             entries.append({**entry, "bvh": bvh, "labels": f"clips/{name}.labels.json"})
         if cmu_dir is not None and params.cmu_clips != 0:
             entries += _add_cmu(Path(cmu_dir), tmp, params, results[0][1].skeleton)
-        write_json(tmp / "library.json", {"kind": "vidstyle.library", "schema_version": SCHEMA_VERSION,
-                                          "params": asdict(params),
-                                          "performers": [library_performer(params, i).to_dict()
-                                                         for i in range(params.performers)],
-                                          "clips": entries})
+        write_library(tmp / "library.json", library_document(
+            asdict(params), [library_performer(params, i).to_dict() for i in range(params.performers)], entries))
         replace_dir(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
