@@ -230,6 +230,21 @@ def check_int(v: Any, path, field: str, min: int | None = None, max: int | None 
     return v
 
 
+def check_leaves(v: Any, path, name: str, depth: int = 0) -> None:
+    """``v`` is plain JSON data whose leaves are finite numbers, null, booleans or strings (nested objects
+    and lists allowed, at most 20 deep)."""
+    if depth > 20:
+        raise FormatError(path, name, "nested too deeply")
+    if isinstance(v, dict):
+        for k, x in v.items():
+            check_leaves(x, path, f"{name}.{k}", depth + 1)
+    elif isinstance(v, list):
+        for i, x in enumerate(v):
+            check_leaves(x, path, f"{name}[{i}]", depth + 1)
+    elif v is not None and not isinstance(v, (bool, str)):
+        check_number(v, path, name)
+
+
 def check_number(v: Any, path, field: str, min: float | None = None, max: float | None = None,
                  positive: bool = False) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float, np.number)):

@@ -18,12 +18,11 @@ Clip names are unique, and their paths stay inside the library directory.
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import PurePosixPath
 from typing import Any
 
-from ._base import Fields, FormatError, check_header, header, read_json_document, write_checked
+from ._base import Fields, FormatError, check_header, check_leaves, header, read_json_document, write_checked
 
 KIND = "vidstyle.library"
 SCHEMA_VERSION = 1
@@ -38,37 +37,17 @@ def _relative(f: Fields, key: str) -> str:
     return p
 
 
-def _plain(obj: Any, path, field: str, depth: int = 0) -> None:
-    """``obj`` is plain JSON data: objects with string keys, lists, strings, booleans, null, finite numbers."""
-    if depth > 20:
-        raise FormatError(path, field, "nested too deeply")
-    if isinstance(obj, dict):
-        for k, v in obj.items():
-            if not isinstance(k, str):
-                raise FormatError(path, field, f"key {k!r} is not a string")
-            _plain(v, path, f"{field}.{k}", depth + 1)
-    elif isinstance(obj, list):
-        for i, v in enumerate(obj):
-            _plain(v, path, f"{field}[{i}]", depth + 1)
-    elif isinstance(obj, float) and not math.isfinite(obj):
-        raise FormatError(path, field, f"{obj} is not a finite number")
-    elif obj is not None and not isinstance(obj, (str, bool, int, float)):
-        raise FormatError(path, field, f"unexpected value of type {type(obj).__name__}")
-
-
 def parse_library(doc: Any, path: str | os.PathLike | None = None) -> dict:
     """Validate a manifest document; returns it as a plain dict (FormatError names the field)."""
     check_header(doc, path, KIND, (SCHEMA_VERSION,))
     top = Fields(doc, path)
-    params = top.get("params")
-    if not isinstance(params, dict):
-        raise top.fail("params", "expected an object")
-    Fields(params, path, "params").int("seed", min=0)
-    _plain(params, path, "params")
+    params = top.sub("params")
+    params.int("seed", min=0)
+    check_leaves(params.obj, path, "params")
     performers = top.list("performers")
     for i, p in enumerate(performers):
         Fields(p, path, f"performers[{i}]").str("id", nonempty=True)
-        _plain(p, path, f"performers[{i}]")
+        check_leaves(p, path, f"performers[{i}]")
     clips, names = [], set()
     for i, raw in enumerate(top.list("clips", min_len=1)):
         f = Fields(raw, path, f"clips[{i}]")
@@ -83,7 +62,7 @@ def parse_library(doc: Any, path: str | os.PathLike | None = None) -> dict:
         if kind == "cmu":
             clip["source"] = f.str("source", nonempty=True)
         clips.append(clip)
-    return {**header(KIND, SCHEMA_VERSION), "params": dict(params), "performers": list(performers), "clips": clips}
+    return {**header(KIND, SCHEMA_VERSION), "params": dict(params.obj), "performers": list(performers), "clips": clips}
 
 
 def library_document(params: dict, performers: list[dict], clips: list[dict]) -> dict:

@@ -42,7 +42,7 @@ from ._base import (
     FormatError,
     check_array,
     check_header,
-    check_number,
+    check_leaves,
     read_json_document,
     write_json_document,
 )
@@ -88,20 +88,7 @@ def _numbers_or_null(f: Fields, key: str, required: bool = True) -> None:
     lists allowed)."""
     sub = f.sub(key, required=required)
     if sub is not None:
-        _leaves(sub.obj, f.path, sub.prefix)
-
-
-def _leaves(v: Any, path, name: str, depth: int = 0) -> None:
-    if depth > 20:
-        raise FormatError(path, name, "nested too deeply")
-    if isinstance(v, dict):
-        for k, x in v.items():
-            _leaves(x, path, f"{name}.{k}", depth + 1)
-    elif isinstance(v, list):
-        for i, x in enumerate(v):
-            _leaves(x, path, f"{name}[{i}]", depth + 1)
-    elif v is not None and not isinstance(v, (bool, str)):
-        check_number(v, path, name)
+        check_leaves(sub.obj, f.path, sub.prefix)
 
 
 def _recognition(f: Fields) -> None:
