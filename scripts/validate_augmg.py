@@ -36,14 +36,19 @@ from pathlib import Path
 import numpy as np
 
 VALIDATION_VIDEOS = [f"{p}_perf{t}_front" for p in ("p00", "p01", "p02", "p07", "p08", "p09") for t in (0, 1)]
-GRID = [  # (segment, context, scores, k)
-    ("fixed", 0, False, 10),  # the previous defaults (single frame, no weights)
-    ("adaptive", 0, False, 10),
-    ("fixed", 2, True, 10),
-    ("adaptive", 1, True, 10),
-    ("adaptive", 2, False, 10),
-    ("adaptive", 2, True, 10),
-    ("adaptive", 2, True, 30),
+GRID = [  # (segment, context, scores, k, foreshortening)
+    ("fixed", 0, False, 10, False),  # the first defaults (single frame, no weights)
+    ("adaptive", 0, False, 10, False),
+    ("fixed", 2, True, 10, False),
+    ("adaptive", 1, True, 10, False),
+    ("adaptive", 2, False, 10, False),
+    ("adaptive", 2, True, 10, False),
+    ("adaptive", 2, True, 30, False),
+    ("fixed", 0, False, 10, True),
+    ("fixed", 2, False, 10, True),
+    ("fixed", 2, True, 10, True),
+    ("adaptive", 2, True, 10, True),
+    ("fixed", 2, True, 30, True),
 ]
 ESTIMATED = ("model", "blazepose")
 COMMAND = ("python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose (seed-0 pipeline "
@@ -88,13 +93,13 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
     poses = dict([_read_poses_dir(Path(ps_dir)), _read_poses_dir(Path(bp_dir))])
     sources = ("model", "blazepose", "gt", "noisy")
     out_rows = []
-    hdr = f"{'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} | " + " | ".join(f"{s:>13}" for s in sources)
+    hdr = f"{'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} | " + " | ".join(f"{s:>13}" for s in sources)
     print("transition-error reduction on the validation performers, without / with the source's thresholds "
           "(2-fold cross-validated over the takes)")
     print(hdr + " | estimated sources' mean (cross-validated)")
-    for seg, ctx, sc, k in GRID:
+    for seg, ctx, sc, k, fs in GRID:
         m = evaluate_augmg(Path(dataset), Path(library), sources=sources, poses=poses, segment=seg, context=ctx,
-                           use_scores=sc, k=k, videos=VALIDATION_VIDEOS)
+                           use_scores=sc, k=k, foreshortening=fs, videos=VALIDATION_VIDEOS)
         rows = m["rows"]
         thresholds = {s: search_thresholds([r for r in rows if r["source"] == s])[0] for s in sources}
         thr = summarise(accept(rows, thresholds=thresholds), m["params"])["by_source"]
@@ -106,7 +111,7 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
             cv_rows += accept([r for r in rows if held in r["video"]], thresholds=t)
         cv = summarise(cv_rows, m["params"])["by_source"]
         red = float(np.mean([cv[s]["transition_reduction"] for s in ESTIMATED]))
-        entry = {"segment": seg, "context": ctx, "scores": sc, "k": k,
+        entry = {"segment": seg, "context": ctx, "scores": sc, "k": k, "foreshortening": fs,
                  "no_threshold": {s: {kk: v for kk, v in m["by_source"][s].items()} for s in m["by_source"]},
                  "thresholds": thresholds, "estimated_reduction": red,
                  "cross_validated": {s: {kk: v for kk, v in cv[s].items()} for s in cv},
@@ -115,7 +120,7 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
         out_rows.append(entry)
         cells = " | ".join(f"{100 * m['by_source'][s]['transition_reduction']:5.1f}/{100 * cv[s]['transition_reduction']:5.1f} %"
                            for s in sources)
-        print(f"{seg:8} {ctx:3d} {str(sc):>6} {k:3d} | {cells} | {100 * red:.1f} %", flush=True)
+        print(f"{seg:8} {ctx:3d} {str(sc):>6} {k:3d} {str(fs):>5} | {cells} | {100 * red:.1f} %", flush=True)
     best = max(out_rows, key=lambda x: x["estimated_reduction"])
     print(f"best: segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
           f"(estimated sources' mean reduction {100 * best['estimated_reduction']:.1f} % on "

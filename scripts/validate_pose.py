@@ -17,6 +17,12 @@ One factor at a time from the starting point (the values before this script exis
   among those within ``--budget-ms``, the speed goal, wins; the fastest when none is); then the person
   prior of video input (``fg_weight``: foreground of each clip's median background added to the
   part scores). ``--second-stage-only`` runs just this stage on an existing ``--out``;
+- part detectors (third stage; ``--detector-stage-only`` runs just it on an existing ``--out``): the
+  HOG templates with the chosen values, trained on the default set and on a larger one
+  (``--detector-demo/-cmu/-views``), against the cnn detector (:mod:`vidstyle.pose.cnn`) trained on
+  the larger set, at every unary weight and refinement radius, on the same validation frames (single
+  image, no person prior). The best PCP within the speed budget chooses ``detector``; the cnn's best
+  unary weight and refinement are its defaults (:data:`vidstyle.pose.defaults.CNN_DEFAULTS`);
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -201,6 +207,97 @@ def second_stage(args, train, doc: dict) -> dict:
     return doc
 
 
+CNN_ALPHAS = [0.5, 1.0, 2.0]
+CNN_REFINE = [0, 2]
+
+
+def score_frames(model, val, view_method: str | None = None) -> dict:
+    """PCP (chosen / true viewpoint / generic), per part, PCK, viewpoint accuracy, CPU ms/frame of one
+    model on the validation frames (colour frames; hog models read them as gray)."""
+    from vidstyle.pose.evaluate import _frame_of, pck
+
+    gt = np.stack([s.keypoints for s in val])
+    views = [s.view for s in val]
+    pts = {"ps": [], "oracle": [], "generic": []}
+    pred = []
+    for s in val:
+        f, scale = model.prepare(_frame_of(s))
+        feats, maps = model.view_features(f, full=True)
+        v = model.classify_view(feats, view_method)[0]
+        pred.append(v)
+        for name, mname in (("ps", v), ("oracle", s.view), ("generic", GENERIC)):
+            pts[name].append(model.solve(mname, maps[mname], scale, None, f))
+    conf = confusion(views, pred)
+    hits = {k: strict_pcp(np.stack(v), gt) for k, v in pts.items()}
+    ts = []
+    for s in val[:: max(1, len(val) // 12)]:
+        t = time.process_time()
+        model.estimate(_frame_of(s))
+        ts.append(time.process_time() - t)
+    return {"pcp_mean": float(hits["ps"].mean()), "pcp_per_part": hits["ps"].mean(axis=0).round(4).tolist(),
+            "pcp_min_part": float(hits["ps"].mean(axis=0).min()), "pcp_oracle_view": float(hits["oracle"].mean()),
+            "pcp_generic": float(hits["generic"].mean()), "pck": float(pck(np.stack(pts["ps"]), gt).mean()),
+            "view_acc": conf["per_view_accuracy"], "view_acc_mean": float(np.mean(list(conf["per_view_accuracy"].values()))),
+            "cpu_ms_per_frame": float(np.median(ts) * 1000)}
+
+
+def detector_stage(args, doc: dict) -> dict:
+    """Part detectors compared on the same validation frames: HOG templates (the chosen defaults) on
+    the default training set and on the larger ``--detector-*`` set, and the cnn detector on the
+    larger set at every unary weight and refinement radius. The best PCP wins the detector; the
+    cnn's best unary weight and refinement are its defaults."""
+    from vidstyle.pose.cnn import CnnPoseModel
+    from vidstyle.pose.defaults import CNN_DEFAULTS
+
+    ch = doc["chosen"]
+    val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
+                                    args.cmu_dir), jobs=args.jobs, keep_bgr=True)
+    big = render_samples(make_specs("train", args.detector_demo, args.detector_cmu, args.detector_views, args.seed,
+                                    args.cmu_dir), jobs=args.jobs, keep_bgr=True)
+    small = render_samples(make_specs("train", args.train_demo, args.train_cmu, args.views_per_clip, args.seed,
+                                      args.cmu_dir), jobs=args.jobs)
+    rows = []
+    for name, train in (("default", small), ("large", big)):
+        t0 = time.time()
+        hog = PoseModel(n_orient=ch["n_orient"], hard_rounds=ch["hard_rounds"], viewpoint=ch["viewpoint"],
+                        unary_weight=ch["unary_weight"], fg_weight=0.0, seed=args.seed).fit(train, jobs=args.jobs)
+        fit = time.time() - t0
+        r = {"detector": "hog", "training": name, "train_frames": len(train), "fit_wall_s": round(fit, 1),
+             "unary_weight": ch["unary_weight"], "refine": None, **score_frames(hog, val)}
+        rows.append(r)
+        log.info("hog (%s training, %d frames): PCP %.3f, view %.3f", name, len(train), r["pcp_mean"], r["view_acc_mean"])
+    t0 = time.time()
+    cnn = CnnPoseModel(n_orient=ch["n_orient"], epochs=args.cnn_epochs, channels=CNN_DEFAULTS["channels"],
+                       seed=args.seed).fit(big)
+    fit = time.time() - t0
+    for a in CNN_ALPHAS:
+        for ref in CNN_REFINE:
+            cnn.set_inference(unary_weight=a)
+            cnn.refine = ref
+            r = {"detector": "cnn", "training": "large", "train_frames": len(big), "fit_wall_s": round(fit, 1),
+                 "epochs": args.cnn_epochs, "unary_weight": a, "refine": ref, **score_frames(cnn, val)}
+            rows.append(r)
+            log.info("cnn alpha %.1f refine %d: PCP %.3f, view %.3f, %.1f ms/frame", a, ref, r["pcp_mean"],
+                     r["view_acc_mean"], r["cpu_ms_per_frame"])
+    fast = [r for r in rows if r["cpu_ms_per_frame"] <= args.budget_ms] or rows
+    best = max(fast, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    best_cnn = max((r for r in rows if r["detector"] == "cnn"), key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    doc["detector_stage"] = {"rows": rows, "training": {"demo": args.detector_demo, "cmu": args.detector_cmu,
+                                                        "views_per_clip": args.detector_views, "frames": len(big)},
+                             "cnn_epochs": args.cnn_epochs}
+    doc["chosen"]["detector"] = best["detector"]
+    doc["chosen"]["cnn"] = {"unary_weight": best_cnn["unary_weight"], "refine": best_cnn["refine"],
+                            "epochs": args.cnn_epochs, "channels": CNN_DEFAULTS["channels"]}
+    doc["scores"]["detector_pcp_mean"] = best["pcp_mean"]
+    print("\npart detectors (same validation frames; single image, no person prior):")
+    for r in rows:
+        print(f"  {r['detector']:4s} {r['training']:8s} {r['train_frames']:5d} frames  alpha {r['unary_weight']:3.1f} "
+              f"refine {'-' if r['refine'] is None else r['refine']}  PCP {r['pcp_mean']:.3f} (min part "
+              f"{r['pcp_min_part']:.3f}, true view {r['pcp_oracle_view']:.3f}, generic {r['pcp_generic']:.3f})  "
+              f"PCK {r['pck']:.3f}  view {r['view_acc_mean']:.3f}  {r['cpu_ms_per_frame']:.1f} ms  fit {r['fit_wall_s']:.0f} s")
+    return doc
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cmu-dir", type=Path, default=DEFAULT_CMU if DEFAULT_CMU.is_dir() else None)
@@ -214,13 +311,25 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--budget-ms", type=float, default=50.0, help="CPU ms/frame the default viewpoint classifier's "
                     "pose path may take (the issue's speed goal); the most accurate within it wins.")
+    ap.add_argument("--detector-demo", type=int, default=24, help="Demo performers of the detector stage's "
+                    "larger training set.")
+    ap.add_argument("--detector-cmu", type=int, default=40, help="CMU clips of the detector stage's training set.")
+    ap.add_argument("--detector-views", type=int, default=8, help="Azimuths per clip of that set.")
+    ap.add_argument("--cnn-epochs", type=int, default=10, help="Training epochs of the cnn detector.")
+    ap.add_argument("--detector-stage-only", action="store_true", help="Only the part-detector comparison "
+                    "(hog vs cnn), from the chosen values already in --out (which it updates).")
     ap.add_argument("--second-stage-only", action="store_true", help="Only the second stage (viewpoint "
                     "classifiers, person prior), from the first stage's table already in --out (which it updates).")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
     t_all = time.time()
-    if args.second_stage_only and not args.out.is_file():
-        ap.error(f"--second-stage-only: {args.out} does not exist")
+    if (args.second_stage_only or args.detector_stage_only) and not args.out.is_file():
+        ap.error(f"--second-stage-only / --detector-stage-only: {args.out} does not exist")
+    if args.detector_stage_only:
+        doc = detector_stage(args, json.loads(args.out.read_text()))
+        args.out.write_text(json.dumps(doc, indent=2) + "\n")
+        print(f"chosen: {json.dumps(doc['chosen'])} -> {args.out}")
+        return 0
     train = render_samples(make_specs("train", args.train_demo, args.train_cmu, args.views_per_clip, args.seed,
                                       args.cmu_dir), jobs=args.jobs)
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
@@ -264,6 +373,7 @@ def main() -> int:
                       "views_per_clip": args.views_per_clip},
            "table": table, "orientation": orient_rows, "wall_s": round(time.time() - t_all, 1)}
     doc = second_stage(args, train, doc)
+    doc = detector_stage(args, doc)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2) + "\n")
     print(f"{'n_orient':>8s} {'hard':>4s} {'viewpoint':>9s} {'alpha':>5s} {'PCP':>6s} {'minpart':>7s} "

@@ -174,7 +174,7 @@ def _camera(q: Query, motion, manifest: dict):
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
                    annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
                    place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
-                   context: int = 0, use_scores: bool = True, max_match_cost: float = np.inf,
+                   context: int = 0, use_scores: bool = True, foreshortening: bool = False, max_match_cost: float = np.inf,
                    max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf, thresholds: dict | None = None,
                    videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1) -> dict:
     """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
@@ -284,7 +284,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 continue
             offs, uv, sc, az, spread = got
             top, costs = window_query(idx_all, uv, offs / float(manifest["fps"]), az, k, spread,
-                                      sc if use_scores else None)
+                                      sc if use_scores else None, foreshortening=foreshortening)
             same = idx_all.clip_[top] == idx_all.clip_[oracle]
             near = same & (np.abs(idx_all.frame_[top] - idx_all.frame_[oracle]) <= 2 * idx_all.stride)
             # reference point: the enhanced distance over the top-k candidates
@@ -322,7 +322,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     params = dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                   library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
                   enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale,
-                  max_span=max_span, context=context, use_scores=use_scores,
+                  max_span=max_span, context=context, use_scores=use_scores, foreshortening=foreshortening,
                   max_match_cost=_finite(max_match_cost), max_enh_cost=_finite(max_enh_cost),
                   min_gain_mm=_finite(min_gain_mm), thresholds=thresholds,
                   sources=list(sources), index=idx_all.get_params(), queries=len(queries),

@@ -134,6 +134,7 @@ class PoseIndex:
         self.features_ = np.stack([np.concatenate([f[v] for f in per_clip]) for v in range(self.n_views)])
         self.trees_ = parallel_map(_build_tree, list(self.features_), jobs=self.jobs, scheduler=self.scheduler,
                                    description="indexing views")
+        self.bone_ratio_ = bone_length_ratios(np.concatenate([c.points[::self.stride] for c in clips]))
         return self
 
     @property
@@ -221,14 +222,54 @@ def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
 __all__ = ["KP", "LibraryClip", "PoseIndex", "coherent_ranking", "library_clips"]
 
 
-def bone_weights(scores: np.ndarray | None) -> np.ndarray | None:
-    """(..., B) weight of every bone: the smaller confidence score of its two keypoints (scores (..., 15))."""
+def _girdle_midpoints(points: np.ndarray) -> np.ndarray:
+    """Copy of keypoints (..., 15, d) with the neck and pelvis at the shoulder and hip midpoints (as
+    :func:`.projection.angle_features` compares them)."""
+    p = np.array(points, dtype=np.float64, copy=True)
+    p[..., KP["neck"], :] = 0.5 * (p[..., KP["left_shoulder"], :] + p[..., KP["right_shoulder"], :])
+    p[..., KP["pelvis"], :] = 0.5 * (p[..., KP["left_hip"], :] + p[..., KP["right_hip"], :])
+    return p
+
+
+def bone_length_ratios(points3d: np.ndarray) -> np.ndarray:
+    """(B,) median 3D length of every bone over frames (F, 15, 3), in torso lengths (hip midpoint to
+    shoulder midpoint): the unforeshortened 2D length a bone has next to an upright torso."""
     from .keypoints import BONE_INDEX
 
-    if scores is None:
-        return None
-    s = np.clip(np.asarray(scores, dtype=np.float64), 0.0, 1.0)
-    return np.minimum(s[..., BONE_INDEX[:, 0]], s[..., BONE_INDEX[:, 1]])
+    p = _girdle_midpoints(points3d)
+    bones = np.linalg.norm(p[:, BONE_INDEX[:, 1]] - p[:, BONE_INDEX[:, 0]], axis=-1)
+    torso = np.linalg.norm(p[:, KP["neck"]] - p[:, KP["pelvis"]], axis=-1)
+    return np.median(bones / np.maximum(torso, 1e-9)[:, None], axis=0)
+
+
+def foreshortening_weights(points2d: np.ndarray, ratios: np.ndarray) -> np.ndarray:
+    """(..., B) weight of every bone of 2D keypoints (..., 15, 2): its image length over the length it
+    would have seen side-on (``ratios`` x the image torso length), clipped to [0, 1]. A bone pointing
+    at the camera is short in the image and its direction is noise (a guard's forearms seen from the
+    front); its angle then counts for little. The neck and pelvis are the girdle midpoints."""
+    from .keypoints import BONE_INDEX
+
+    p = _girdle_midpoints(points2d)
+    bones = np.linalg.norm(p[..., BONE_INDEX[:, 1], :] - p[..., BONE_INDEX[:, 0], :], axis=-1)
+    torso = np.linalg.norm(p[..., KP["neck"], :] - p[..., KP["pelvis"], :], axis=-1)
+    return np.clip(bones / np.maximum(ratios * torso[..., None], 1e-9), 0.0, 1.0)
+
+
+def bone_weights(scores: np.ndarray | None, points2d: np.ndarray | None = None,
+                 ratios: np.ndarray | None = None) -> np.ndarray | None:
+    """(..., B) weight of every bone: the smaller confidence score of its two keypoints (scores (..., 15));
+    with ``points2d`` and ``ratios`` also times its :func:`foreshortening_weights`. None when neither
+    applies (all bones weigh 1)."""
+    from .keypoints import BONE_INDEX
+
+    w = None
+    if scores is not None:
+        s = np.clip(np.asarray(scores, dtype=np.float64), 0.0, 1.0)
+        w = np.minimum(s[..., BONE_INDEX[:, 0]], s[..., BONE_INDEX[:, 1]])
+    if points2d is not None and ratios is not None:
+        f = foreshortening_weights(points2d, ratios)
+        w = f if w is None else w * f
+    return w
 
 
 def weighted_feature_distance(q: np.ndarray, f: np.ndarray, w: np.ndarray | None) -> np.ndarray:
@@ -244,8 +285,8 @@ def weighted_feature_distance(q: np.ndarray, f: np.ndarray, w: np.ndarray | None
 
 
 def window_query(index: PoseIndex, points2d: np.ndarray, offsets_s: np.ndarray, azimuth_deg: float, k: int = 10,
-                 spread: int = 0, scores: np.ndarray | None = None, per_frame_k: int = 50, tolerance: float = 0.5
-                 ) -> tuple[np.ndarray, np.ndarray]:
+                 spread: int = 0, scores: np.ndarray | None = None, per_frame_k: int = 50, tolerance: float = 0.5,
+                 foreshortening: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Top-``k`` library frames for a marked frame seen together with its neighbours (temporal coherence
     over a short window, as in Tautges' lazy neighbourhood graph, but scored exactly).
 
@@ -256,14 +297,15 @@ def window_query(index: PoseIndex, points2d: np.ndarray, offsets_s: np.ndarray, 
     by ``tolerance`` x |offset| plus one indexed frame (other speeds). Candidates are the union of the
     kd-tree's ``per_frame_k`` neighbours of every query frame (moved back by its offset) at the view
     nearest ``azimuth_deg`` and ``spread`` neighbouring views either side; each candidate takes its best
-    view. With one query frame at offset 0 and no scores this is exact kNN at those views.
+    view. With one query frame at offset 0, no scores and no ``foreshortening`` (bones weighted by
+    :func:`foreshortening_weights` with the library's ``bone_ratio_``) this is exact kNN at those views.
     Returns (indices into ``clip_``/``frame_``, costs), each (k,), best first."""
     pts = np.asarray(points2d, dtype=np.float64)
     off = np.asarray(offsets_s, dtype=np.float64)
     if pts.ndim != 3 or len(pts) != len(off) or len(pts) == 0:
         raise ValueError(f"points2d (D, 15, 2) and offsets_s (D,) must agree, got {pts.shape} and {off.shape}")
     feats = angle_features(pts).astype(np.float64)  # (D, 2B)
-    w = bone_weights(scores)
+    w = bone_weights(scores, pts if foreshortening else None, index.bone_ratio_ if foreshortening else None)
     step = 360.0 / index.n_views
     views = sorted({index.view_index(azimuth_deg + d * step) for d in range(-spread, spread + 1)})
     N = index.n_frames

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..pose.defaults import DEFAULTS, VIEWPOINT_METHODS
+from ..pose.defaults import CNN_DEFAULTS, DEFAULTS, DETECTOR, VIEWPOINT_METHODS
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
@@ -47,19 +47,30 @@ def train_pose(
                                   "torso scores, one-vs-all + one-vs-one SVMs), logistic (every part's score), "
                                   "hog (linear SVM on a whole-person HOG) or combined (product of logistic and "
                                   "hog). All are trained; this one is used."),
-    unary_weight: float = typer.Option(DEFAULTS["unary_weight"], "--unary-weight",
-                                       help="Weight of the part detectors against the tree prior."),
+    unary_weight: float | None = typer.Option(None, "--unary-weight", help="Weight of the part detectors against "
+                                              f"the tree prior [default: {DEFAULTS['unary_weight']} (hog), "
+                                              f"{CNN_DEFAULTS['unary_weight']} (cnn)]."),
     fg_weight: float = typer.Option(DEFAULTS["fg_weight"], "--fg-weight", help="Weight of the person prior on video "
-                                    "input (foreground against the video's median background; 0 = off)."),
+                                    "input (foreground against the video's median background; 0 = off; hog only)."),
+    detector: str = typer.Option(DETECTOR, "--detector", help="Part detectors: hog (HOG cells + linear templates, "
+                                 "per viewpoint, with --viewpoint's classifier) or cnn (a convolutional network's "
+                                 "keypoint heatmaps as the unary terms and its viewpoint head; needs PyTorch)."),
+    epochs: int = typer.Option(CNN_DEFAULTS["epochs"], "--epochs", help="Training epochs of the cnn detector."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
-    """Train the pictorial-structures pose model (viewpoint-specific + generic part detectors, tree
-    priors, viewpoint SVMs) on frames rendered from the demo performers and CMU clips."""
+    """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
+    detectors, viewpoint classifier) on frames rendered from the demo performers and CMU clips."""
     from ..pose.data import make_specs
     from ..pose.estimator import PoseModel, save_pose_model
 
+    if detector not in ("hog", "cnn"):
+        raise InputError(f"--detector: {detector!r} is not hog or cnn")
+    if epochs < 1:
+        raise InputError("--epochs: must be at least 1")
+    if unary_weight is None:
+        unary_weight = (CNN_DEFAULTS if detector == "cnn" else DEFAULTS)["unary_weight"]
     if viewpoint not in VIEWPOINT_METHODS:
         raise InputError(f"--viewpoint: {viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
     if not unary_weight > 0:
@@ -72,8 +83,14 @@ def train_pose(
         raise InputError("--orientations: must be between 4 and 36")
     cmu = _cmu(cmu_dir)
     specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
-    model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
-                      fg_weight=fg_weight, seed=seed)
+    if detector == "cnn":
+        from ..pose.cnn import CnnPoseModel
+
+        model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
+                             channels=CNN_DEFAULTS["channels"], refine=CNN_DEFAULTS["refine"], seed=seed)
+    else:
+        model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
+                          fg_weight=fg_weight, seed=seed)
     model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
     save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
                                               "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,

@@ -344,6 +344,8 @@ class PoseModel:
 
     PARAMS = ("n_orient", "cell", "C", "neg_per_pos", "hard_rounds", "viewpoint", "dt", "unary_weight", "hog_C",
               "fg_weight", "seed")
+    #: the viewpoint classifiers this model trains (``set_inference(viewpoint=...)``, ``evaluate pose``)
+    VIEWPOINTS = VIEWPOINT_METHODS
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}

@@ -94,11 +94,12 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     if prior:
         methods["ps_single_image"] = []
     backgrounds = clip_backgrounds(samples) if prior else {}
-    vpred = {w: [] for w in VIEWPOINT_METHODS}
+    methods_v = getattr(model, "VIEWPOINTS", VIEWPOINT_METHODS)
+    vpred = {w: [] for w in methods_v}
     for s in samples:
-        f, scale = model.prepare(s.image)
+        f, scale = model.prepare(_frame_of(s))
         feats, maps = model.view_features(f, full=True)
-        for w in VIEWPOINT_METHODS:
+        for w in methods_v:
             vpred[w].append(model.classify_view(feats, w)[0])
         chosen = vpred[model.viewpoint][-1]
         fg = model.foreground_map(_frame_of(s), backgrounds.get(s.clip), f)

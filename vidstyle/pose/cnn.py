@@ -1,0 +1,418 @@
+"""Convolutional part detectors for the pictorial structures (``vidstyle train-pose --detector cnn``).
+
+The HOG cells + linear templates of :mod:`vidstyle.pose.model` are capacity-bound: six times more
+training frames moved their validation PCP by less than a point (``scripts/validate_pose.py``'s
+detector table). This module replaces only the *unary terms*: a small fully convolutional network
+(PyTorch, CPU) reads the colour frame at the working size and gives, for each of the 15 keypoints,
+a log-probability map over the feature cell grid (stride 4, the grid the tree prior works on), plus
+the frame's viewpoint (front / left / right / back) from a global-pooling head.
+
+The tree prior, its exact min-sum inference (the generalised distance transform) and the
+per-viewpoint models stay those of :class:`~vidstyle.pose.model.PictorialStructures`; the unary of
+part ``j`` at state (orientation k, cell y, x) is the sum of its two endpoint keypoints'
+log-probabilities at ``(x, y) + R(theta_k) * offset`` (proximal and distal offsets learned with the
+tree geometry), so the tree decides which detections belong together (left/right, which limb) and the
+network says where joints are. The solution's keypoints are then refined to the heatmap's
+probability-weighted mean within ``refine`` cells (the 45-degree orientation bins would otherwise
+quantise a limb's end), and each keypoint's score is the heatmap's probability mass within one cell of
+it.
+
+Network (``KeypointNet``): 3x3 convolutions with batch norm and ReLU, two stride-2 stages
+(16, 32, ``channels``) then dilated 3x3 convolutions (dilation 2, 4, 8, 2) so that the receptive field
+covers the whole figure (needed to tell the performer's left from right), a 1x1 keypoint head and a
+linear viewpoint head on the pooled features. Training: spatial softmax cross-entropy against a
+Gaussian (``sigma`` cells) around each true keypoint, plus the viewpoint cross-entropy; AdamW with a
+one-cycle schedule; horizontal flips (left/right keypoints and views swapped) and per-channel gain /
+offset jitter; seeded (torch and numpy generators), single-process, ``threads`` intra-op threads.
+
+The weights are kept as numpy arrays (the model pickles without torch objects; torch is imported
+only to train and to run).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
+from .data import VIEW_NAMES
+from .estimator import PoseModel
+
+log = logging.getLogger(__name__)
+
+CELL = 4
+LOG_FLOOR = -20.0  # log-probability outside the frame
+#: keypoint order under a horizontal flip (the performer's left becomes the image's other side)
+FLIP_KEYPOINTS = [KEYPOINTS.index(n.replace("left", "@").replace("right", "left").replace("@", "right"))
+                  for n in KEYPOINTS]
+FLIP_VIEWS = [VIEW_NAMES.index({"left": "right", "right": "left"}.get(v, v)) for v in VIEW_NAMES]
+
+
+def _torch():
+    try:
+        import torch
+    except ImportError as exc:  # pragma: no cover - torch is a dependency
+        raise RuntimeError("the cnn pose detector needs PyTorch (pip install torch==2.13.0)") from exc
+    return torch
+
+
+def _build_net(channels: int):
+    torch = _torch()
+    nn = torch.nn
+
+    def block(i, o, s=1, d=1):
+        return nn.Sequential(nn.Conv2d(i, o, 3, s, padding=d, dilation=d, bias=False), nn.BatchNorm2d(o),
+                             nn.ReLU(inplace=True))
+
+    class KeypointNet(nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            c = channels
+            self.body = nn.Sequential(block(3, 16), block(16, 32, 2), block(32, 32), block(32, c, 2), block(c, c),
+                                      block(c, c, d=2), block(c, c, d=4), block(c, c, d=8), block(c, c, d=2))
+            self.kp = nn.Conv2d(c, len(KEYPOINTS), 1)
+            self.view = nn.Linear(c, len(VIEW_NAMES))
+
+        def forward(self, x):
+            f = self.body(x)
+            return self.kp(f), self.view(f.mean(dim=(2, 3)))
+
+    return KeypointNet()
+
+
+def to_input(frames_bgr: np.ndarray):
+    """(N, H, W, 3) uint8 BGR -> float tensor (N, 3, H, W) in [-0.5, 0.5]."""
+    torch = _torch()
+    x = np.ascontiguousarray(np.asarray(frames_bgr, dtype=np.float32).transpose(0, 3, 1, 2)) / 255.0 - 0.5
+    return torch.from_numpy(x)
+
+
+def gaussian_targets(keypoints: np.ndarray, grid: tuple[int, int], sigma: float) -> np.ndarray:
+    """(N, 15, Hc, Wc) normalised Gaussians around keypoints (N, 15, 2) px on the cell grid (cell
+    centre of cell (x, y) at pixel x * CELL + (CELL - 1) / 2)."""
+    Hc, Wc = grid
+    gy, gx = np.mgrid[0:Hc, 0:Wc]
+    c = (np.asarray(keypoints, dtype=np.float64) - (CELL - 1) / 2.0) / CELL
+    d2 = (gx - c[..., 0, None, None]) ** 2 + (gy - c[..., 1, None, None]) ** 2
+    h = np.exp(-d2 / (2.0 * sigma ** 2))
+    return (h / np.maximum(h.sum(axis=(-1, -2), keepdims=True), 1e-12)).astype(np.float32)
+
+
+class HeatmapCNN:
+    """Keypoint heatmaps and viewpoint from a colour frame (see the module docstring).
+
+    Parameters: ``channels``, ``epochs``, ``batch_size``, ``lr`` (peak of the one-cycle schedule),
+    ``sigma`` (target width, cells), ``view_weight`` (viewpoint loss weight), ``seed``, ``threads``.
+    Learned: ``weights_`` (name -> numpy array, the network's state), ``size_`` (W, H) it was trained
+    at, ``loss_`` (mean training loss of every epoch)."""
+
+    def __init__(self, channels: int = 48, epochs: int = 10, batch_size: int = 32, lr: float = 3e-3,
+                 sigma: float = 1.0, view_weight: float = 0.5, seed: int = 0, threads: int = 2) -> None:
+        self.channels = channels
+        self.epochs = epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.sigma = sigma
+        self.view_weight = view_weight
+        self.seed = seed
+        self.threads = threads
+
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in ("channels", "epochs", "batch_size", "lr", "sigma", "view_weight",
+                                               "seed", "threads")}
+
+    def fit(self, frames_bgr: np.ndarray, keypoints: np.ndarray, views: list[str]) -> HeatmapCNN:
+        """Train on (N, H, W, 3) uint8 frames (H, W multiples of 4), keypoints (N, 15, 2) px, view names."""
+        from ..logutil import progress
+
+        torch = _torch()
+        F = torch.nn.functional
+        X = np.asarray(frames_bgr)
+        if X.ndim != 4 or X.shape[-1] != 3 or X.shape[1] % CELL or X.shape[2] % CELL:
+            raise ValueError(f"frames must be (N, H, W, 3) with H, W multiples of {CELL}, got {X.shape}")
+        kp = np.asarray(keypoints, dtype=np.float64)
+        v = np.array([VIEW_NAMES.index(s) for s in views])
+        n, H, W = X.shape[:3]
+        if len(kp) != n or len(v) != n or n < self.batch_size:
+            raise ValueError(f"need at least batch_size={self.batch_size} frames with keypoints and views, got {n}")
+        torch.manual_seed(self.seed)
+        rng = np.random.default_rng(self.seed)
+        prev_threads = torch.get_num_threads()
+        torch.set_num_threads(max(1, int(self.threads)))
+        try:
+            net = _build_net(self.channels)
+            opt = torch.optim.AdamW(net.parameters(), lr=self.lr / 1.5, weight_decay=1e-4)
+            per_epoch = n // self.batch_size
+            sched = torch.optim.lr_scheduler.OneCycleLR(opt, self.lr, total_steps=self.epochs * per_epoch)
+            flip_kp, flip_v = np.array(FLIP_KEYPOINTS), np.array(FLIP_VIEWS)
+            grid = (H // CELL, W // CELL)
+            self.loss_ = []
+            for _ep in progress(range(self.epochs), "training pose cnn"):
+                net.train()
+                perm = rng.permutation(n)
+                total = 0.0
+                for b in range(per_epoch):
+                    idx = perm[b * self.batch_size:(b + 1) * self.batch_size]
+                    x, k, vv = X[idx].copy(), kp[idx].copy(), v[idx].copy()
+                    flip = rng.random(len(idx)) < 0.5
+                    x[flip] = x[flip][:, :, ::-1]
+                    k[flip] = k[flip][:, flip_kp]
+                    k[flip, :, 0] = W - 1 - k[flip, :, 0]
+                    vv[flip] = flip_v[vv[flip]]
+                    xt = to_input(x)
+                    gain = torch.from_numpy(rng.uniform(0.8, 1.2, (len(idx), 3, 1, 1)).astype(np.float32))
+                    off = torch.from_numpy(rng.uniform(-0.1, 0.1, (len(idx), 3, 1, 1)).astype(np.float32))
+                    xt = xt * gain + off
+                    tgt = torch.from_numpy(gaussian_targets(k, grid, self.sigma))
+                    out, vl = net(xt)
+                    logp = F.log_softmax(out.flatten(2), dim=2)
+                    loss = -(tgt.flatten(2) * logp).sum(2).mean() + self.view_weight * F.cross_entropy(
+                        vl, torch.from_numpy(vv))
+                    opt.zero_grad()
+                    loss.backward()
+                    opt.step()
+                    sched.step()
+                    total += float(loss.detach())
+                self.loss_.append(total / per_epoch)
+                log.info("pose cnn epoch %d: loss %.3f", len(self.loss_), self.loss_[-1])
+            net.eval()
+            self.weights_ = {k: t.detach().cpu().numpy().copy() for k, t in net.state_dict().items()}
+        finally:
+            torch.set_num_threads(prev_threads)
+        self.size_ = (W, H)
+        self._net = None
+        return self
+
+    def _module(self):
+        net = self.__dict__.get("_net")
+        if net is None:
+            torch = _torch()
+            net = _build_net(self.channels)
+            net.load_state_dict({k: torch.from_numpy(np.asarray(a)) for k, a in self.weights_.items()})
+            net.eval()
+            self._net = net
+        return net
+
+    def __getstate__(self) -> dict:
+        d = dict(self.__dict__)
+        d.pop("_net", None)
+        return d
+
+    def predict(self, frames_bgr: np.ndarray, batch: int = 32, threads: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """(log-probability heatmaps (N, 15, H/4, W/4), viewpoint log-probabilities (N, 4)) of
+        (N, H, W, 3) uint8 frames, on ``threads`` intra-op threads (1: the pose command runs one
+        worker per core)."""
+        torch = _torch()
+        F = torch.nn.functional
+        X = np.asarray(frames_bgr)
+        if X.ndim == 3:
+            X = X[None]
+        net = self._module()
+        heat, views = [], []
+        prev = torch.get_num_threads()
+        torch.set_num_threads(max(1, int(threads)))
+        try:
+            with torch.no_grad():
+                for i in range(0, len(X), batch):
+                    out, vl = net(to_input(X[i:i + batch]))
+                    s = out.shape
+                    heat.append(F.log_softmax(out.flatten(2), dim=2).reshape(s).numpy())
+                    views.append(F.log_softmax(vl, dim=1).numpy())
+        finally:
+            torch.set_num_threads(prev)
+        return np.concatenate(heat), np.concatenate(views)
+
+
+def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
+    """(10, K, Hc, Wc) unary scores of the parts of pictorial structures ``m`` from keypoint
+    log-probability maps (15, Hc, Wc): part j at (k, y, x) scores the log-probabilities of its
+    proximal and distal keypoints at ``(x, y) + R(theta_k) offset`` (offsets rounded to cells)."""
+    from .model import N_PARTS, _shift
+
+    K = m.n_orient
+    out = np.empty((N_PARTS, K) + logheat.shape[1:], dtype=np.float32)
+    for j in range(N_PARTS):
+        a, b = int(PART_KEYPOINTS[j, 0]), int(PART_KEYPOINTS[j, 1])
+        da, db = m._rounded(m.proximal_[j]), m._rounded(m.distal_[j])
+        for k in range(K):
+            out[j, k] = (_shift(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
+                         + _shift(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))
+    return out
+
+
+def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, radius: int = 2) -> np.ndarray:
+    """Keypoints (15, >=2) at the input size (``scale``: working / input) moved to the heatmap's
+    probability-weighted mean within ``radius`` cells of each (0: not moved); returns (15, 3) with the
+    score = the probability mass within one cell of the (refined) point."""
+    K, Hc, Wc = logheat.shape
+    p = np.exp(logheat.astype(np.float64))
+    out = np.zeros((K, 3))
+    for i in range(K):
+        cx = (points_px[i, 0] * scale - (CELL - 1) / 2.0) / CELL
+        cy = (points_px[i, 1] * scale - (CELL - 1) / 2.0) / CELL
+        x0, y0 = int(np.clip(round(cx), 0, Wc - 1)), int(np.clip(round(cy), 0, Hc - 1))
+        ys = slice(max(0, y0 - radius), min(Hc, y0 + radius + 1))
+        xs = slice(max(0, x0 - radius), min(Wc, x0 + radius + 1))
+        w = p[i, ys, xs]
+        gy, gx = np.mgrid[ys, xs]
+        tot = w.sum()
+        if radius > 0 and tot > 1e-12:
+            mx, my = float((w * gx).sum() / tot), float((w * gy).sum() / tot)
+        else:
+            mx, my = float(cx), float(cy)
+        xi, yi = int(np.clip(round(mx), 0, Wc - 1)), int(np.clip(round(my), 0, Hc - 1))
+        mass = float(p[i, max(0, yi - 1):yi + 2, max(0, xi - 1):xi + 2].sum())
+        out[i] = ((mx * CELL + (CELL - 1) / 2.0) / scale, (my * CELL + (CELL - 1) / 2.0) / scale,
+                  min(1.0, mass))
+    return out
+
+
+def argmax_keypoints(logheat: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """(15, 3) keypoints at each heatmap's maximum (no tree prior), refined like the tree's."""
+    Hc, Wc = logheat.shape[1:]
+    am = logheat.reshape(len(logheat), -1).argmax(axis=1)
+    pts = np.stack([(am % Wc) * CELL + (CELL - 1) / 2.0, (am // Wc) * CELL + (CELL - 1) / 2.0], -1) / scale
+    return refine_keypoints(pts, logheat, scale)
+
+
+class CnnFrame:
+    """A frame prepared for :class:`CnnPoseModel`: the working-size BGR image (padded to multiples of
+    4 at the right and bottom), its keypoint log-probability maps and viewpoint log-probabilities."""
+
+    def __init__(self, bgr: np.ndarray, logheat: np.ndarray, view_logp: np.ndarray) -> None:
+        self.bgr = bgr
+        self.H, self.W = bgr.shape[:2]
+        self.logheat = logheat
+        self.view_logp = view_logp
+
+
+def _pad4(img: np.ndarray) -> np.ndarray:
+    H, W = img.shape[:2]
+    ph, pw = (-H) % CELL, (-W) % CELL
+    if ph or pw:
+        img = np.pad(img, ((0, ph), (0, pw), (0, 0)), mode="edge")
+    return img
+
+
+class CnnPoseModel(PoseModel):
+    """Pictorial structures whose unary terms come from :class:`HeatmapCNN` (module docstring), with
+    its viewpoint head as the viewpoint classifier (``viewpoint="cnn"``). The same interface as
+    :class:`~vidstyle.pose.estimator.PoseModel` (``estimate``, ``prepare``, ``view_features``,
+    ``classify_view``, ``solve``), so ``vidstyle pose`` and ``evaluate pose`` run it unchanged.
+
+    Parameters: ``n_orient`` (part orientation bins of the tree), ``unary_weight`` (detectors vs tree
+    prior), ``refine`` (cells of the final keypoint refinement, 0 = none), ``dt``, and the network's
+    (:class:`HeatmapCNN`: ``channels``, ``epochs``, ``batch_size``, ``lr``, ``sigma``, ``threads``),
+    ``seed``. No person prior (``fg_weight`` is 0: the network sees colour). Learned: ``models_``
+    (tree geometry per viewpoint and generic), ``cnn_``, ``n_train_frames_``."""
+
+    PARAMS = ("detector", "n_orient", "unary_weight", "refine", "dt", "channels", "epochs", "batch_size", "lr",
+              "sigma", "threads", "seed")
+    VIEWPOINTS = ("cnn",)
+
+    def __init__(self, n_orient: int = 8, unary_weight: float = 1.0, refine: int = 2, dt: str = "envelope",
+                 channels: int = 48, epochs: int = 10, batch_size: int = 32, lr: float = 3e-3, sigma: float = 1.0,
+                 threads: int = 2, seed: int = 0) -> None:
+        self.detector = "cnn"
+        self.n_orient = n_orient
+        self.unary_weight = unary_weight
+        self.refine = refine
+        self.dt = dt
+        self.channels = channels
+        self.epochs = epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.sigma = sigma
+        self.threads = threads
+        self.seed = seed
+        self.cell = CELL
+        self.viewpoint = "cnn"
+        self.fg_weight = 0.0
+
+    def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
+                      fg_weight: float | None = None) -> CnnPoseModel:
+        if viewpoint is not None and viewpoint != "cnn":
+            raise ValueError(f"the cnn detector's viewpoint classifier is 'cnn', got {viewpoint!r}")
+        if unary_weight is not None:
+            self.unary_weight = float(unary_weight)
+            for m in self.models_.values():
+                m.unary_weight = float(unary_weight)
+        return self
+
+    def fit_specs(self, specs, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
+        from .data import render_samples
+
+        return self.fit(render_samples(specs, jobs=jobs, scheduler=scheduler, keep_bgr=True))
+
+    def fit(self, samples, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
+        from ..errors import InputError
+        from .estimator import GENERIC
+        from .model import PictorialStructures
+
+        views = {s.view for s in samples}
+        missing = [v for v in VIEW_NAMES if v not in views]
+        if missing:
+            raise InputError(f"training frames have no {', '.join(missing)} view")
+        if any(s.bgr is None for s in samples):
+            raise ValueError("the cnn detector trains on colour frames (render_samples(..., keep_bgr=True))")
+        self.models_ = {}
+        for name in VIEW_NAMES + (GENERIC,):
+            kp = np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
+            m = PictorialStructures(self.n_orient, CELL, seed=self.seed, dt=self.dt, unary_weight=self.unary_weight)
+            self.models_[name] = m.fit_geometry(kp)
+        frames, kps = [], []
+        for s in samples:
+            f, sc = self._resize(s.bgr)
+            frames.append(f)
+            kps.append(np.asarray(s.keypoints, dtype=np.float64) * sc)
+        shapes = {f.shape for f in frames}
+        if len(shapes) != 1:
+            raise ValueError(f"training frames must share one size, got {sorted(shapes)}")
+        self.cnn_ = HeatmapCNN(self.channels, self.epochs, self.batch_size, self.lr, self.sigma, seed=self.seed,
+                               threads=self.threads).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
+        self.n_train_frames_ = len(samples)
+        return self
+
+    def _resize(self, frame: np.ndarray) -> tuple[np.ndarray, float]:
+        import cv2
+
+        from .estimator import WORK_HEIGHT
+
+        bgr = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        s = self.work_scale(bgr.shape)
+        if abs(s - 1.0) > 1e-6:
+            bgr = cv2.resize(bgr, (max(8, round(bgr.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+        return _pad4(bgr), s
+
+    def prepare(self, frame: np.ndarray) -> tuple[CnnFrame, float]:
+        bgr, s = self._resize(frame)
+        heat, views = self.cnn_.predict(bgr[None])
+        return CnnFrame(bgr, heat[0], views[0]), s
+
+    def view_features(self, f: CnnFrame, full: bool | None = None, which: str | None = None) -> tuple[dict, dict]:
+        return {"cnn": f.view_logp}, {name: part_unaries(f.logheat, m) for name, m in self.models_.items()}
+
+    def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
+        if which not in (None, "cnn"):
+            raise ValueError(f"the cnn detector's viewpoint classifier is 'cnn', got {which!r}")
+        p = np.exp(np.asarray(feats["cnn"], dtype=np.float64))
+        p /= p.sum()
+        return VIEW_NAMES[int(np.argmax(p))], {v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, p)}
+
+    def foreground_map(self, frame, background, f):
+        return None
+
+    def solve(self, model_name: str, S: np.ndarray, scale: float, fg=None, f: CnnFrame | None = None,
+              fg_weight: float | None = None) -> np.ndarray:
+        m = self.models_[model_name]
+        r = m.infer(S)
+        pts = m.keypoints(r["states"], r["unary"], scale=scale)
+        if f is not None:
+            pts = refine_keypoints(pts, f.logheat, scale, radius=int(self.refine))
+        return pts
+
+
+__all__ = ["CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints", "gaussian_targets", "part_unaries",
+           "refine_keypoints", "FLIP_KEYPOINTS", "FLIP_VIEWS"]
