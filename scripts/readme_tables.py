@@ -153,14 +153,23 @@ def validation_table(items, root: Path) -> list[str]:
 
 
 def pose_table(items, root: Path) -> list[str]:
-    names = {"ps": "pictorial structures (default)", "ps_single_image": "pictorial structures, single image",
-             "ps_generic": "pictorial structures, generic detectors", "ps_oracle_view": "pictorial structures, true viewpoint",
-             "blazepose": "BlazePose"}
     lines = ["| backend (held-out renders) | frames | mean strict PCP | PCK@0.2 | viewpoint accuracy | file |",
              "|---|---:|---:|---:|---:|---|"]
+    # the default detectors first, then the thesis' HOG baseline; BlazePose once (the same frames)
+    items = sorted(items, key=lambda x: ((x[1].get("params") or {}).get("model_params") or {}).get("detector", "hog") != "cnn")
+    seen_blazepose = False
     for p, d in items:
+        det = ((d.get("params") or {}).get("model_params") or {}).get("detector", "hog")
+        ps = "pictorial structures, cnn detectors" if det == "cnn" else "pictorial structures, HOG detectors"
+        names = {"ps": f"{ps}{' (default)' if det == 'cnn' else ' (thesis baseline)'}",
+                 "ps_single_image": f"{ps}, single image", "ps_generic": f"{ps}, generic {'tree' if det == 'cnn' else 'detectors'}",
+                 "ps_oracle_view": f"{ps}, true viewpoint", "blazepose": "BlazePose"}
         vp = d.get("viewpoint") or {}
         for key, block in (d.get("pcp") or {}).items():
+            if key == "blazepose":
+                if seen_blazepose:
+                    continue
+                seen_blazepose = True
             if key == "ps":
                 acc = (vp.get(d.get("ps_viewpoint_method") or "") or {}).get("accuracy")
             else:
@@ -170,7 +179,7 @@ def pose_table(items, root: Path) -> list[str]:
                          f"`{_rel(p, root)}` |")
         for key in sorted(vp):
             if key not in (d.get("pcp") or {}):
-                lines.append(f"| viewpoint classifier `{key}` | {d.get('n_frames')} | | | "
+                lines.append(f"| {'cnn' if det == 'cnn' else 'HOG'} model's viewpoint classifier `{key}` | {d.get('n_frames')} | | | "
                              f"{_pct(vp[key].get('accuracy'))} | `{_rel(p, root)}` |")
     return lines
 

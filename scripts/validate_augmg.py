@@ -137,17 +137,18 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
     Path("bench_results").mkdir(exist_ok=True)
     Path("bench_results/validate_augmg.json").write_text(json.dumps(
         {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [ps_dir, bp_dir],
-         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("segment", "context", "scores", "k",
+         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("segment", "context", "scores", "k", "foreshortening",
                                                                       "thresholds", "estimated_reduction")}},
         indent=2))
     # the chosen defaults, read by `vidstyle evaluate augmg --validation` (pipelines/kickboxing/validation/)
     Path("bench_results/validation_augmg_chosen.json").write_text(json.dumps(
         {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
          "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
-         "thresholds": best["thresholds"], "validation_reduction": {
+         "foreshortening": best["foreshortening"], "thresholds": best["thresholds"], "validation_reduction": {
              s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]},
          "command": COMMAND, "queries": best["queries"],
          "table": [{"segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
+                    "foreshortening": r["foreshortening"],
                     "reduction_no_threshold": {s: round(r["no_threshold"][s]["transition_reduction"], 4)
                                                for s in r["no_threshold"]},
                     "reduction_cross_validated": {s: round(r["cross_validated"][s]["transition_reduction"], 4)

@@ -26,11 +26,12 @@ def chosen() -> dict:
 
 def test_matching_defaults_are_the_validated_ones(chosen):
     assert (cmd.SEGMENT, cmd.CONTEXT, cmd.SCORES) == (chosen["segment"], chosen["context"], chosen["scores"])
+    assert cmd.FORESHORTENING == chosen.get("foreshortening", False)
     import yaml
 
     assert yaml.safe_load(PARAMS.read_text())["augmg"]["context"] == chosen["context"]
-    best = [r for r in chosen["table"] if (r["segment"], r["context"], r["scores"], r["k"])
-            == (chosen["segment"], chosen["context"], chosen["scores"], chosen["k"])]
+    best = [r for r in chosen["table"] if (r["segment"], r["context"], r["scores"], r["k"], r.get("foreshortening", False))
+            == (chosen["segment"], chosen["context"], chosen["scores"], chosen["k"], chosen.get("foreshortening", False))]
     assert len(best) == 1
     assert best[0]["estimated_mean_cross_validated"] == max(r["estimated_mean_cross_validated"] for r in chosen["table"])
 

@@ -170,3 +170,30 @@ def test_report_shows_one_animated_entry_per_accepted_annotation(tmp_path):
     assert html.count('<canvas class="augmg-anim"') == len(marks)
     payload = json.loads(html.split('id="augmg-anim-data">')[1].split("</script>")[0].replace("<\\/", "</"))
     assert len(payload["entries"]) == len(marks)
+
+
+def test_foreshortening_weights_follow_the_bone_angle_to_the_image_plane(rng):
+    from vidstyle.augmg.index import bone_length_ratios, bone_weights, foreshortening_weights
+    from vidstyle.augmg.keypoints import KP
+
+    # a 3D body: its side-on bone lengths in torso lengths are what bone_length_ratios measures
+    pts3 = rng.normal(size=(1, 15, 3))
+    ratios = bone_length_ratios(np.repeat(pts3, 4, axis=0))
+    mid = lambda p, a, b: (p[..., KP[a], :] + p[..., KP[b], :]) / 2  # noqa: E731
+    torso = np.linalg.norm(mid(pts3, "left_shoulder", "right_shoulder") - mid(pts3, "left_hip", "right_hip"))
+    wrist = np.linalg.norm(pts3[0, KP["left_wrist"]] - pts3[0, KP["left_elbow"]])
+    assert ratios[4] == pytest.approx(wrist / torso)  # bone 4: left_elbow -> left_wrist
+    # an image of that body with the forearm turned by an angle a out of the image plane: weight cos(a)
+    uv = np.zeros((3, 15, 2))
+    uv[:, KP["left_shoulder"]], uv[:, KP["right_shoulder"]] = (-1.0, 0.0), (1.0, 0.0)
+    uv[:, KP["left_hip"]], uv[:, KP["right_hip"]] = (-1.0, 2.0), (1.0, 2.0)  # image torso length 2
+    uv[:, KP["left_elbow"]] = (3.0, 0.0)
+    for i, a in enumerate((0.0, 60.0, 90.0)):
+        uv[i, KP["left_wrist"]] = uv[i, KP["left_elbow"]] + (0.0, 2.0 * ratios[4] * np.cos(np.radians(a)))
+    w = foreshortening_weights(uv, ratios)
+    np.testing.assert_allclose(w[:, 4], [1.0, 0.5, 0.0], atol=1e-9)
+    assert (w >= 0).all() and (w <= 1).all()
+    # combined with confidence scores: the product
+    scores = rng.uniform(0.2, 1.0, (3, 15))
+    np.testing.assert_allclose(bone_weights(scores, uv, ratios), bone_weights(scores) * w)
+    assert bone_weights(None) is None and bone_weights(None, uv, ratios) is not None

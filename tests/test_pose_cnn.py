@@ -9,8 +9,8 @@ import pytest
 
 pytest.importorskip("torch")
 
-from vidstyle.mocap.keypoints import KEYPOINTS, PART_KEYPOINTS  # noqa: E402
-from vidstyle.pose.cnn import (  # noqa: E402
+from vidstyle.mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
+from vidstyle.pose.cnn import (
     CELL,
     FLIP_KEYPOINTS,
     FLIP_VIEWS,
@@ -22,8 +22,8 @@ from vidstyle.pose.cnn import (  # noqa: E402
     part_unaries,
     refine_keypoints,
 )
-from vidstyle.pose.data import VIEW_NAMES, Spec, render_samples  # noqa: E402
-from vidstyle.pose.model import N_PARTS, PictorialStructures, _from_frame  # noqa: E402
+from vidstyle.pose.data import VIEW_NAMES, Spec, render_samples
+from vidstyle.pose.model import N_PARTS, PictorialStructures, _from_frame
 
 
 def test_flip_tables_swap_sides_and_are_involutions():
@@ -168,3 +168,33 @@ def test_cnn_pose_model_round_trip_and_pose_frames(tmp_path):
     assert np.median(np.linalg.norm(c.points[:, :2] / 2.0 - a.points[:, :2], axis=1)) < 2.0
     with pytest.raises(ValueError, match="cnn"):
         loaded.set_inference(viewpoint="hog")
+
+
+@pytest.mark.slow
+def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
+    """train-pose --detector cnn writes a model whose evaluate-pose true-viewpoint PCP is recomputed
+    here frame by frame through its public estimate(); the viewpoint row is the network's head."""
+    from vidstyle.cli import main
+    from vidstyle.commands.pose import _cmu
+    from vidstyle.formats.metrics import POSE, read_metrics
+    from vidstyle.pose.data import make_specs
+    from vidstyle.pose.estimator import load_pose_model
+    from vidstyle.pose.evaluate import strict_pcp
+
+    path = tmp_path / "cnn.joblib"
+    assert main(["train-pose", "--detector", "cnn", "--epochs", "1", "--out", str(path), "--demo-performers", "4",
+                 "--cmu-clips", "0", "--views-per-clip", "4", "--seconds", "1", "--fps", "4", "--seed", "0",
+                 "-j", "1"]) == 0
+    model, header = load_pose_model(path)
+    assert header["params"]["detector"] == "cnn" and header["training"]["demo_performers"] == 4
+    out = tmp_path / "m.json"
+    assert main(["evaluate", "pose", "--model", str(path), "--out", str(out), "--demo-performers", "1",
+                 "--cmu-clips", "0", "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none",
+                 "--seed", "5", "-j", "1"]) == 0
+    m = read_metrics(out, POSE)
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    pred = np.stack([model.estimate(s.bgr, view=s.view).points for s in samples])
+    hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))
+    assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))
+    assert set(m.doc["viewpoint"]) == {"cnn", "blazepose"} and m.doc["ps_viewpoint_method"] == "cnn"
+    assert "PCP" in capsys.readouterr().out

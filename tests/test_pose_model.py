@@ -119,7 +119,7 @@ def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, train
 
     samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
     assert m.doc["n_frames"] == len(samples) > 0
-    pred = np.stack([model.estimate(s.image, view=s.view).points for s in samples])  # the gray render, as scored
+    pred = np.stack([model.estimate(s.image, view=s.view).points for s in samples])  # gray = the colour render read as gray
     hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))
     assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))
     views = [s.view for s in samples]

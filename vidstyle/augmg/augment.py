@@ -60,7 +60,7 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
                   elevation_deg: float = 10.0, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
                   edges_per_side: int = 3, enhancement_cost: float = 0.5, context: int = 2,
                   use_scores: bool = False, max_match_cost: float | None = None, video_fps: float = 20.0,
-                  jobs: int = 1) -> list[Insertion]:
+                  jobs: int = 1, foreshortening: bool = False) -> list[Insertion]:
     """Add enhancement segments and edges to ``graph`` in place (module docstring).
 
     ``marks``: :func:`.annotations_io.read_marks` items; ``poses``: video stem -> {frame: FramePose}.
@@ -104,7 +104,8 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
                 if m["frame"] + d in poses[m["video"]]]
         ids, match = window_query(index, np.stack([f.points for _, f in near]),
                                   np.array([d for d, _ in near]) / float(video_fps), az, k, spread,
-                                  np.stack([f.scores for _, f in near]) if use_scores else None)
+                                  np.stack([f.scores for _, f in near]) if use_scores else None,
+                                  foreshortening=foreshortening)
         discarded = {(c["clip"], round(c["time"], 3)) for c in m.get("candidates", []) if c["status"] == "discarded"}
         keep = [r for r, i in enumerate(ids)
                 if (index.paths_[int(index.clip_[i])], round(float(index.time_of(np.array([i]))[0]), 3)) not in discarded]

@@ -20,6 +20,7 @@ log = logging.getLogger(__name__)
 SEGMENT = "fixed"
 CONTEXT = 2
 SCORES = True
+FORESHORTENING = False
 MAX_MATCH_COST = ["model=0.732", "blazepose=0.720"]
 MAX_ENH_COST = ["blazepose=5.926"]
 MIN_GAIN = ["model=209.367", "gt=128.227", "noisy=111.448"]
@@ -47,6 +48,7 @@ def augment(
     enhancement_cost: float = typer.Option(0.5, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
     context: int = typer.Option(CONTEXT, "--context", help="Match each mark together with the poses of up to this many frames either side (temporal coherence; run vidstyle pose with --context)."),
     scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the poses' confidence scores."),
+    foreshortening: bool = typer.Option(FORESHORTENING, "--foreshortening/--no-foreshortening", help="Also weight bones by their image length against their side-on length (a bone pointing at the camera counts less)."),
     max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Reject a reference point whose match cost exceeds this (the pair keeps its plain transitions): VALUE, or SOURCE=VALUE per pose source (model = ps, blazepose); repeatable. Default: chosen on validation performers (scripts/validate_augmg.py)."),
     jobs: int = _JOBS,
 ) -> None:
@@ -95,6 +97,7 @@ def augment(
     fps = next((m["fps"] for m in marks), 20.0)
     inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
                              enhancement_cost=enhancement_cost, context=context, use_scores=scores,
+                             foreshortening=foreshortening,
                              max_match_cost=limit.get(source, limit.get("*")), video_fps=fps, jobs=jobs)
     graph.save(out)
     log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
@@ -228,6 +231,7 @@ def evaluate_augmg_cmd(
     enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
     context: int = typer.Option(CONTEXT, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
     scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
+    foreshortening: bool = typer.Option(FORESHORTENING, "--foreshortening/--no-foreshortening", help="Also weight bones by their image length against their side-on length (a bone pointing at the camera counts less)."),
     max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Accept an enhancement only when its match cost is at most this, else keep the plain transition: VALUE or SOURCE=VALUE (- = none); repeatable. Default: chosen per source on validation performers (scripts/validate_augmg.py)."),
     max_enh_cost: List[str] = typer.Option(MAX_ENH_COST, "--max-enh-cost", help="... and its enhanced distance (CMU length units) at most this: VALUE or SOURCE=VALUE; repeatable; default from validation."),
     min_gain: List[str] = typer.Option(MIN_GAIN, "--min-gain", help="... and the reference pose at least this far (mm) from the plain transition's middle frame: VALUE or SOURCE=VALUE; repeatable; default from validation."),
@@ -262,7 +266,7 @@ def evaluate_augmg_cmd(
     sources = [*poses, "gt", "noisy"]
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
-                             context=context, use_scores=scores, thresholds=_thresholds(sources, max_match_cost,
+                             context=context, use_scores=scores, foreshortening=foreshortening, thresholds=_thresholds(sources, max_match_cost,
                                                                                         max_enh_cost, min_gain),
                              animate=next((x for x in ("model", "blazepose") if x in poses), "gt"), seed=seed, jobs=jobs)
     animations_source = next((x for x in ("model", "blazepose") if x in poses), "gt")

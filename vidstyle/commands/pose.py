@@ -35,9 +35,9 @@ def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
                                            "performers (default: ../shared/data/mocap/cmu when present)."),
-    n_demo: int = typer.Option(6, "--demo-performers", help="Demo performers rendered for training."),
-    n_cmu: int = typer.Option(10, "--cmu-clips", help="CMU clips (of the training subjects) rendered."),
-    views_per_clip: int = typer.Option(4, "--views-per-clip", help="Camera azimuths per clip."),
+    n_demo: int = typer.Option(24, "--demo-performers", help="Demo performers rendered for training."),
+    n_cmu: int = typer.Option(40, "--cmu-clips", help="CMU clips (of the training subjects) rendered."),
+    views_per_clip: int = typer.Option(8, "--views-per-clip", help="Camera azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
     fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
     n_orient: int = typer.Option(DEFAULTS["n_orient"], "--orientations", help="Part orientation bins."),

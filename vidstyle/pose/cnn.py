@@ -32,7 +32,6 @@ only to train and to run).
 from __future__ import annotations
 
 import logging
-import math
 
 import numpy as np
 
@@ -271,7 +270,7 @@ def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, r
 
 def argmax_keypoints(logheat: np.ndarray, scale: float = 1.0) -> np.ndarray:
     """(15, 3) keypoints at each heatmap's maximum (no tree prior), refined like the tree's."""
-    Hc, Wc = logheat.shape[1:]
+    Wc = logheat.shape[2]
     am = logheat.reshape(len(logheat), -1).argmax(axis=1)
     pts = np.stack([(am % Wc) * CELL + (CELL - 1) / 2.0, (am // Wc) * CELL + (CELL - 1) / 2.0], -1) / scale
     return refine_keypoints(pts, logheat, scale)
@@ -414,5 +413,5 @@ class CnnPoseModel(PoseModel):
         return pts
 
 
-__all__ = ["CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints", "gaussian_targets", "part_unaries",
-           "refine_keypoints", "FLIP_KEYPOINTS", "FLIP_VIEWS"]
+__all__ = ["FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints",
+           "gaussian_targets", "part_unaries", "refine_keypoints"]

@@ -1,0 +1,44 @@
+"""The pose model's defaults are the values scripts/validate_pose.py chose on validation renders
+(pipelines/kickboxing/validation/pose.json), so a rerun of the validation that changes them fails here
+until the library and the pipeline follow."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from vidstyle.pose.defaults import CNN_DEFAULTS, DEFAULTS, DETECTOR
+
+ROOT = Path(__file__).resolve().parents[1]
+VALIDATION = ROOT / "pipelines" / "kickboxing" / "validation" / "pose.json"
+
+
+@pytest.fixture(scope="module")
+def doc() -> dict:
+    return json.loads(VALIDATION.read_text())
+
+
+def test_hog_defaults_are_the_validated_ones(doc):
+    ch = doc["chosen"]
+    assert {k: DEFAULTS[k] for k in ("n_orient", "hard_rounds", "viewpoint", "unary_weight", "fg_weight")} == \
+        {k: ch[k] for k in ("n_orient", "hard_rounds", "viewpoint", "unary_weight", "fg_weight")}
+
+
+def test_detector_and_cnn_defaults_are_the_validated_ones(doc):
+    ch = doc["chosen"]
+    assert DETECTOR == ch["detector"]
+    assert {k: CNN_DEFAULTS[k] for k in ("unary_weight", "refine", "epochs", "channels")} == ch["cnn"]
+    rows = doc["detector_stage"]["rows"]
+    best = max(rows, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    assert best["detector"] == ch["detector"]
+    cnn = max((r for r in rows if r["detector"] == "cnn"), key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    assert (cnn["unary_weight"], cnn["refine"]) == (ch["cnn"]["unary_weight"], ch["cnn"]["refine"])
+
+
+def test_pipeline_trains_the_validated_detector(doc):
+    import yaml
+
+    params = yaml.safe_load((ROOT / "pipelines" / "kickboxing" / "params.yaml").read_text())
+    assert params["pose"]["detector"] == doc["chosen"]["detector"]
