@@ -6,8 +6,8 @@ loaded machine the CPU figure is the fairer one.
 
     python scripts/bench_pose.py [--model pose.joblib] [--out bench_results/pose.json]
 
-Without --model a small model is trained first (a few demo renders; speed does not depend on how well
-it is trained). Prints a table and writes JSON.
+Without --model a small model of each detector (hog, cnn) is trained first (a few demo renders; speed
+does not depend on how well they are trained). Prints a table and writes JSON.
 """
 
 from __future__ import annotations
@@ -59,13 +59,18 @@ def _frame(size):
     return frames[0]
 
 
-def _small_model():
+def _small_models() -> dict:
+    """One small model per detector (hog, cnn): speed does not depend on how well they are trained."""
+    from vidstyle.pose.cnn import CnnPoseModel
     from vidstyle.pose.data import Spec, render_samples
+    from vidstyle.pose.defaults import CNN_DEFAULTS
     from vidstyle.pose.estimator import PoseModel
 
-    specs = [Spec("demo:0", 1.0 + i, 2.0, az, 10.0, 100 + i, fps=3.0)
+    specs = [Spec("demo:0", 1.0 + i, 2.0, az, 10.0, 100 + i, fps=8.0)
              for i, az in enumerate((0.0, 90.0, -90.0, 180.0))]
-    return PoseModel(hard_rounds=0, neg_per_pos=6).fit(render_samples(specs, jobs=1), jobs=1)
+    samples = render_samples(specs, jobs=1, keep_bgr=True)
+    return {"hog": PoseModel(hard_rounds=0, neg_per_pos=6).fit(samples, jobs=1),
+            "cnn": CnnPoseModel(epochs=1, channels=CNN_DEFAULTS["channels"], batch_size=16, threads=1).fit(samples)}
 
 
 def main() -> int:
@@ -82,32 +87,41 @@ def main() -> int:
     from threadpoolctl import threadpool_limits
 
     from vidstyle.pose.blazepose import BlazePoseEstimator
-    from vidstyle.pose.defaults import VIEWPOINT_METHODS
     from vidstyle.pose.dt import brute_dt2d, dt2d
     from vidstyle.pose.estimator import load_pose_model
 
     rows = []
     with threadpool_limits(1):
-        model = load_pose_model(args.model)[0] if args.model else _small_model()
+        if args.model:
+            m = load_pose_model(args.model)[0]
+            models = {getattr(m, "detector", "hog"): m}
+        else:
+            models = _small_models()
+        from vidstyle.pose.defaults import DETECTOR
+
+        order = sorted(models, key=lambda d: d != DETECTOR)  # the default detector first
         bp = BlazePoseEstimator()
-        default_view = model.viewpoint
-        views = [default_view] + [v for v in VIEWPOINT_METHODS if v != default_view]
         for size in ((160, 120), (640, 480)):
             frame = _frame(size)
-            for view in views:
-                model.set_inference(viewpoint=view)
-                f_ps = lambda f=frame: model.estimate(f)  # noqa: E731
-                ps_ms, ps_runs = _median_ms(f_ps, args.runs)
-                rows.append({"what": f"ps (n_orient={model.n_orient}, viewpoint={view}"
-                                     f"{', the default' if view == default_view else ''})",
-                             "size": f"{size[0]}x{size[1]}", "ms_per_frame": ps_ms,
-                             "cpu_ms_per_frame": CPU_MS[id(f_ps)], "runs_ms": ps_runs})
-            model.set_inference(viewpoint=default_view)
+            for det in order:
+                model = models[det]
+                default_view = model.viewpoint
+                views = [default_view] + [v for v in model.VIEWPOINTS if v != default_view]
+                for view in views:
+                    model.set_inference(viewpoint=view)
+                    f_ps = lambda f=frame, m=model: m.estimate(f)  # noqa: E731
+                    ps_ms, ps_runs = _median_ms(f_ps, args.runs)
+                    rows.append({"what": f"ps {det} (n_orient={model.n_orient}, viewpoint={view}"
+                                         f"{', the default' if view == default_view and det == DETECTOR else ''})",
+                                 "size": f"{size[0]}x{size[1]}", "ms_per_frame": ps_ms,
+                                 "cpu_ms_per_frame": CPU_MS[id(f_ps)], "runs_ms": ps_runs})
+                model.set_inference(viewpoint=default_view)
+            model = models.get("hog", models[order[0]])
             if getattr(model, "fg_weight", 0.0):  # video input: the person prior's extra work (any background)
                 bg = cv2.GaussianBlur(frame, (31, 31), 0)
                 f_pr = lambda f=frame, b=bg: model.estimate(f, background=b)  # noqa: E731
                 pr_ms, pr_runs = _median_ms(f_pr, args.runs)
-                rows.append({"what": f"ps (viewpoint={default_view}) + person prior (video input)",
+                rows.append({"what": f"ps hog (viewpoint={model.viewpoint}) + person prior (video input)",
                              "size": f"{size[0]}x{size[1]}", "ms_per_frame": pr_ms,
                              "cpu_ms_per_frame": CPU_MS[id(f_pr)], "runs_ms": pr_runs})
             f_bp = lambda f=frame: bp.estimate(f)  # noqa: E731
@@ -134,7 +148,7 @@ def main() -> int:
     print(f"ratio ps (default) / blazepose CPU ms at 160x120: {ps160[0]['cpu_ms_per_frame'] / bp160['cpu_ms_per_frame']:.2f}")
     doc = {"benchmark": "pose", "rows": rows, "dt_speedup_vs_brute": bru_ms / env_ms, "runs": args.runs,
            "one_core": True, "python": platform.python_version(), "machine": platform.machine(),
-           "model": str(args.model) if args.model else "small model trained by the script", "load_avg": os.getloadavg()}
+           "model": str(args.model) if args.model else "small models (hog, cnn) trained by the script", "load_avg": os.getloadavg()}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2) + "\n")
     return 0

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from .data import VIEW_NAMES
+from .defaults import CNN_DEFAULTS, DEFAULTS
 from .estimator import PoseModel
 
 log = logging.getLogger(__name__)
@@ -304,15 +305,17 @@ class CnnPoseModel(PoseModel):
     Parameters: ``n_orient`` (part orientation bins of the tree), ``unary_weight`` (detectors vs tree
     prior), ``refine`` (cells of the final keypoint refinement, 0 = none), ``dt``, and the network's
     (:class:`HeatmapCNN`: ``channels``, ``epochs``, ``batch_size``, ``lr``, ``sigma``, ``threads``),
-    ``seed``. No person prior (``fg_weight`` is 0: the network sees colour). Learned: ``models_``
+    ``seed``; defaults :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (``scripts/validate_pose.py``'s
+    detector stage). No person prior (``fg_weight`` is 0: the network sees colour). Learned: ``models_``
     (tree geometry per viewpoint and generic), ``cnn_``, ``n_train_frames_``."""
 
     PARAMS = ("detector", "n_orient", "unary_weight", "refine", "dt", "channels", "epochs", "batch_size", "lr",
               "sigma", "threads", "seed")
     VIEWPOINTS = ("cnn",)
 
-    def __init__(self, n_orient: int = 8, unary_weight: float = 1.0, refine: int = 2, dt: str = "envelope",
-                 channels: int = 48, epochs: int = 10, batch_size: int = 32, lr: float = 3e-3, sigma: float = 1.0,
+    def __init__(self, n_orient: int = DEFAULTS["n_orient"], unary_weight: float = CNN_DEFAULTS["unary_weight"],
+                 refine: int = CNN_DEFAULTS["refine"], dt: str = "envelope", channels: int = CNN_DEFAULTS["channels"],
+                 epochs: int = CNN_DEFAULTS["epochs"], batch_size: int = 32, lr: float = 3e-3, sigma: float = 1.0,
                  threads: int = 2, seed: int = 0) -> None:
         self.detector = "cnn"
         self.n_orient = n_orient

@@ -6,6 +6,6 @@ VIEWPOINT_METHODS = ("svm", "logistic", "hog", "combined")
 DEFAULTS = {"n_orient": 8, "hard_rounds": 1, "viewpoint": "hog", "unary_weight": 2.0, "fg_weight": 2.0}
 
 #: part detectors of ``vidstyle train-pose`` (``--detector``)
-DETECTOR = "hog"
+DETECTOR = "cnn"
 #: the cnn detector's defaults (:class:`vidstyle.pose.cnn.CnnPoseModel`)
-CNN_DEFAULTS = {"unary_weight": 1.0, "epochs": 10, "channels": 48, "refine": 2}
+CNN_DEFAULTS = {"unary_weight": 2.0, "epochs": 10, "channels": 48, "refine": 2}
