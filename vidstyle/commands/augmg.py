@@ -18,12 +18,12 @@ log = logging.getLogger(__name__)
 # Defaults chosen on the validation performers (scripts/validate_augmg.py, recorded in
 # pipelines/kickboxing/validation/augmg.json): never on the test performers.
 SEGMENT = "fixed"
-CONTEXT = 2
-SCORES = True
-FORESHORTENING = False
-MAX_MATCH_COST = ["model=0.732", "blazepose=0.720"]
-MAX_ENH_COST = ["blazepose=5.926"]
-MIN_GAIN = ["model=209.367", "gt=128.227", "noisy=111.448"]
+CONTEXT = 0
+SCORES = False
+FORESHORTENING = True
+MAX_MATCH_COST = ["blazepose=0.725"]
+MAX_ENH_COST = ["model=4.669", "blazepose=6.036"]
+MIN_GAIN = ["gt=137.154", "noisy=104.382"]
 
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
