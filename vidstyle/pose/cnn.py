@@ -32,6 +32,7 @@ only to train and to run).
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -288,6 +289,27 @@ class CnnFrame:
         self.view_logp = view_logp
 
 
+class _PartMaps(Mapping):
+    """Tree name -> part unaries (:func:`part_unaries`) of one frame, computed on first use: the pose
+    command needs only the chosen viewpoint's, the evaluation all of them."""
+
+    def __init__(self, logheat: np.ndarray, models: dict) -> None:
+        self._logheat = logheat
+        self._models = models
+        self._maps: dict = {}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self._maps:
+            self._maps[name] = part_unaries(self._logheat, self._models[name])
+        return self._maps[name]
+
+    def __iter__(self):
+        return iter(self._models)
+
+    def __len__(self) -> int:
+        return len(self._models)
+
+
 def _pad4(img: np.ndarray) -> np.ndarray:
     H, W = img.shape[:2]
     ph, pw = (-H) % CELL, (-W) % CELL
@@ -394,7 +416,7 @@ class CnnPoseModel(PoseModel):
         return CnnFrame(bgr, heat[0], views[0]), s
 
     def view_features(self, f: CnnFrame, full: bool | None = None, which: str | None = None) -> tuple[dict, dict]:
-        return {"cnn": f.view_logp}, {name: part_unaries(f.logheat, m) for name, m in self.models_.items()}
+        return {"cnn": f.view_logp}, _PartMaps(f.logheat, self.models_)
 
     def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
         if which not in (None, "cnn"):

@@ -18,7 +18,6 @@ import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
 from .data import VIEW_NAMES
-from .estimator import VIEWPOINT_METHODS
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +93,7 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     if prior:
         methods["ps_single_image"] = []
     backgrounds = clip_backgrounds(samples) if prior else {}
-    methods_v = getattr(model, "VIEWPOINTS", VIEWPOINT_METHODS)
+    methods_v = model.VIEWPOINTS
     vpred = {w: [] for w in methods_v}
     for s in samples:
         f, scale = model.prepare(_frame_of(s))
