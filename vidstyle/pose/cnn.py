@@ -284,7 +284,6 @@ class CnnFrame:
 
     def __init__(self, bgr: np.ndarray, logheat: np.ndarray, view_logp: np.ndarray) -> None:
         self.bgr = bgr
-        self.H, self.W = bgr.shape[:2]
         self.logheat = logheat
         self.view_logp = view_logp
 
@@ -402,12 +401,7 @@ class CnnPoseModel(PoseModel):
     def _resize(self, frame: np.ndarray) -> tuple[np.ndarray, float]:
         import cv2
 
-        from .estimator import WORK_HEIGHT
-
-        bgr = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-        s = self.work_scale(bgr.shape)
-        if abs(s - 1.0) > 1e-6:
-            bgr = cv2.resize(bgr, (max(8, round(bgr.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+        bgr, s = self.to_work_size(frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
         return _pad4(bgr), s
 
     def prepare(self, frame: np.ndarray) -> tuple[CnnFrame, float]:

@@ -446,11 +446,15 @@ class PoseModel:
     def work_scale(self, frame_shape) -> float:
         return WORK_HEIGHT / float(frame_shape[0])
 
-    def prepare(self, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
-        g = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-        s = self.work_scale(g.shape)
+    def to_work_size(self, img: np.ndarray) -> tuple[np.ndarray, float]:
+        """``img`` (gray or colour) resized to the working height (aspect kept), and the scale."""
+        s = self.work_scale(img.shape)
         if abs(s - 1.0) > 1e-6:
-            g = cv2.resize(g, (max(8, round(g.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+            img = cv2.resize(img, (max(8, round(img.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
+        return img, s
+
+    def prepare(self, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
+        g, s = self.to_work_size(frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
         f = RotatedFeatures(g, self.n_orient, self.cell)
         f.gray = g
         return f, s
