@@ -183,3 +183,37 @@ def test_real_footage_random_access_equals_sequential(name, rng):
         assert np.array_equal(w.source_index, brute_force_nearest(w.info.timestamps, 20.0))
         for k in (9, 1, 5):
             assert np.array_equal(w[k], seq[int(w.source_index[k])])
+
+
+@pytest.mark.parametrize("height", [None, 60, 180])
+def test_frames_equal_a_fresh_conversion_of_each_decoded_frame(tmp_path, rng, height):
+    """The reader's one reusable swscale context gives, frame after frame and after seeks, exactly the
+    pixels of a new conversion of each decoded frame (PyAV's per-frame ``reformat``), at the native
+    size (which is OpenCV's own BGR) and shrunk or enlarged; gray is OpenCV's gray of that BGR."""
+    import av
+    import cv2
+
+    frames = [rng.integers(0, 256, (120, 160, 3), dtype=np.uint8) for _ in range(12)]
+    p = write_video(iter(frames), tmp_path / "noise.mp4", 20.0)
+    with av.open(str(p)) as c:
+        decoded = list(c.decode(c.streams.video[0]))
+    if height is None:
+        want = [f.to_ndarray(format="bgr24") for f in decoded]
+    else:
+        w = round(160 * height / 120)
+        interp = "AREA" if height < 120 else "BILINEAR"
+        want = [f.reformat(width=w, height=height, format="bgr24", interpolation=interp).to_ndarray()
+                for f in decoded]
+    order = list(range(12)) + [int(i) for i in rng.permutation(12)]
+    with VideoReader(p, height=height, enlarge=True) as r:
+        for i in order:
+            np.testing.assert_array_equal(r[i], want[i])
+    with VideoReader(p, height=height, enlarge=True, gray=True) as r:
+        for i in order:
+            np.testing.assert_array_equal(r[i], cv2.cvtColor(want[i], cv2.COLOR_BGR2GRAY))
+    if height is None:  # OpenCV's own decoding of the file
+        cap = cv2.VideoCapture(str(p))
+        ok, first = cap.read()
+        cap.release()
+        assert ok
+        np.testing.assert_array_equal(first, want[0])
