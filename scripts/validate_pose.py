@@ -23,6 +23,11 @@ One factor at a time from the starting point (the values before this script exis
   the larger set, at every unary weight and refinement radius, on the same validation frames (single
   image, no person prior). The best PCP within the speed budget chooses ``detector``; the cnn's best
   unary weight and refinement are its defaults (:data:`vidstyle.pose.defaults.CNN_DEFAULTS`);
+- the cnn detector's own choices (fourth stage; ``--cnn-models M...`` runs just it on an existing
+  ``--out``): ``vidstyle train-pose`` models trained on the default training renders with other
+  epochs or heatmap strides, each scored at every unary weight, refinement radius and with and
+  without the test-time flip, beside the detector stage's cnn rows. The best PCP within the speed
+  budget gives :data:`vidstyle.pose.defaults.CNN_DEFAULTS`;
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -298,6 +303,61 @@ def detector_stage(args, doc: dict) -> dict:
     return doc
 
 
+CNN_FLIP = (False, True)
+
+
+def cnn_stage(args, doc: dict) -> dict:
+    """Score ``vidstyle train-pose`` cnn models (``--cnn-models``) on the validation frames at every unary
+    weight x refinement x test-time flip; with the detector stage's cnn rows (10 epochs, stride 4, no
+    flip) the best PCP (then viewpoint accuracy) within the speed budget gives the cnn defaults."""
+    from vidstyle.pose.defaults import CNN_DEFAULTS
+    from vidstyle.pose.estimator import load_pose_model
+
+    val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
+                                    args.cmu_dir), jobs=args.jobs, keep_bgr=True)
+    rows = []
+    for path in args.cnn_models:
+        model, header = load_pose_model(path)
+        if getattr(model, "detector", "hog") != "cnn":
+            raise SystemExit(f"{path}: not a cnn pose model")
+        tr = header.get("training") or {}
+        if tr.get("cmu_clips") != args.detector_cmu or tr.get("demo_performers") != args.detector_demo \
+                or tr.get("views_per_clip") != args.detector_views or header.get("seed") != args.seed:
+            raise SystemExit(f"{path}: not trained on the detector stage's training renders ({tr})")
+        for flip in CNN_FLIP:
+            model.flip_test = flip
+            for a in CNN_ALPHAS:
+                for ref in CNN_REFINE:
+                    model.set_inference(unary_weight=a)
+                    model.refine = ref
+                    r = {"detector": "cnn", "model": Path(path).name, "train_frames": header.get("n_train_frames"),
+                         "epochs": model.epochs, "stride": model.stride, "flip_test": flip, "unary_weight": a,
+                         "refine": ref, **score_frames(model, val)}
+                    rows.append(r)
+                    log.info("cnn %d epochs stride %d flip %s alpha %.1f refine %d: PCP %.3f (min %.3f), view %.3f, "
+                             "%.1f ms", r["epochs"], r["stride"], flip, a, ref, r["pcp_mean"], r["pcp_min_part"],
+                             r["view_acc_mean"], r["cpu_ms_per_frame"])
+    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False}
+           for r in doc["detector_stage"]["rows"] if r["detector"] == "cnn"]
+    every = old + rows
+    fast = [r for r in every if r["cpu_ms_per_frame"] <= args.budget_ms] or every
+    best = max(fast, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
+    doc["cnn_stage"] = {"rows": rows, "budget_ms": args.budget_ms,
+                        "note": "models: vidstyle train-pose outputs on the detector stage's training renders; "
+                                "compared with the detector stage's cnn rows (10 epochs, stride 4, no flip)"}
+    doc["chosen"]["cnn"] = {"unary_weight": best["unary_weight"], "refine": best["refine"], "epochs": best["epochs"],
+                            "channels": CNN_DEFAULTS["channels"], "stride": best["stride"], "flip_test": best["flip_test"]}
+    doc["scores"]["cnn_pcp_mean"] = best["pcp_mean"]
+    doc["scores"]["detector_pcp_mean"] = max(doc["scores"].get("detector_pcp_mean", 0.0), best["pcp_mean"])
+    print("\ncnn detector (same validation frames; single image):")
+    for r in every:
+        print(f"  {r['epochs']:3d} epochs  stride {r['stride']}  flip {'yes' if r['flip_test'] else 'no ':3s}  "
+              f"alpha {r['unary_weight']:3.1f} refine {r['refine']}  PCP {r['pcp_mean']:.3f} (min part "
+              f"{r['pcp_min_part']:.3f}, true view {r['pcp_oracle_view']:.3f})  PCK {r['pck']:.3f}  "
+              f"view {r['view_acc_mean']:.3f}  {r['cpu_ms_per_frame']:.1f} ms")
+    return doc
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cmu-dir", type=Path, default=DEFAULT_CMU if DEFAULT_CMU.is_dir() else None)
@@ -318,6 +378,9 @@ def main() -> int:
     ap.add_argument("--cnn-epochs", type=int, default=10, help="Training epochs of the cnn detector.")
     ap.add_argument("--detector-stage-only", action="store_true", help="Only the part-detector comparison "
                     "(hog vs cnn), from the chosen values already in --out (which it updates).")
+    ap.add_argument("--cnn-models", type=Path, nargs="+", default=None, help="Only the cnn stage: score these "
+                    "vidstyle train-pose cnn models (trained on the detector stage's renders) on the validation "
+                    "frames; updates --out.")
     ap.add_argument("--second-stage-only", action="store_true", help="Only the second stage (viewpoint "
                     "classifiers, person prior), from the first stage's table already in --out (which it updates).")
     args = ap.parse_args()
@@ -325,6 +388,13 @@ def main() -> int:
     t_all = time.time()
     if (args.second_stage_only or args.detector_stage_only) and not args.out.is_file():
         ap.error(f"--second-stage-only / --detector-stage-only: {args.out} does not exist")
+    if args.cnn_models:
+        if not args.out.is_file():
+            ap.error(f"--cnn-models: {args.out} does not exist")
+        doc = cnn_stage(args, json.loads(args.out.read_text()))
+        args.out.write_text(json.dumps(doc, indent=2) + "\n")
+        print(f"chosen: {json.dumps(doc['chosen'])} -> {args.out}")
+        return 0
     if args.detector_stage_only:
         doc = detector_stage(args, json.loads(args.out.read_text()))
         args.out.write_text(json.dumps(doc, indent=2) + "\n")

@@ -18,6 +18,7 @@ from vidstyle.pose.cnn import (
     CnnPoseModel,
     HeatmapCNN,
     argmax_keypoints,
+    coarse_logheat,
     gaussian_targets,
     part_unaries,
     refine_keypoints,
@@ -127,6 +128,55 @@ def test_network_learns_to_find_a_dot_and_its_quadrant(rng):
     assert np.mean(np.array(VIEW_NAMES)[vlog.argmax(1)] == np.array(vt)) >= 0.6  # chance: 0.25
 
 
+def test_stride_two_head_finds_the_dot_finer(rng):
+    X, kp, views = _dot_images(rng, 384)
+    net = HeatmapCNN(channels=16, epochs=10, batch_size=32, lr=5e-3, view_weight=1.0, seed=0, threads=1,
+                     stride=2).fit(X, kp, views)
+    Xt, kpt, _vt = _dot_images(np.random.default_rng(99), 64)
+    heat, _ = net.predict(Xt)
+    assert heat.shape == (64, 15, 24, 32)  # twice the tree grid's resolution
+    np.testing.assert_allclose(np.exp(heat).sum(axis=(2, 3)), 1.0, rtol=1e-4)
+    pts = np.stack([argmax_keypoints(h, cell=2) for h in heat])
+    assert np.median(np.linalg.norm(pts[:, 0, :2] - kpt[:, 0], axis=1)) <= 1.5 * 2
+    coarse = np.stack([coarse_logheat(h, 2) for h in heat])
+    assert coarse.shape == (64, 15, 12, 16)
+    with pytest.raises(ValueError, match="stride"):
+        HeatmapCNN(stride=3)
+
+
+def test_coarse_logheat_sums_sub_cells():
+    rng = np.random.default_rng(3)
+    p = rng.random((15, 9, 12))  # an odd number of rows: the last one is dropped with its mass
+    p /= p.sum(axis=(1, 2), keepdims=True)
+    got = np.exp(coarse_logheat(np.log(p).astype(np.float32), 2))
+    want = np.zeros((15, 4, 6))
+    for y in range(4):
+        for x in range(6):
+            want[:, y, x] = p[:, 2 * y:2 * y + 2, 2 * x:2 * x + 2].sum(axis=(1, 2))
+    np.testing.assert_allclose(got, want, rtol=1e-5)
+    same = np.log(p[:, :8]).astype(np.float32)
+    assert coarse_logheat(same, 4) is same
+
+
+@pytest.mark.parametrize("stride", [4, 2])
+def test_flip_test_is_mirror_equivariant(rng, stride):
+    """With the test-time flip, the estimate of a mirrored frame is the mirror image of the frame's
+    estimate (columns reversed, left and right swapped): exactly, up to float rounding, whatever the
+    weights; without it an untrained network is not."""
+    X, kp, views = _dot_images(rng, 64)
+    net = HeatmapCNN(channels=8, epochs=1, seed=1, threads=1, stride=stride).fit(X, kp, views)
+    x = X[:3]
+    mx = np.ascontiguousarray(x[:, :, ::-1])
+    h, v = net.predict(x, flip=True)
+    hm, vm = net.predict(mx, flip=True)
+    np.testing.assert_allclose(hm, h[:, FLIP_KEYPOINTS][..., ::-1], atol=1e-4)
+    np.testing.assert_allclose(vm, v[:, FLIP_VIEWS], atol=1e-5)
+    np.testing.assert_allclose(np.exp(h).sum(axis=(2, 3)), 1.0, rtol=1e-4)
+    h0, _ = net.predict(x)
+    h0m, _ = net.predict(mx)
+    assert np.abs(h0m - h0[:, FLIP_KEYPOINTS][..., ::-1]).max() > 1e-3
+
+
 def test_network_is_reproducible_from_its_seed(rng):
     X, kp, views = _dot_images(rng, 64)
     a = HeatmapCNN(channels=8, epochs=1, seed=5, threads=1).fit(X, kp, views)
@@ -158,6 +208,14 @@ def test_cnn_pose_model_round_trip_and_pose_frames(tmp_path):
     frame = samples[3].bgr
     a, b = model.estimate(frame, 7), loaded.estimate(frame, 7)
     np.testing.assert_array_equal(a.points, b.points)
+    # the stride-2 head and the test-time flip through the same interface and file
+    m2 = CnnPoseModel(epochs=1, channels=8, batch_size=16, threads=1, seed=2, stride=2, flip_test=True).fit(samples)
+    save_pose_model(path, m2)
+    loaded2, header2 = load_pose_model(path)
+    assert header2["params"]["stride"] == 2 and header2["params"]["flip_test"] is True
+    p2 = loaded2.estimate(frame, 7)
+    np.testing.assert_array_equal(p2.points, m2.estimate(frame, 7).points)
+    assert p2.points.shape == (15, 3) and np.isfinite(p2.points).all()
     assert a.frame == 7 and a.viewpoint in VIEW_NAMES and set(a.viewpoint_scores) == set(VIEW_NAMES)
     assert a.points.shape == (15, 3) and np.isfinite(a.points).all()
     # a frame twice the working size: the same pose in the input's pixels

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from vidstyle.mocap.keypoints import KEYPOINTS
-from vidstyle.pose.data import Spec, render_samples, view_of
+from vidstyle.pose.data import Spec, acceptable_views, render_samples, view_of
 from vidstyle.pose.estimator import PoseModel, load_pose_model, save_pose_model
-from vidstyle.pose.evaluate import confusion, pck, strict_pcp
+from vidstyle.pose.evaluate import confusion, pck, strict_pcp, viewpoint_scores
 
 
 @pytest.fixture(scope="module")
@@ -27,6 +27,31 @@ def trained(tmp_path_factory):
 def test_view_of():
     assert [view_of(a) for a in (0, 44, 46, 90, -91, 180, -170, 225)] == \
         ["front", "front", "left", "left", "right", "back", "back", "right"]
+
+
+def test_acceptable_views_on_and_off_boundaries():
+    # one view away from a boundary; both neighbours within 5 degrees of one (45 from two centres)
+    assert acceptable_views(15.0) == ("front",) and acceptable_views(-75.0) == ("right",)
+    assert acceptable_views(180.0) == ("back",) and acceptable_views(39.0) == ("front",)
+    assert acceptable_views(45.0) == ("front", "left") and acceptable_views(-45.0) == ("front", "right")
+    assert acceptable_views(135.0) == ("left", "back") and acceptable_views(-135.0) == ("right", "back")
+    assert acceptable_views(48.0) == ("left", "front") and acceptable_views(-132.0) == ("right", "back")
+    assert acceptable_views(45.0, tol=0.0) == ("front", "left") and acceptable_views(44.0, tol=0.0) == ("front",)
+    for a in np.arange(-180.0, 180.0, 7.0):  # the nearest view is always first
+        assert acceptable_views(a)[0] == view_of(a)
+
+
+def test_viewpoint_scores_by_hand():
+    az = [15.0, 45.0, 45.0, -45.0, 135.0, 90.0, 180.0, -90.0]
+    true = [view_of(a) for a in az]  # front front front front left left back right
+    pred = ["front", "left", "back", "front", "back", "left", "right", "right"]
+    v = viewpoint_scores(true, az, pred)
+    assert v["accuracy"] == 4 / 8  # nearest-view labels: frames 0, 3, 5, 7
+    assert v["unambiguous"]["accuracy"] == 3 / 4  # frames 0, 5, 6, 7: the back frame called right
+    assert v["unambiguous"]["per_view_accuracy"]["back"] == 0.0
+    assert v["boundary"] == {"tolerance_deg": 5.0, "n": 4, "accuracy_either_neighbour": 3 / 4}  # 45 -> back is wrong
+    assert v["tolerant_per_view_accuracy"] == {"front": 3 / 4, "left": 1.0, "right": 1.0, "back": 0.0}
+    assert v["tolerant_accuracy"] == 6 / 8
 
 
 @pytest.mark.slow

@@ -56,6 +56,12 @@ def train_pose(
                                  "per viewpoint, with --viewpoint's classifier) or cnn (a convolutional network's "
                                  "keypoint heatmaps as the unary terms and its viewpoint head; needs PyTorch)."),
     epochs: int = typer.Option(CNN_DEFAULTS["epochs"], "--epochs", help="Training epochs of the cnn detector."),
+    heatmap_stride: int = typer.Option(CNN_DEFAULTS["stride"], "--heatmap-stride", help="Pixels per heatmap cell of "
+                                       "the cnn detector: 4 (the tree's grid) or 2 (an upsampling head; the tree "
+                                       "works on the maps pooled to 4 px, the refinement on the 2-px maps)."),
+    flip_test: bool = typer.Option(CNN_DEFAULTS["flip_test"], "--flip-test/--no-flip-test", help="cnn detector: "
+                                   "average the heatmaps and viewpoint of each frame and its mirror image (twice "
+                                   "the network's time)."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
@@ -69,6 +75,8 @@ def train_pose(
         raise InputError(f"--detector: {detector!r} is not hog or cnn")
     if epochs < 1:
         raise InputError("--epochs: must be at least 1")
+    if heatmap_stride not in (2, 4):
+        raise InputError(f"--heatmap-stride: {heatmap_stride} is not 2 or 4")
     if unary_weight is None:
         unary_weight = (CNN_DEFAULTS if detector == "cnn" else DEFAULTS)["unary_weight"]
     if viewpoint not in VIEWPOINT_METHODS:
@@ -87,7 +95,8 @@ def train_pose(
         from ..pose.cnn import CnnPoseModel
 
         model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
-                             channels=CNN_DEFAULTS["channels"], refine=CNN_DEFAULTS["refine"], seed=seed)
+                             channels=CNN_DEFAULTS["channels"], refine=CNN_DEFAULTS["refine"], seed=seed,
+                             stride=heatmap_stride, flip_test=flip_test)
     else:
         model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
                           fg_weight=fg_weight, seed=seed)

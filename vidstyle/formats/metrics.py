@@ -26,7 +26,9 @@ computed, e.g. video accuracy without single-action test videos):
 * ``vidstyle.metrics.pose`` (``vidstyle evaluate pose``): ``n_frames`` >= 0; ``pcp``: per backend (``ps``,
   ``blazepose``, ...) per viewpoint an object of per-part strict PCP in [0, 1] or null and ``n`` >= 0;
   ``pck@0.2``: per backend an object of numbers in [0, 1] or null (``all`` and one per keypoint);
-  ``viewpoint``: per classifier ``accuracy`` in [0, 1] or null; ``params`` an object.
+  ``viewpoint``: per classifier ``accuracy`` in [0, 1] or null (and, when present, ``tolerant_accuracy``,
+  ``unambiguous.accuracy``, ``boundary.accuracy_either_neighbour`` and every
+  ``tolerant_per_view_accuracy`` in [0, 1] or null, ``boundary.n`` >= 0); ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """
@@ -199,7 +201,17 @@ def _pose(f: Fields) -> None:
             _opt_number(b, key, 0, 1)
     vp = f.sub("viewpoint")
     for name in vp.obj:
-        _opt_number(vp.sub(name), "accuracy", 0, 1)
+        c = vp.sub(name)
+        _opt_number(c, "accuracy", 0, 1)
+        if c.has("tolerant_accuracy"):  # files before the boundary-aware scores lack them
+            _opt_number(c, "tolerant_accuracy", 0, 1)
+            _opt_number(c.sub("unambiguous"), "accuracy", 0, 1)
+            b = c.sub("boundary")
+            b.int("n", min=0)
+            _opt_number(b, "accuracy_either_neighbour", 0, 1)
+            t = c.sub("tolerant_per_view_accuracy")
+            for v in t.obj:
+                _opt_number(t, v, 0, 1)
     f.sub("params")
 
 

@@ -59,9 +59,13 @@ def _torch():
     return torch
 
 
-def _build_net(channels: int):
+def _build_net(channels: int, stride: int = CELL):
+    """The network; ``stride`` 4 gives the heatmaps on the tree's cell grid, 2 adds an upsampling head
+    (the stride-4 features, upsampled and reduced, plus the stride-2 features, then a 3x3 block) that
+    gives them at twice that resolution."""
     torch = _torch()
     nn = torch.nn
+    F = torch.nn.functional
 
     def block(i, o, s=1, d=1):
         return nn.Sequential(nn.Conv2d(i, o, 3, s, padding=d, dilation=d, bias=False), nn.BatchNorm2d(o),
@@ -73,10 +77,18 @@ def _build_net(channels: int):
             c = channels
             self.body = nn.Sequential(block(3, 16), block(16, 32, 2), block(32, 32), block(32, c, 2), block(c, c),
                                       block(c, c, d=2), block(c, c, d=4), block(c, c, d=8), block(c, c, d=2))
-            self.kp = nn.Conv2d(c, len(KEYPOINTS), 1)
+            if stride == 2:
+                self.up = nn.Conv2d(c, 32, 1)
+                self.fine = block(32, 32)
+            self.kp = nn.Conv2d(32 if stride == 2 else c, len(KEYPOINTS), 1)
             self.view = nn.Linear(c, len(VIEW_NAMES))
 
         def forward(self, x):
+            if stride == 2:
+                f2 = self.body[:3](x)
+                f = self.body[3:](f2)
+                h = self.fine(F.interpolate(self.up(f), size=f2.shape[2:], mode="bilinear", align_corners=False) + f2)
+                return self.kp(h), self.view(f.mean(dim=(2, 3)))
             f = self.body(x)
             return self.kp(f), self.view(f.mean(dim=(2, 3)))
 
@@ -90,12 +102,12 @@ def to_input(frames_bgr: np.ndarray):
     return torch.from_numpy(x)
 
 
-def gaussian_targets(keypoints: np.ndarray, grid: tuple[int, int], sigma: float) -> np.ndarray:
-    """(N, 15, Hc, Wc) normalised Gaussians around keypoints (N, 15, 2) px on the cell grid (cell
-    centre of cell (x, y) at pixel x * CELL + (CELL - 1) / 2)."""
+def gaussian_targets(keypoints: np.ndarray, grid: tuple[int, int], sigma: float, cell: int = CELL) -> np.ndarray:
+    """(N, 15, Hc, Wc) normalised Gaussians (``sigma`` in cells) around keypoints (N, 15, 2) px on the
+    grid of ``cell``-px cells (centre of cell (x, y) at pixel x * cell + (cell - 1) / 2)."""
     Hc, Wc = grid
     gy, gx = np.mgrid[0:Hc, 0:Wc]
-    c = (np.asarray(keypoints, dtype=np.float64) - (CELL - 1) / 2.0) / CELL
+    c = (np.asarray(keypoints, dtype=np.float64) - (cell - 1) / 2.0) / cell
     d2 = (gx - c[..., 0, None, None]) ** 2 + (gy - c[..., 1, None, None]) ** 2
     h = np.exp(-d2 / (2.0 * sigma ** 2))
     return (h / np.maximum(h.sum(axis=(-1, -2), keepdims=True), 1e-12)).astype(np.float32)
@@ -105,12 +117,18 @@ class HeatmapCNN:
     """Keypoint heatmaps and viewpoint from a colour frame (see the module docstring).
 
     Parameters: ``channels``, ``epochs``, ``batch_size``, ``lr`` (peak of the one-cycle schedule),
-    ``sigma`` (target width, cells), ``view_weight`` (viewpoint loss weight), ``seed``, ``threads``.
+    ``sigma`` (target width, in cells of the tree's 4-px grid), ``view_weight`` (viewpoint loss weight),
+    ``seed``, ``threads``, ``stride`` (heatmap cell in px: 4, the tree's grid, or 2 with the upsampling
+    head of :func:`_build_net`).
     Learned: ``weights_`` (name -> numpy array, the network's state), ``size_`` (W, H) it was trained
     at, ``loss_`` (mean training loss of every epoch)."""
 
     def __init__(self, channels: int = 48, epochs: int = 10, batch_size: int = 32, lr: float = 3e-3,
-                 sigma: float = 1.0, view_weight: float = 0.5, seed: int = 0, threads: int = 2) -> None:
+                 sigma: float = 1.0, view_weight: float = 0.5, seed: int = 0, threads: int = 2,
+                 stride: int = CELL) -> None:
+        if stride not in (2, CELL):
+            raise ValueError(f"stride must be 2 or {CELL}, got {stride}")
+        self.stride = stride
         self.channels = channels
         self.epochs = epochs
         self.batch_size = batch_size
@@ -122,7 +140,7 @@ class HeatmapCNN:
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in ("channels", "epochs", "batch_size", "lr", "sigma", "view_weight",
-                                               "seed", "threads")}
+                                               "seed", "threads", "stride")}
 
     def fit(self, frames_bgr: np.ndarray, keypoints: np.ndarray, views: list[str]) -> HeatmapCNN:
         """Train on (N, H, W, 3) uint8 frames (H, W multiples of 4), keypoints (N, 15, 2) px, view names."""
@@ -143,12 +161,14 @@ class HeatmapCNN:
         prev_threads = torch.get_num_threads()
         torch.set_num_threads(max(1, int(self.threads)))
         try:
-            net = _build_net(self.channels)
+            net = _build_net(self.channels, self.stride)
             opt = torch.optim.AdamW(net.parameters(), lr=self.lr / 1.5, weight_decay=1e-4)
             per_epoch = n // self.batch_size
             sched = torch.optim.lr_scheduler.OneCycleLR(opt, self.lr, total_steps=self.epochs * per_epoch)
             flip_kp, flip_v = np.array(FLIP_KEYPOINTS), np.array(FLIP_VIEWS)
-            grid = (H // CELL, W // CELL)
+            st = self.stride
+            grid = (H // st, W // st)
+            sigma = self.sigma * CELL / st  # the same width in pixels at either stride
             self.loss_ = []
             for _ep in progress(range(self.epochs), "training pose cnn"):
                 net.train()
@@ -166,7 +186,7 @@ class HeatmapCNN:
                     gain = torch.from_numpy(rng.uniform(0.8, 1.2, (len(idx), 3, 1, 1)).astype(np.float32))
                     off = torch.from_numpy(rng.uniform(-0.1, 0.1, (len(idx), 3, 1, 1)).astype(np.float32))
                     xt = xt * gain + off
-                    tgt = torch.from_numpy(gaussian_targets(k, grid, self.sigma))
+                    tgt = torch.from_numpy(gaussian_targets(k, grid, sigma, st))
                     out, vl = net(xt)
                     logp = F.log_softmax(out.flatten(2), dim=2)
                     loss = -(tgt.flatten(2) * logp).sum(2).mean() + self.view_weight * F.cross_entropy(
@@ -190,7 +210,7 @@ class HeatmapCNN:
         net = self.__dict__.get("_net")
         if net is None:
             torch = _torch()
-            net = _build_net(self.channels)
+            net = _build_net(self.channels, getattr(self, "stride", CELL))
             net.load_state_dict({k: torch.from_numpy(np.asarray(a)) for k, a in self.weights_.items()})
             net.eval()
             self._net = net
@@ -201,10 +221,13 @@ class HeatmapCNN:
         d.pop("_net", None)
         return d
 
-    def predict(self, frames_bgr: np.ndarray, batch: int = 32, threads: int = 1) -> tuple[np.ndarray, np.ndarray]:
-        """(log-probability heatmaps (N, 15, H/4, W/4), viewpoint log-probabilities (N, 4)) of
-        (N, H, W, 3) uint8 frames, on ``threads`` intra-op threads (1: the pose command runs one
-        worker per core)."""
+    def predict(self, frames_bgr: np.ndarray, batch: int = 32, threads: int = 1,
+                flip: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(log-probability heatmaps (N, 15, H/s, W/s) at the network's stride s, viewpoint
+        log-probabilities (N, 4)) of (N, H, W, 3) uint8 frames, on ``threads`` intra-op threads (1: the
+        pose command runs one worker per core). ``flip``: test-time flip, the mean log-probabilities of
+        the frame and of its mirror image (mapped back: columns reversed, left and right keypoints and
+        views swapped), renormalised; W must then be a multiple of the stride."""
         torch = _torch()
         F = torch.nn.functional
         X = np.asarray(frames_bgr)
@@ -219,8 +242,15 @@ class HeatmapCNN:
                 for i in range(0, len(X), batch):
                     out, vl = net(to_input(X[i:i + batch]))
                     s = out.shape
-                    heat.append(F.log_softmax(out.flatten(2), dim=2).reshape(s).numpy())
-                    views.append(F.log_softmax(vl, dim=1).numpy())
+                    h = F.log_softmax(out.flatten(2), dim=2).reshape(s)
+                    v = F.log_softmax(vl, dim=1)
+                    if flip:
+                        fo, fv = net(to_input(np.ascontiguousarray(X[i:i + batch][:, :, ::-1])))
+                        fh = F.log_softmax(fo.flatten(2), dim=2).reshape(s).flip(3)[:, FLIP_KEYPOINTS]
+                        h = F.log_softmax(((h + fh) / 2).flatten(2), dim=2).reshape(s)
+                        v = F.log_softmax((v + F.log_softmax(fv, dim=1)[:, FLIP_VIEWS]) / 2, dim=1)
+                    heat.append(h.numpy())
+                    views.append(v.numpy())
         finally:
             torch.set_num_threads(prev)
         return np.concatenate(heat), np.concatenate(views)
@@ -243,16 +273,33 @@ def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
     return out
 
 
-def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, radius: int = 2) -> np.ndarray:
+def coarse_logheat(logheat: np.ndarray, stride: int) -> np.ndarray:
+    """Log-probability maps on the tree's 4-px grid from maps at ``stride`` px (2 or 4): each coarse
+    cell's probability is the sum of its sub-cells' (a log-sum-exp over 2x2 blocks; an odd last row or
+    column of sub-cells is dropped with its mass)."""
+    if stride == CELL:
+        return logheat
+    f = CELL // stride
+    K, H, W = logheat.shape
+    Hc, Wc = H // f, W // f
+    b = logheat[:, :Hc * f, :Wc * f].astype(np.float64).reshape(K, Hc, f, Wc, f)
+    m = b.max(axis=(2, 4), keepdims=True)
+    return (np.log(np.exp(b - m).sum(axis=(2, 4))) + m[:, :, 0, :, 0]).astype(np.float32)
+
+
+def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, radius: int = 2,
+                     cell: int = CELL) -> np.ndarray:
     """Keypoints (15, >=2) at the input size (``scale``: working / input) moved to the heatmap's
     probability-weighted mean within ``radius`` cells of each (0: not moved); returns (15, 3) with the
-    score = the probability mass within one cell of the (refined) point."""
+    score = the probability mass within 4 px (one cell of the tree's grid) of the (refined) point.
+    ``logheat`` is on a grid of ``cell``-px cells."""
     K, Hc, Wc = logheat.shape
+    r_mass = max(1, CELL // cell)
     p = np.exp(logheat.astype(np.float64))
     out = np.zeros((K, 3))
     for i in range(K):
-        cx = (points_px[i, 0] * scale - (CELL - 1) / 2.0) / CELL
-        cy = (points_px[i, 1] * scale - (CELL - 1) / 2.0) / CELL
+        cx = (points_px[i, 0] * scale - (cell - 1) / 2.0) / cell
+        cy = (points_px[i, 1] * scale - (cell - 1) / 2.0) / cell
         x0, y0 = int(np.clip(round(cx), 0, Wc - 1)), int(np.clip(round(cy), 0, Hc - 1))
         ys = slice(max(0, y0 - radius), min(Hc, y0 + radius + 1))
         xs = slice(max(0, x0 - radius), min(Wc, x0 + radius + 1))
@@ -264,28 +311,33 @@ def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, r
         else:
             mx, my = float(cx), float(cy)
         xi, yi = int(np.clip(round(mx), 0, Wc - 1)), int(np.clip(round(my), 0, Hc - 1))
-        mass = float(p[i, max(0, yi - 1):yi + 2, max(0, xi - 1):xi + 2].sum())
-        out[i] = ((mx * CELL + (CELL - 1) / 2.0) / scale, (my * CELL + (CELL - 1) / 2.0) / scale,
+        mass = float(p[i, max(0, yi - r_mass):yi + r_mass + 1, max(0, xi - r_mass):xi + r_mass + 1].sum())
+        out[i] = ((mx * cell + (cell - 1) / 2.0) / scale, (my * cell + (cell - 1) / 2.0) / scale,
                   min(1.0, mass))
     return out
 
 
-def argmax_keypoints(logheat: np.ndarray, scale: float = 1.0) -> np.ndarray:
+def argmax_keypoints(logheat: np.ndarray, scale: float = 1.0, cell: int = CELL) -> np.ndarray:
     """(15, 3) keypoints at each heatmap's maximum (no tree prior), refined like the tree's."""
     Wc = logheat.shape[2]
     am = logheat.reshape(len(logheat), -1).argmax(axis=1)
-    pts = np.stack([(am % Wc) * CELL + (CELL - 1) / 2.0, (am // Wc) * CELL + (CELL - 1) / 2.0], -1) / scale
-    return refine_keypoints(pts, logheat, scale)
+    pts = np.stack([(am % Wc) * cell + (cell - 1) / 2.0, (am // Wc) * cell + (cell - 1) / 2.0], -1) / scale
+    return refine_keypoints(pts, logheat, scale, radius=2 * CELL // cell, cell=cell)
 
 
 class CnnFrame:
     """A frame prepared for :class:`CnnPoseModel`: the working-size BGR image (padded to multiples of
-    4 at the right and bottom), its keypoint log-probability maps and viewpoint log-probabilities."""
+    4 at the right and bottom), its keypoint log-probability maps on the tree's grid (``logheat``) and
+    at the network's stride (``fine``, ``stride`` px; the same array at stride 4) and viewpoint
+    log-probabilities."""
 
-    def __init__(self, bgr: np.ndarray, logheat: np.ndarray, view_logp: np.ndarray) -> None:
+    def __init__(self, bgr: np.ndarray, logheat: np.ndarray, view_logp: np.ndarray,
+                 fine: np.ndarray | None = None, stride: int = CELL) -> None:
         self.bgr = bgr
         self.logheat = logheat
         self.view_logp = view_logp
+        self.fine = logheat if fine is None else fine
+        self.stride = stride
 
 
 class _PartMaps(Mapping):
@@ -324,21 +376,25 @@ class CnnPoseModel(PoseModel):
     ``classify_view``, ``solve``), so ``vidstyle pose`` and ``evaluate pose`` run it unchanged.
 
     Parameters: ``n_orient`` (part orientation bins of the tree), ``unary_weight`` (detectors vs tree
-    prior), ``refine`` (cells of the final keypoint refinement, 0 = none), ``dt``, and the network's
-    (:class:`HeatmapCNN`: ``channels``, ``epochs``, ``batch_size``, ``lr``, ``sigma``, ``threads``),
-    ``seed``; defaults :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (``scripts/validate_pose.py``'s
+    prior), ``refine`` (cells of the tree's grid of the final keypoint refinement, 0 = none),
+    ``flip_test`` (test-time flip of :meth:`HeatmapCNN.predict`), ``dt``, and the network's
+    (:class:`HeatmapCNN`: ``channels``, ``epochs``, ``batch_size``, ``lr``, ``sigma``, ``threads``,
+    ``stride``), ``seed``; defaults :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (``scripts/validate_pose.py``'s
     detector stage). No person prior (``fg_weight`` is 0: the network sees colour). Learned: ``models_``
     (tree geometry per viewpoint and generic), ``cnn_``, ``n_train_frames_``."""
 
-    PARAMS = ("detector", "n_orient", "unary_weight", "refine", "dt", "channels", "epochs", "batch_size", "lr",
-              "sigma", "threads", "seed")
+    PARAMS = ("detector", "n_orient", "unary_weight", "refine", "flip_test", "dt", "channels", "epochs", "batch_size",
+              "lr", "sigma", "threads", "stride", "seed")
     VIEWPOINTS = ("cnn",)
 
     def __init__(self, n_orient: int = DEFAULTS["n_orient"], unary_weight: float = CNN_DEFAULTS["unary_weight"],
                  refine: int = CNN_DEFAULTS["refine"], dt: str = "envelope", channels: int = CNN_DEFAULTS["channels"],
                  epochs: int = CNN_DEFAULTS["epochs"], batch_size: int = 32, lr: float = 3e-3, sigma: float = 1.0,
-                 threads: int = 2, seed: int = 0) -> None:
+                 threads: int = 2, seed: int = 0, stride: int = CNN_DEFAULTS["stride"],
+                 flip_test: bool = CNN_DEFAULTS["flip_test"]) -> None:
         self.detector = "cnn"
+        self.stride = stride
+        self.flip_test = flip_test
         self.n_orient = n_orient
         self.unary_weight = unary_weight
         self.refine = refine
@@ -353,6 +409,11 @@ class CnnPoseModel(PoseModel):
         self.cell = CELL
         self.viewpoint = "cnn"
         self.fg_weight = 0.0
+
+    def __setstate__(self, state: dict) -> None:
+        state.setdefault("stride", CELL)  # models saved before these parameters existed
+        state.setdefault("flip_test", False)
+        self.__dict__.update(state)
 
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
                       fg_weight: float | None = None) -> CnnPoseModel:
@@ -394,7 +455,7 @@ class CnnPoseModel(PoseModel):
         if len(shapes) != 1:
             raise ValueError(f"training frames must share one size, got {sorted(shapes)}")
         self.cnn_ = HeatmapCNN(self.channels, self.epochs, self.batch_size, self.lr, self.sigma, seed=self.seed,
-                               threads=self.threads).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
+                               threads=self.threads, stride=self.stride).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
         self.n_train_frames_ = len(samples)
         return self
 
@@ -406,8 +467,9 @@ class CnnPoseModel(PoseModel):
 
     def prepare(self, frame: np.ndarray) -> tuple[CnnFrame, float]:
         bgr, s = self._resize(frame)
-        heat, views = self.cnn_.predict(bgr[None])
-        return CnnFrame(bgr, heat[0], views[0]), s
+        heat, views = self.cnn_.predict(bgr[None], flip=bool(self.flip_test))
+        st = int(getattr(self.cnn_, "stride", CELL))
+        return CnnFrame(bgr, coarse_logheat(heat[0], st), views[0], heat[0], st), s
 
     def view_features(self, f: CnnFrame, full: bool | None = None, which: str | None = None) -> tuple[dict, dict]:
         return {"cnn": f.view_logp}, _PartMaps(f.logheat, self.models_)
@@ -428,9 +490,9 @@ class CnnPoseModel(PoseModel):
         r = m.infer(S)
         pts = m.keypoints(r["states"], r["unary"], scale=scale)
         if f is not None:
-            pts = refine_keypoints(pts, f.logheat, scale, radius=int(self.refine))
+            pts = refine_keypoints(pts, f.fine, scale, radius=int(self.refine) * CELL // f.stride, cell=f.stride)
         return pts
 
 
 __all__ = ["FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints",
-           "gaussian_targets", "part_unaries", "refine_keypoints"]
+           "coarse_logheat", "gaussian_targets", "part_unaries", "refine_keypoints"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
-from .data import VIEW_NAMES
+from .data import BOUNDARY_TOL, VIEW_NAMES, acceptable_views
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +51,27 @@ def confusion(true: list[str], pred: list[str], labels=VIEW_NAMES) -> dict:
     return {"labels": list(labels), "counts": M.astype(int).tolist(), "rates": R.round(4).tolist(),
             "per_view_accuracy": {v: float(R[i, i]) for i, v in enumerate(labels)},
             "accuracy": float(np.trace(M) / max(1, M.sum()))}
+
+
+def viewpoint_scores(true: list[str], azimuths: list[float], pred: list[str], tol: float = BOUNDARY_TOL) -> dict:
+    """Viewpoint confusion (rows: the nearest view of the camera azimuth, as :func:`confusion`) plus
+    the scores that do not depend on how a tie is broken: ``unambiguous``, the confusion over the frames
+    whose azimuth has one view (farther than ``tol`` degrees from a view boundary); ``boundary``, the
+    frames that sit on a boundary and the share of them called either neighbouring view; and
+    ``tolerant_per_view_accuracy`` / ``tolerant_accuracy``, every frame counted correct when the
+    estimate is one of its :func:`~vidstyle.pose.data.acceptable_views`."""
+    ok = [acceptable_views(a, tol) for a in azimuths]
+    single = [len(o) == 1 for o in ok]
+    out = confusion(true, pred)
+    out["unambiguous"] = confusion([t for t, s in zip(true, single) if s], [p for p, s in zip(pred, single) if s])
+    hit = np.array([p in o for p, o in zip(pred, ok)], dtype=bool)
+    sb = ~np.array(single, dtype=bool)
+    out["boundary"] = {"tolerance_deg": float(tol), "n": int(sb.sum()),
+                       "accuracy_either_neighbour": float(hit[sb].mean()) if sb.any() else None}
+    tv = np.array(true)
+    out["tolerant_per_view_accuracy"] = {v: float(hit[tv == v].mean()) for v in VIEW_NAMES if (tv == v).any()}
+    out["tolerant_accuracy"] = float(hit.mean()) if len(hit) else None
+    return out
 
 
 def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
@@ -131,8 +152,9 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
             found = P[:, :, 2].max(axis=1) > 0
             out["blazepose_detected"] = float(found.mean())
         out["pck@0.2"][name] = {"all": float(k.mean()), **{kp: float(k[:, i].mean()) for i, kp in enumerate(KEYPOINTS)}}
+    azimuths = [s.azimuth for s in samples]
     for name, pred in vpred.items():
-        out["viewpoint"][name] = confusion(views, pred)
+        out["viewpoint"][name] = viewpoint_scores(views, azimuths, pred)
     out["ps_cpu_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
     out["ps_viewpoint_method"] = model.viewpoint
     out["ps_person_prior"] = {"fg_weight": float(getattr(model, "fg_weight", 0.0)),
@@ -157,6 +179,17 @@ def format_tables(m: dict) -> str:
         for v, row in zip(c["labels"], c["rates"]):
             lines.append(f"{v:8s}" + "".join(f"{x:8.2f}" for x in row))
         lines.append(f"accuracy {c['accuracy']:.3f}")
+        if "unambiguous" in c:
+            u, b = c["unambiguous"], c["boundary"]
+            lines.append("  away from view boundaries (one true view): " + ", ".join(
+                f"{v} {a:.3f}" for v, a in u["per_view_accuracy"].items() if v in c["tolerant_per_view_accuracy"])
+                + f"; accuracy {u['accuracy']:.3f}")
+            if b["n"]:
+                lines.append(f"  on a boundary (+-{b['tolerance_deg']:g} deg; either neighbour counts): "
+                             f"{b['accuracy_either_neighbour']:.3f} of {b['n']} frames")
+            lines.append("  either neighbour counts at a boundary, by nearest view: " + ", ".join(
+                f"{v} {a:.3f}" for v, a in c["tolerant_per_view_accuracy"].items())
+                + f"; accuracy {c['tolerant_accuracy']:.3f}")
         lines.append("")
     if "real" in m:
         lines.append("real footage: agreement of ps with blazepose (PCK@0.2 of blazepose's torso)")
