@@ -192,6 +192,16 @@ def pose_table(items, root: Path) -> list[str]:
             if key not in (d.get("pcp") or {}):
                 lines.append(f"| {'cnn' if det == 'cnn' else 'HOG'} model's viewpoint classifier `{key}` | {d.get('n_frames')} | | | "
                              f"{accs(vp[key])} | `{_rel(p, root)}` |")
+    notes = []
+    for p, d in items:
+        for key, c in sorted((d.get("viewpoint") or {}).items()):
+            u = (c or {}).get("unambiguous")
+            if u:
+                per = ", ".join(f"{v} {_pct(a)} (n {sum(row)})" for (v, a), row in
+                                zip(u["per_view_accuracy"].items(), u["counts"]) if sum(row))
+                notes.append(f"- viewpoint classifier `{key}` (`{_rel(p, root)}`), frames off view boundaries: {per}")
+    if notes:
+        lines += ["", "Viewpoint accuracy per true view, away from view boundaries:", "", *notes]
     return lines
 
 
