@@ -130,6 +130,21 @@ def test_parallel_joblib_and_dask_give_identical_candidates(rng):
         assert np.array_equal(getattr(serial, name), getattr(dask_res, name))
 
 
+def test_in_process_and_workers_agree_at_sizes_where_blas_threads():
+    """Tiles the size of a real build (2048 windows of 10 frames x 27 joints, the demo skeleton's
+    size): there a multi-threaded OpenBLAS blocks the float32 products differently from one thread
+    (last bits), so the in-process path must run them on one thread as the workers do."""
+    rng = np.random.default_rng(11)
+    pos, clip = _database(rng, n_clips=6, frames=400, J=27)
+    ws = WindowSet.from_clips(pos, clip, rng.uniform(0.5, 2.0, size=pos.shape[1]), 10)
+    thr = float(np.quantile(distance_matrix(ws)[np.triu_indices(ws.n_windows, 1)], 0.1))
+    serial = all_pair_candidates(ws, thr, 20, tile=2048, progress=False)
+    par = all_pair_candidates(ws, thr, 20, tile=2048, n_jobs=2, progress=False)
+    assert len(serial.a) > 100 and serial.n_below == par.n_below
+    for name in ("a", "b", "D", "theta", "x0", "z0"):
+        assert np.array_equal(getattr(serial, name), getattr(par, name))
+
+
 def test_tile_keeps_only_candidates_not_the_matrix(rng):
     ws = _windows(rng)
     res = compute_tile(ws, 0, 30, 30, 60, threshold_sq=np.inf, min_gap=2 * K)

@@ -325,23 +325,33 @@ def all_pair_candidates(
 ) -> TileResult:
     """Local-minimum candidates over all window pairs, tile by tile.
 
-    ``n_jobs == 1``: in this process with BLAS on every core (threadpoolctl leaves BLAS alone);
-    ``n_jobs > 1`` or -1: joblib (loky) workers with one BLAS thread each; ``scheduler``: the address
-    of a Dask scheduler (``tcp://host:port``), the windows are scattered to the workers once.
-    The result does not depend on how the tiles were run.
+    ``n_jobs == 1``: in this process, the tiles on a pool of threads (one per core; numpy releases
+    the GIL in its products) with one BLAS thread each; ``n_jobs > 1`` or -1: joblib (loky) workers with
+    one BLAS thread each; ``scheduler``: the address of a Dask scheduler (``tcp://host:port``), the
+    windows are scattered to the workers once. Every tile's products run on one BLAS thread whichever
+    way it is run, so the result does not depend on it: a multi-threaded BLAS blocks a float32 product
+    differently, which moves the last bits and, through near-ties, the local-minimum candidates.
     """
     blocks = tile_ranges(ws.n_windows, tile)
     results: list[TileResult] = []
     if scheduler:
         results = _dask_blocks(ws, blocks, threshold_sq, min_gap, dtype, scheduler)
     elif n_jobs == 1 or len(blocks) <= 1:
-        it: Iterator = iter(blocks)
-        if progress:
-            from ..logutil import progress as _progress
+        from concurrent.futures import ThreadPoolExecutor
 
-            it = _progress(blocks, f"distance tiles ({ws.n_windows} windows)", total=len(blocks))
-        for block in it:
-            results.append(compute_tile(ws, *block, threshold_sq=threshold_sq, min_gap=min_gap, dtype=dtype))
+        from threadpoolctl import threadpool_limits
+
+        def run(block):
+            return compute_tile(ws, *block, threshold_sq=threshold_sq, min_gap=min_gap, dtype=dtype)
+
+        threads = min(len(blocks), os.cpu_count() or 1)
+        with threadpool_limits(1, user_api="blas"), ThreadPoolExecutor(max_workers=threads) as pool:
+            it: Iterator = pool.map(run, blocks)  # in the order of the blocks
+            if progress:
+                from ..logutil import progress as _progress
+
+                it = _progress(it, f"distance tiles ({ws.n_windows} windows)", total=len(blocks))
+            results = list(it)
     else:
         from joblib import Parallel, delayed
 
