@@ -205,6 +205,16 @@ def pose_table(items, root: Path) -> list[str]:
     return lines
 
 
+#: what each committed AugMG metrics file is (the 2D sources' poses and the validation file of its thresholds)
+AUGMG_FILES = {
+    "augmg_seed0.json": "the pipeline's evaluate_augmg stage: pictorial structures = the pipeline's own pose model "
+                        "(demo renders only, 10 epochs); defaults and thresholds from `validation/augmg.json`",
+    "augmg_trainpose_seed0.json": "the same marks with pictorial structures = `vidstyle train-pose`'s default model "
+                                  "(demo + CMU renders, 20 epochs, 2-px heatmaps, test-time flip); matching defaults "
+                                  "and thresholds chosen on that model's validation poses (`validation/augmg_trainpose.json`)",
+}
+
+
 def augmg_table(items, root: Path) -> list[str]:
     names = {"model": "pictorial structures", "blazepose": "BlazePose", "gt": "true 2D", "noisy": "true 2D + 5 % noise"}
     lines = ["| 2D source | marks | retrieval MPJPE | recall@10 | plain | AugMG | lower by | accepted | file |",
@@ -217,6 +227,9 @@ def augmg_table(items, root: Path) -> list[str]:
                          f"{b['retrieval_mpjpe_mm']:.1f} mm | {_pct(b.get('recall_at_10'))} | "
                          f"{b['transition_plain_mm']:.1f} mm | {b['transition_augmg_mm']:.1f} mm | {_pct(red)} | "
                          f"{_pct(b.get('accepted'))} | `{_rel(p, root)}` |")
+    notes = [f"- `{_rel(p, root)}`: {AUGMG_FILES[Path(p).name]}" for p, _d in items if Path(p).name in AUGMG_FILES]
+    if notes:
+        lines += ["", *notes]
     return lines
 
 
