@@ -248,3 +248,25 @@ def test_compiled_pow_is_python_float_pow_to_the_last_bit(rng):
     x = np.concatenate([rng.uniform(-1, 1, 20000), rng.uniform(0.95, 1, 20000), [0.0, -0.0, 1.0, -1.0, 1e-300]])
     ref = np.array([v ** float(POWER) for v in x.tolist()])
     assert np.array_equal(_libm_pow(x, POWER).view(np.int64), ref.view(np.int64))
+
+
+def test_compiled_accumulation_is_bincount_to_the_last_bit(rng):
+    """The numba accumulation (what histograms() runs) against the numpy reference that sums the
+    flattened contributions with np.bincount: identical float64 histograms, on random magnitudes,
+    bins and weights with many samples per entry (so any change of summation order would show)."""
+    offs, gauss, sub = sc._offsets()
+    R = sc.HALF
+    T, H, W = 6, 20, 24
+    Hp, Wp = H + 2 * R, W + 2 * R
+    flat_off = ((offs[:, 0] * Hp + offs[:, 1]) * Wp + offs[:, 2]).astype(np.int64)
+    size = (T + 2 * R) * Hp * Wp
+    m_all = rng.random(size) * (rng.random(size) < 0.7)
+    bins_all = rng.integers(0, sc.N_BINS, (size, 3))
+    w_all = rng.dirichlet(np.ones(3), size)
+    q = np.stack([rng.integers(0, T, 40), rng.integers(0, H, 40), rng.integers(0, W, 40)], axis=1)
+    base = (((q[:, 0] + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)).astype(np.int64)
+    got = np.zeros((len(base), sc.DIM))
+    sc._accumulate_kernel()(got, base, flat_off, gauss, sub, m_all, bins_all, w_all, sc.N_BINS)
+    want = np.zeros((len(base), sc.DIM))
+    sc._accumulate_numpy(want, base, flat_off, gauss, sub, m_all, bins_all, w_all, sc.N_BINS)
+    assert np.array_equal(got, want) and got.sum() > 0

@@ -28,8 +28,10 @@ volume I indexed as I(r, c, t) (row, column, frame) and computed in float64:
   order), entries above 0.2 set to 0.2, L2-normalise again, times 512, rounded half away from zero,
   capped at 255, uint8. An all-zero histogram gives all zeros.
 
-Accumulation happens sample by sample in the visiting order above (``np.bincount`` adds in input order),
-so the float64 histograms are bit-identical to a literal per-sample loop, not just the uint8 result.
+Accumulation happens sample by sample in the visiting order above, in a compiled loop (numba, no
+fast-math) that makes the same additions in the same order as ``np.bincount`` over the flattened
+contributions (its numpy reference, :func:`_accumulate_numpy`), so the float64 histograms are
+bit-identical to a literal per-sample loop, not just the uint8 result.
 Speed: the 3-bin assignment is a per-voxel property (there is no rotation), so it is computed once per
 voxel of the neighbourhoods in use, with a BLAS pre-selection of candidate bins and the exact
 element-wise cosines for the final choice.
@@ -237,6 +239,42 @@ def _libm_pow(a: np.ndarray, p: float) -> np.ndarray:
     return _pow_kernel()(np.ascontiguousarray(a, dtype=np.float64), float(p))
 
 
+def _accumulate_loop(hist, base, flat_off, gauss, sub, m_all, bins_all, w_all, n_bins):
+    # compiled by numba: hist[p, sub[n] * n_bins + bin_k] += (m * G) * w_k for every point p, sample n in
+    # visiting order and k = 0, 1, 2 -- per histogram entry the same additions in the same order as
+    # np.bincount over the flattened (p, n, k) targets, without materialising them
+    for p in range(base.shape[0]):
+        for n in range(flat_off.shape[0]):
+            j = base[p] + flat_off[n]
+            mg = m_all[j] * gauss[n]
+            s = sub[n] * n_bins
+            for k in range(3):
+                hist[p, s + bins_all[j, k]] += mg * w_all[j, k]
+
+
+def _accumulate_numpy(hist, base, flat_off, gauss, sub, m_all, bins_all, w_all, n_bins):
+    """The same as :func:`_accumulate_loop` with numpy: the (P, N, 3) contributions and targets, summed
+    by ``np.bincount`` (which adds in input order); the reference of the compiled kernel."""
+    P = len(base)
+    idx = base[:, None] + flat_off[None, :]  # (P, N) in visiting order
+    mg = m_all[idx] * gauss[None, :]  # m * G
+    contrib = mg[:, :, None] * w_all[idx]  # (m * G) * w_k
+    target = (np.arange(P)[:, None, None] * hist.shape[1] + sub[None, :, None] * n_bins) + bins_all[idx]
+    # samples outside the volume add (+0.0), which leaves every sum unchanged
+    hist += np.bincount(target.reshape(-1), contrib.reshape(-1), minlength=hist.size).reshape(hist.shape)
+
+
+@cache
+def _accumulate_kernel():
+    """The compiled :func:`_accumulate_loop` (numba, cached per installation; no fast-math, so every
+    product and sum rounds as numpy's), or :func:`_accumulate_numpy` without numba."""
+    try:
+        from numba import njit
+    except ImportError:  # pragma: no cover
+        return _accumulate_numpy
+    return njit(cache=True, nogil=True)(_accumulate_loop)
+
+
 def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per voxel (flat arrays): magnitude (V,), top-3 bins (V, 3) and their weights (V, 3).
 
@@ -306,9 +344,10 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
     if len(pts) == 0:
         return out
     offs, gauss, sub = _offsets()
+    accumulate = _accumulate_kernel()
     R = HALF
     Hp, Wp = H + 2 * R, W + 2 * R
-    flat_off = (offs[:, 0] * Hp + offs[:, 1]) * Wp + offs[:, 2]
+    flat_off = ((offs[:, 0] * Hp + offs[:, 1]) * Wp + offs[:, 2]).astype(np.int64)
     order = np.argsort(pts[:, 0], kind="stable")
     frames = pts[order, 0]
     start = 0
@@ -341,13 +380,9 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
         w_all[tt + R, rr + R, cc + R] = wts
         m_all, bins_all, w_all = m_all.reshape(-1), bins_all.reshape(-1, 3), w_all.reshape(-1, 3)
         base = ((q[:, 0] - a + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)
-        idx = base[:, None] + flat_off[None, :]  # (P, N) in visiting order
-        mg = m_all[idx] * gauss[None, :]  # m * G
-        contrib = mg[:, :, None] * w_all[idx]  # (m * G) * w_k
-        target = (np.arange(len(sel))[:, None, None] * DIM + sub[None, :, None] * N_BINS) + bins_all[idx]
-        # samples outside the volume add (+0.0), which leaves every sum unchanged
-        hist = np.bincount(target.reshape(-1), contrib.reshape(-1), minlength=len(sel) * DIM)
-        out[sel] = hist.reshape(len(sel), DIM)
+        hist = np.zeros((len(sel), DIM))
+        accumulate(hist, base.astype(np.int64), flat_off, gauss, sub, m_all, bins_all, w_all, N_BINS)
+        out[sel] = hist
         start = stop
     return out
 
