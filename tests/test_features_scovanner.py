@@ -270,3 +270,22 @@ def test_compiled_accumulation_is_bincount_to_the_last_bit(rng):
     want = np.zeros((len(base), sc.DIM))
     sc._accumulate_numpy(want, base, flat_off, gauss, sub, m_all, bins_all, w_all, sc.N_BINS)
     assert np.array_equal(got, want) and got.sum() > 0
+
+
+def test_compiled_top3_is_the_numpy_reference(rng):
+    """The compiled top-3 selection (what assign_bins runs) against its numpy reference: the same bins
+    and cosines to the last bit, with exact ties (repeated candidates) and padded rows (-1 entries,
+    including rows with fewer than three real candidates)."""
+    C = sc._bins()
+    n, K = 5000, 8
+    u = rng.standard_normal((n, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    cands = np.sort(rng.integers(0, sc.N_BINS, (n, K)), axis=1)  # repeats give exact ties
+    cands[rng.random((n, K)) < 0.2] = -1
+    cands[:50, 2:] = -1  # at most two real candidates
+    got = (np.empty((n, 3), np.int64), np.empty((n, 3)))
+    want = (np.empty((n, 3), np.int64), np.empty((n, 3)))
+    sc._top3_kernel()(u[:, 0].copy(), u[:, 1].copy(), u[:, 2].copy(), cands, C, *got)
+    sc._top3_numpy(u[:, 0].copy(), u[:, 1].copy(), u[:, 2].copy(), cands, C, *want)
+    assert np.array_equal(got[0], want[0])
+    assert np.array_equal(got[1].view(np.int64), want[1].view(np.int64))

@@ -33,8 +33,8 @@ fast-math) that makes the same additions in the same order as ``np.bincount`` ov
 contributions (its numpy reference, :func:`_accumulate_numpy`), so the float64 histograms are
 bit-identical to a literal per-sample loop, not just the uint8 result.
 Speed: the 3-bin assignment is a per-voxel property (there is no rotation), so it is computed once per
-voxel of the neighbourhoods in use, with a BLAS pre-selection of candidate bins and the exact
-element-wise cosines for the final choice.
+voxel of the neighbourhoods in use, with a pre-selection of candidate bins and the exact element-wise
+cosines for the final choice (a compiled loop, :func:`_top3_loop`, checked against its numpy reference).
 """
 
 from __future__ import annotations
@@ -275,6 +275,55 @@ def _accumulate_kernel():
     return njit(cache=True, nogil=True)(_accumulate_loop)
 
 
+def _top3_loop(u1, u2, u3, cands, C, top, dv):
+    # compiled by numba: per voxel the exact cosines ((u1 * c1 + u2 * c2) + u3 * c3, no fused multiply-add)
+    # of its candidate bins (-1 = padding: -inf, bin 0), then three times the first maximum, taken out
+    # (-inf) after each pick -- what _top3_numpy's repeated np.argmax does
+    K = cands.shape[1]
+    d = np.empty(K)
+    for i in range(cands.shape[0]):
+        for c in range(K):
+            b = cands[i, c]
+            if b >= 0:
+                d[c] = u1[i] * C[b, 0] + u2[i] * C[b, 1] + u3[i] * C[b, 2]
+            else:
+                d[c] = -np.inf
+        for k in range(3):
+            j = 0
+            for c in range(1, K):
+                if d[c] > d[j]:
+                    j = c
+            b = cands[i, j]
+            top[i, k] = b if b >= 0 else 0
+            dv[i, k] = d[j]
+            d[j] = -np.inf
+
+
+def _top3_numpy(u1, u2, u3, cands, C, top, dv):
+    """The same as :func:`_top3_loop` with numpy (the reference of the compiled kernel)."""
+    valid = cands >= 0
+    cc = np.where(valid, cands, 0)
+    # exact cosines, element-wise in the defined order (no BLAS, no fused multiply-add)
+    d = u1[:, None] * C[cc, 0] + u2[:, None] * C[cc, 1] + u3[:, None] * C[cc, 2]
+    d[~valid] = -np.inf
+    rows = np.arange(len(cands))
+    for k in range(3):
+        j = np.argmax(d, axis=1)  # first maximum = lowest bin index among equal cosines
+        top[:, k] = cc[rows, j]
+        dv[:, k] = d[rows, j]
+        d[rows, j] = -np.inf
+
+
+@cache
+def _top3_kernel():
+    """The compiled :func:`_top3_loop` (numba, no fast-math), or :func:`_top3_numpy` without numba."""
+    try:
+        from numba import njit
+    except ImportError:  # pragma: no cover
+        return _top3_numpy
+    return njit(cache=True, nogil=True)(_top3_loop)
+
+
 def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per voxel (flat arrays): magnitude (V,), top-3 bins (V, 3) and their weights (V, 3).
 
@@ -293,19 +342,9 @@ def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndar
     C = _bins()
     table, _ = _candidate_table()
     cands = table[_cube_cell(u1, u2, u3)]  # (V, k), increasing bin index, -1 = padding
-    valid = cands >= 0
-    cc = np.where(valid, cands, 0)
-    # exact cosines, element-wise in the defined order (no BLAS, no fused multiply-add)
-    d = u1[:, None] * C[cc, 0] + u2[:, None] * C[cc, 1] + u3[:, None] * C[cc, 2]
-    d[~valid] = -np.inf
-    rows = np.arange(nz.size)
     top = np.empty((nz.size, 3), dtype=np.int64)
     dv = np.empty((nz.size, 3), dtype=np.float64)
-    for k in range(3):
-        j = np.argmax(d, axis=1)  # first maximum = lowest bin index among equal cosines
-        top[:, k] = cc[rows, j]
-        dv[:, k] = d[rows, j]
-        d[rows, j] = -np.inf
+    _top3_kernel()(u1, u2, u3, np.ascontiguousarray(cands, dtype=np.int64), C, top, dv)
     # d ** 20 through the C library's pow, as the literal definition (Python floats) computes it; numpy's
     # SIMD pow differs from it in the last bit for a few % of arguments
     p = _libm_pow(dv.reshape(-1), float(POWER)).reshape(-1, 3)
