@@ -223,15 +223,21 @@ def _libm_pow_loop(a, p):  # compiled by numba: a[i] ** p with a float exponent 
     return out
 
 
-@cache
-def _pow_kernel():
-    """The compiled ``_libm_pow_loop`` (numba, cached per installation), or the Python loop without numba.
-    Both call the C library's pow once per element, so the results are the same to the last bit."""
+def _compiled(loop, fallback):
+    """``loop`` compiled by numba (cached per installation, no fast-math, so every operation rounds as
+    numpy's and the C library's do), or ``fallback`` (its numpy / Python reference) without numba."""
     try:
         from numba import njit
     except ImportError:  # pragma: no cover
-        return _libm_pow_py
-    return njit(cache=True, nogil=True)(_libm_pow_loop)
+        return fallback
+    return njit(cache=True, nogil=True)(loop)
+
+
+@cache
+def _pow_kernel():
+    """The compiled ``_libm_pow_loop``, or the Python loop without numba. Both call the C library's pow
+    once per element, so the results are the same to the last bit."""
+    return _compiled(_libm_pow_loop, _libm_pow_py)
 
 
 def _libm_pow(a: np.ndarray, p: float) -> np.ndarray:
@@ -266,13 +272,8 @@ def _accumulate_numpy(hist, base, flat_off, gauss, sub, m_all, bins_all, w_all, 
 
 @cache
 def _accumulate_kernel():
-    """The compiled :func:`_accumulate_loop` (numba, cached per installation; no fast-math, so every
-    product and sum rounds as numpy's), or :func:`_accumulate_numpy` without numba."""
-    try:
-        from numba import njit
-    except ImportError:  # pragma: no cover
-        return _accumulate_numpy
-    return njit(cache=True, nogil=True)(_accumulate_loop)
+    """The compiled :func:`_accumulate_loop`, or :func:`_accumulate_numpy` without numba."""
+    return _compiled(_accumulate_loop, _accumulate_numpy)
 
 
 def _top3_loop(u1, u2, u3, cands, C, top, dv):
@@ -316,12 +317,8 @@ def _top3_numpy(u1, u2, u3, cands, C, top, dv):
 
 @cache
 def _top3_kernel():
-    """The compiled :func:`_top3_loop` (numba, no fast-math), or :func:`_top3_numpy` without numba."""
-    try:
-        from numba import njit
-    except ImportError:  # pragma: no cover
-        return _top3_numpy
-    return njit(cache=True, nogil=True)(_top3_loop)
+    """The compiled :func:`_top3_loop`, or :func:`_top3_numpy` without numba."""
+    return _compiled(_top3_loop, _top3_numpy)
 
 
 def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
