@@ -277,14 +277,15 @@ def coarse_logheat(logheat: np.ndarray, stride: int) -> np.ndarray:
     """Log-probability maps on the tree's 4-px grid from maps at ``stride`` px (2 or 4): each coarse
     cell's probability is the sum of its sub-cells' (a log-sum-exp over 2x2 blocks; an odd last row or
     column of sub-cells is dropped with its mass)."""
+    from scipy.special import logsumexp
+
     if stride == CELL:
         return logheat
     f = CELL // stride
     K, H, W = logheat.shape
     Hc, Wc = H // f, W // f
     b = logheat[:, :Hc * f, :Wc * f].astype(np.float64).reshape(K, Hc, f, Wc, f)
-    m = b.max(axis=(2, 4), keepdims=True)
-    return (np.log(np.exp(b - m).sum(axis=(2, 4))) + m[:, :, 0, :, 0]).astype(np.float32)
+    return logsumexp(b, axis=(2, 4)).astype(np.float32)
 
 
 def refine_keypoints(points_px: np.ndarray, logheat: np.ndarray, scale: float, radius: int = 2,
