@@ -18,7 +18,9 @@ Reads every JSON document under ``--metrics DIR`` (recursively) and recognises t
 - ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes --out``): the share of a real mocap clip's
   action frames recognised as punches, per camera.
 
-Every row names the file it came from. With ``--readme README.md`` the text between
+Every row names the file it came from (several ``--metrics`` directories: the README uses the committed
+results and the validation files, ``--metrics pipelines/kickboxing/results pipelines/kickboxing/validation``).
+With ``--readme README.md`` the text between
 ``<!-- results:begin -->`` and ``<!-- results:end -->`` is replaced (atomically); without the markers (or
 without ``--readme``) the tables go to stdout. ``--check`` exits 1 when the README is not up to date.
 """
@@ -64,10 +66,22 @@ def load_documents(root: Path) -> dict[str, list[tuple[Path, dict]]]:
 
 
 def _rel(p: Path, root: Path) -> str:
+    """``p`` relative to ``root`` (the first metrics directory), or to the parent of the other directory
+    it came from (``validation/recognition.json``)."""
     try:
         return str(p.relative_to(root))
     except ValueError:
-        return str(p)
+        pass
+    for extra in EXTRA_ROOTS:
+        try:
+            return str(p.relative_to(extra.parent))
+        except ValueError:
+            continue
+    return str(p)
+
+
+#: metrics directories after the first (set by :func:`tables`)
+EXTRA_ROOTS: list[Path] = []
 
 
 def _config(d: dict) -> str:
@@ -77,6 +91,9 @@ def _config(d: dict) -> str:
     sm = dec.get("smoothing") or rp.get("smoothing")
     ew = dec.get("emission_weight") if dec.get("emission_weight") is not None else rp.get("emission_weight")
     parts = []
+    n_points = (((d.get("params") or {}).get("features") or {}).get("salient") or {}).get("n_points")
+    if n_points is not None:
+        parts.append(f"{n_points} points")
     if rp.get("C") is not None:
         parts.append(f"C {rp['C']:g}")
     if "max_frames_per_class" in rp:
@@ -144,12 +161,40 @@ def prior_table(items, root: Path) -> list[str]:
 
 
 def validation_table(items, root: Path) -> list[str]:
-    lines = ["| tuned value | chosen | validation smoothed frame acc. | file |", "|---|---|---:|---|"]
-    for p, d in items:
+    """The search of the library's defaults (seed 0's validation file) value by value; with files of other
+    seeds, one line per seed with its chosen configuration."""
+    items = sorted(items, key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
+    lines = ["| tuned value | chosen | validation smoothed frame acc. | the other candidates | file |",
+             "|---|---|---:|---|---|"]
+    for p, d in items[:1]:
         for key, c in (d.get("chosen") or {}).items():
-            lines.append(f"| {key} | {json.dumps(c.get('value'))} | {_pct(c.get('validation_frame_accuracy_smoothed'))} "
+            value = c.get("value")
+            shown = value if not isinstance(value, dict) else (_smoother_name(value) or json.dumps(value))
+            others = ", ".join(f"{k} {_pct(v)}" for k, v in (c.get("candidates") or {}).items()
+                               if k not in (str(value), _smoother_name(value)))
+            lines.append(f"| {key} | {shown} | {_pct(c.get('validation_frame_accuracy_smoothed'))} | {others} "
                          f"| `{_rel(p, root)}` |")
+    if len(items) > 1:
+        lines += ["", "Per split seed (the recognizer of each seed's results uses its own seed's choice):", "",
+                  "| seed | validation performers | points | words | grouping | C | cap | context | smoother "
+                  "| V smoothed | V video | file |", "|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---|"]
+        for p, d in items:
+            fc, fv = d.get("final_config") or {}, d.get("final_validation") or {}
+            lines.append(
+                f"| {d.get('seed')} | {', '.join((d.get('split') or {}).get('val_performers') or [])} | "
+                f"{fc.get('points', 10)} | {fc.get('words')} | {fc.get('grouping_threshold')} | {fc.get('C', 0):g} | "
+                f"{fc.get('max_frames_per_class')} | {fc.get('coarse_context') or 'no'} | "
+                f"{_smoother_name(fc) or fc.get('smoothing')} | {_pct(fv.get('frame_accuracy_smoothed'))} | "
+                f"{_pct(fv.get('video_accuracy'))} | `{_rel(p, root)}` |")
     return lines
+
+
+def _smoother_name(value) -> str | None:
+    """The candidate key of a smoother value (as scripts/validate_recognition.py names them)."""
+    if not isinstance(value, dict) or "smoothing" not in value:
+        return None
+    w = value.get("emission_weight")
+    return f"{value['smoothing']}^{w:g}" if value["smoothing"] in ("viterbi", "duration") else None
 
 
 def pose_table(items, root: Path) -> list[str]:
@@ -246,8 +291,12 @@ def strikes_table(items, root: Path) -> list[str]:
     return lines
 
 
-def tables(root: Path) -> str:
+def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
     docs = load_documents(root)
+    EXTRA_ROOTS[:] = list(extra)
+    for e in extra:
+        for kind, items in load_documents(e).items():
+            docs[kind] += items
     out = []
     sections = [("vidstyle.metrics.recognition", "Recognition (`vidstyle evaluate recognition`)", recognition_table),
                 ("vidstyle.metrics.style", "Style (`vidstyle evaluate style`)", style_table),
@@ -277,14 +326,17 @@ def splice(text: str, table: str) -> str | None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--metrics", type=Path, required=True, help="directory of metrics JSON files")
+    ap.add_argument("--metrics", type=Path, required=True, nargs="+",
+                    help="directories of metrics JSON files (files are named relative to the first; the others "
+                         "as <directory name>/<file>)")
     ap.add_argument("--readme", type=Path, default=None, help="README to update between the markers")
     ap.add_argument("--check", action="store_true", help="exit 1 if the README differs from the metrics")
     args = ap.parse_args(argv)
-    if not args.metrics.is_dir():
-        print(f"{args.metrics}: metrics directory not found", file=sys.stderr)
-        return 2
-    table = tables(args.metrics)
+    for d in args.metrics:
+        if not d.is_dir():
+            print(f"{d}: metrics directory not found", file=sys.stderr)
+            return 2
+    table = tables(args.metrics[0], args.metrics[1:])
     if args.readme is None:
         sys.stdout.write(table)
         return 0

@@ -3,14 +3,17 @@
 
 For every seed S this runs the pipeline's own commands with the recognizer values of
 ``pipelines/kickboxing/params.yaml`` (the values ``scripts/validate_recognition.py`` chose on the
-validation performers):
+validation performers of seed 0), or, with ``--validation DIR``, with the values that script chose on
+seed S's own validation performers (``DIR`` holds one file per seed). The second is the clean protocol
+for seeds other than 0: seed 0's validation performers are test performers of other seeds, so
+params.yaml's values were tuned on part of their test set.
 
 1. ``vidstyle vocabulary`` on set A and ``vidstyle train-recognizer`` on set B of the unseen-performer
    split of seed S;
 2. ``vidstyle recognize`` of the split's test videos and ``vidstyle evaluate recognition --labels-dir``
    -> ``recognition_unseen_performer_seedS.json`` (+ PNGs);
 3. with ``--camera-dataset``: the same model on the test performers re-filmed from the unseen cameras
-   (``vidstyle demo make-dataset --unseen-camera``, any superset of the test performers) ->
+   (``vidstyle demo make-dataset --unseen-camera``, a superset of the test performers) ->
    ``recognition_unseen_camera_seedS.json``;
 4. with ``--left-right``: the unseen-view split (test view right) trained with and without mirror images
    -> ``recognition_unseen_view_right_{mirror,nomirror}_seedS.json``.
@@ -64,6 +67,9 @@ def _test_ids(dataset: Path, split: str, seed: int, test_dataset: Path | None = 
 def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, test_view: str | None = None,
         camera: bool = False) -> None:
     vs = [str(args.vidstyle)] if args.vidstyle else [sys.executable, "-m", "vidstyle"]
+    rp = config_for_seed(args, rp, seed)
+    features = _pick(args.feature_dirs, rp, "--features")
+    camera_features = _pick(args.camera_dirs, rp, "--camera-features") if camera else None
     w = args.work / f"{name}_seed{seed}"
     w.mkdir(parents=True, exist_ok=True)
     ds = str(args.dataset / "dataset.json")
@@ -71,17 +77,18 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
     model = w / "recognizer.joblib"
     if not model.is_file():
         # one vocabulary per split, seed and size (the mirror and no-mirror runs share theirs)
-        vocab = args.work / f"vocab_{split}{'_' + test_view if test_view else ''}_{rp['words']}w_seed{seed}.npz"
+        vocab = args.work / (f"vocab_{split}{'_' + test_view if test_view else ''}_{rp['words']}w_"
+                             f"{rp['variant']}{rp['points']}_seed{seed}.npz")
         if not vocab.is_file():
-            _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
+            _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(features), "--split", split, *tv,
                        "--words", str(rp["words"]), "--seed", str(seed), "--out", str(vocab)])
         shutil.copyfile(vocab, w / "vocab.npz")
-        _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(args.features), "--split", split, *tv,
+        _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(features), "--split", split, *tv,
                    "--vocab", str(w / "vocab.npz"), *_train_args(rp), "--mirror" if mirror else "--no-mirror",
                    "--seed", str(seed), "--jobs", str(args.jobs), "--out", str(model)])
-    outs = [(split, name, args.features, None)]
+    outs = [(split, name, features, None)]
     if camera:
-        outs.append(("unseen-camera", "unseen_camera", args.camera_features, args.camera_dataset / "dataset.json"))
+        outs.append(("unseen-camera", "unseen_camera", camera_features, args.camera_dataset / "dataset.json"))
     for sp, nm, fdir, tds in outs:
         ids = _test_ids(args.dataset, sp, seed, tds, test_view)
         labels = w / f"labels_{nm}"
@@ -95,12 +102,68 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
                    *extra, "--seed", str(seed), "--out", str(args.results / f"recognition_{nm}_seed{seed}.json")])
 
 
+def config_for_seed(args, rp: dict, seed: int) -> dict:
+    """params.yaml's recognizer values, or with ``--validation`` those chosen on seed ``seed``'s validation set."""
+    if args.validation is None:
+        return dict(rp)
+    import json
+
+    docs = []
+    for f in sorted(Path(args.validation).glob("*.json")):
+        d = json.loads(f.read_text())
+        if d.get("kind") == "vidstyle.validation.recognition" and d.get("seed") == seed:
+            docs.append((f, d))
+    if len(docs) != 1:
+        raise SystemExit(f"{args.validation}: {len(docs)} recognition validation files of seed {seed} (need one)")
+    f, d = docs[0]
+    fc = d["final_config"]
+    log.info("seed %d: the values chosen on validation performers %s (%s)", seed, d["split"]["val_performers"], f)
+    return {**rp, **{k: fc[k] for k in ("variant", "points", "words", "grouping_threshold", "C", "max_frames_per_class",
+                                        "coarse_context", "smoothing", "emission_weight")}}
+
+
+def _by_points(dirs) -> dict:
+    out = {}
+    for fdir in dirs:
+        fp = _features_params(fdir)
+        out[(fp["variant"], int(fp["salient"]["n_points"]))] = Path(fdir)
+    return out
+
+
+def _pick(dirs: dict, rp: dict, option: str) -> Path:
+    key = (rp["variant"], int(rp["points"]))
+    if key not in dirs:
+        raise SystemExit(f"{option}: no features of {key[0]} with {key[1]} points per frame among "
+                         f"{sorted(dirs)}")
+    return dirs[key]
+
+
+def _features_params(fdir: Path) -> dict:
+    """The extraction parameters recorded in the first features file of ``fdir``."""
+    import json
+
+    import numpy as np
+
+    files = sorted(Path(fdir).glob("*.npz"))
+    if not files:
+        raise SystemExit(f"{fdir}: no features files")
+    with np.load(files[0], allow_pickle=False) as z:
+        return json.loads(str(z["params"]))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dataset", type=Path, required=True, help="the demo dataset directory")
-    ap.add_argument("--features", type=Path, required=True, help="its features directory")
+    ap.add_argument("--features", type=Path, required=True, nargs="+",
+                    help="its features directories (one per descriptor and points per frame a recognizer uses: "
+                         "params.yaml's, or each --validation choice)")
     ap.add_argument("--camera-dataset", type=Path, default=None, help="unseen-camera dataset directory")
-    ap.add_argument("--camera-features", type=Path, default=None, help="its features directory")
+    ap.add_argument("--camera-features", type=Path, default=None, nargs="+", help="its features directories")
+    ap.add_argument("--validation", type=Path, default=None,
+                    help="directory of scripts/validate_recognition.py files: the recognizer of seed S uses the "
+                         "values chosen on seed S's own validation performers (the file with that seed), so no "
+                         "seed's test performers tuned its recognizer (default: params.yaml's values for every "
+                         "seed)")
     ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
     ap.add_argument("--left-right", type=int, nargs="*", default=[],
                     help="seeds of the unseen-view split (test view right), with and without mirror training")
@@ -111,7 +174,11 @@ def main() -> None:
     ap.add_argument("--vidstyle", type=Path, default=None, help="the vidstyle executable (default: python -m vidstyle)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
-    rp = yaml.safe_load(args.params.read_text())["recognition"]
+    params = yaml.safe_load(args.params.read_text())
+    rp = {**params["recognition"], "variant": params["features"]["variant"], "points": int(params["features"]["points"])}
+    # features directories by the (descriptor, points per frame) recorded in their files
+    args.feature_dirs = _by_points(args.features)
+    args.camera_dirs = _by_points(args.camera_features or [])
     args.results.mkdir(parents=True, exist_ok=True)
     for seed in args.seeds:
         one(args, rp, seed, "unseen-performer", "unseen_performer", camera=args.camera_dataset is not None)

@@ -69,7 +69,7 @@ def render_extra(cmu: Path, work: Path, seed: int) -> list[tuple[Path, Path]]:
                 rs = int(np.random.SeedSequence([seed, ci, vi, 7]).generate_state(1)[0])
                 render_to_file(m, video, view=view, size=(160, 120), fps=20, elevation_deg=10.0,
                                appearance=Appearance.random(rs), background="texture", noise_sigma=2.0, seed=rs)
-                process_video(video, feats, variant="scovanner2007", salient=SalientParams(n_points=10))
+                process_video(video, feats, variant="scovanner2007", salient=SalientParams(n_points=POINTS))
             from vidstyle.recognition.io import load_features
 
             n = load_features(feats).n_frames
@@ -103,7 +103,7 @@ def render_cameras(pipeline: Path, work: Path, seed: int, views: tuple[str, ...]
         feats = root / "features" / f"{v.id}.npz"
         if not feats.exists():
             feats.parent.mkdir(exist_ok=True)
-            process_video(root / v.video, feats, variant="scovanner2007", salient=SalientParams(n_points=10))
+            process_video(root / v.video, feats, variant="scovanner2007", salient=SalientParams(n_points=POINTS))
         out.append((feats, root / v.labels))
     return out
 
@@ -160,6 +160,10 @@ def score_v(model, pipeline: Path, seed: int) -> dict:
             "frame_accuracy_raw": hit["raw"] / n, "video_accuracy": vid_ok / vid_n if vid_n else None}
 
 
+#: salient points per frame of the extra videos' features: main() sets the pipeline model's own count
+POINTS = 10
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pipeline", type=Path, required=True)
@@ -175,8 +179,11 @@ def main(argv=None) -> int:
         ap.error("give --real and/or --cameras")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
     from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, evaluate_strikes, strikes_table
-    from vidstyle.recognition.recognizer import load_model
+    from vidstyle.recognition.recognizer import load_model, read_header
 
+    global POINTS
+    fp = read_header(a.pipeline / "out/models/recognizer.joblib").get("features_params") or {}
+    POINTS = int((fp.get("salient") or {}).get("n_points", 10))
     extra = render_extra(a.cmu, a.work / "extra", a.seed) if a.real else []
     views = tuple(x.strip() for x in a.cameras.split(",") if x.strip())
     if views:

@@ -12,17 +12,19 @@ never loaded. Factors (``ALL_FACTORS``):
 - ``C``: the SVM cost,
 - ``max_frames_per_class``: the SVM training frames per class (the cap),
 - ``coarse_context``: the multi-scale temporal context (0 = the thesis' single 5-frame context),
+- ``points``: salient points per frame (the thesis' 10); every other count needs its own features of the
+  starting variant (``--points-features 20=DIR``, ``vidstyle features --points 20``),
 
 and the smoother (``SMOOTHERS``: the thesis' window vote, Viterbi and the explicit-duration Viterbi with
 several emission weights), which needs no retraining: every trained candidate is scored with each.
 
-Search: (1) the smoother is chosen on the starting model; (2) one factor at a time from the starting
-point (``START``), every candidate scored with that smoother; for each factor the best value wins
-(score: smoothed frame accuracy on V; ties go to the video accuracy, then to the starting value);
-(3) when the winners differ from the starting point, their combination is trained and scored on V, and
-it is the final configuration only if it scores at least as well as the starting point (otherwise the
-starting values stay). The default grid tries one other value per factor (``FACTORS``; ``--full`` more,
-``--quick`` two factors for a smoke run). Candidates train in parallel (``--workers``); with
+Search: (1) the smoother is chosen on the starting model; (2) the features factor (``points``) one value
+at a time from the starting point (``START``), scored with that smoother; (3) the model factors one at a
+time from the features winner; for each factor the best value wins (score: smoothed frame accuracy on V;
+ties go to the video accuracy, then to the incumbent); (4) when the model factors' winners differ from the
+features winner, their combination is trained and scored on V, and it is the final configuration only if
+it scores at least as well as the features winner (otherwise its values stay). The default grid tries one
+other value per model factor (``FACTORS``; ``--full`` more, ``--quick`` two factors for a smoke run). Candidates train in parallel (``--workers``); with
 ``--cache-dir`` every trained candidate is kept, so a rerun (another smoother, another factor) trains only
 what is new.
 
@@ -36,14 +38,19 @@ and ``smoother``: ``value``, ``validation_frame_accuracy_smoothed``, ``validatio
 ``candidates`` value -> V smoothed accuracy, and ``value_if_alone`` when the combination lost),
 ``final_config``, ``final_validation`` (raw / smoothed / video accuracy, per-class smoothed recall, V
 frames) and ``rows`` (every candidate x smoother: ``step``, ``config``, the V scores, ``train_s``).
-Schema 1 (before the duration smoother and the coarse context) had the same fields without
-``smoothers``.
+``points_features`` (points -> directory) names the features of the points candidates. Schema 1
+(before the duration smoother and the coarse context) had the same fields without ``smoothers``.
 
-Usage (the demo pipeline's dataset and features)::
+Usage (the demo pipeline's dataset; its features have the chosen 20 points per frame, the other counts
+and the thesis descriptor are extracted for the search)::
 
+    V=pipelines/kickboxing/out/dataset/videos
+    vidstyle features $V/*.mp4 --points 10 --out /tmp/f10     # and --points 30, --points 40
+    vidstyle features $V/*.mp4 --points 20 --variant thesis --out /tmp/thesis20
     python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \
-        --features scovanner2007=pipelines/kickboxing/out/features --features thesis=THESIS_FEATURES \
-        --start-model pipelines/kickboxing/out/models/recognizer.joblib --cache-dir /tmp/vcache --seed 0
+        --features scovanner2007=/tmp/f10 --features thesis=/tmp/thesis20 \
+        --points-features 20=pipelines/kickboxing/out/features --points-features 30=/tmp/f30 \
+        --points-features 40=/tmp/f40 --cache-dir /tmp/vcache --seed 0
 """
 
 from __future__ import annotations
@@ -67,24 +74,27 @@ from vidstyle.recognition.splits import make_split  # noqa: E402
 log = logging.getLogger("validate_recognition")
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / "validation" / "recognition.json"
 
-# the starting point (the values before this search; the smoother's emission weight 1 was chosen by an
-# earlier run of this script) and the other values tried per factor
-START = {"variant": "scovanner2007", "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
-         "max_frames_per_class": 3000, "coarse_context": 0, "smoothing": "viterbi", "emission_weight": 1.0,
+# the starting point (the values an earlier run of this script chose at 10 points per frame: the duration
+# smoother, emission weight 1, cap 1500) and the other values tried per factor
+START = {"variant": "scovanner2007", "points": 10, "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
+         "max_frames_per_class": 1500, "coarse_context": 0, "smoothing": "duration", "emission_weight": 1.0,
          "smoothing_window": 6}
 # the default grid: one other value per factor (what two shared cores allow in an hour: every candidate
-# is a full SVM training), two for the cap (after 1500 beat 3000 on V, 800 was added to see whether the
-# trend goes on); --full searches more values per factor
-FACTORS = {"words": [500], "grouping_threshold": [0.7], "C": [30.0], "max_frames_per_class": [1500, 800],
+# is a full SVM training), two for the cap (one on each side of the start); the points come from the
+# --points-features directories given; --full searches more values per factor
+FACTORS = {"words": [500], "grouping_threshold": [0.7], "C": [30.0], "max_frames_per_class": [3000, 800],
            "coarse_context": [8]}
 QUICK = {"words": [500], "C": [30.0]}
 FULL = {"words": [500, 1500], "grouping_threshold": [0.7, 0.9], "C": [30.0, 300.0],
-        "max_frames_per_class": [800, 1500, 5000], "coarse_context": [5, 8, 12]}
+        "max_frames_per_class": [800, 3000, 5000], "coarse_context": [5, 8, 12]}
 # every factor the search knows (the descriptor variant's values are the --features directories given)
-ALL_FACTORS = ("variant", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context")
+ALL_FACTORS = ("variant", "points", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context")
 SMOOTHERS = [("viterbi", 1.0), ("vote", None), ("viterbi", 2.0), ("viterbi", 3.0), ("viterbi", 5.0),
              ("duration", 1.0), ("duration", 2.0), ("duration", 3.0)]
-MODEL_KEYS = ("variant", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context", "smoothing_window")
+# factors that change the features files (searched first: the model factors are searched on their winner)
+FEATURE_FACTORS = ("points",)
+MODEL_KEYS = ("variant", "points", "words", "grouping_threshold", "C", "max_frames_per_class", "coarse_context",
+              "smoothing_window")
 
 
 class Search:
@@ -92,8 +102,11 @@ class Search:
     candidate (the model and its raw V outputs) is kept there under a key of its training values, so a
     rerun (e.g. with another smoother) retrains nothing it has already trained."""
 
-    def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int, cache_dir: Path | None = None):
+    def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int, cache_dir: Path | None = None,
+                 points_features: dict[int, str] | None = None, variant_points: dict[str, int] | None = None):
         self.ds, self.features, self.split, self.seed, self.jobs = ds, features, split, seed, jobs
+        self.points_features = {int(k): v for k, v in (points_features or {}).items()}
+        self.variant_points = dict(variant_points or {})  # points per frame of each --features directory
         self.cache_dir = None if cache_dir is None else Path(cache_dir)
         self._sets: dict = {}
         self._vocab: dict = {}
@@ -103,21 +116,32 @@ class Search:
         by_id = ds.by_id()
         self.actions = [by_id[i].action if by_id[i].kind == "single" else None for i in split.val]
 
-    def sets(self, variant):
-        if variant not in self._sets:
-            fdir = Path(self.features[variant])
-            self._sets[variant] = {k: _load_set(self.ds, fdir, ids, self.jobs)
-                                   for k, ids in (("A", self.split.vocab), ("B", self.split.train), ("V", self.split.val))}
-        return self._sets[variant]
+    def features_dir(self, variant, points=None) -> str:
+        """Features of ``variant`` with ``points`` per frame (``--points-features`` for the starting variant's
+        other counts; the ``--features`` directory of the variant for its own count)."""
+        if variant == START["variant"] and points in self.points_features:
+            return self.points_features[points]
+        if points is None or points == self.variant_points.get(variant, START["points"]):
+            return self.features[variant]
+        raise SystemExit(f"no features of {variant} with {points} points per frame were given")
 
-    def vocabulary(self, variant, words):
+    def sets(self, variant, points=None):
+        key = self.features_dir(variant, points)
+        if key not in self._sets:
+            fdir = Path(self.features_dir(variant, points))
+            self._sets[key] = {k: _load_set(self.ds, fdir, ids, self.jobs)
+                               for k, ids in (("A", self.split.vocab), ("B", self.split.train), ("V", self.split.val))}
+        return self._sets[key]
+
+    def vocabulary(self, variant, words, points=None):
         from vidstyle.recognition.vocabulary import Vocabulary
 
-        key = (variant, words)
-        if key not in self._vocab and self.start_model is not None and key == self.start_key:
+        key = (self.features_dir(variant, points), words)
+        if key not in self._vocab and self.start_model is not None and (variant, words) == self.start_key \
+                and key[0] == self.features[variant]:
             self._vocab[key] = self.start_model.vocabulary  # the same fit on the same set A
         if key not in self._vocab:
-            feats_a = self.sets(variant)["A"][0]
+            feats_a = self.sets(variant, points)["A"][0]
             desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
             self._vocab[key] = Vocabulary(n_words=words, random_state=self.seed).fit(desc)
         return self._vocab[key]
@@ -126,7 +150,7 @@ class Search:
         if self.cache_dir is None:
             return None
         ident = json.dumps({"dataset": str(self.ds.root) if hasattr(self.ds, "root") else None,
-                            "features": str(Path(self.features[cfg["variant"]]).resolve()),
+                            "features": str(Path(self.features_dir(cfg["variant"], cfg.get("points"))).resolve()),
                             "seed": self.seed, "val": sorted(self.split.val), "train": sorted(self.split.train),
                             **{k: cfg.get(k, START[k]) for k in MODEL_KEYS}}, sort_keys=True)
         return self.cache_dir / (hashlib.sha256(ident.encode()).hexdigest()[:20] + ".joblib")
@@ -146,14 +170,15 @@ class Search:
             self._memo[key] = (d["model"], d["raw"], d["train_s"])
             return self._memo[key]
         t0 = time.perf_counter()
-        feats_v, _ = self.sets(cfg["variant"])["V"]
+        pts = cfg.get("points")
+        feats_v, _ = self.sets(cfg["variant"], pts)["V"]
         same_as_start = self.start_model is not None and all(cfg.get(k, START[k]) == self.start_cfg.get(k, START[k])
                                                               for k in MODEL_KEYS)
         if same_as_start:
             rec = self.start_model  # trained by `vidstyle train-recognizer` on the same A/B with these values
         else:
-            voc = self.vocabulary(cfg["variant"], cfg["words"])
-            feats_b, labels_b = self.sets(cfg["variant"])["B"]
+            voc = self.vocabulary(cfg["variant"], cfg["words"], pts)
+            feats_b, labels_b = self.sets(cfg["variant"], pts)["B"]
             rec = ActionRecognizer(
                 vocabulary=voc, grouping_threshold=cfg["grouping_threshold"], C=cfg["C"],
                 max_frames_per_class=cfg["max_frames_per_class"], coarse_context=cfg.get("coarse_context", 0),
@@ -173,9 +198,9 @@ class Search:
     def run(self, step: str, cfg: dict, smoothers=None) -> list[dict]:
         """Train on A/B with ``cfg`` and score V once per smoother; one row per smoother."""
         rec, raw, train_s = self.trained(cfg)
-        labels_v = self.sets(cfg["variant"])["V"][1]
+        labels_v = self.sets(cfg["variant"], cfg.get("points"))["V"][1]
         if not hasattr(rec, "durations_") and hasattr(rec, "fit_durations"):  # trained before the duration smoother
-            rec.fit_durations([t.labels for t in self.sets(cfg["variant"])["B"][1]])
+            rec.fit_durations([t.labels for t in self.sets(cfg["variant"], cfg.get("points"))["B"][1]])
         rows = []
         for smoothing, weight in smoothers or [(cfg["smoothing"], cfg["emission_weight"])]:
             rec.smoothing = smoothing
@@ -197,7 +222,7 @@ class Search:
 
 def _short(c: dict) -> str:
     ctx = f" ctx2+{c['coarse_context']}" if c.get("coarse_context") else ""
-    return (f"{c['variant']} {c['words']}w g{c['grouping_threshold']:g} C{c['C']:g} "
+    return (f"{c['variant']} {c.get('points', 10)}pt {c['words']}w g{c['grouping_threshold']:g} C{c['C']:g} "
             f"cap{c['max_frames_per_class']}{ctx} {_smoother(c)}")
 
 
@@ -222,17 +247,26 @@ def _smoothers():
 
 def _candidate(args) -> list[dict]:
     """One trained candidate (a worker process): rows for every smoother."""
-    dataset, features, seed, cache_dir, step, cfg, start_model, start_cfg = args
+    dataset, features, points_features, variant_points, seed, cache_dir, step, cfg, start_model, start_cfg = args
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     ds = load_dataset(dataset)
     split = make_split(ds, "unseen-performer", seed=seed)
-    search = Search(ds, features, split, seed, 1, cache_dir)
+    search = Search(ds, features, split, seed, 1, cache_dir, points_features, variant_points)
     if start_model is not None:
         from vidstyle.recognition.recognizer import load_model
 
         search.start_model = load_model(start_model)[0]
         search.start_cfg, search.start_key = start_cfg, (start_cfg["variant"], start_cfg["words"])
     return search.run(step, cfg, smoothers=_smoothers())
+
+
+def features_points(fdir: str | Path) -> int:
+    """Salient points per frame that the features files of ``fdir`` were extracted with (their params)."""
+    files = sorted(Path(fdir).glob("*.npz"))
+    if not files:
+        raise SystemExit(f"{fdir}: no features files")
+    with np.load(files[0], allow_pickle=False) as z:
+        return int(json.loads(str(z["params"]))["salient"]["n_points"])
 
 
 def check_start_model(path: Path, start: dict, split, seed: int) -> None:
@@ -250,6 +284,9 @@ def check_start_model(path: Path, start: dict, split, seed: int) -> None:
         problems.append(f"words {h.get('vocabulary', {}).get('n_words')} != {start['words']}")
     if (h.get("features_params") or {}).get("variant", start["variant"]) != start["variant"]:
         problems.append("descriptor variant differs")
+    n_points = ((h.get("features_params") or {}).get("salient") or {}).get("n_points", start["points"])
+    if n_points != start["points"]:
+        problems.append(f"points {n_points} != {start['points']}")
     if sp.get("kind") != "unseen-performer" or sp.get("seed") != seed or sorted(sp.get("val") or []) != sorted(split.val):
         problems.append("trained on another split")
     if h.get("seed") != seed:
@@ -268,6 +305,10 @@ def main() -> None:
     ap.add_argument("--features", action="append", default=[], metavar="VARIANT=DIR", required=True,
                     help="features directory of each descriptor variant to compare (the first is the starting one "
                          "unless scovanner2007 is given)")
+    ap.add_argument("--points-features", action="append", default=[], metavar="N=DIR",
+                    help="features of the starting variant with N salient points per frame (`vidstyle features "
+                         "--points N`): the candidates of the points factor (the --features directory has "
+                         f"{START['points']})")
     ap.add_argument("--seed", type=int, default=0, help="split / vocabulary / sampling seed")
     ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
     grid = ap.add_mutually_exclusive_group()
@@ -287,6 +328,14 @@ def main() -> None:
     from joblib import Parallel, delayed
 
     features = dict(f.split("=", 1) for f in args.features)
+    points_features = {int(k): v for k, v in (f.split("=", 1) for f in args.points_features)}
+    variant_points = {v: features_points(d) for v, d in features.items()}
+    if variant_points.get(START["variant"], START["points"]) != START["points"]:
+        raise SystemExit(f"--features {START['variant']}=DIR: features with {variant_points[START['variant']]} points "
+                         f"per frame; the search starts from {START['points']}")
+    for n, fdir in sorted(points_features.items()):
+        if features_points(fdir) != n:
+            raise SystemExit(f"{fdir}: features with {features_points(fdir)} points per frame, given as {n}")
     ds = load_dataset(args.dataset)
     split = make_split(ds, "unseen-performer", seed=args.seed)
     log.info("validation performers %s (test performers %s are not loaded)", split.val_performers, split.test_performers)
@@ -295,19 +344,26 @@ def main() -> None:
         start["variant"] = next(iter(features))
     grid_values = FULL if args.full else QUICK if args.quick else FACTORS
     # the descriptor variant last: its candidates need other features files (often computed meanwhile)
-    factors = {**grid_values, "variant": [v for v in features if v != start["variant"]]}
+    factors = {"points": sorted(points_features), **grid_values, "variant": [v for v in features if v != start["variant"]]}
     factors = {k: v for k, v in factors.items() if v}
     if args.only:
         factors = {k: v for k, v in factors.items() if k in args.only}
     if args.start_model is not None:
         check_start_model(args.start_model, start, split, args.seed)
-    jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in factors.items() for v in vals]
-    ctx = (str(args.dataset), features, args.seed, args.cache_dir)
+    ctx = (str(args.dataset), features, points_features, variant_points, args.seed, args.cache_dir)
     sm = (None if args.start_model is None else str(args.start_model), start)
-    results = Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, cfg, *sm)) for step, cfg in jobs)
+
+    def train(jobs):
+        return Parallel(n_jobs=args.workers, backend="loky")(delayed(_candidate)((*ctx, step, c, *sm)) for step, c in jobs)
+
+    # stage 1: the starting model and the features factors (points: other features files)
+    feature_factors = {k: v for k, v in factors.items() if k in FEATURE_FACTORS}
+    model_factors = {k: v for k, v in factors.items() if k not in FEATURE_FACTORS}
+    jobs = [("start", start)] + [(key, {**start, key: v}) for key, vals in feature_factors.items() for v in vals]
+    results = train(jobs)
     rows = [r for rs in results for r in rs]
     base = results[0]
-    # 1. the smoother, on the starting model (no retraining); 2. each factor under that smoother
+    # the smoother, on the starting model (no retraining); then each features factor under that smoother
     win = best([_at(base, (start["smoothing"], start["emission_weight"]))] + base)
     cfg = dict(start)
     cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
@@ -316,38 +372,65 @@ def main() -> None:
                                  "validation_video_accuracy": win["video_accuracy"],
                                  "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}}
     smoother = (cfg["smoothing"], cfg["emission_weight"])
+
+    def choose(factor_set, jobs, results, incumbent):
+        winners = {}
+        for key in factor_set:
+            cands = [incumbent] + [_at(rs, smoother) for (step, _), rs in zip(jobs, results) if step == key]
+            w = best(cands)
+            winners[key] = w
+            cfg[key] = w["config"][key]
+            if key == "variant":  # another descriptor comes with the points its features were extracted with
+                cfg["points"] = w["config"]["points"]
+            chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": w["frame_accuracy_smoothed"],
+                           "validation_video_accuracy": w["video_accuracy"],
+                           "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
+        return winners
+
     start_row = _at(base, smoother)
-    for key, vals in factors.items():
-        cands = [start_row] + [_at(rs, smoother) for (step, _), rs in zip(jobs, results) if step == key]
-        w = best(cands)
-        cfg[key] = w["config"][key]
-        chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": w["frame_accuracy_smoothed"],
-                       "validation_video_accuracy": w["video_accuracy"],
-                       "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
-    final = start_row
-    if any(cfg[k] != start[k] for k in factors):
-        comb = _candidate((*ctx, "combined winners", cfg, *sm))
+    winners = choose(feature_factors, jobs, results, start_row)
+    # the features the model factors are searched on: the features winner (one features factor at a time;
+    # with several, their combination is trained below like the model factors')
+    base_cfg = dict(cfg)
+    base_row = start_row
+    if len(winners) == 1:
+        base_row = next(iter(winners.values()))
+    elif any(cfg[k] != start[k] for k in feature_factors):
+        comb = train([("features winners", base_cfg)])[0]
+        rows += comb
+        base_row = _at(comb, smoother)
+    # stage 2: the model factors, one at a time from the stage-1 configuration
+    jobs2 = [(key, {**base_cfg, key: v, **({"points": variant_points[v]} if key == "variant" else {})})
+             for key, vals in model_factors.items() for v in vals]
+    results2 = train(jobs2) if jobs2 else []
+    rows += [r for rs in results2 for r in rs]
+    choose(model_factors, jobs2, results2, base_row)
+    final = base_row
+    if any(cfg[k] != base_cfg[k] for k in model_factors):
+        comb = train([("combined winners", dict(cfg))])[0]
         rows += comb
         c = _at(comb, smoother)
         if _key(c) >= _key(final):
             final = c
-        else:  # the combination does worse than the starting point with the chosen smoother: keep the start
-            log.info("combined winners score below the starting point on V; keeping the starting values")
-            for k in factors:
+        else:  # the combination does worse than the stage-1 configuration: keep its values
+            log.info("combined winners score below the stage-1 configuration on V; keeping its values")
+            for k in model_factors:
                 chosen[k]["value_if_alone"] = chosen[k]["value"]
-                chosen[k]["value"] = start[k]
-                cfg[k] = start[k]
+                chosen[k]["value"] = base_cfg[k]
+                cfg[k] = base_cfg[k]
     doc = {
         "kind": "vidstyle.validation.recognition", "schema_version": 2,
         "command": "python scripts/validate_recognition.py " + " ".join(sys.argv[1:]),
         "dataset": str(args.dataset), "dataset_seed": ds.seed, "seed": args.seed, "features": features,
+        "points_features": {str(k): v for k, v in sorted(points_features.items())},
         "split": {"kind": split.kind, "vocab_performers": split.vocab_performers,
                   "train_performers": split.train_performers, "val_performers": split.val_performers,
                   "test_performers_not_used": split.test_performers},
         "score": "smoothed frame accuracy on the validation performers (ties: video accuracy, then the starting value)",
-        "search": "the smoother on the starting model first; then one factor at a time from the starting point, "
-                  "scored with that smoother; then the combination of the winners (kept only if it scores at least "
-                  "as well as the starting point)",
+        "search": "the smoother on the starting model first; then the features factors (points per frame) one at "
+                  "a time from the starting point, scored with that smoother; then the model factors one at a time "
+                  "from the features winner; then the combination of their winners (kept only if it scores at least "
+                  "as well as the features winner)",
         "start": start, "start_model": None if args.start_model is None else str(args.start_model),
         "factors": factors, "factors_not_searched": sorted(set(ALL_FACTORS) - set(factors)),
         "smoothers": [list(x) for x in _smoothers()], "chosen": chosen, "final_config": cfg,

@@ -131,9 +131,10 @@ def test_committed_02_05_labels_are_the_rule_output(cmu_dir):
     assert len(ev) == 9 and ev[0]["start"] > 100 and ev[-1]["end"] < motion.n_frames - 150
 
 
-def _toy_model(path: Path, rng) -> None:
+def _toy_model(path: Path, rng, points: int | None = None) -> None:
     """A recognizer of the demo's classes on random scovanner-sized descriptors: its labels are arbitrary,
-    what the test checks is the counting."""
+    what the test checks is the counting. ``points``: the salient points per frame its header says its
+    features were extracted with."""
     from vidstyle.demo.actions import CLASSES
     from vidstyle.recognition.io import VideoFeatures
     from vidstyle.recognition.recognizer import ActionRecognizer, save_model
@@ -148,7 +149,8 @@ def _toy_model(path: Path, rng) -> None:
     vocab = Vocabulary(n_words=12, random_state=0).fit(np.concatenate([v.descriptors for v in vids]))
     model = ActionRecognizer(vocab, n_components=8, mirror=False, max_frames_per_class=None, random_state=0)
     model.fit(vids, labels, classes=CLASSES)
-    save_model(path, model)
+    extra = None if points is None else {"features_params": {"variant": "scovanner2007", "salient": {"n_points": points}}}
+    save_model(path, model, extra=extra)
 
 
 def test_command_end_to_end_on_a_slice(cmu_dir, tmp_path, rng):
@@ -158,7 +160,7 @@ def test_command_end_to_end_on_a_slice(cmu_dir, tmp_path, rng):
     from vidstyle.recognition.io import load_features
     from vidstyle.recognition.recognizer import load_model
 
-    _toy_model(tmp_path / "m.joblib", rng)
+    _toy_model(tmp_path / "m.joblib", rng, points=7)
     out, work = tmp_path / "strikes.json", tmp_path / "work"
     args = ["evaluate", "strikes", "--bvh", str(cmu_dir / "02_05.bvh"), "--model", str(tmp_path / "m.joblib"),
             "--cameras", "0:10:texture,150:30:texture:moon", "--start", "100", "--stop", "420", "--seed", "3",
@@ -167,6 +169,9 @@ def test_command_end_to_end_on_a_slice(cmu_dir, tmp_path, rng):
     assert main(args) == 0
     m = read_metrics(out, STRIKES)
     assert m.seed == 3 and m.doc["params"]["start"] == 100 and m.doc["rule"]["extension_min"] == 0.8
+    # the clip is described as the model's own features were (its header: 7 points per frame)
+    assert m.doc["params"]["points"] == 7 and m.doc["params"]["variant"] == "scovanner2007"
+    assert max(np.bincount(np.load(work / f"{m.doc['cameras'][0]['name']}.npz")["points"][:, 0])) == 7
     motion = read_bvh(cmu_dir / "02_05.bvh")[100:420]
     mask = action_frames(motion)
     assert m.doc["action_frames"]["segments"] == segments(mask) and len(segments(mask)) == 2

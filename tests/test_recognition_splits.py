@@ -113,6 +113,16 @@ def test_unseen_camera_refuses_a_training_camera():
         make_split(ds, "unseen-camera")
 
 
+def test_unseen_camera_needs_every_test_performer_filmed():
+    """A camera dataset holding only some of the seed's test performers would score part of T: refused."""
+    ds = dataset(10)
+    full = make_split(ds, "unseen-camera", seed=1, test_dataset=camera_dataset(10))
+    keep = [int(q[1:]) for q in full.test_performers[:1]]
+    part = dataset(views=("az30", "az150"), azimuths={"az30": 30.0, "az150": 150.0}, elevation=30.0, performers=keep)
+    with pytest.raises(InputError, match="no video of the test performers"):
+        make_split(ds, "unseen-camera", seed=1, test_dataset=part)
+
+
 def test_errors():
     with pytest.raises(InputError, match=">= 4 performers"):
         make_split(dataset(n_perf=3))

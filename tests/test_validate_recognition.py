@@ -82,3 +82,33 @@ def test_cache_retrains_nothing_and_rescores_smoothers(tmp_path, monkeypatch):
 def test_factors_not_searched_names_every_factor_left_out():
     assert set(vr.ALL_FACTORS) >= set(vr.FACTORS) | {"variant"}
     assert all(m in ("viterbi", "vote", "duration") for m, _ in vr.SMOOTHERS)
+
+
+def test_points_candidates_read_their_own_features(tmp_path, monkeypatch):
+    """A points candidate trains and scores on the features given for that count; the start on --features."""
+    import shutil
+
+    from vidstyle.formats.dataset import read_dataset as load_dataset
+    from vidstyle.recognition.splits import make_split
+    from vidstyle.recognition.synthetic import make_dataset
+
+    make_dataset(tmp_path, n_performers=5, views=("front",), seed=0, dim=16, reps=(2, 3), n_actions=4)
+    shutil.copytree(tmp_path / "features", tmp_path / "features20")
+    ds = load_dataset(tmp_path)
+    split = make_split(ds, seed=0)
+    dirs = []
+    real = vr._load_set
+
+    def spy(dataset, fdir, ids, jobs):
+        dirs.append(Path(fdir).name)
+        return real(dataset, fdir, ids, jobs)
+
+    monkeypatch.setattr(vr, "_load_set", spy)
+    s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1,
+                  points_features={20: str(tmp_path / "features20")})
+    s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0)])
+    assert set(dirs) == {"features"}
+    dirs.clear()
+    s.run("points", {**vr.START, "words": 40, "points": 20}, smoothers=[("viterbi", 1.0)])
+    assert set(dirs) == {"features20"} and len(dirs) == 3  # sets A, B and V, with their own vocabulary
+    assert len(s._vocab) == 2

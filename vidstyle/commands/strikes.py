@@ -38,9 +38,10 @@ def evaluate_strikes_cmd(
                                         "in arm lengths at least this."),
     reach_min: float = typer.Option(0.6, "--reach-min", help="Action-frame rule: hand in front of the shoulder "
                                     "along the pelvis' facing, in arm lengths, at least this."),
-    variant: str = typer.Option("scovanner2007", "--variant", help="Descriptor of the recognizer's features "
-                                "(as `vidstyle features --variant`)."),
-    points: int = typer.Option(10, "--points", help="Salient points per frame (as `vidstyle features --points`)."),
+    variant: str = typer.Option(None, "--variant", help="Descriptor of the recognizer's features (as `vidstyle "
+                                "features --variant`; default: the one MODEL was trained on)."),
+    points: int = typer.Option(None, "--points", help="Salient points per frame (as `vidstyle features --points`; "
+                               "default: the count MODEL's features were extracted with)."),
     work_dir: Path = typer.Option(None, "--work-dir", help="Keep the rendered videos and their features here "
                                   "(default: a temporary directory, removed)."),
     actions_out: Path = typer.Option(None, "--actions-out", help="Also write the action frames as a labels "
@@ -81,6 +82,14 @@ def evaluate_strikes_cmd(
         raise InputError(f"--{e.param.replace('_', '-')}: {e.problem}") from None
     if start < 0 or stop < 0 or (stop and stop <= start):
         raise InputError("--start must be >= 0 and --stop 0 or above --start")
+    if variant is None or points is None:
+        from ..recognition.recognizer import read_header
+
+        fp = read_header(model).get("features_params") or {}
+        variant = variant or fp.get("variant", "scovanner2007")
+        points = points if points is not None else int((fp.get("salient") or {}).get("n_points", 10))
+    if points < 1:
+        raise InputError(f"--points: must be >= 1, got {points}")
     params = StrikeEvalParams(variant=variant, points=points, start=start, stop=stop or None)
     labels_list = [x.strip() for x in action_labels.split(",") if x.strip()]
     if actions is not None and not labels_list:

@@ -164,8 +164,10 @@ def make_split(
         test = ids(test_perf, cond=lambda v: v.view == test_view)
     else:
         test = ids(test_perf, pool=sorted(test_dataset.videos, key=lambda v: v.id), cond=lambda v: True)
-        if not test:
-            raise InputError(f"split: the unseen-camera dataset has no video of the test performers {test_perf}")
+        missing = sorted(set(test_perf) - {v.performer for v in test_dataset.videos})
+        if missing:  # a figure over part of the test performers would not be the split's
+            raise InputError(f"split: the unseen-camera dataset has no video of the test performers {missing} "
+                             f"(test performers of seed {seed}: {test_perf})")
     test_cams = []
     if kind == "unseen-camera":
         t_by = test_dataset.by_id()

@@ -1,0 +1,69 @@
+"""The recognizer's tuned defaults are the values scripts/validate_recognition.py chose on the validation
+performers (pipelines/kickboxing/validation/recognition.json), in the library, the CLI and the pipeline, so
+a rerun of the validation that changes them fails here until all three follow."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+VALIDATION = ROOT / "pipelines" / "kickboxing" / "validation" / "recognition.json"
+MODEL_KEYS = ("grouping_threshold", "C", "max_frames_per_class", "coarse_context", "smoothing", "emission_weight")
+
+
+@pytest.fixture(scope="module")
+def doc() -> dict:
+    return json.loads(VALIDATION.read_text())
+
+
+def _cli_defaults(name: str) -> dict:
+    import typer.main
+
+    from vidstyle.cli import app
+
+    group = typer.main.get_command(app)
+    cmd = group.commands[name]
+    return {p.name: p.default for p in cmd.params}
+
+
+def test_the_validation_searched_every_factor_and_chose_its_best(doc):
+    assert doc["factors_not_searched"] == []
+    final = doc["final_config"]
+    for key, ch in doc["chosen"].items():
+        if key == "smoother":
+            continue
+        assert ch["value"] == final[key]
+        best = max(ch["candidates"].values())
+        assert ch["validation_frame_accuracy_smoothed"] == best == ch["candidates"][str(final[key])]
+    # every row scored the validation performers, never a test performer
+    assert not set(doc["split"]["val_performers"]) & set(doc["split"]["test_performers_not_used"])
+
+
+def test_library_defaults_are_the_validated_ones(doc):
+    from vidstyle.recognition.recognizer import ActionRecognizer
+
+    final = doc["final_config"]
+    params = ActionRecognizer().get_params()
+    assert {k: params[k] for k in MODEL_KEYS} == {k: final[k] for k in MODEL_KEYS}
+
+
+def test_cli_defaults_are_the_validated_ones(doc):
+    final = doc["final_config"]
+    features = _cli_defaults("features")
+    assert (features["variant"], features["points"]) == (final["variant"], final["points"])
+    assert _cli_defaults("vocabulary")["words"] == final["words"]
+    train = _cli_defaults("train-recognizer")
+    assert {k: train[k.lower()] for k in MODEL_KEYS} == {k: final[k] for k in MODEL_KEYS}
+
+
+def test_pipeline_uses_the_validated_values(doc):
+    import yaml
+
+    params = yaml.safe_load((ROOT / "pipelines" / "kickboxing" / "params.yaml").read_text())
+    final = doc["final_config"]
+    assert (params["features"]["variant"], params["features"]["points"]) == (final["variant"], final["points"])
+    rec = params["recognition"]
+    assert {k: rec[k] for k in ("words", *MODEL_KEYS)} == {k: final[k] for k in ("words", *MODEL_KEYS)}
