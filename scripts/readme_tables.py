@@ -94,6 +94,11 @@ def _config(d: dict) -> str:
     n_points = (((d.get("params") or {}).get("features") or {}).get("salient") or {}).get("n_points")
     if n_points is not None:
         parts.append(f"{n_points} points")
+    n_words = ((d.get("model_header") or {}).get("vocabulary") or {}).get("n_words")
+    if n_words is not None:
+        parts.append(f"{n_words} words")
+    if rp.get("grouping_threshold") is not None and rp.get("grouping", True):
+        parts.append(f"grouping {rp['grouping_threshold']:g}")
     if rp.get("C") is not None:
         parts.append(f"C {rp['C']:g}")
     if "max_frames_per_class" in rp:
@@ -103,6 +108,14 @@ def _config(d: dict) -> str:
     if sm:
         parts.append(f"{sm}" + (f" ^{ew:g}" if sm in ("viterbi", "duration") and ew is not None else ""))
     return ", ".join(parts) or "?"
+
+
+def _configs(g) -> str:
+    """The recognizer values of files sorted by seed: one when they agree, else one per seed."""
+    cfgs = [(d.get("seed"), _config(d)) for _, d in g]
+    if len({c for _, c in cfgs}) == 1:
+        return cfgs[0][1]
+    return "; ".join(f"seed {s}: {c}" for s, c in cfgs)
 
 
 def recognition_table(items, root: Path) -> list[str]:
@@ -126,7 +139,7 @@ def recognition_table(items, root: Path) -> list[str]:
         g = sorted(groups[kind], key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
         seeds = ", ".join(str(d.get("seed")) for _, d in g)
         lines.append(
-            f"| {kind} | {seeds} | {'; '.join(sorted({_config(d) for _, d in g}))} | "
+            f"| {kind} | {seeds} | {_configs(g)} | "
             f"{_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
             f"{_spread([d['frame_accuracy']['smoothed'] for _, d in g])} | "
             f"{_spread([d.get('video_accuracy') for _, d in g])} | "
