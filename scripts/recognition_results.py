@@ -23,8 +23,14 @@ files go to ``--work`` (models, labels). The dataset and features are the demo p
 the seed only changes the performer split)::
 
     python scripts/recognition_results.py --dataset pipelines/kickboxing/out/dataset \\
-        --features pipelines/kickboxing/out/features --camera-dataset CAM --camera-features CAMF \\
-        --seeds 0 1 2 3 4 --left-right 0 --work /tmp/results_work
+        --features pipelines/kickboxing/out/features F40 --camera-dataset CAM --camera-features CAMF20 CAMF40 \\
+        --validation pipelines/kickboxing/validation --seeds 0 1 2 3 4 --left-right 0 --work /tmp/results_work
+
+``CAM``: ``vidstyle demo make-dataset --unseen-camera --single-seconds 8 --performance-seconds 60``, the
+pipeline's camera stage without ``--split-seed``: every performer, so that each seed's test performers are
+all there, in the same videos as the pipeline's. The features directories: ``vidstyle features --points N``
+of the dataset's and of CAM's videos for every N a seed's validation chose (they are told apart by the
+points recorded in their files).
 """
 
 from __future__ import annotations
