@@ -177,20 +177,23 @@ def validation_table(items, root: Path) -> list[str]:
     """The search of the library's defaults (seed 0's validation file) value by value; with files of other
     seeds, one line per seed with its chosen configuration."""
     items = sorted(items, key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
-    lines = ["| tuned value | chosen | validation smoothed frame acc. | the other candidates | file |",
-             "|---|---|---:|---|---|"]
+    lines = ["| tuned value | chosen | validation score | the other candidates | file |", "|---|---|---:|---|---|"]
     for p, d in items[:1]:
+        lines.insert(0, f"Score: {d.get('score', 'smoothed frame accuracy on the validation performers')}.")
+        lines.insert(1, "")
         for key, c in (d.get("chosen") or {}).items():
             value = c.get("value")
             shown = value if not isinstance(value, dict) else (_smoother_name(value) or json.dumps(value))
             others = ", ".join(f"{k} {_pct(v)}" for k, v in (c.get("candidates") or {}).items()
                                if k not in (str(value), _smoother_name(value)))
-            lines.append(f"| {key} | {shown} | {_pct(c.get('validation_frame_accuracy_smoothed'))} | {others} "
+            won = c.get("validation_score", c.get("validation_frame_accuracy_smoothed"))
+            lines.append(f"| {key} | {shown} | {_pct(won)} | {others} "
                          f"| `{_rel(p, root)}` |")
     if len(items) > 1:
         lines += ["", "Per split seed (the recognizer of each seed's results uses its own seed's choice):", "",
                   "| seed | validation performers | points | words | grouping | C | cap | context | smoother "
-                  "| V smoothed | V video | file |", "|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---|"]
+                  "| V smoothed | V video | V camera smoothed | score | file |",
+                  "|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|"]
         for p, d in items:
             fc, fv = d.get("final_config") or {}, d.get("final_validation") or {}
             lines.append(
@@ -198,7 +201,8 @@ def validation_table(items, root: Path) -> list[str]:
                 f"{fc.get('points', 10)} | {fc.get('words')} | {fc.get('grouping_threshold')} | {fc.get('C', 0):g} | "
                 f"{fc.get('max_frames_per_class')} | {fc.get('coarse_context') or 'no'} | "
                 f"{_smoother_name(fc) or fc.get('smoothing')} | {_pct(fv.get('frame_accuracy_smoothed'))} | "
-                f"{_pct(fv.get('video_accuracy'))} | `{_rel(p, root)}` |")
+                f"{_pct(fv.get('video_accuracy'))} | {_pct(fv.get('camera_frame_accuracy_smoothed'))} | "
+                f"{_pct(fv.get('score', fv.get('frame_accuracy_smoothed')))} | `{_rel(p, root)}` |")
     return lines
 
 

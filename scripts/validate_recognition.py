@@ -3,7 +3,10 @@
 
 Every candidate trains the vocabulary on set A and the recognizer on set B of the seeded split
 (:func:`vidstyle.recognition.splits.make_split`) and is scored on set V; the test performers (set T) are
-never loaded. Factors (``ALL_FACTORS``):
+never loaded. With ``--camera-dataset`` (the *validation camera*: V's performers filmed from cameras, an
+elevation and a background that neither the training videos nor the unseen-camera test use) every
+candidate is also scored on V's videos there, and the score is the mean of the two smoothed frame
+accuracies (the goals ask for unseen performers and an unseen camera both). Factors (``ALL_FACTORS``):
 
 - ``variant``: the descriptor (one features directory per variant: ``--features scovanner2007=DIR
   --features thesis=DIR``; the variant's own features of sets A, B and V are enough),
@@ -50,7 +53,15 @@ and the thesis descriptor are extracted for the search)::
     python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \
         --features scovanner2007=/tmp/f10 --features thesis=/tmp/thesis20 \
         --points-features 20=pipelines/kickboxing/out/features --points-features 30=/tmp/f30 \
-        --points-features 40=/tmp/f40 --cache-dir /tmp/vcache --seed 0
+        --points-features 40=/tmp/f40 --camera-dataset /tmp/valcam \\
+        --camera-features /tmp/valcam10 /tmp/valcam20 /tmp/valcam30 /tmp/valcam40 /tmp/valcam_thesis20 \\
+        --cache-dir /tmp/vcache --seed 0
+
+The validation camera (every performer, so that one dataset serves every seed's V; its features
+directories are told apart by the variant and points recorded in them)::
+
+    vidstyle demo make-dataset --out /tmp/valcam --views 60,120 --elevation 30 --background texture:coins \\
+        --performances 1 --performance-views 60,120 --single-seconds 8 --performance-seconds 60
 """
 
 from __future__ import annotations
@@ -103,8 +114,13 @@ class Search:
     rerun (e.g. with another smoother) retrains nothing it has already trained."""
 
     def __init__(self, ds, features: dict[str, str], split, seed: int, jobs: int, cache_dir: Path | None = None,
-                 points_features: dict[int, str] | None = None, variant_points: dict[str, int] | None = None):
+                 points_features: dict[int, str] | None = None, variant_points: dict[str, int] | None = None,
+                 camera_dataset=None, camera_features: dict | None = None):
         self.ds, self.features, self.split, self.seed, self.jobs = ds, features, split, seed, jobs
+        # the validation camera: the validation performers filmed from cameras, an elevation and a background
+        # that neither training nor the test cameras use; features by (variant, points)
+        self.camera_dataset, self.camera_features = camera_dataset, dict(camera_features or {})
+        self._camera_sets: dict = {}
         self.points_features = {int(k): v for k, v in (points_features or {}).items()}
         self.variant_points = dict(variant_points or {})  # points per frame of each --features directory
         self.cache_dir = None if cache_dir is None else Path(cache_dir)
@@ -195,9 +211,31 @@ class Search:
             tmp.replace(cache)
         return self._memo[key]
 
+    def camera_set(self, variant, points):
+        """(features, labels, ids, actions) of the validation performers' validation-camera videos."""
+        key = (variant, int(points if points is not None else START["points"]))
+        if key not in self._camera_sets:
+            if key not in self.camera_features:
+                raise SystemExit(f"--camera-features: no features of {key[0]} with {key[1]} points per frame")
+            val = set(self.split.val_performers)
+            videos = [v for v in sorted(self.camera_dataset.videos, key=lambda v: v.id) if v.performer in val]
+            missing = val - {v.performer for v in videos}
+            if missing:
+                raise SystemExit(f"--camera-dataset: no video of the validation performers {sorted(missing)}")
+            ids = [v.id for v in videos]
+            feats, labels = _load_set(self.camera_dataset, Path(self.camera_features[key]), ids, self.jobs)
+            self._camera_sets[key] = (feats, labels, ids, [v.action if v.kind == "single" else None for v in videos])
+        return self._camera_sets[key]
+
     def run(self, step: str, cfg: dict, smoothers=None) -> list[dict]:
-        """Train on A/B with ``cfg`` and score V once per smoother; one row per smoother."""
+        """Train on A/B with ``cfg`` and score V (and V's validation-camera videos) once per smoother;
+        one row per smoother."""
         rec, raw, train_s = self.trained(cfg)
+        cam = None
+        if self.camera_dataset is not None:
+            feats_c, labels_c, ids_c, actions_c = self.camera_set(cfg["variant"], cfg.get("points"))
+            cam = ([rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))) for H in rec._histograms_many(feats_c)],
+                   labels_c, ids_c, actions_c)
         labels_v = self.sets(cfg["variant"], cfg.get("points"))["V"][1]
         if not hasattr(rec, "durations_") and hasattr(rec, "fit_durations"):  # trained before the duration smoother
             rec.fit_durations([t.labels for t in self.sets(cfg["variant"], cfg.get("points"))["B"][1]])
@@ -213,10 +251,18 @@ class Search:
                    "frame_accuracy_smoothed": m["frame_accuracy"]["smoothed"], "video_accuracy": m["video_accuracy"],
                    "per_class_recall_smoothed": {k: v["recall_smoothed"] for k, v in m["per_class"].items()},
                    "n_val_frames": m["n_test_frames"], "train_s": train_s}
+            if cam is not None:
+                mc = score_videos(rec.classes_, [t.labels for t in cam[1]], [rec._finish(*r) for r in cam[0]],
+                                  cam[2], cam[3])
+                row.update({"camera_frame_accuracy_raw": mc["frame_accuracy"]["raw"],
+                            "camera_frame_accuracy_smoothed": mc["frame_accuracy"]["smoothed"],
+                            "camera_video_accuracy": mc["video_accuracy"], "n_camera_frames": mc["n_test_frames"]})
+            row["score"] = _score(row)
             rows.append(row)
             self.rows.append(row)
-            log.info("%-20s %s: smoothed %.4f raw %.4f video %s (%.0f s)", step, _short(c), row["frame_accuracy_smoothed"],
-                     row["frame_accuracy_raw"], row["video_accuracy"], train_s)
+            log.info("%-20s %s: score %.4f smoothed %.4f raw %.4f video %s camera %s (%.0f s)", step, _short(c),
+                     row["score"], row["frame_accuracy_smoothed"], row["frame_accuracy_raw"], row["video_accuracy"],
+                     row.get("camera_frame_accuracy_smoothed"), train_s)
         return rows
 
 
@@ -226,8 +272,16 @@ def _short(c: dict) -> str:
             f"cap{c['max_frames_per_class']}{ctx} {_smoother(c)}")
 
 
+def _score(row) -> float:
+    """The validation score: V's smoothed frame accuracy, or with a validation camera the mean of it and
+    the smoothed frame accuracy on V's validation-camera videos (the goals ask for both)."""
+    if row.get("camera_frame_accuracy_smoothed") is None:
+        return row["frame_accuracy_smoothed"]
+    return 0.5 * (row["frame_accuracy_smoothed"] + row["camera_frame_accuracy_smoothed"])
+
+
 def _key(row):
-    return (row["frame_accuracy_smoothed"], row["video_accuracy"] or 0.0)
+    return (row.get("score", row["frame_accuracy_smoothed"]), row["video_accuracy"] or 0.0)
 
 
 def best(rows):
@@ -247,11 +301,13 @@ def _smoothers():
 
 def _candidate(args) -> list[dict]:
     """One trained candidate (a worker process): rows for every smoother."""
-    dataset, features, points_features, variant_points, seed, cache_dir, step, cfg, start_model, start_cfg = args
+    (dataset, features, points_features, variant_points, camera, seed, cache_dir, step, cfg, start_model,
+     start_cfg) = args
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     ds = load_dataset(dataset)
     split = make_split(ds, "unseen-performer", seed=seed)
-    search = Search(ds, features, split, seed, 1, cache_dir, points_features, variant_points)
+    cam_ds, cam_features = (load_dataset(camera[0]), camera[1]) if camera else (None, None)
+    search = Search(ds, features, split, seed, 1, cache_dir, points_features, variant_points, cam_ds, cam_features)
     if start_model is not None:
         from vidstyle.recognition.recognizer import load_model
 
@@ -260,13 +316,18 @@ def _candidate(args) -> list[dict]:
     return search.run(step, cfg, smoothers=_smoothers())
 
 
-def features_points(fdir: str | Path) -> int:
-    """Salient points per frame that the features files of ``fdir`` were extracted with (their params)."""
+def _features_params(fdir: str | Path) -> dict:
+    """The extraction parameters recorded in the first features file of ``fdir``."""
     files = sorted(Path(fdir).glob("*.npz"))
     if not files:
         raise SystemExit(f"{fdir}: no features files")
     with np.load(files[0], allow_pickle=False) as z:
-        return int(json.loads(str(z["params"]))["salient"]["n_points"])
+        return json.loads(str(z["params"]))
+
+
+def features_points(fdir: str | Path) -> int:
+    """Salient points per frame that the features files of ``fdir`` were extracted with (their params)."""
+    return int(_features_params(fdir)["salient"]["n_points"])
 
 
 def check_start_model(path: Path, start: dict, split, seed: int) -> None:
@@ -309,6 +370,13 @@ def main() -> None:
                     help="features of the starting variant with N salient points per frame (`vidstyle features "
                          "--points N`): the candidates of the points factor (the --features directory has "
                          f"{START['points']})")
+    ap.add_argument("--camera-dataset", type=Path, default=None,
+                    help="the validation camera: a dataset of (at least) the validation performers filmed from "
+                         "cameras, an elevation and a background that neither the training videos nor the test "
+                         "cameras use; with it the score is the mean of V's smoothed frame accuracy and that on "
+                         "these videos")
+    ap.add_argument("--camera-features", type=Path, nargs="+", default=[],
+                    help="its features directories, one per descriptor and points per frame a candidate uses")
     ap.add_argument("--seed", type=int, default=0, help="split / vocabulary / sampling seed")
     ap.add_argument("--workers", type=int, default=2, help="candidates trained in parallel")
     grid = ap.add_mutually_exclusive_group()
@@ -350,7 +418,14 @@ def main() -> None:
         factors = {k: v for k, v in factors.items() if k in args.only}
     if args.start_model is not None:
         check_start_model(args.start_model, start, split, args.seed)
-    ctx = (str(args.dataset), features, points_features, variant_points, args.seed, args.cache_dir)
+    camera = None
+    if args.camera_dataset is not None:
+        cam_dirs = {}
+        for d in args.camera_features:
+            fp = _features_params(d)
+            cam_dirs[(fp["variant"], int(fp["salient"]["n_points"]))] = str(d)
+        camera = (str(args.camera_dataset), cam_dirs)
+    ctx = (str(args.dataset), features, points_features, variant_points, camera, args.seed, args.cache_dir)
     sm = (None if args.start_model is None else str(args.start_model), start)
 
     def train(jobs):
@@ -368,9 +443,10 @@ def main() -> None:
     cfg = dict(start)
     cfg["smoothing"], cfg["emission_weight"] = win["config"]["smoothing"], win["config"]["emission_weight"]
     chosen: dict = {"smoother": {"value": {"smoothing": cfg["smoothing"], "emission_weight": cfg["emission_weight"]},
+                                 "validation_score": win["score"],
                                  "validation_frame_accuracy_smoothed": win["frame_accuracy_smoothed"],
                                  "validation_video_accuracy": win["video_accuracy"],
-                                 "candidates": {_smoother(r["config"]): r["frame_accuracy_smoothed"] for r in base}}}
+                                 "candidates": {_smoother(r["config"]): r["score"] for r in base}}}
     smoother = (cfg["smoothing"], cfg["emission_weight"])
 
     def choose(factor_set, jobs, results, incumbent):
@@ -382,9 +458,10 @@ def main() -> None:
             cfg[key] = w["config"][key]
             if key == "variant":  # another descriptor comes with the points its features were extracted with
                 cfg["points"] = w["config"]["points"]
-            chosen[key] = {"value": cfg[key], "validation_frame_accuracy_smoothed": w["frame_accuracy_smoothed"],
+            chosen[key] = {"value": cfg[key], "validation_score": w["score"],
+                           "validation_frame_accuracy_smoothed": w["frame_accuracy_smoothed"],
                            "validation_video_accuracy": w["video_accuracy"],
-                           "candidates": {str(r["config"][key]): r["frame_accuracy_smoothed"] for r in cands}}
+                           "candidates": {str(r["config"][key]): r["score"] for r in cands}}
         return winners
 
     start_row = _at(base, smoother)
@@ -426,7 +503,11 @@ def main() -> None:
         "split": {"kind": split.kind, "vocab_performers": split.vocab_performers,
                   "train_performers": split.train_performers, "val_performers": split.val_performers,
                   "test_performers_not_used": split.test_performers},
-        "score": "smoothed frame accuracy on the validation performers (ties: video accuracy, then the starting value)",
+        "score": ("mean of the smoothed frame accuracy on the validation performers and on their validation-camera "
+                  "videos" if camera else "smoothed frame accuracy on the validation performers")
+                 + " (ties: video accuracy, then the incumbent)",
+        "camera_dataset": None if camera is None else camera[0],
+        "camera_features": None if camera is None else {f"{v}@{n}": d for (v, n), d in sorted(camera[1].items())},
         "search": "the smoother on the starting model first; then the features factors (points per frame) one at "
                   "a time from the starting point, scored with that smoother; then the model factors one at a time "
                   "from the features winner; then the combination of their winners (kept only if it scores at least "
@@ -434,8 +515,10 @@ def main() -> None:
         "start": start, "start_model": None if args.start_model is None else str(args.start_model),
         "factors": factors, "factors_not_searched": sorted(set(ALL_FACTORS) - set(factors)),
         "smoothers": [list(x) for x in _smoothers()], "chosen": chosen, "final_config": cfg,
-        "final_validation": {k: final[k] for k in ("frame_accuracy_raw", "frame_accuracy_smoothed", "video_accuracy",
-                                                  "per_class_recall_smoothed", "n_val_frames")},
+        "final_validation": {k: final[k] for k in ("score", "frame_accuracy_raw", "frame_accuracy_smoothed",
+                                                  "video_accuracy", "per_class_recall_smoothed", "n_val_frames",
+                                                  "camera_frame_accuracy_raw", "camera_frame_accuracy_smoothed",
+                                                  "camera_video_accuracy", "n_camera_frames") if k in final},
         "rows": rows,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -455,17 +538,21 @@ def _smoother(c: dict) -> str:
 def table(doc: dict) -> str:
     lines = [f"# Recognition validation (seed {doc['seed']}; validation performers {', '.join(doc['split']['val_performers'])}; "
              "test performers not used)", "",
-             "| step | candidate | V frame acc. raw | V frame acc. smoothed | V video acc. |", "|---|---|---:|---:|---:|"]
+             "| step | candidate | V frame acc. raw | V frame acc. smoothed | V video acc. | V camera smoothed | score |",
+             "|---|---|---:|---:|---:|---:|---:|"]
     st = doc["chosen"]["smoother"]["value"]
     for r in doc["rows"]:
         c = r["config"]
         if r["step"] != "start" and (c["smoothing"], c["emission_weight"]) != (st["smoothing"], st["emission_weight"]):
             continue  # the other smoothers are listed for the starting model only (all are in the JSON)
         va = "n/a" if r["video_accuracy"] is None else f"{100 * r['video_accuracy']:.1f} %"
+        ca = r.get("camera_frame_accuracy_smoothed")
         lines.append(f"| {r['step']} | {_short(r['config'])} | {100 * r['frame_accuracy_raw']:.1f} % | "
-                     f"{100 * r['frame_accuracy_smoothed']:.1f} % | {va} |")
+                     f"{100 * r['frame_accuracy_smoothed']:.1f} % | {va} | "
+                     f"{'n/a' if ca is None else f'{100 * ca:.1f} %'} | {100 * r.get('score', r['frame_accuracy_smoothed']):.1f} % |")
     lines += ["", "Chosen: " + _short(doc["final_config"]) +
-              f" (V smoothed {100 * doc['final_validation']['frame_accuracy_smoothed']:.1f} %)"]
+              f" (V smoothed {100 * doc['final_validation']['frame_accuracy_smoothed']:.1f} %, score "
+              f"{100 * doc['final_validation'].get('score', doc['final_validation']['frame_accuracy_smoothed']):.1f} %)"]
     return "\n".join(lines)
 
 

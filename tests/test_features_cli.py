@@ -51,10 +51,10 @@ def test_cli_writes_the_documented_npz(video, tmp_path):
     assert (d.n_frames, d.height, d.width) == frames.shape
     assert np.array_equal(d.source_index, np.arange(len(frames))) and d.source_frames == len(frames)
     assert d.fps == pytest.approx(20.0) and d.video == str(p) and d.variant == "thesis"
-    assert d.params["variant"] == "thesis" and d.params["salient"]["n_points"] == 20  # the validated default
+    assert d.params["variant"] == "thesis" and d.params["salient"]["n_points"] == 10  # the validated default
     assert d.params["descriptor"]["n_subregions"] == [2, 2, 2]
     assert d.params["working"] == {"fps": 20.0, "height": 120}
-    assert np.bincount(d.frame_index).max() <= 20
+    assert np.bincount(d.frame_index).max() <= 10
     assert [f.name for f in out.iterdir()] == ["clip.npz"]  # no temporary left behind
 
 

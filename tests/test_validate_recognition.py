@@ -112,3 +112,34 @@ def test_points_candidates_read_their_own_features(tmp_path, monkeypatch):
     s.run("points", {**vr.START, "words": 40, "points": 20}, smoothers=[("viterbi", 1.0)])
     assert set(dirs) == {"features20"} and len(dirs) == 3  # sets A, B and V, with their own vocabulary
     assert len(s._vocab) == 2
+
+
+def test_validation_camera_scores_only_the_validation_performers(tmp_path, monkeypatch):
+    """With a validation camera, each row also scores V's performers on their camera videos (never another
+    performer's), and the score is the mean of the two smoothed accuracies."""
+    from vidstyle.formats.dataset import read_dataset as load_dataset
+    from vidstyle.recognition.splits import make_split
+    from vidstyle.recognition.synthetic import make_dataset
+
+    make_dataset(tmp_path / "d", n_performers=5, views=("front",), seed=0, dim=16, reps=(2, 3), n_actions=4)
+    make_dataset(tmp_path / "c", n_performers=5, views=("front",), seed=7, dim=16, reps=(2, 3), n_actions=4)
+    ds, cam = load_dataset(tmp_path / "d"), load_dataset(tmp_path / "c")
+    split = make_split(ds, seed=0)
+    read = []
+    real = vr._load_set
+
+    def spy(dataset, fdir, ids, jobs):
+        if Path(fdir).parent.name == "c":
+            read.extend(ids)
+        return real(dataset, fdir, ids, jobs)
+
+    monkeypatch.setattr(vr, "_load_set", spy)
+    s = vr.Search(ds, {"scovanner2007": str(tmp_path / "d" / "features")}, split, 0, 1,
+                  camera_dataset=cam, camera_features={("scovanner2007", 10): str(tmp_path / "c" / "features")})
+    rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0), ("vote", None)])
+    by = cam.by_id()
+    assert read and {by[i].performer for i in read} == set(split.val_performers)
+    for r in rows:
+        assert 0.0 <= r["camera_frame_accuracy_smoothed"] <= 1.0 and r["n_camera_frames"] > 0
+        assert r["score"] == pytest.approx((r["frame_accuracy_smoothed"] + r["camera_frame_accuracy_smoothed"]) / 2)
+    assert vr._key(rows[0]) == (rows[0]["score"], rows[0]["video_accuracy"])

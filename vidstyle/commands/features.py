@@ -42,7 +42,7 @@ def register(app: typer.Typer) -> None:
             120, "--height", help="Working frame height in pixels, width keeping the aspect ratio (120 keeps "
             "the demo's 160x120 and turns a 1080x1920 phone clip into 68x120; 0: the video's own size).",
         ),
-        points: int = typer.Option(20, "--points", "-n", help="Salient points per frame (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json; thesis: 10)."),
+        points: int = typer.Option(10, "--points", "-n", help="Salient points per frame (default: chosen on validation performers and a validation camera, pipelines/kickboxing/validation/recognition.json; thesis: 10)."),
         threshold: float = typer.Option(
             0.05,
             "--threshold",
