@@ -41,21 +41,24 @@ and ``smoother``: ``value``, ``validation_frame_accuracy_smoothed``, ``validatio
 ``candidates`` value -> V smoothed accuracy, and ``value_if_alone`` when the combination lost),
 ``final_config``, ``final_validation`` (raw / smoothed / video accuracy, per-class smoothed recall, V
 frames) and ``rows`` (every candidate x smoother: ``step``, ``config``, the V scores, ``train_s``).
-``points_features`` (points -> directory) names the features of the points candidates. Schema 1
+``points_features`` (points -> directory) names the features of the points candidates; with a validation
+camera, ``camera_dataset`` and ``camera_features`` name it, every row adds ``camera_frame_accuracy_raw``,
+``camera_frame_accuracy_smoothed``, ``camera_video_accuracy`` and ``n_camera_frames``, and ``score`` (every
+row, and ``validation_score`` in ``chosen``) is what the search ranks by. Schema 1
 (before the duration smoother and the coarse context) had the same fields without ``smoothers``.
 
-Usage (the demo pipeline's dataset; its features have the chosen 20 points per frame, the other counts
+Usage (the demo pipeline's dataset; its features have the starting 10 points per frame, the other counts
 and the thesis descriptor are extracted for the search)::
 
     V=pipelines/kickboxing/out/dataset/videos
-    vidstyle features $V/*.mp4 --points 10 --out /tmp/f10     # and --points 30, --points 40
+    vidstyle features $V/*.mp4 --points 20 --out /tmp/f20     # and --points 30, --points 40
     vidstyle features $V/*.mp4 --points 20 --variant thesis --out /tmp/thesis20
-    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \
-        --features scovanner2007=/tmp/f10 --features thesis=/tmp/thesis20 \
-        --points-features 20=pipelines/kickboxing/out/features --points-features 30=/tmp/f30 \
-        --points-features 40=/tmp/f40 --camera-dataset /tmp/valcam \\
+    python scripts/validate_recognition.py --dataset pipelines/kickboxing/out/dataset \\
+        --features scovanner2007=pipelines/kickboxing/out/features --features thesis=/tmp/thesis20 \\
+        --points-features 20=/tmp/f20 --points-features 30=/tmp/f30 --points-features 40=/tmp/f40 \\
+        --camera-dataset /tmp/valcam \\
         --camera-features /tmp/valcam10 /tmp/valcam20 /tmp/valcam30 /tmp/valcam40 /tmp/valcam_thesis20 \\
-        --cache-dir /tmp/vcache --seed 0
+        --cache-dir /tmp/vcache --seed 0    # and --seed S --out .../recognition_seedS.json for S = 1..4
 
 The validation camera (every performer, so that one dataset serves every seed's V; its features
 directories are told apart by the variant and points recorded in them)::
