@@ -145,16 +145,15 @@ def _pick(dirs: dict, rp: dict, option: str) -> Path:
 
 
 def _features_params(fdir: Path) -> dict:
-    """The extraction parameters recorded in the first features file of ``fdir``."""
-    import json
+    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
+    them); a missing or unreadable directory ends the script with the format's one-line error."""
+    from vidstyle.formats._base import FormatError
+    from vidstyle.formats.features import directory_params
 
-    import numpy as np
-
-    files = sorted(Path(fdir).glob("*.npz"))
-    if not files:
-        raise SystemExit(f"{fdir}: no features files")
-    with np.load(files[0], allow_pickle=False) as z:
-        return json.loads(str(z["params"]))
+    try:
+        return directory_params(fdir)
+    except FormatError as e:
+        raise SystemExit(str(e)) from None
 
 
 def main() -> None:

@@ -320,12 +320,15 @@ def _candidate(args) -> list[dict]:
 
 
 def _features_params(fdir: str | Path) -> dict:
-    """The extraction parameters recorded in the first features file of ``fdir``."""
-    files = sorted(Path(fdir).glob("*.npz"))
-    if not files:
-        raise SystemExit(f"{fdir}: no features files")
-    with np.load(files[0], allow_pickle=False) as z:
-        return json.loads(str(z["params"]))
+    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
+    them); a missing or unreadable directory ends the script with the format's one-line error."""
+    from vidstyle.formats._base import FormatError
+    from vidstyle.formats.features import directory_params
+
+    try:
+        return directory_params(fdir)
+    except FormatError as e:
+        raise SystemExit(str(e)) from None
 
 
 def features_points(fdir: str | Path) -> int:

@@ -168,3 +168,20 @@ def test_zip_members_damaged(tmp_path):
         zf.writestr("descriptors.npy", b"\x93NUMPY garbage")
     with pytest.raises(FormatError, match="z.npz"):
         read_features(p)
+
+
+def test_directory_params_reads_the_recorded_extraction(tmp_path, rng):
+    from dataclasses import replace
+
+    from vidstyle.formats.features import directory_params
+
+    f = sample(rng)
+    write_features(tmp_path / "b.npz", f)
+    write_features(tmp_path / "a.npz", replace(f, params={"variant": "thesis", "salient": {"n_points": 20}}))
+    assert directory_params(tmp_path) == {"variant": "thesis", "salient": {"n_points": 20}}  # the first file
+    with pytest.raises(FormatError, match="no features files"):
+        directory_params(tmp_path / "missing")
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "x.npz").write_bytes(b"not a zip")
+    with pytest.raises(FormatError, match="not a readable"):
+        directory_params(tmp_path / "bad")

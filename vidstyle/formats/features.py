@@ -325,3 +325,14 @@ def read_features(path: str | os.PathLike) -> Features:
         descriptors=z["descriptors"], frame_index=fi, n_frames=n_frames, points=points, params=params,
         path=str(path), schema_version=version, **kw, **src,
     )
+
+
+def directory_params(directory: str | os.PathLike) -> dict[str, Any]:
+    """The extraction parameters (``params``: variant, salient points, descriptor, working rate and size)
+    of a directory of features files, read and validated from its first ``.npz`` (a directory is one
+    ``vidstyle features`` run, so every file records the same)."""
+    directory = Path(directory)
+    files = sorted(directory.glob("*.npz"))
+    if not files:
+        raise FormatError(directory, None, "no features files (.npz) in this directory")
+    return read_features(files[0]).params
