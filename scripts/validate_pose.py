@@ -25,9 +25,10 @@ One factor at a time from the starting point (the values before this script exis
   unary weight and refinement are its defaults (:data:`vidstyle.pose.defaults.CNN_DEFAULTS`);
 - the cnn detector's own choices (fourth stage; ``--cnn-models M...`` runs just it on an existing
   ``--out``): ``vidstyle train-pose`` models trained on the default training renders with other
-  epochs or heatmap strides, each scored at every unary weight, refinement radius and with and
-  without the test-time flip, beside the detector stage's cnn rows. The best PCP within the speed
-  budget gives :data:`vidstyle.pose.defaults.CNN_DEFAULTS`;
+  epochs, heatmap strides or training augmentation (``--augment``), each scored at every unary
+  weight, refinement radius and with and without the test-time flip, beside the detector stage's cnn
+  rows (and the rows of models an earlier run scored, kept unless given again). The best PCP within
+  the speed budget gives :data:`vidstyle.pose.defaults.CNN_DEFAULTS`;
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -331,13 +332,18 @@ def cnn_stage(args, doc: dict) -> dict:
                     model.set_inference(unary_weight=a)
                     model.refine = ref
                     r = {"detector": "cnn", "model": Path(path).name, "train_frames": header.get("n_train_frames"),
-                         "epochs": model.epochs, "stride": model.stride, "flip_test": flip, "unary_weight": a,
-                         "refine": ref, **score_frames(model, val)}
+                         "epochs": model.epochs, "stride": model.stride, "augment": getattr(model, "augment", "flip"),
+                         "flip_test": flip, "unary_weight": a, "refine": ref, **score_frames(model, val)}
                     rows.append(r)
                     log.info("cnn %d epochs stride %d flip %s alpha %.1f refine %d: PCP %.3f (min %.3f), view %.3f, "
                              "%.1f ms", r["epochs"], r["stride"], flip, a, ref, r["pcp_mean"], r["pcp_min_part"],
                              r["view_acc_mean"], r["cpu_ms_per_frame"])
-    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False}
+    # rows of models scored by an earlier run and not given again are kept (the validation frames are
+    # rendered from the seed, so they are the same frames)
+    names = {Path(p).name for p in args.cnn_models}
+    kept = [{"augment": "flip", **r} for r in (doc.get("cnn_stage") or {}).get("rows", []) if r["model"] not in names]
+    rows = kept + rows
+    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False, "augment": "flip"}
            for r in doc["detector_stage"]["rows"] if r["detector"] == "cnn"]
     every = old + rows
     fast = [r for r in every if r["cpu_ms_per_frame"] <= args.budget_ms] or every
@@ -346,12 +352,14 @@ def cnn_stage(args, doc: dict) -> dict:
                         "note": "models: vidstyle train-pose outputs on the detector stage's training renders; "
                                 "compared with the detector stage's cnn rows (10 epochs, stride 4, no flip)"}
     doc["chosen"]["cnn"] = {"unary_weight": best["unary_weight"], "refine": best["refine"], "epochs": best["epochs"],
-                            "channels": CNN_DEFAULTS["channels"], "stride": best["stride"], "flip_test": best["flip_test"]}
+                            "channels": CNN_DEFAULTS["channels"], "stride": best["stride"], "flip_test": best["flip_test"],
+                            "augment": best["augment"]}
     doc["scores"]["cnn_pcp_mean"] = best["pcp_mean"]
     doc["scores"]["detector_pcp_mean"] = max(doc["scores"].get("detector_pcp_mean", 0.0), best["pcp_mean"])
     print("\ncnn detector (same validation frames; single image):")
     for r in every:
-        print(f"  {r['epochs']:3d} epochs  stride {r['stride']}  flip {'yes' if r['flip_test'] else 'no ':3s}  "
+        print(f"  {r['epochs']:3d} epochs  stride {r['stride']}  augment {r['augment']:6s}  "
+              f"flip {'yes' if r['flip_test'] else 'no ':3s}  "
               f"alpha {r['unary_weight']:3.1f} refine {r['refine']}  PCP {r['pcp_mean']:.3f} (min part "
               f"{r['pcp_min_part']:.3f}, true view {r['pcp_oracle_view']:.3f})  PCK {r['pck']:.3f}  "
               f"view {r['view_acc_mean']:.3f}  {r['cpu_ms_per_frame']:.1f} ms")

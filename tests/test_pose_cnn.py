@@ -21,6 +21,7 @@ from vidstyle.pose.cnn import (
     coarse_logheat,
     gaussian_targets,
     part_unaries,
+    random_affine,
     refine_keypoints,
 )
 from vidstyle.pose.data import VIEW_NAMES, Spec, render_samples
@@ -175,6 +176,53 @@ def test_flip_test_is_mirror_equivariant(rng, stride):
     h0, _ = net.predict(x)
     h0m, _ = net.predict(mx)
     assert np.abs(h0m - h0[:, FLIP_KEYPOINTS][..., ::-1]).max() > 1e-3
+
+
+def test_random_affine_moves_the_pixels_with_the_keypoints(rng):
+    """Each keypoint is drawn as a bright dot; after the augmentation the dots must sit at the returned
+    keypoints (the image and the labels go through the same map), inside the frame, and the map must
+    be a similarity (pairwise keypoint distances scaled by one factor within the range)."""
+    import cv2
+
+    n, H, W = 12, 120, 160
+    X = np.zeros((n, H, W, 3), np.uint8)
+    kp = np.zeros((n, 15, 2))
+    for i in range(n):
+        c = rng.uniform([50, 40], [110, 80])
+        kp[i] = c + rng.uniform(-30, 30, (15, 2)) * [1.0, 1.2]
+        for j in range(15):
+            cv2.circle(X[i], (int(round(kp[i, j, 0] * 16)), int(round(kp[i, j, 1] * 16))), 16, (0, 0, 255), -1,
+                       lineType=cv2.LINE_AA, shift=4)
+    Y, k = random_affine(X, kp, rng, scale=(0.8, 1.25), rotate_deg=20.0, margin=2.0)
+    assert Y.shape == X.shape and Y.dtype == np.uint8 and k.shape == kp.shape
+    assert (k[..., 0] >= 2.0 - 1e-9).all() and (k[..., 0] <= W - 3 + 1e-9).all()
+    assert (k[..., 1] >= 2.0 - 1e-9).all() and (k[..., 1] <= H - 3 + 1e-9).all()
+    moved = 0.0
+    for i in range(n):
+        d0 = np.linalg.norm(kp[i][:, None] - kp[i][None], axis=-1)
+        d1 = np.linalg.norm(k[i][:, None] - k[i][None], axis=-1)
+        m = d0 > 5
+        ratio = d1[m] / d0[m]
+        assert ratio.std() < 1e-6 and 0.8 - 1e-6 <= ratio.mean() <= 1.25 + 1e-6
+        moved = max(moved, float(np.abs(k[i] - kp[i]).max()))
+        red = Y[i, :, :, 2].astype(float)
+        for j in range(15):
+            x, y = k[i, j]
+            # the warped dot's brightest pixel is within a pixel of the mapped keypoint
+            ys, xs = slice(max(0, int(y) - 3), int(y) + 4), slice(max(0, int(x) - 3), int(x) + 4)
+            assert red[ys, xs].max() > 150
+            assert red[int(round(y)), int(round(x))] > 100
+    assert moved > 3.0  # the augmentation does change the frames
+
+
+def test_affine_augment_trains_and_is_checked(rng):
+    X, kp, views = _dot_images(rng, 64)
+    a = HeatmapCNN(channels=8, epochs=1, seed=5, threads=1, augment="affine").fit(X, kp, views)
+    b = HeatmapCNN(channels=8, epochs=1, seed=5, threads=1, augment="flip").fit(X, kp, views)
+    assert a.get_params()["augment"] == "affine"
+    assert np.abs(a.predict(X[:4])[0] - b.predict(X[:4])[0]).max() > 1e-4  # the frames it saw differ
+    with pytest.raises(ValueError, match="augment"):
+        HeatmapCNN(augment="crop")
 
 
 def test_network_is_reproducible_from_its_seed(rng):

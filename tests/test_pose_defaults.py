@@ -38,12 +38,12 @@ def test_detector_and_cnn_defaults_are_the_validated_ones(doc):
     # the cnn's defaults: the best cnn row of the detector stage and of the cnn stage (other epochs, strides,
     # the test-time flip; scripts/validate_pose.py --cnn-models) within the speed budget
     budget = (doc.get("cnn_stage") or {}).get("budget_ms", float("inf"))
-    cnn_rows = [{"stride": 4, "flip_test": False, **r} for r in rows if r["detector"] == "cnn"]
-    cnn_rows += (doc.get("cnn_stage") or {}).get("rows", [])
+    base = {"stride": 4, "flip_test": False, "augment": "flip"}
+    cnn_rows = [{**base, **r} for r in rows if r["detector"] == "cnn"]
+    cnn_rows += [{"augment": "flip", **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])]
     cnn = max((r for r in cnn_rows if r["cpu_ms_per_frame"] <= budget), key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
-    assert {k: cnn[k] for k in ("unary_weight", "refine", "epochs", "stride", "flip_test")} == \
-        {k: ch["cnn"].get(k, {"stride": 4, "flip_test": False}.get(k)) for k in
-         ("unary_weight", "refine", "epochs", "stride", "flip_test")}
+    keys = ("unary_weight", "refine", "epochs", "stride", "flip_test", "augment")
+    assert {k: cnn[k] for k in keys} == {k: ch["cnn"].get(k, base.get(k)) for k in keys}
 
 
 def test_pipeline_trains_the_validated_detector(doc):

@@ -62,6 +62,9 @@ def train_pose(
     flip_test: bool = typer.Option(CNN_DEFAULTS["flip_test"], "--flip-test/--no-flip-test", help="cnn detector: "
                                    "average the heatmaps and viewpoint of each frame and its mirror image (twice "
                                    "the network's time)."),
+    augment: str = typer.Option(CNN_DEFAULTS["augment"], "--augment", help="cnn detector's training augmentation: "
+                                "flip (mirror images and colour jitter) or affine (also random scale 0.8-1.25, "
+                                "rotation up to 20 degrees and shift)."),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
@@ -77,6 +80,8 @@ def train_pose(
         raise InputError("--epochs: must be at least 1")
     if heatmap_stride not in (2, 4):
         raise InputError(f"--heatmap-stride: {heatmap_stride} is not 2 or 4")
+    if augment not in ("flip", "affine"):
+        raise InputError(f"--augment: {augment!r} is not flip or affine")
     if unary_weight is None:
         unary_weight = (CNN_DEFAULTS if detector == "cnn" else DEFAULTS)["unary_weight"]
     if viewpoint not in VIEWPOINT_METHODS:
@@ -96,7 +101,7 @@ def train_pose(
 
         model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
                              channels=CNN_DEFAULTS["channels"], refine=CNN_DEFAULTS["refine"], seed=seed,
-                             stride=heatmap_stride, flip_test=flip_test)
+                             stride=heatmap_stride, flip_test=flip_test, augment=augment)
     else:
         model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
                           fg_weight=fg_weight, seed=seed)

@@ -44,6 +44,8 @@ from .estimator import PoseModel
 log = logging.getLogger(__name__)
 
 CELL = 4
+#: training augmentations of :class:`HeatmapCNN` (``augment``)
+AUGMENTS = ("flip", "affine")
 LOG_FLOOR = -20.0  # log-probability outside the frame
 #: keypoint order under a horizontal flip (the performer's left becomes the image's other side)
 FLIP_KEYPOINTS = [KEYPOINTS.index(n.replace("left", "@").replace("right", "left").replace("@", "right"))
@@ -102,6 +104,38 @@ def to_input(frames_bgr: np.ndarray):
     return torch.from_numpy(x)
 
 
+def random_affine(frames_bgr: np.ndarray, keypoints: np.ndarray, rng: np.random.Generator,
+                  scale: tuple[float, float] = (0.8, 1.25), rotate_deg: float = 20.0,
+                  margin: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Geometric training augmentation: each frame (N, H, W, 3) uint8 is scaled by a factor drawn
+    log-uniformly from ``scale`` and rotated by up to +-``rotate_deg`` about its keypoints' centre, then
+    shifted by a uniform offset that keeps every keypoint at least ``margin`` px inside the frame (none
+    when the figure is too large for that). Borders are reflected (the backgrounds are textures). Returns
+    the warped frames and keypoints (N, 15, 2), the keypoints mapped by the same affine maps."""
+    import cv2
+
+    X = np.asarray(frames_bgr)
+    kp = np.asarray(keypoints, dtype=np.float64)
+    n, H, W = X.shape[:3]
+    out = np.empty_like(X)
+    kout = np.empty_like(kp)
+    lo, hi = np.log(scale[0]), np.log(scale[1])
+    for i in range(n):
+        s = float(np.exp(rng.uniform(lo, hi)))
+        a = float(rng.uniform(-rotate_deg, rotate_deg))
+        c = kp[i].mean(axis=0)
+        M = cv2.getRotationMatrix2D((float(c[0]), float(c[1])), a, s)
+        k = kp[i] @ M[:, :2].T + M[:, 2]
+        for d, size in ((0, W), (1, H)):
+            lo_t, hi_t = margin - k[:, d].min(), size - 1 - margin - k[:, d].max()
+            t = rng.uniform(lo_t, hi_t) if lo_t <= hi_t else 0.0
+            M[d, 2] += t
+            k[:, d] += t
+        out[i] = cv2.warpAffine(X[i], M, (W, H), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT_101)
+        kout[i] = k
+    return out, kout
+
+
 def gaussian_targets(keypoints: np.ndarray, grid: tuple[int, int], sigma: float, cell: int = CELL) -> np.ndarray:
     """(N, 15, Hc, Wc) normalised Gaussians (``sigma`` in cells) around keypoints (N, 15, 2) px on the
     grid of ``cell``-px cells (centre of cell (x, y) at pixel x * cell + (cell - 1) / 2)."""
@@ -119,16 +153,20 @@ class HeatmapCNN:
     Parameters: ``channels``, ``epochs``, ``batch_size``, ``lr`` (peak of the one-cycle schedule),
     ``sigma`` (target width, in cells of the tree's 4-px grid), ``view_weight`` (viewpoint loss weight),
     ``seed``, ``threads``, ``stride`` (heatmap cell in px: 4, the tree's grid, or 2 with the upsampling
-    head of :func:`_build_net`).
+    head of :func:`_build_net`), ``augment`` (``"flip"``: horizontal flips and colour jitter; ``"affine"``:
+    also :func:`random_affine`'s scale, rotation and shift).
     Learned: ``weights_`` (name -> numpy array, the network's state), ``size_`` (W, H) it was trained
     at, ``loss_`` (mean training loss of every epoch)."""
 
     def __init__(self, channels: int = 48, epochs: int = 10, batch_size: int = 32, lr: float = 3e-3,
                  sigma: float = 1.0, view_weight: float = 0.5, seed: int = 0, threads: int = 2,
-                 stride: int = CELL) -> None:
+                 stride: int = CELL, augment: str = "flip") -> None:
         if stride not in (2, CELL):
             raise ValueError(f"stride must be 2 or {CELL}, got {stride}")
+        if augment not in AUGMENTS:
+            raise ValueError(f"augment must be one of {AUGMENTS}, got {augment!r}")
         self.stride = stride
+        self.augment = augment
         self.channels = channels
         self.epochs = epochs
         self.batch_size = batch_size
@@ -140,7 +178,7 @@ class HeatmapCNN:
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in ("channels", "epochs", "batch_size", "lr", "sigma", "view_weight",
-                                               "seed", "threads", "stride")}
+                                               "seed", "threads", "stride", "augment")}
 
     def fit(self, frames_bgr: np.ndarray, keypoints: np.ndarray, views: list[str]) -> HeatmapCNN:
         """Train on (N, H, W, 3) uint8 frames (H, W multiples of 4), keypoints (N, 15, 2) px, view names."""
@@ -182,6 +220,8 @@ class HeatmapCNN:
                     k[flip] = k[flip][:, flip_kp]
                     k[flip, :, 0] = W - 1 - k[flip, :, 0]
                     vv[flip] = flip_v[vv[flip]]
+                    if self.augment == "affine":
+                        x, k = random_affine(x, k, rng)
                     xt = to_input(x)
                     gain = torch.from_numpy(rng.uniform(0.8, 1.2, (len(idx), 3, 1, 1)).astype(np.float32))
                     off = torch.from_numpy(rng.uniform(-0.1, 0.1, (len(idx), 3, 1, 1)).astype(np.float32))
@@ -220,6 +260,10 @@ class HeatmapCNN:
         d = dict(self.__dict__)
         d.pop("_net", None)
         return d
+
+    def __setstate__(self, state: dict) -> None:
+        state.setdefault("augment", "flip")  # networks trained before the parameter existed
+        self.__dict__.update(state)
 
     def predict(self, frames_bgr: np.ndarray, batch: int = 32, threads: int = 1,
                 flip: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -380,20 +424,21 @@ class CnnPoseModel(PoseModel):
     prior), ``refine`` (cells of the tree's grid of the final keypoint refinement, 0 = none),
     ``flip_test`` (test-time flip of :meth:`HeatmapCNN.predict`), ``dt``, and the network's
     (:class:`HeatmapCNN`: ``channels``, ``epochs``, ``batch_size``, ``lr``, ``sigma``, ``threads``,
-    ``stride``), ``seed``; defaults :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (``scripts/validate_pose.py``'s
+    ``stride``, ``augment``), ``seed``; defaults :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (``scripts/validate_pose.py``'s
     detector stage). No person prior (``fg_weight`` is 0: the network sees colour). Learned: ``models_``
     (tree geometry per viewpoint and generic), ``cnn_``, ``n_train_frames_``."""
 
     PARAMS = ("detector", "n_orient", "unary_weight", "refine", "flip_test", "dt", "channels", "epochs", "batch_size",
-              "lr", "sigma", "threads", "stride", "seed")
+              "lr", "sigma", "threads", "stride", "augment", "seed")
     VIEWPOINTS = ("cnn",)
 
     def __init__(self, n_orient: int = DEFAULTS["n_orient"], unary_weight: float = CNN_DEFAULTS["unary_weight"],
                  refine: int = CNN_DEFAULTS["refine"], dt: str = "envelope", channels: int = CNN_DEFAULTS["channels"],
                  epochs: int = CNN_DEFAULTS["epochs"], batch_size: int = 32, lr: float = 3e-3, sigma: float = 1.0,
                  threads: int = 2, seed: int = 0, stride: int = CNN_DEFAULTS["stride"],
-                 flip_test: bool = CNN_DEFAULTS["flip_test"]) -> None:
+                 flip_test: bool = CNN_DEFAULTS["flip_test"], augment: str = CNN_DEFAULTS["augment"]) -> None:
         self.detector = "cnn"
+        self.augment = augment
         self.stride = stride
         self.flip_test = flip_test
         self.n_orient = n_orient
@@ -414,6 +459,7 @@ class CnnPoseModel(PoseModel):
     def __setstate__(self, state: dict) -> None:
         state.setdefault("stride", CELL)  # models saved before these parameters existed
         state.setdefault("flip_test", False)
+        state.setdefault("augment", "flip")
         self.__dict__.update(state)
 
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
@@ -456,7 +502,7 @@ class CnnPoseModel(PoseModel):
         if len(shapes) != 1:
             raise ValueError(f"training frames must share one size, got {sorted(shapes)}")
         self.cnn_ = HeatmapCNN(self.channels, self.epochs, self.batch_size, self.lr, self.sigma, seed=self.seed,
-                               threads=self.threads, stride=self.stride).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
+                               threads=self.threads, stride=self.stride, augment=self.augment).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
         self.n_train_frames_ = len(samples)
         return self
 
@@ -495,5 +541,5 @@ class CnnPoseModel(PoseModel):
         return pts
 
 
-__all__ = ["FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints",
-           "coarse_logheat", "gaussian_targets", "part_unaries", "refine_keypoints"]
+__all__ = ["AUGMENTS", "FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints",
+           "coarse_logheat", "gaussian_targets", "part_unaries", "random_affine", "refine_keypoints"]
