@@ -82,6 +82,7 @@ def test_the_readme_shows_the_committed_results():
     root = Path(__file__).resolve().parents[1]
     res = subprocess.run([sys.executable, str(root / "scripts" / "readme_tables.py"), "--metrics",
                           str(root / "pipelines" / "kickboxing" / "results"),
-                          str(root / "pipelines" / "kickboxing" / "validation"), "--readme", str(root / "README.md"),
+                          str(root / "pipelines" / "kickboxing" / "validation"),
+                          str(root / "pipelines" / "kickboxing" / "strikes"), "--readme", str(root / "README.md"),
                           "--check"], capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr

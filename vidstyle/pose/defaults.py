@@ -8,5 +8,5 @@ DEFAULTS = {"n_orient": 8, "hard_rounds": 1, "viewpoint": "hog", "unary_weight":
 #: part detectors of ``vidstyle train-pose`` (``--detector``)
 DETECTOR = "cnn"
 #: the cnn detector's defaults (:class:`vidstyle.pose.cnn.CnnPoseModel`)
-CNN_DEFAULTS = {"unary_weight": 2.0, "epochs": 20, "channels": 48, "refine": 2, "stride": 2, "flip_test": True,
+CNN_DEFAULTS = {"unary_weight": 8.0, "epochs": 40, "channels": 48, "refine": 2, "stride": 2, "flip_test": True,
                 "augment": "flip"}
