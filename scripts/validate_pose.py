@@ -213,7 +213,7 @@ def second_stage(args, train, doc: dict) -> dict:
     return doc
 
 
-CNN_ALPHAS = [0.5, 1.0, 2.0, 4.0, 8.0]
+CNN_ALPHAS = [0.5, 1.0, 2.0, 4.0, 8.0, 16.0]
 CNN_REFINE = [0, 1, 2, 3]
 
 
