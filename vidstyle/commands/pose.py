@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..pose.defaults import CNN_DEFAULTS, DEFAULTS, DETECTOR, VIEWPOINT_METHODS
+from ..pose.defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS, DETECTOR, VIEWPOINT_METHODS
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
@@ -80,8 +80,8 @@ def train_pose(
         raise InputError("--epochs: must be at least 1")
     if heatmap_stride not in (2, 4):
         raise InputError(f"--heatmap-stride: {heatmap_stride} is not 2 or 4")
-    if augment not in ("flip", "affine"):
-        raise InputError(f"--augment: {augment!r} is not flip or affine")
+    if augment not in AUGMENTS:
+        raise InputError(f"--augment: {augment!r} is not one of {', '.join(AUGMENTS)}")
     if unary_weight is None:
         unary_weight = (CNN_DEFAULTS if detector == "cnn" else DEFAULTS)["unary_weight"]
     if viewpoint not in VIEWPOINT_METHODS:

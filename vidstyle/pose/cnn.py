@@ -38,14 +38,12 @@ import numpy as np
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from .data import VIEW_NAMES
-from .defaults import CNN_DEFAULTS, DEFAULTS
+from .defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS
 from .estimator import PoseModel
 
 log = logging.getLogger(__name__)
 
 CELL = 4
-#: training augmentations of :class:`HeatmapCNN` (``augment``)
-AUGMENTS = ("flip", "affine")
 LOG_FLOOR = -20.0  # log-probability outside the frame
 #: keypoint order under a horizontal flip (the performer's left becomes the image's other side)
 FLIP_KEYPOINTS = [KEYPOINTS.index(n.replace("left", "@").replace("right", "left").replace("@", "right"))

@@ -7,6 +7,8 @@ DEFAULTS = {"n_orient": 8, "hard_rounds": 1, "viewpoint": "hog", "unary_weight":
 
 #: part detectors of ``vidstyle train-pose`` (``--detector``)
 DETECTOR = "cnn"
+#: training augmentations of the cnn detector (``train-pose --augment``, :class:`vidstyle.pose.cnn.HeatmapCNN`)
+AUGMENTS = ("flip", "affine")
 #: the cnn detector's defaults (:class:`vidstyle.pose.cnn.CnnPoseModel`)
 CNN_DEFAULTS = {"unary_weight": 8.0, "epochs": 40, "channels": 48, "refine": 2, "stride": 2, "flip_test": True,
                 "augment": "flip"}
