@@ -24,11 +24,13 @@ One factor at a time from the starting point (the values before this script exis
   image, no person prior). The best PCP within the speed budget chooses ``detector``; the cnn's best
   unary weight and refinement are its defaults (:data:`vidstyle.pose.defaults.CNN_DEFAULTS`);
 - the cnn detector's own choices (fourth stage; ``--cnn-models M...`` runs just it on an existing
-  ``--out``): ``vidstyle train-pose`` models trained on the default training renders with other
-  epochs, heatmap strides or training augmentation (``--augment``), each scored at every unary
+  ``--out``): ``vidstyle train-pose`` models (same seed and clip rendering) trained with other
+  epochs, heatmap strides, training augmentation (``--augment``) or training sets (demo performers,
+  CMU clips, azimuths per clip; never a validation performer or subject), each scored at every unary
   weight, refinement radius and with and without the test-time flip, beside the detector stage's cnn
   rows (and the rows of models an earlier run scored, kept unless given again). The best PCP within
-  the speed budget gives :data:`vidstyle.pose.defaults.CNN_DEFAULTS`;
+  the speed budget gives :data:`vidstyle.pose.defaults.CNN_DEFAULTS` (with its training set, the
+  defaults of ``train-pose --demo-performers/--cmu-clips/--views-per-clip``);
 - part-orientation handling, measured on the generic detectors (all training frames, no hard
   negatives, same frames and orientation bins): rotated templates (Andriluka) vs one template per
   orientation on the unrotated frame (Yang & Ramanan mixtures).
@@ -305,13 +307,15 @@ def detector_stage(args, doc: dict) -> dict:
 
 
 CNN_FLIP = (False, True)
+#: what every compared model must share: the rendering of each training clip
+TRAIN_RENDER = {"seconds": 2.0, "fps": 4.0}
 
 
 def cnn_stage(args, doc: dict) -> dict:
     """Score ``vidstyle train-pose`` cnn models (``--cnn-models``) on the validation frames at every unary
     weight x refinement x test-time flip; with the detector stage's cnn rows (10 epochs, stride 4, no
     flip) the best PCP (then viewpoint accuracy) within the speed budget gives the cnn defaults."""
-    from vidstyle.pose.defaults import CNN_DEFAULTS
+    from vidstyle.pose.defaults import CNN_DEFAULTS, TRAIN_SET
     from vidstyle.pose.estimator import load_pose_model
 
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
@@ -322,9 +326,11 @@ def cnn_stage(args, doc: dict) -> dict:
         if getattr(model, "detector", "hog") != "cnn":
             raise SystemExit(f"{path}: not a cnn pose model")
         tr = header.get("training") or {}
-        if tr.get("cmu_clips") != args.detector_cmu or tr.get("demo_performers") != args.detector_demo \
-                or tr.get("views_per_clip") != args.detector_views or header.get("seed") != args.seed:
-            raise SystemExit(f"{path}: not trained on the detector stage's training renders ({tr})")
+        if header.get("seed") != args.seed or any(tr.get(k) != v for k, v in TRAIN_RENDER.items()):
+            raise SystemExit(f"{path}: not trained with seed {args.seed} on {TRAIN_RENDER} renders ({tr}, "
+                             f"seed {header.get('seed')})")
+        train_set = {"demo_performers": tr["demo_performers"], "cmu_clips": tr["cmu_clips"],
+                     "views_per_clip": tr["views_per_clip"]}
         for flip in CNN_FLIP:
             model.flip_test = flip
             for a in CNN_ALPHAS:
@@ -332,7 +338,8 @@ def cnn_stage(args, doc: dict) -> dict:
                     model.set_inference(unary_weight=a)
                     model.refine = ref
                     r = {"detector": "cnn", "model": Path(path).name, "train_frames": header.get("n_train_frames"),
-                         "epochs": model.epochs, "stride": model.stride, "augment": getattr(model, "augment", "flip"),
+                         **train_set, "epochs": model.epochs, "stride": model.stride,
+                         "augment": getattr(model, "augment", "flip"),
                          "flip_test": flip, "unary_weight": a, "refine": ref, **score_frames(model, val)}
                     rows.append(r)
                     log.info("cnn %d epochs stride %d flip %s alpha %.1f refine %d: PCP %.3f (min %.3f), view %.3f, "
@@ -341,24 +348,29 @@ def cnn_stage(args, doc: dict) -> dict:
     # rows of models scored by an earlier run and not given again are kept (the validation frames are
     # rendered from the seed, so they are the same frames)
     names = {Path(p).name for p in args.cnn_models}
-    kept = [{"augment": "flip", **r} for r in (doc.get("cnn_stage") or {}).get("rows", []) if r["model"] not in names]
+    detector_set = {"demo_performers": args.detector_demo, "cmu_clips": args.detector_cmu,
+                    "views_per_clip": args.detector_views}
+    kept = [{"augment": "flip", **detector_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])
+            if r["model"] not in names]
     rows = kept + rows
-    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False, "augment": "flip"}
+    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False, "augment": "flip", **detector_set}
            for r in doc["detector_stage"]["rows"] if r["detector"] == "cnn"]
     every = old + rows
     fast = [r for r in every if r["cpu_ms_per_frame"] <= args.budget_ms] or every
     best = max(fast, key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
     doc["cnn_stage"] = {"rows": rows, "budget_ms": args.budget_ms,
-                        "note": "models: vidstyle train-pose outputs on the detector stage's training renders; "
-                                "compared with the detector stage's cnn rows (10 epochs, stride 4, no flip)"}
+                        "note": "models: vidstyle train-pose outputs (training set: demo performers, CMU clips and "
+                                "azimuths per clip of each row); compared with the detector stage's cnn rows (10 "
+                                "epochs, stride 4, no flip)"}
     doc["chosen"]["cnn"] = {"unary_weight": best["unary_weight"], "refine": best["refine"], "epochs": best["epochs"],
                             "channels": CNN_DEFAULTS["channels"], "stride": best["stride"], "flip_test": best["flip_test"],
-                            "augment": best["augment"]}
+                            "augment": best["augment"], **{k: best[k] for k in TRAIN_SET}}
     doc["scores"]["cnn_pcp_mean"] = best["pcp_mean"]
     doc["scores"]["detector_pcp_mean"] = max(doc["scores"].get("detector_pcp_mean", 0.0), best["pcp_mean"])
     print("\ncnn detector (same validation frames; single image):")
     for r in every:
-        print(f"  {r['epochs']:3d} epochs  stride {r['stride']}  augment {r['augment']:6s}  "
+        print(f"  {r['demo_performers']:2d}+{r['cmu_clips']:2d}x{r['views_per_clip']:2d}  "
+              f"{r['epochs']:3d} epochs  stride {r['stride']}  augment {r['augment']:6s}  "
               f"flip {'yes' if r['flip_test'] else 'no ':3s}  "
               f"alpha {r['unary_weight']:3.1f} refine {r['refine']}  PCP {r['pcp_mean']:.3f} (min part "
               f"{r['pcp_min_part']:.3f}, true view {r['pcp_oracle_view']:.3f})  PCK {r['pck']:.3f}  "

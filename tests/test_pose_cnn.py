@@ -304,3 +304,16 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
     assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))
     assert set(m.doc["viewpoint"]) == {"cnn", "blazepose"} and m.doc["ps_viewpoint_method"] == "cnn"
     assert "PCP" in capsys.readouterr().out
+
+
+def test_train_pose_refuses_validation_performers(tmp_path, capsys):
+    """More demo performers than the training split owns would train on validation performers: a
+    one-line error before any rendering, exit 2, no model written."""
+    from vidstyle.cli import main
+    from vidstyle.pose.data import MAX_PERFORMERS
+
+    path = tmp_path / "m.joblib"
+    assert main(["train-pose", "--out", str(path), "--demo-performers", str(MAX_PERFORMERS["train"] + 1),
+                 "--cmu-clips", "0", "-j", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--demo-performers" in err[0] and not path.exists()

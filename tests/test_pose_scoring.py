@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from vidstyle.pose.data import TRAIN_CMU_SUBJECTS, VAL_CMU_SUBJECTS, make_specs
+from vidstyle.pose.data import MAX_PERFORMERS, TRAIN_CMU_SUBJECTS, VAL_CMU_SUBJECTS, make_specs
 from vidstyle.pose.dt import min_plus
 from vidstyle.pose.estimator import HOG_DROP, HOG_WIN, ViewpointHOG, person_crop, person_hog
 from vidstyle.pose.features import RotatedFeatures
@@ -143,6 +143,17 @@ def test_splits_share_no_source_and_hold_out_azimuths(cmu_dir: Path):
     for sp in va + te:
         gap = np.abs((train_az - sp.azimuth + 180) % 360 - 180)
         assert gap.min() >= 9.99
+
+
+def test_splits_refuse_more_performers_than_they_own(cmu_dir: Path):
+    # the largest training set ends just before the first validation performer; one more would train on it
+    tr = make_specs("train", MAX_PERFORMERS["train"], 0, 1, 0, cmu_dir)
+    va = make_specs("val", 1, 0, 1, 0, cmu_dir)
+    assert max(int(sp.source.split(":")[1]) for sp in tr) < int(va[0].source.split(":")[1])
+    with pytest.raises(ValueError, match="n_demo"):
+        make_specs("train", MAX_PERFORMERS["train"] + 1, 0, 1, 0, cmu_dir)
+    with pytest.raises(ValueError, match="n_demo"):
+        make_specs("val", MAX_PERFORMERS["val"] + 1, 0, 1, 0, cmu_dir)
 
 
 def test_background_median_and_foreground(rng):

@@ -35,9 +35,12 @@ def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
                                            "performers (default: ../shared/data/mocap/cmu when present)."),
-    n_demo: int = typer.Option(24, "--demo-performers", help="Demo performers rendered for training."),
-    n_cmu: int = typer.Option(40, "--cmu-clips", help="CMU clips (of the training subjects) rendered."),
-    views_per_clip: int = typer.Option(8, "--views-per-clip", help="Camera azimuths per clip."),
+    n_demo: int = typer.Option(CNN_DEFAULTS["demo_performers"], "--demo-performers",
+                               help="Demo performers rendered for training (at most 30: the training performers)."),
+    n_cmu: int = typer.Option(CNN_DEFAULTS["cmu_clips"], "--cmu-clips",
+                              help="CMU clips (of the training subjects) rendered."),
+    views_per_clip: int = typer.Option(CNN_DEFAULTS["views_per_clip"], "--views-per-clip",
+                                       help="Camera azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
     fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
     n_orient: int = typer.Option(DEFAULTS["n_orient"], "--orientations", help="Part orientation bins."),
@@ -71,7 +74,7 @@ def train_pose(
 ) -> None:
     """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
     detectors, viewpoint classifier) on frames rendered from the demo performers and CMU clips."""
-    from ..pose.data import make_specs
+    from ..pose.data import MAX_PERFORMERS, make_specs
     from ..pose.estimator import PoseModel, save_pose_model
 
     if detector not in ("hog", "cnn"):
@@ -94,6 +97,9 @@ def train_pose(
         raise InputError("--hard-rounds: must be 0 or 1")
     if n_orient < 4 or n_orient > 36:
         raise InputError("--orientations: must be between 4 and 36")
+    if not 0 <= n_demo <= MAX_PERFORMERS["train"]:
+        raise InputError(f"--demo-performers: must be between 0 and {MAX_PERFORMERS['train']} (the training "
+                         "performers; the next ones are validation performers)")
     cmu = _cmu(cmu_dir)
     specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
     if detector == "cnn":

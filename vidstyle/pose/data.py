@@ -39,6 +39,8 @@ VIEW_AZ = {"front": 0.0, "left": 90.0, "right": -90.0, "back": 180.0}
 TRAIN_CMU_SUBJECTS = ("01", "02", "05", "06", "07", "09", "10", "12", "13", "14", "15", "16")
 VAL_CMU_SUBJECTS = ("08",)
 FIRST_PERFORMER = {"train": 0, "val": 30, "test": 50}
+#: demo performers each split can take without reaching the next split's (test: no upper limit)
+MAX_PERFORMERS = {"train": FIRST_PERFORMER["val"], "val": FIRST_PERFORMER["test"] - FIRST_PERFORMER["val"]}
 FIGURE_FRACTION = 0.7  # standing figure height / frame height at the nominal camera distance
 BOUNDARY_TOL = 5.0  # degrees: an azimuth this close to a view boundary (+-45, +-135) belongs to both views
 
@@ -161,6 +163,9 @@ def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: i
     held out)."""
     if split not in FIRST_PERFORMER:
         raise ValueError(f"split must be train, val or test, got {split!r}")
+    if n_demo < 0 or n_demo > MAX_PERFORMERS.get(split, n_demo):
+        raise ValueError(f"{split} split: n_demo must be between 0 and {MAX_PERFORMERS.get(split, n_demo)} "
+                         f"(more would take the next split's performers), got {n_demo}")
     rng = np.random.default_rng(np.random.SeedSequence([seed, {"train": 0, "test": 1, "val": 2}[split]]))
     demo_ids = list(range(FIRST_PERFORMER[split], FIRST_PERFORMER[split] + n_demo))
     if split == "train":
