@@ -338,7 +338,7 @@ def cnn_stage(args, doc: dict) -> dict:
                     model.set_inference(unary_weight=a)
                     model.refine = ref
                     r = {"detector": "cnn", "model": Path(path).name, "train_frames": header.get("n_train_frames"),
-                         **train_set, "epochs": model.epochs, "stride": model.stride,
+                         **train_set, "channels": model.channels, "epochs": model.epochs, "stride": model.stride,
                          "augment": getattr(model, "augment", "flip"),
                          "flip_test": flip, "unary_weight": a, "refine": ref, **score_frames(model, val)}
                     rows.append(r)
@@ -350,10 +350,12 @@ def cnn_stage(args, doc: dict) -> dict:
     names = {Path(p).name for p in args.cnn_models}
     detector_set = {"demo_performers": args.detector_demo, "cmu_clips": args.detector_cmu,
                     "views_per_clip": args.detector_views}
-    kept = [{"augment": "flip", **detector_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])
+    # (rows written before a field was recorded had the value given here)
+    kept = [{"augment": "flip", "channels": 48, **detector_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])
             if r["model"] not in names]
     rows = kept + rows
-    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False, "augment": "flip", **detector_set}
+    old = [{**r, "model": "detector stage", "stride": 4, "flip_test": False, "augment": "flip", "channels": 48,
+            **detector_set}
            for r in doc["detector_stage"]["rows"] if r["detector"] == "cnn"]
     every = old + rows
     fast = [r for r in every if r["cpu_ms_per_frame"] <= args.budget_ms] or every
@@ -363,14 +365,14 @@ def cnn_stage(args, doc: dict) -> dict:
                                 "azimuths per clip of each row); compared with the detector stage's cnn rows (10 "
                                 "epochs, stride 4, no flip)"}
     doc["chosen"]["cnn"] = {"unary_weight": best["unary_weight"], "refine": best["refine"], "epochs": best["epochs"],
-                            "channels": CNN_DEFAULTS["channels"], "stride": best["stride"], "flip_test": best["flip_test"],
+                            "channels": best["channels"], "stride": best["stride"], "flip_test": best["flip_test"],
                             "augment": best["augment"], **{k: best[k] for k in TRAIN_SET}}
     doc["scores"]["cnn_pcp_mean"] = best["pcp_mean"]
     doc["scores"]["detector_pcp_mean"] = max(doc["scores"].get("detector_pcp_mean", 0.0), best["pcp_mean"])
     print("\ncnn detector (same validation frames; single image):")
     for r in every:
         print(f"  {r['demo_performers']:2d}+{r['cmu_clips']:2d}x{r['views_per_clip']:2d}  "
-              f"{r['epochs']:3d} epochs  stride {r['stride']}  augment {r['augment']:6s}  "
+              f"{r['channels']:3d} ch  {r['epochs']:3d} epochs  stride {r['stride']}  augment {r['augment']:6s}  "
               f"flip {'yes' if r['flip_test'] else 'no ':3s}  "
               f"alpha {r['unary_weight']:3.1f} refine {r['refine']}  PCP {r['pcp_mean']:.3f} (min part "
               f"{r['pcp_min_part']:.3f}, true view {r['pcp_oracle_view']:.3f})  PCK {r['pck']:.3f}  "

@@ -290,9 +290,11 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
     path = tmp_path / "cnn.joblib"
     assert main(["train-pose", "--detector", "cnn", "--epochs", "1", "--out", str(path), "--demo-performers", "4",
                  "--cmu-clips", "0", "--views-per-clip", "4", "--seconds", "1", "--fps", "4", "--seed", "0",
-                 "-j", "1"]) == 0
+                 "--channels", "16", "-j", "1"]) == 0
     model, header = load_pose_model(path)
     assert header["params"]["detector"] == "cnn" and header["training"]["demo_performers"] == 4
+    assert header["params"]["channels"] == 16 and model.cnn_.weights_["kp.weight"].shape[1] == 32  # stride-2 head
+    assert model.cnn_.weights_["view.weight"].shape == (4, 16)
     out = tmp_path / "m.json"
     assert main(["evaluate", "pose", "--model", str(path), "--out", str(out), "--demo-performers", "1",
                  "--cmu-clips", "0", "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none",

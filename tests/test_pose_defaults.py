@@ -40,11 +40,11 @@ def test_detector_and_cnn_defaults_are_the_validated_ones(doc):
     budget = (doc.get("cnn_stage") or {}).get("budget_ms", float("inf"))
     # (rows before the training set was compared: the detector stage's set, 24 demo performers + 40 CMU clips x 8)
     train_set = {"demo_performers": 24, "cmu_clips": 40, "views_per_clip": 8}
-    base = {"stride": 4, "flip_test": False, "augment": "flip", **train_set}
+    base = {"stride": 4, "flip_test": False, "augment": "flip", "channels": 48, **train_set}
     cnn_rows = [{**base, **r} for r in rows if r["detector"] == "cnn"]
-    cnn_rows += [{"augment": "flip", **train_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])]
+    cnn_rows += [{"augment": "flip", "channels": 48, **train_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])]
     cnn = max((r for r in cnn_rows if r["cpu_ms_per_frame"] <= budget), key=lambda r: (r["pcp_mean"], r["view_acc_mean"]))
-    keys = ("unary_weight", "refine", "epochs", "stride", "flip_test", "augment") + TRAIN_SET
+    keys = ("unary_weight", "refine", "epochs", "channels", "stride", "flip_test", "augment") + TRAIN_SET
     assert {k: cnn[k] for k in keys} == {k: ch["cnn"].get(k, base.get(k)) for k in keys}
 
 

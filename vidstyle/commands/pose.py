@@ -59,6 +59,8 @@ def train_pose(
                                  "per viewpoint, with --viewpoint's classifier) or cnn (a convolutional network's "
                                  "keypoint heatmaps as the unary terms and its viewpoint head; needs PyTorch)."),
     epochs: int = typer.Option(CNN_DEFAULTS["epochs"], "--epochs", help="Training epochs of the cnn detector."),
+    channels: int = typer.Option(CNN_DEFAULTS["channels"], "--channels", help="Width (feature channels) of the cnn "
+                                 "detector's deeper layers; the network's time grows about with its square."),
     heatmap_stride: int = typer.Option(CNN_DEFAULTS["stride"], "--heatmap-stride", help="Pixels per heatmap cell of "
                                        "the cnn detector: 4 (the tree's grid) or 2 (an upsampling head; the tree "
                                        "works on the maps pooled to 4 px, the refinement on the 2-px maps)."),
@@ -81,6 +83,8 @@ def train_pose(
         raise InputError(f"--detector: {detector!r} is not hog or cnn")
     if epochs < 1:
         raise InputError("--epochs: must be at least 1")
+    if not 8 <= channels <= 256:
+        raise InputError(f"--channels: {channels} is not between 8 and 256")
     if heatmap_stride not in (2, 4):
         raise InputError(f"--heatmap-stride: {heatmap_stride} is not 2 or 4")
     if augment not in AUGMENTS:
@@ -106,7 +110,7 @@ def train_pose(
         from ..pose.cnn import CnnPoseModel
 
         model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
-                             channels=CNN_DEFAULTS["channels"], refine=CNN_DEFAULTS["refine"], seed=seed,
+                             channels=channels, refine=CNN_DEFAULTS["refine"], seed=seed,
                              stride=heatmap_stride, flip_test=flip_test, augment=augment)
     else:
         model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
