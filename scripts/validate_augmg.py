@@ -19,7 +19,11 @@ rows. Nothing here reads a test performer.
         --frames <key-2..key+2 of its styled transitions> --out VAL/ps/p00_perf0_front.poses.json
     (the same with --backend blazepose into VAL/blazepose; scripts/validate_augmg.py --print-frames
      DATASET VIDEO prints the --frames list)
-    python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose
+    python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose [VAL/ps_ms ...]
+
+More pictorial-structures directories after the BlazePose one hold the same frames posed with other
+``vidstyle pose`` inference settings (e.g. ``--scales 1,1.2,1.4``, read from the files' ``params``):
+every configuration is scored with each, and the winner's settings are recorded as ``pose``.
 
 Prints the tables and writes bench_results/validate_augmg.json (every row) and
 bench_results/validation_augmg_chosen.json (the chosen defaults with the table they won on; it is
@@ -51,8 +55,8 @@ GRID = [  # (segment, context, scores, k, foreshortening)
     ("fixed", 2, True, 30, True),
 ]
 ESTIMATED = ("model", "blazepose")
-COMMAND = ("python scripts/validate_augmg.py out/dataset out/augmg/library VAL/ps VAL/blazepose (seed-0 pipeline "
-           "output; VAL = vidstyle pose --frames <key-2..key+2> of the validation videos, both backends)")
+NOTE = ("seed-0 pipeline output; VAL = vidstyle pose --frames <key-2..key+2> of the validation videos, both "
+        "backends")
 
 
 def print_frames(dataset: str, video: str, context: int = 2) -> None:
@@ -86,18 +90,31 @@ def search_thresholds(rows: list[dict]) -> tuple[dict, float]:
     return best
 
 
-def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
+def pose_settings(ps_dir: str) -> dict:
+    """The ``vidstyle pose`` inference settings recorded in a directory's poses.json files (``params``;
+    {} = the defaults: one scale); every file must agree."""
+    from vidstyle.formats.poses import read_poses
+
+    got = {json.dumps(read_poses(f).params, sort_keys=True) for f in sorted(Path(ps_dir).glob("*.poses.json"))}
+    if len(got) != 1:
+        raise SystemExit(f"{ps_dir}: poses made with different settings {sorted(got)} (or none)")
+    return json.loads(got.pop())
+
+
+def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str = NOTE) -> None:
     from vidstyle.augmg.evaluate import accept, evaluate_augmg, summarise  # noqa: F401
     from vidstyle.commands.augmg import _read_poses_dir
 
-    poses = dict([_read_poses_dir(Path(ps_dir)), _read_poses_dir(Path(bp_dir))])
+    bp = _read_poses_dir(Path(bp_dir))
     sources = ("model", "blazepose", "gt", "noisy")
     out_rows = []
-    hdr = f"{'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} | " + " | ".join(f"{s:>13}" for s in sources)
+    hdr = (f"{'pose':18} {'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} | "
+           + " | ".join(f"{s:>13}" for s in sources))
     print("transition-error reduction on the validation performers, without / with the source's thresholds "
           "(2-fold cross-validated over the takes)")
     print(hdr + " | estimated sources' mean (cross-validated)")
-    for seg, ctx, sc, k, fs in GRID:
+    for (pose, ps_dir), (seg, ctx, sc, k, fs) in [(v, g) for v in [(pose_settings(d), d) for d in ps_dirs] for g in GRID]:
+        poses = dict([_read_poses_dir(Path(ps_dir)), bp])
         m = evaluate_augmg(Path(dataset), Path(library), sources=sources, poses=poses, segment=seg, context=ctx,
                            use_scores=sc, k=k, foreshortening=fs, videos=VALIDATION_VIDEOS)
         rows = m["rows"]
@@ -111,7 +128,8 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
             cv_rows += accept([r for r in rows if held in r["video"]], thresholds=t)
         cv = summarise(cv_rows, m["params"])["by_source"]
         red = float(np.mean([cv[s]["transition_reduction"] for s in ESTIMATED]))
-        entry = {"segment": seg, "context": ctx, "scores": sc, "k": k, "foreshortening": fs,
+        entry = {"pose": pose, "ps_dir": ps_dir, "segment": seg, "context": ctx, "scores": sc, "k": k,
+                 "foreshortening": fs,
                  "no_threshold": {s: {kk: v for kk, v in m["by_source"][s].items()} for s in m["by_source"]},
                  "thresholds": thresholds, "estimated_reduction": red,
                  "cross_validated": {s: {kk: v for kk, v in cv[s].items()} for s in cv},
@@ -120,9 +138,11 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
         out_rows.append(entry)
         cells = " | ".join(f"{100 * m['by_source'][s]['transition_reduction']:5.1f}/{100 * cv[s]['transition_reduction']:5.1f} %"
                            for s in sources)
-        print(f"{seg:8} {ctx:3d} {str(sc):>6} {k:3d} {str(fs):>5} | {cells} | {100 * red:.1f} %", flush=True)
+        label = ",".join(f"{kk}={v}" for kk, v in pose.items()) or "defaults"
+        print(f"{label[:18]:18} {seg:8} {ctx:3d} {str(sc):>6} {k:3d} {str(fs):>5} | {cells} | {100 * red:.1f} %",
+              flush=True)
     best = max(out_rows, key=lambda x: x["estimated_reduction"])
-    print(f"best: segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
+    print(f"best: pose={best['pose'] or 'defaults'} segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
           f"(estimated sources' mean reduction {100 * best['estimated_reduction']:.1f} % on "
           f"{best['queries']} validation transitions); thresholds:")
     for s, t in best["thresholds"].items():
@@ -136,18 +156,20 @@ def main(dataset: str, library: str, ps_dir: str, bp_dir: str) -> None:
                   f"enhanced {x['enhanced_mm']:6.1f}  oracle {x['oracle_mm']:6.1f}  accepted {x['accepted']:.2f}")
     Path("bench_results").mkdir(exist_ok=True)
     Path("bench_results/validate_augmg.json").write_text(json.dumps(
-        {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [ps_dir, bp_dir],
-         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("segment", "context", "scores", "k", "foreshortening",
+        {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [*ps_dirs, bp_dir],
+         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("pose", "segment", "context", "scores", "k",
+                                                                      "foreshortening",
                                                                       "thresholds", "estimated_reduction")}},
         indent=2))
     # the chosen defaults, read by `vidstyle evaluate augmg --validation` (pipelines/kickboxing/validation/)
     Path("bench_results/validation_augmg_chosen.json").write_text(json.dumps(
         {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
-         "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
+         "pose": best["pose"], "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
          "foreshortening": best["foreshortening"], "thresholds": best["thresholds"], "validation_reduction": {
              s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]},
-         "command": COMMAND, "queries": best["queries"],
-         "table": [{"segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
+         "command": f"python scripts/validate_augmg.py {dataset} {library} {ps_dirs[0]} {bp_dir} "
+                    + "".join(f"{d} " for d in ps_dirs[1:]) + f"({note})", "queries": best["queries"],
+         "table": [{"pose": r["pose"], "segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
                     "foreshortening": r["foreshortening"],
                     "reduction_no_threshold": {s: round(r["no_threshold"][s]["transition_reduction"], 4)
                                                for s in r["no_threshold"]},
@@ -161,4 +183,13 @@ if __name__ == "__main__":
     if sys.argv[1] == "--print-frames":
         print_frames(sys.argv[2], sys.argv[3])
     else:
-        main(*sys.argv[1:5])
+        argv = sys.argv[1:]
+        note = NOTE
+        if "--note" in argv:  # --note TEXT: how the pose directories were made (kept with the command)
+            i = argv.index("--note")
+            note = argv[i + 1]
+            del argv[i:i + 2]
+        if len(argv) < 4:
+            raise SystemExit("usage: validate_augmg.py DATASET LIBRARY PS_DIR BP_DIR [PS_DIR ...] [--note TEXT] | "
+                             "--print-frames DATASET VIDEO")
+        main(argv[0], argv[1], [argv[2], *argv[4:]], argv[3], note)

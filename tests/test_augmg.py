@@ -350,3 +350,27 @@ def test_bundled_demo_annotations_mark_frames_inside_the_true_transitions():
         for m in ms:
             t = next(t for t in styled if t["start"] <= m["frame"] < t["end"])
             assert (t["from"], t["to"]) == (m["from"], m["to"])
+
+
+def test_augment_pose_scales_are_checked_before_any_work(tmp_path, capsys):
+    from vidstyle.cli import main
+    from vidstyle.formats.annotations import (
+        Annotations,
+        Transition,
+        VideoAnnotations,
+        file_sha256,
+        write_annotations,
+    )
+
+    video = tmp_path / "v.mp4"
+    video.write_bytes(b"not decoded before the options are checked")
+    ann = tmp_path / "a.json"
+    write_annotations(ann, Annotations(["jab", "kick"], [VideoAnnotations("v.mp4", file_sha256(video), 100, 20.0,
+                                                                           [Transition(10, "jab", "kick", "accepted")])]))
+    for bad in ("0", "1,x"):
+        out = tmp_path / "g2.npz"
+        assert main(["augment", "--graph", str(tmp_path / "g.npz"), "--annotations", str(ann), "--video", str(video),
+                     "--pose-model", str(tmp_path / "m.joblib"), "--pose-scales", bad, "--library", str(tmp_path),
+                     "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("vidstyle: error: --pose-scales") and not out.exists()

@@ -30,8 +30,11 @@ def test_matching_defaults_are_the_validated_ones(chosen):
     import yaml
 
     assert yaml.safe_load(PARAMS.read_text())["augmg"]["context"] == chosen["context"]
-    best = [r for r in chosen["table"] if (r["segment"], r["context"], r["scores"], r["k"], r.get("foreshortening", False))
-            == (chosen["segment"], chosen["context"], chosen["scores"], chosen["k"], chosen.get("foreshortening", False))]
+    assert cmd.POSE_SCALES == chosen.get("pose", {}).get("scales")
+    best = [r for r in chosen["table"] if (r.get("pose", {}), r["segment"], r["context"], r["scores"], r["k"],
+                                           r.get("foreshortening", False))
+            == (chosen.get("pose", {}), chosen["segment"], chosen["context"], chosen["scores"], chosen["k"],
+                chosen.get("foreshortening", False))]
     assert len(best) == 1
     assert best[0]["estimated_mean_cross_validated"] == max(r["estimated_mean_cross_validated"] for r in chosen["table"])
 

@@ -118,6 +118,23 @@ def test_pose_command_ps_and_errors(tmp_path, trained, capsys):
     assert "bad.joblib" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
     assert main(["pose", str(video), "--out", str(tmp_path / "x.json")]) == 2
     assert "--model" in capsys.readouterr().err
+    # multi-scale inference: recorded in the file; each pose is the model's own at scale 1 or a zoom
+    ms = tmp_path / "ms.json"
+    assert main(["pose", str(video), "--model", str(path), "--frames", "1,4", "--scales", "1.5,0.8", "--out", str(ms),
+                 "-j", "1"]) == 0
+    from vidstyle.formats.poses import read_poses
+
+    got = read_poses(ms)
+    assert got.params == {"scales": [1.0, 1.5, 0.8]}
+    single = read_poses(out)
+    assert single.params == {}
+    for a, b in zip(got.frames, single.frames):  # never less confident than the single-scale pose
+        assert a.scores.mean() >= b.scores.mean() - 1e-3
+    capsys.readouterr()
+    for bad in (["--scales", "0"], ["--scales", "1,x"], ["--scales", "1.2", "--backend", "blazepose"]):
+        assert main(["pose", str(video), "--model", str(path), "--out", str(tmp_path / "y.json"), *bad]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--scales" in err[0] and not (tmp_path / "y.json").exists()
 
 
 def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, trained, capsys):

@@ -24,6 +24,8 @@ FORESHORTENING = True
 MAX_MATCH_COST = ["blazepose=0.725"]
 MAX_ENH_COST = ["model=4.669", "blazepose=6.036"]
 MIN_GAIN = ["gt=137.154", "noisy=104.382"]
+#: zoom factors of the pose stage's multi-scale inference (``vidstyle pose --scales``); None: one scale
+POSE_SCALES: list[float] | None = None
 
 _JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
@@ -42,6 +44,7 @@ def augment(
     video: Optional[Path] = typer.Option(None, "--video", "-V", help="Use only the marks of this video (default: every annotated video)."),
     poses: List[Path] = typer.Option([], "--poses", "-p", help="poses.json of the marked frames (from vidstyle pose; repeatable, one per video)."),
     pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Pose model: estimate the marked frames' poses here (needs --video)."),
+    pose_scales: Optional[str] = typer.Option(",".join(str(z) for z in POSE_SCALES) if POSE_SCALES else None, "--pose-scales", help="With --pose-model: zoom factors of multi-scale pose inference (as vidstyle pose --scales). Default: chosen on validation performers."),
     k: int = typer.Option(10, "--k", help="Candidate reference points per mark."),
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
     edges_per_side: int = typer.Option(3, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
@@ -78,9 +81,15 @@ def augment(
     if pose_model is not None:
         if video is None:
             raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
+        zooms = None
+        if pose_scales:
+            try:
+                zooms = [float(x) for x in pose_scales.split(",") if x.strip()]
+            except ValueError:
+                raise InputError(f"--pose-scales: {pose_scales!r} is not a comma-separated list of numbers") from None
         by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] + d for m in marks
                                                                            for d in range(-context, context + 1)
-                                                                           if m["frame"] + d >= 0}))
+                                                                           if m["frame"] + d >= 0}), zooms)
     source = "model" if pose_model is not None else None
     for p in poses:
         from ..formats.poses import read_poses
@@ -117,12 +126,16 @@ def per_source(values: list[str], option: str) -> dict:
     return out
 
 
-def _estimate_poses(model: Path, video: Path, frames: list[int]) -> dict:
-    """Poses of ``frames`` of ``video`` by the pose stage (pictorial structures, ``model``)."""
+def _estimate_poses(model: Path, video: Path, frames: list[int], scales: list[float] | None = None) -> dict:
+    """Poses of ``frames`` of ``video`` by the pose stage (pictorial structures, ``model``; ``scales``:
+    multi-scale inference)."""
     from ..augmg.poses_io import FramePose
     from ..pose.run import estimate_video
 
-    doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1)
+    try:
+        doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1, scales=scales)
+    except InputError as exc:
+        raise InputError(f"--pose-{exc}" if str(exc).startswith("scales:") else str(exc)) from None
     return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}
 
 

@@ -133,6 +133,10 @@ def pose(
         "transition marks (the video must be the annotated one: same sha256)."),
     context: int = typer.Option(0, "--context", help="With --annotations: also the frames up to this many "
                                 "either side of every mark (AugMG's temporal coherence matches them too)."),
+    scales: str | None = typer.Option(None, "--scales", help="ps backend: comma-separated zoom factors of "
+                                      "multi-scale inference, e.g. 1,1.2,1.4 (each frame is also zoomed about the "
+                                      "person by each factor and the most confident pose kept; for people smaller "
+                                      "or larger than the training figures; time grows with their number)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
@@ -148,6 +152,20 @@ def pose(
         raise InputError("--model: the ps backend needs a pose model (vidstyle train-pose)")
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
+    zooms = None
+    if scales is not None:
+        if backend != "ps":
+            raise InputError("--scales: multi-scale inference is a ps backend setting")
+        try:
+            zooms = [float(x) for x in scales.split(",") if x.strip()]
+        except ValueError:
+            raise InputError(f"--scales: {scales!r} is not a comma-separated list of numbers") from None
+        from ..pose.estimator import check_scales
+
+        try:
+            check_scales(zooms)
+        except ValueError as exc:
+            raise InputError(f"--scales: {exc}") from None
     with VideoReader(video) as r:
         if annotations is not None:
             from ..formats.annotations import check_video, read_annotations
@@ -163,7 +181,7 @@ def pose(
                 raise InputError(f"{annotations}: no transition marks for {video}")
         else:
             idx = parse_frames(frames, len(r))
-    poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler)
+    poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms)
     write_poses(out, poses)
     log.info("wrote %s (%d frames, backend %s)", out, len(poses.frames), backend)
 

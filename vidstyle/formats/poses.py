@@ -6,6 +6,7 @@ Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 1)::
      "video": "clip.mp4",                       # the input video, as given
      "backend": "ps" | "blazepose",
      "keypoints": ["head_top", "neck", ...],    # the 15 names of vidstyle.mocap.keypoints.KEYPOINTS, in order
+     "params": {"scales": [1.0, 1.2, 1.4]},     # optional: the backend's inference settings
      "frames": [{"frame": 12,                   # decoded frame index (vidstyle.video.VideoReader)
                  "viewpoint": "front",          # front | left | right | back | unknown (nobody found)
                  "viewpoint_scores": {"front": 0.9, "left": 0.05, ...},   # finite numbers, per viewpoint
@@ -69,6 +70,7 @@ class Poses:
     backend: str
     frames: list[PoseFrame]
     keypoints: tuple[str, ...] = KEYPOINTS
+    params: dict = field(default_factory=dict)
 
     def frame(self, index: int) -> PoseFrame:
         for f in self.frames:
@@ -83,6 +85,7 @@ class Poses:
             "video": self.video,
             "backend": self.backend,
             "keypoints": list(self.keypoints),
+            **({"params": dict(self.params)} if self.params else {}),
             "frames": [{"frame": int(f.frame), "viewpoint": f.viewpoint,
                         "viewpoint_scores": {k: float(v) for k, v in f.viewpoint_scores.items()},
                         "points": [[round(float(x), 3), round(float(y), 3), round(float(s), 4)]
@@ -99,6 +102,8 @@ def validate_poses(p: Poses, path: str | os.PathLike | None) -> None:
         raise FormatError(path, "backend", f"{p.backend!r} is not one of {', '.join(BACKENDS)}")
     if tuple(p.keypoints) != KEYPOINTS:
         raise FormatError(path, "keypoints", f"must be exactly {', '.join(KEYPOINTS)}")
+    if not isinstance(p.params, dict):
+        raise FormatError(path, "params", "must be an object")
     last = -1
     for i, f in enumerate(p.frames):
         where = f"frames[{i}]"
@@ -136,7 +141,8 @@ def read_poses(path: str | os.PathLike) -> Poses:
         scores = {k: scores_f.number(k) for k in scores_f.obj}
         frames.append(PoseFrame(f.int("frame", min=0), f.str("viewpoint"), f.array("points", (len(KEYPOINTS), 3)),
                                 scores))
-    p = Poses(video, backend, frames, tuple(kps))
+    params = top.sub("params").obj if "params" in doc else {}
+    p = Poses(video, backend, frames, tuple(kps), dict(params))
     validate_poses(p, path)
     return p
 

@@ -39,7 +39,7 @@ import numpy as np
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from .data import VIEW_NAMES
 from .defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS
-from .estimator import PoseModel
+from .estimator import PoseModel, check_scales
 
 log = logging.getLogger(__name__)
 
@@ -461,7 +461,9 @@ class CnnPoseModel(PoseModel):
         self.__dict__.update(state)
 
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
-                      fg_weight: float | None = None) -> CnnPoseModel:
+                      fg_weight: float | None = None, scales=None) -> CnnPoseModel:
+        if scales is not None:
+            self.scales = check_scales(scales)
         if viewpoint is not None and viewpoint != "cnn":
             raise ValueError(f"the cnn detector's viewpoint classifier is 'cnn', got {viewpoint!r}")
         if unary_weight is not None:

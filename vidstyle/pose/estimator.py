@@ -312,6 +312,23 @@ def _chunks(seq, n):
 
 # ---------------------------------------------------------------- the model
 
+def check_scales(scales) -> tuple[float, ...]:
+    """Zoom factors of multi-scale inference: finite, within 0.25-4, 1 first (the pose at scale 1
+    gives the centre the others zoom about); ValueError otherwise."""
+    out = [float(z) for z in scales]
+    if not out or not all(np.isfinite(z) and 0.25 <= z <= 4.0 for z in out):
+        raise ValueError(f"scales must be zoom factors between 0.25 and 4, got {list(scales)}")
+    return tuple(dict.fromkeys([1.0] + out))
+
+
+def zoom_about(centre: np.ndarray, z: float, size: tuple[int, int]) -> np.ndarray:
+    """2x3 affine map (for ``cv2.warpAffine``, pixel centres at integers) that zooms by ``z`` about
+    ``centre`` (x, y) and moves it to the middle of a frame of ``size`` (W, H): ``q = z p + t``."""
+    W, H = size
+    return np.array([[z, 0.0, (W - 1) / 2.0 - z * float(centre[0])],
+                     [0.0, z, (H - 1) / 2.0 - z * float(centre[1])]])
+
+
 class PoseModel:
     """Viewpoint-specific + generic pictorial structures and a viewpoint classifier.
 
@@ -351,9 +368,11 @@ class PoseModel:
         return {k: getattr(self, k) for k in self.PARAMS}
 
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
-                      fg_weight: float | None = None) -> PoseModel:
+                      fg_weight: float | None = None, scales=None) -> PoseModel:
         """Change what needs no retraining: the viewpoint classifier used, the unary weight, the
-        person prior's weight."""
+        person prior's weight, the zoom factors of multi-scale inference (:meth:`estimate`)."""
+        if scales is not None:
+            self.scales = check_scales(scales)
         if fg_weight is not None:
             self.fg_weight = float(fg_weight)
         if viewpoint is not None:
@@ -501,13 +520,42 @@ class PoseModel:
             return str(clf.predict(x)[0]), clf.scores(x)[0]
         return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
 
+    #: zoom factors tried about the person (``set_inference(scales=...)``; (1.0,): the frame as given)
+    scales: tuple[float, ...] = (1.0,)
+
     def estimate(self, frame: np.ndarray, index: int = 0, view: str | None = None,
                  detectors: str | None = None, background: np.ndarray | None = None) -> PoseFrame:
         """Pose of one frame (BGR or gray, any size: it is resized to the working height). ``view``
         forces a viewpoint (else the classifier decides); ``detectors="generic"`` uses the generic
         set. ``background`` (same size and channels as ``frame``: the median of frames of a
         static-camera video, :func:`vidstyle.pose.foreground.background_model`) adds the person
-        prior, weighted by ``fg_weight``."""
+        prior, weighted by ``fg_weight``.
+
+        With ``scales`` other than 1 (multi-scale inference, for people smaller or larger in the frame
+        than the training renders' figures): the frame is also zoomed by each factor about the centre
+        of the pose found at scale 1 (kept at the frame's size, borders replicated), and the pose whose
+        keypoints score highest on average is returned, mapped back to the frame's pixels."""
+        pf = self._estimate_once(frame, index, view, detectors, background)
+        zooms = [float(z) for z in self.scales if float(z) != 1.0]
+        if not zooms:
+            return pf
+        H, W = frame.shape[:2]
+        centre = pf.points[:, :2].mean(axis=0)
+        best, best_score = pf, float(pf.points[:, 2].mean())
+        for z in zooms:
+            A = zoom_about(centre, z, (W, H))
+            fz = cv2.warpAffine(frame, A, (W, H), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            bz = None if background is None else cv2.warpAffine(background, A, (W, H), flags=cv2.INTER_LINEAR,
+                                                                  borderMode=cv2.BORDER_REPLICATE)
+            cand = self._estimate_once(fz, index, view, detectors, bz)
+            score = float(cand.points[:, 2].mean())
+            if score > best_score:
+                cand.points[:, :2] = (cand.points[:, :2] - A[:, 2]) / z
+                best, best_score = cand, score
+        return best
+
+    def _estimate_once(self, frame: np.ndarray, index: int, view: str | None, detectors: str | None,
+                       background: np.ndarray | None) -> PoseFrame:
         f, s = self.prepare(frame)
         feats, maps = self.view_features(f)
         vname, vscores = self.classify_view(feats)

@@ -22,6 +22,7 @@ class _Chunk:
     frames: list[int]
     backend: str
     model_path: str | None
+    scales: tuple[float, ...] = (1.0,)
 
 
 def working_height(backend: str, native_height: int) -> int:
@@ -53,6 +54,8 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
     from ..video import VideoReader
 
     est = _make_estimator(chunk.backend, chunk.model_path)
+    if chunk.scales != (1.0,):
+        est.set_inference(scales=chunk.scales)
     with VideoReader(chunk.video) as probe:
         in_size = (probe.info.width, probe.info.height)
     h = working_height(chunk.backend, in_size[1])
@@ -108,21 +111,31 @@ def parse_frames(text: str | None, n_frames: int) -> list[int]:
 
 def estimate_video(video: str | Path, backend: str = "ps", model_path: str | Path | None = None,
                    frames: list[int] | None = None, jobs: int = -1, scheduler: str | None = None,
-                   chunk_frames: int = 16) -> Poses:
+                   chunk_frames: int = 16, scales=None) -> Poses:
+    """Poses of ``frames`` (default: all) of ``video``; ``scales``: zoom factors of the ps backend's
+    multi-scale inference (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only)."""
     from ..parallel import parallel_map
     from ..video import VideoReader
+    from .estimator import check_scales
 
     if backend not in ("ps", "blazepose"):
         raise InputError(f"backend: {backend!r} is not ps or blazepose")
     if backend == "ps" and model_path is None:
         raise InputError("model: the ps backend needs a pose model (vidstyle train-pose)")
+    if scales is not None and backend != "ps":
+        raise InputError("scales: multi-scale inference is a ps backend setting")
+    try:
+        scales = (1.0,) if scales is None else check_scales(scales)
+    except ValueError as exc:
+        raise InputError(f"scales: {exc}") from None
     with VideoReader(video) as r:
         n = len(r)
     frames = list(range(n)) if frames is None else frames
     if backend == "ps":  # fail early on a bad model file, before any worker starts
         _make_estimator(backend, str(model_path))
     size = max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
-    chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path))
-              for i in range(0, len(frames), size)]
+    chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path),
+                     scales) for i in range(0, len(frames), size)]
     res = parallel_map(_run_chunk, chunks, jobs=jobs, scheduler=scheduler, description=f"pose ({backend})")
-    return Poses(str(video), backend, [pf for part in res for pf in part])
+    params = {"scales": list(scales)} if scales != (1.0,) else {}
+    return Poses(str(video), backend, [pf for part in res for pf in part], params=params)
