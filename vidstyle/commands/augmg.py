@@ -17,13 +17,13 @@ log = logging.getLogger(__name__)
 
 # Defaults chosen on the validation performers (scripts/validate_augmg.py, recorded in
 # pipelines/kickboxing/validation/augmg.json): never on the test performers.
-SEGMENT = "fixed"
-CONTEXT = 0
+SEGMENT = "adaptive"
+CONTEXT = 2
 SCORES = False
-FORESHORTENING = True
-MAX_MATCH_COST = ["blazepose=0.725"]
-MAX_ENH_COST = ["model=4.669", "blazepose=6.036"]
-MIN_GAIN = ["gt=137.154", "noisy=104.382"]
+FORESHORTENING = False
+MAX_MATCH_COST = ["model=0.627", "blazepose=0.839"]
+MAX_ENH_COST = ["model=4.351", "blazepose=5.926"]
+MIN_GAIN = ["gt=118.534", "noisy=111.448"]
 #: zoom factors of the pose stage's multi-scale inference (``vidstyle pose --scales``); None: one scale
 POSE_SCALES: list[float] | None = None
 
