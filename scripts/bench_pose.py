@@ -1,8 +1,8 @@
 """Benchmark the 2D pose backends: ms/frame of pictorial structures (ps) and BlazePose at 160x120 and
 640x480 on one core (median of 5 runs after a warm-up; ps once per viewpoint classifier, the
-model's own first), plus the distance transform alone (Felzenszwalb-Huttenlocher lower envelope vs
-separable brute force, the baseline, same run). Wall and CPU ms are both printed: on a shared,
-loaded machine the CPU figure is the fairer one.
+model's own first, and the default detector with multi-scale inference), plus the distance transform
+alone (Felzenszwalb-Huttenlocher lower envelope vs separable brute force, the baseline, same run). Wall
+and CPU ms are both printed: on a shared, loaded machine the CPU figure is the fairer one.
 
     python scripts/bench_pose.py [--model pose.joblib] [--out bench_results/pose.json]
 
@@ -31,6 +31,7 @@ import numpy as np
 
 
 CPU_MS: dict = {}
+MULTI_SCALES = (1.0, 1.2, 1.4)
 
 
 def _median_ms(fn, runs: int = 5) -> tuple[float, list[float]]:
@@ -116,6 +117,14 @@ def main() -> int:
                                  "size": f"{size[0]}x{size[1]}", "ms_per_frame": ps_ms,
                                  "cpu_ms_per_frame": CPU_MS[id(f_ps)], "runs_ms": ps_runs})
                 model.set_inference(viewpoint=default_view)
+                if det == DETECTOR:  # multi-scale inference (vidstyle pose --scales): one more pass per zoom
+                    model.set_inference(scales=MULTI_SCALES)
+                    f_ms = lambda f=frame, m=model: m.estimate(f)  # noqa: E731
+                    ms_ms, ms_runs = _median_ms(f_ms, args.runs)
+                    rows.append({"what": f"ps {det} --scales {','.join(str(z) for z in MULTI_SCALES)}",
+                                 "size": f"{size[0]}x{size[1]}", "ms_per_frame": ms_ms,
+                                 "cpu_ms_per_frame": CPU_MS[id(f_ms)], "runs_ms": ms_runs})
+                    model.set_inference(scales=(1.0,))
             model = models.get("hog", models[order[0]])
             if getattr(model, "fg_weight", 0.0):  # video input: the person prior's extra work (any background)
                 bg = cv2.GaussianBlur(frame, (31, 31), 0)
