@@ -274,8 +274,8 @@ AUGMG_FILES = {
     "augmg_seed0.json": "the pipeline's evaluate_augmg stage: pictorial structures = the pipeline's own pose model "
                         "(demo renders only, 10 epochs); defaults and thresholds from `validation/augmg.json`",
     "augmg_trainpose_seed0.json": "the same marks with pictorial structures = `vidstyle train-pose`'s default model "
-                                  "(30 demo performers + 71 CMU clips x 12 azimuths, 20 epochs, 2-px heatmaps, test-time flip, unary "
-                                  "weight 16); matching defaults "
+                                  "(30 demo performers + 71 CMU clips x 16 azimuths, 20 epochs, 2-px heatmaps, test-time flip, unary "
+                                  "weight 16; test poses at scales 1, 1.2, 1.4); matching defaults "
                                   "and thresholds chosen on that model's validation poses (`validation/augmg_trainpose.json`)",
 }
 

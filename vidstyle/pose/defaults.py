@@ -10,7 +10,7 @@ DETECTOR = "cnn"
 #: training augmentations of the cnn detector (``train-pose --augment``, :class:`vidstyle.pose.cnn.HeatmapCNN`)
 AUGMENTS = ("flip", "affine")
 #: the cnn detector's defaults (:class:`vidstyle.pose.cnn.CnnPoseModel`)
-CNN_DEFAULTS = {"unary_weight": 16.0, "epochs": 20, "channels": 48, "refine": 2, "stride": 2, "flip_test": True,
-                "augment": "flip", "demo_performers": 30, "cmu_clips": 71, "views_per_clip": 12}
+CNN_DEFAULTS = {"unary_weight": 16.0, "epochs": 20, "channels": 48, "refine": 3, "stride": 2, "flip_test": True,
+                "augment": "flip", "demo_performers": 30, "cmu_clips": 71, "views_per_clip": 16}
 #: the training set of ``vidstyle train-pose`` (demo performers, CMU clips, azimuths per clip)
 TRAIN_SET = ("demo_performers", "cmu_clips", "views_per_clip")
