@@ -81,12 +81,9 @@ def augment(
     if pose_model is not None:
         if video is None:
             raise InputError("--pose-model: give --video (the poses of its marked frames are estimated)")
-        zooms = None
-        if pose_scales:
-            try:
-                zooms = [float(x) for x in pose_scales.split(",") if x.strip()]
-            except ValueError:
-                raise InputError(f"--pose-scales: {pose_scales!r} is not a comma-separated list of numbers") from None
+        from .pose import parse_scales
+
+        zooms = parse_scales(pose_scales, "--pose-scales")
         by_video[video.stem] = _estimate_poses(pose_model, video, sorted({m["frame"] + d for m in marks
                                                                            for d in range(-context, context + 1)
                                                                            if m["frame"] + d >= 0}), zooms)
@@ -132,10 +129,7 @@ def _estimate_poses(model: Path, video: Path, frames: list[int], scales: list[fl
     from ..augmg.poses_io import FramePose
     from ..pose.run import estimate_video
 
-    try:
-        doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1, scales=scales)
-    except InputError as exc:
-        raise InputError(f"--pose-{exc}" if str(exc).startswith("scales:") else str(exc)) from None
+    doc = estimate_video(video, backend="ps", model_path=model, frames=frames, jobs=1, scales=scales)
     return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}
 
 

@@ -31,6 +31,22 @@ def _cmu(cmu_dir: Path | None) -> Path | None:
     return cmu_dir
 
 
+def parse_scales(text: str | None, option: str) -> list[float] | None:
+    """``"1,1.2,1.4"`` -> zoom factors of multi-scale pose inference (None for none given); a bad list
+    is an :class:`InputError` naming ``option``."""
+    if text is None:
+        return None
+    from ..pose.estimator import check_scales
+
+    try:
+        zooms = [float(x) for x in text.split(",") if x.strip()]
+        check_scales(zooms)
+    except ValueError as exc:
+        problem = str(exc) if "zoom" in str(exc) else "not a comma-separated list of numbers"
+        raise InputError(f"{option}: {text!r}: {problem}") from None
+    return zooms
+
+
 def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
@@ -152,20 +168,9 @@ def pose(
         raise InputError("--model: the ps backend needs a pose model (vidstyle train-pose)")
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
-    zooms = None
-    if scales is not None:
-        if backend != "ps":
-            raise InputError("--scales: multi-scale inference is a ps backend setting")
-        try:
-            zooms = [float(x) for x in scales.split(",") if x.strip()]
-        except ValueError:
-            raise InputError(f"--scales: {scales!r} is not a comma-separated list of numbers") from None
-        from ..pose.estimator import check_scales
-
-        try:
-            check_scales(zooms)
-        except ValueError as exc:
-            raise InputError(f"--scales: {exc}") from None
+    if scales is not None and backend != "ps":
+        raise InputError("--scales: multi-scale inference is a ps backend setting")
+    zooms = parse_scales(scales, "--scales")
     with VideoReader(video) as r:
         if annotations is not None:
             from ..formats.annotations import check_video, read_annotations
