@@ -329,8 +329,7 @@ def cnn_stage(args, doc: dict) -> dict:
         if header.get("seed") != args.seed or any(tr.get(k) != v for k, v in TRAIN_RENDER.items()):
             raise SystemExit(f"{path}: not trained with seed {args.seed} on {TRAIN_RENDER} renders ({tr}, "
                              f"seed {header.get('seed')})")
-        train_set = {"demo_performers": tr["demo_performers"], "cmu_clips": tr["cmu_clips"],
-                     "views_per_clip": tr["views_per_clip"]}
+        train_set = {k: tr[k] for k in TRAIN_SET}
         for flip in CNN_FLIP:
             model.flip_test = flip
             for a in CNN_ALPHAS:
@@ -348,8 +347,7 @@ def cnn_stage(args, doc: dict) -> dict:
     # rows of models scored by an earlier run and not given again are kept (the validation frames are
     # rendered from the seed, so they are the same frames)
     names = {Path(p).name for p in args.cnn_models}
-    detector_set = {"demo_performers": args.detector_demo, "cmu_clips": args.detector_cmu,
-                    "views_per_clip": args.detector_views}
+    detector_set = dict(zip(TRAIN_SET, (args.detector_demo, args.detector_cmu, args.detector_views)))
     # (rows written before a field was recorded had the value given here)
     kept = [{"augment": "flip", "channels": 48, **detector_set, **r} for r in (doc.get("cnn_stage") or {}).get("rows", [])
             if r["model"] not in names]
