@@ -8,7 +8,7 @@ sources are ``gt``, ``noisy`` and the two pose estimators run on the videos at t
 ``context`` frames either side (``vidstyle pose --frames``; pass their directories): ``model``
 (pictorial structures) and ``blazepose``.
 
-Per configuration (segment, context, scores, k) every source is evaluated once; then the acceptance
+Per configuration (segment, context, scores, k, foreshortening, placement, anchor, hold) every source is evaluated once; then the acceptance
 thresholds (match cost, enhanced distance, gain) are searched per source over deciles of the rows' own
 values. A configuration's score is its 2-fold cross-validated reduction (thresholds chosen on the
 perf0 takes decide the perf1 takes and vice versa), averaged over the two *estimated* sources
@@ -40,19 +40,23 @@ from pathlib import Path
 import numpy as np
 
 VALIDATION_VIDEOS = [f"{p}_perf{t}_front" for p in ("p00", "p01", "p02", "p07", "p08", "p09") for t in (0, 1)]
-GRID = [  # (segment, context, scores, k, foreshortening)
-    ("fixed", 0, False, 10, False),  # the first defaults (single frame, no weights)
-    ("adaptive", 0, False, 10, False),
-    ("fixed", 2, True, 10, False),
-    ("adaptive", 1, True, 10, False),
-    ("adaptive", 2, False, 10, False),
-    ("adaptive", 2, True, 10, False),
-    ("adaptive", 2, True, 30, False),
-    ("fixed", 0, False, 10, True),
-    ("fixed", 2, False, 10, True),
-    ("fixed", 2, True, 10, True),
-    ("adaptive", 2, True, 10, True),
-    ("fixed", 2, True, 30, True),
+GRID = [  # (segment, context, scores, k, foreshortening, place, anchor, hold)
+    ("fixed", 0, False, 10, False, "first", "ends", 0.0),  # the first defaults (single frame, no weights)
+    ("adaptive", 0, False, 10, False, "first", "ends", 0.0),
+    ("fixed", 2, True, 10, False, "first", "ends", 0.0),
+    ("adaptive", 1, True, 10, False, "first", "ends", 0.0),
+    ("adaptive", 2, False, 10, False, "first", "ends", 0.0),
+    ("adaptive", 2, True, 10, False, "first", "ends", 0.0),
+    ("adaptive", 2, True, 30, False, "first", "ends", 0.0),
+    ("fixed", 0, False, 10, True, "first", "ends", 0.0),
+    ("fixed", 2, False, 10, True, "first", "ends", 0.0),
+    ("fixed", 2, True, 10, True, "first", "ends", 0.0),
+    ("adaptive", 2, True, 10, True, "first", "ends", 0.0),
+    ("fixed", 2, True, 30, True, "first", "ends", 0.0),
+    # the segment placed by its enhancement nodes (the library's own look-alikes of the endpoints),
+    # with and without a hold of the reference pose
+    *[(seg, 2, sc, 10, fs, place, "nodes", hold) for seg in ("fixed", "adaptive")
+      for sc, fs in ((False, False), (False, True), (True, True)) for place in ("both", "drift") for hold in (0.0, 0.2)],
 ]
 ESTIMATED = ("model", "blazepose")
 NOTE = ("seed-0 pipeline output; VAL = vidstyle pose --frames <key-2..key+2> of the validation videos, both "
@@ -108,15 +112,17 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
     bp = _read_poses_dir(Path(bp_dir))
     sources = ("model", "blazepose", "gt", "noisy")
     out_rows = []
-    hdr = (f"{'pose':18} {'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} | "
+    hdr = (f"{'pose':18} {'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} {'place':>5} {'anchor':>6} "
+           f"{'hold':>4} | "
            + " | ".join(f"{s:>13}" for s in sources))
     print("transition-error reduction on the validation performers, without / with the source's thresholds "
           "(2-fold cross-validated over the takes)")
     print(hdr + " | estimated sources' mean (cross-validated)")
-    for (pose, ps_dir), (seg, ctx, sc, k, fs) in [(v, g) for v in [(pose_settings(d), d) for d in ps_dirs] for g in GRID]:
+    for (pose, ps_dir), (seg, ctx, sc, k, fs, place, anchor, hold) in [(v, g) for v in [(pose_settings(d), d) for d in ps_dirs] for g in GRID]:
         poses = dict([_read_poses_dir(Path(ps_dir)), bp])
         m = evaluate_augmg(Path(dataset), Path(library), sources=sources, poses=poses, segment=seg, context=ctx,
-                           use_scores=sc, k=k, foreshortening=fs, videos=VALIDATION_VIDEOS)
+                           use_scores=sc, k=k, foreshortening=fs, place=place, anchor=anchor, hold=hold,
+                           videos=VALIDATION_VIDEOS)
         rows = m["rows"]
         thresholds = {s: search_thresholds([r for r in rows if r["source"] == s])[0] for s in sources}
         thr = summarise(accept(rows, thresholds=thresholds), m["params"])["by_source"]
@@ -129,7 +135,7 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
         cv = summarise(cv_rows, m["params"])["by_source"]
         red = float(np.mean([cv[s]["transition_reduction"] for s in ESTIMATED]))
         entry = {"pose": pose, "ps_dir": ps_dir, "segment": seg, "context": ctx, "scores": sc, "k": k,
-                 "foreshortening": fs,
+                 "foreshortening": fs, "place": place, "anchor": anchor, "hold": hold,
                  "no_threshold": {s: {kk: v for kk, v in m["by_source"][s].items()} for s in m["by_source"]},
                  "thresholds": thresholds, "estimated_reduction": red,
                  "cross_validated": {s: {kk: v for kk, v in cv[s].items()} for s in cv},
@@ -139,10 +145,12 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
         cells = " | ".join(f"{100 * m['by_source'][s]['transition_reduction']:5.1f}/{100 * cv[s]['transition_reduction']:5.1f} %"
                            for s in sources)
         label = ",".join(f"{kk}={v}" for kk, v in pose.items()) or "defaults"
-        print(f"{label[:18]:18} {seg:8} {ctx:3d} {str(sc):>6} {k:3d} {str(fs):>5} | {cells} | {100 * red:.1f} %",
+        print(f"{label[:18]:18} {seg:8} {ctx:3d} {str(sc):>6} {k:3d} {str(fs):>5} {place:>5} {anchor:>6} {hold:4.2f} | "
+              f"{cells} | {100 * red:.1f} %",
               flush=True)
     best = max(out_rows, key=lambda x: x["estimated_reduction"])
     print(f"best: pose={best['pose'] or 'defaults'} segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
+          f"foreshortening={best['foreshortening']} place={best['place']} anchor={best['anchor']} hold={best['hold']} "
           f"(estimated sources' mean reduction {100 * best['estimated_reduction']:.1f} % on "
           f"{best['queries']} validation transitions); thresholds:")
     for s, t in best["thresholds"].items():
@@ -158,19 +166,20 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
     Path("bench_results/validate_augmg.json").write_text(json.dumps(
         {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [*ps_dirs, bp_dir],
          "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("pose", "segment", "context", "scores", "k",
-                                                                      "foreshortening",
+                                                                      "foreshortening", "place", "anchor", "hold",
                                                                       "thresholds", "estimated_reduction")}},
         indent=2))
     # the chosen defaults, read by `vidstyle evaluate augmg --validation` (pipelines/kickboxing/validation/)
     Path("bench_results/validation_augmg_chosen.json").write_text(json.dumps(
         {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
          "pose": best["pose"], "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
-         "foreshortening": best["foreshortening"], "thresholds": best["thresholds"], "validation_reduction": {
+         "foreshortening": best["foreshortening"], "place": best["place"], "anchor": best["anchor"], "hold": best["hold"],
+         "thresholds": best["thresholds"], "validation_reduction": {
              s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]},
          "command": f"python scripts/validate_augmg.py {dataset} {library} {ps_dirs[0]} {bp_dir} "
                     + "".join(f"{d} " for d in ps_dirs[1:]) + f"({note})", "queries": best["queries"],
          "table": [{"pose": r["pose"], "segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
-                    "foreshortening": r["foreshortening"],
+                    "foreshortening": r["foreshortening"], "place": r["place"], "anchor": r["anchor"], "hold": r["hold"],
                     "reduction_no_threshold": {s: round(r["no_threshold"][s]["transition_reduction"], 4)
                                                for s in r["no_threshold"]},
                     "reduction_cross_validated": {s: round(r["cross_validated"][s]["transition_reduction"], 4)

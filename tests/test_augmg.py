@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 from vidstyle.augmg.enhance import (
     KEYPOINT_WEIGHTS,
     enhanced_distance,
+    place_segment,
     plain_transition,
     two_half_transition,
     window_distance,
@@ -227,6 +228,61 @@ def test_two_half_transition_passes_exactly_through_w_z(rng):
     assert np.all(np.diff(proot[:, 0]) > 0) and proot[-1, 0] < 2.0  # monotone, not yet arrived
 
 
+def test_two_half_transition_hold_follows_the_segment_over_the_held_middle(rng):
+    from scipy.spatial.transform import Rotation
+
+    J, n, m, c = 4, 41, 21, 10
+    q = lambda k: Rotation.random(k, random_state=int(rng.integers(1 << 30))).as_quat()
+    seg = np.repeat(q(J)[None], m, axis=0)  # a held library pose: every segment frame is w_z
+    seg_root = np.tile([0.5, 1.0, -0.5], (m, 1))
+    ra, rb = q(J), q(J)
+    args = (ra, np.zeros(3), seg, seg_root, rb, np.full(3, 2.0), n)
+    mid = n // 2
+    for hold in (0.0, 0.2, 0.5):
+        rot, root = two_half_transition(*args, centre=c, hold=hold)
+        on = np.isclose(np.abs(np.sum(rot * seg[0], -1)).min(-1), 1.0, atol=1e-9) & np.isclose(root, seg_root[0]).all(-1)
+        # the frames with full segment weight: first half f + 1 >= (mid + 1)(1 - hold), second half
+        # f - mid <= hold (n - mid) (the blend weight's own ramps, written independently here)
+        f = np.arange(n)
+        want = np.where(f <= mid, f + 1 >= (mid + 1) * (1 - hold) - 1e-9, f - mid <= hold * (n - mid) + 1e-9)
+        np.testing.assert_array_equal(on, want)
+        assert on[mid] and not on[0] and not on[-1]
+    assert two_half_transition(*args, centre=c, hold=0.0)[1][mid - 1, 0] < 0.5  # hold 0: one frame only
+    assert np.count_nonzero(np.isclose(two_half_transition(*args, centre=c, hold=0.5)[1], seg_root[0]).all(-1)) >= n // 2
+    with pytest.raises(ValueError, match="hold"):
+        two_half_transition(*args, hold=1.0)
+
+
+def test_place_segment_anchored_at_nodes_recovers_the_rigid_move(rng):
+    """A library clip that is the performer's departure moved by a known floor transform T, then travels
+    on its own (a step back): aligning its node (the departure look-alike) undoes T exactly, so the placed
+    segment is T^-1 of the library segment, whatever pose the segment itself is cut in."""
+    from types import SimpleNamespace
+
+    from vidstyle.mocap.placement import Placement
+
+    dep = rng.normal(size=(15, 3)) * [0.3, 1.0, 0.3] + [0.0, 1.0, 0.0]
+    T = Placement(0.9, 1.5, -2.0)
+    node = T.apply_points(dep)
+    m, J = 7, 3
+    lib_root = T.apply_points(np.c_[np.zeros(m), np.full(m, 1.0), -0.1 * np.arange(m)])  # travelling back
+    lib_rot = np.tile([0.0, 0.0, 0.0, 1.0], (m, J, 1))
+    seg = SimpleNamespace(root_positions=lib_root, rotations=lib_rot)
+    seg_pts = rng.normal(size=(m, 15, 3))  # the segment's own frames look nothing like the departure
+    inv = T.inverse()
+    for place in ("first", "both", "drift"):
+        arrival = dep if place != "first" else None
+        rot, root = place_segment(seg, seg_pts, dep, 1.0, arrival, drift=place == "drift",
+                                  align_points=(node, node), align_frames=(-3, m + 2))
+        np.testing.assert_allclose(root, inv.apply_points(lib_root), atol=1e-6)
+        np.testing.assert_allclose(np.abs(np.sum(rot[:, 0] * inv.apply_frames(lib_rot, lib_root)[0][:, 0], -1)), 1.0,
+                                   atol=1e-9)
+        np.testing.assert_allclose(rot[:, 1:], lib_rot[:, 1:])
+    # anchored at its own (unrelated) first frame instead, the placement is not T^-1
+    _, root_ends = place_segment(seg, seg_pts, dep, 1.0)
+    assert np.abs(root_ends - inv.apply_points(lib_root)).max() > 0.1
+
+
 # ------------------------------------------------------------------------------------------ formats + CLI
 def _poses_file(tmp_path: Path, take, view: str = "front") -> tuple[Path, int]:
     from vidstyle.formats.poses import PoseFrame, Poses, write_poses
@@ -350,6 +406,19 @@ def test_bundled_demo_annotations_mark_frames_inside_the_true_transitions():
         for m in ms:
             t = next(t for t in styled if t["start"] <= m["frame"] < t["end"])
             assert (t["from"], t["to"]) == (m["from"], m["to"])
+
+
+@pytest.mark.parametrize("option,value", [("--place", "last"), ("--anchor", "middle"), ("--hold", "1"),
+                                          ("--hold", "-0.1")])
+def test_evaluate_augmg_placement_options_are_checked_before_any_work(tmp_path, capsys, option, value):
+    from vidstyle.cli import main
+
+    out = tmp_path / "augmg.json"
+    # the dataset and library do not exist: the options are refused before either is read
+    assert main(["evaluate", "augmg", "--dataset", str(tmp_path / "none"), "--library", str(tmp_path / "none"),
+                 option, value, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"vidstyle: error: {option}:") and not out.exists()
 
 
 def test_augment_pose_scales_are_checked_before_any_work(tmp_path, capsys):

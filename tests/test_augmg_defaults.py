@@ -27,14 +27,14 @@ def chosen() -> dict:
 def test_matching_defaults_are_the_validated_ones(chosen):
     assert (cmd.SEGMENT, cmd.CONTEXT, cmd.SCORES) == (chosen["segment"], chosen["context"], chosen["scores"])
     assert cmd.FORESHORTENING == chosen.get("foreshortening", False)
+    assert (cmd.PLACE, cmd.ANCHOR, cmd.HOLD) == (chosen["place"], chosen["anchor"], chosen["hold"])
     import yaml
 
     assert yaml.safe_load(PARAMS.read_text())["augmg"]["context"] == chosen["context"]
     assert cmd.POSE_SCALES == chosen.get("pose", {}).get("scales")
-    best = [r for r in chosen["table"] if (r.get("pose", {}), r["segment"], r["context"], r["scores"], r["k"],
-                                           r.get("foreshortening", False))
-            == (chosen.get("pose", {}), chosen["segment"], chosen["context"], chosen["scores"], chosen["k"],
-                chosen.get("foreshortening", False))]
+    keys = ("segment", "context", "scores", "k", "foreshortening", "place", "anchor", "hold")
+    best = [r for r in chosen["table"] if (r.get("pose", {}), *(r[x] for x in keys))
+            == (chosen.get("pose", {}), *(chosen[x] for x in keys))]
     assert len(best) == 1
     assert best[0]["estimated_mean_cross_validated"] == max(r["estimated_mean_cross_validated"] for r in chosen["table"])
 

@@ -151,12 +151,20 @@ def plain_transition(rot_a: np.ndarray, root_a: np.ndarray, rot_b: np.ndarray, r
     return rot, root_a[None] * (1 - t)[:, None] + root_b[None] * t[:, None]
 
 
-def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int, centre: int | None = None
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int, centre: int | None = None,
+                        hold: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``n`` transition frames from departing pose ``a`` through the (placed) enhancement segment
     ``seg`` (``w_z0 .. w_z .. w_z2``, ``w_z`` at index ``centre``, default the middle) into arriving pose
     ``b``: the first half blends ``a`` into ``w_z0 .. w_z`` (time-warped to the first half), the second
-    ``w_z .. w_z2`` into ``b``; the middle output frame is exactly ``w_z``."""
+    ``w_z .. w_z2`` into ``b``; the middle output frame is exactly ``w_z``.
+
+    ``hold`` (in [0, 1)): each half's blend weight reaches the segment ``hold`` of the way early (first
+    half) and leaves it that late (second half), so the output follows the segment itself, with full
+    weight, over the middle ``hold`` fraction of the transition: a performer who *holds* the
+    transition pose (a crouch kept for a beat) is not just touched at one frame. 0 is the thesis'
+    two-half blend."""
+    if not 0.0 <= hold < 1.0:
+        raise ValueError(f"hold: must be in [0, 1), got {hold}")
     c = (len(seg_rot) - 1) // 2 if centre is None else int(centre)
     n1 = n // 2 + 1  # output frames 0 .. n1-1 carry w_z0 .. w_z (the last one is w_z)
     r1, p1 = resample_segment(seg_rot[:c + 1], seg_root[:c + 1], n1)
@@ -168,18 +176,20 @@ def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int,
     J = rot_a.shape[0]
     rot = np.empty_like(W_rot)
     root = np.empty_like(W_root)
-    t1 = _smooth((f[first] + 1.0) / (mid + 1.0))
+    t1 = _smooth((f[first] + 1.0) / ((mid + 1.0) * (1.0 - hold)))
     rot[first] = slerp(np.broadcast_to(rot_a, (first.sum(), J, 4)), W_rot[first], np.broadcast_to(t1[:, None], (first.sum(), J)))
     root[first] = root_a[None] * (1 - t1)[:, None] + W_root[first] * t1[:, None]
     second = ~first
-    t2 = _smooth((f[second] - mid) / (n - mid))
+    t2 = _smooth((f[second] - mid - hold * (n - mid)) / ((1.0 - hold) * (n - mid)))
     rot[second] = slerp(W_rot[second], np.broadcast_to(rot_b, (second.sum(), J, 4)), np.broadcast_to(t2[:, None], (second.sum(), J)))
     root[second] = W_root[second] * (1 - t2)[:, None] + root_b[None] * t2[:, None]
     return rot, root
 
 
 def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray, scale: float = 1.0,
-                  arrival_points: np.ndarray | None = None, drift: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                  arrival_points: np.ndarray | None = None, drift: bool = False,
+                  align_points: tuple[np.ndarray, np.ndarray] | None = None,
+                  align_frames: tuple[int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Rotations (m, J, 4) and roots (m, 3) of a library segment moved onto the performer: roots scaled
     by ``scale`` (body size), then the segment's first frame aligned (vertical rotation + floor
     translation, Kovar) onto ``anchor_points`` (15, 3), the departing pose. With ``arrival_points``
@@ -187,19 +197,28 @@ def place_segment(seg_motion, seg_points: np.ndarray, anchor_points: np.ndarray,
     so the segment drifts from neither end; with ``drift`` too, the placement moves linearly over the
     segment from the first frame's alignment onto the departure to the last frame's onto the arrival
     (the library clip's own travel between its ends is replaced by the performer's, its motion
-    around that line is kept)."""
+    around that line is kept).
+
+    ``align_points``: the library poses (15, 3) aligned onto the departure and the arrival instead of
+    the segment's own first and last frames, at segment-relative frame indices ``align_frames``
+    (default ``(0, m - 1)``; they may lie outside the segment) — the *enhancement nodes*
+    (:func:`enhancement_nodes`): the library frames that look like the departure and the arrival.
+    A segment cut inside a held pose then keeps the clip's own travel from its node into that pose
+    (a step back stays a step back) instead of being pinned onto a pose it does not resemble."""
     from ..motiongraph.distance import align_windows as _align
 
-    _, theta, x0, z0 = _align(anchor_points[None], seg_points[:1] * scale, KEYPOINT_WEIGHTS)
+    m = len(seg_points)
+    first, last = (seg_points[0], seg_points[-1]) if align_points is None else align_points
+    f0, f2 = (0, m - 1) if align_frames is None else align_frames
+    _, theta, x0, z0 = _align(anchor_points[None], first[None] * scale, KEYPOINT_WEIGHTS)
     theta, x0, z0 = float(theta), float(x0), float(z0)
     root = seg_motion.root_positions * scale
     if arrival_points is not None:
-        _, t2, x2, z2 = _align(arrival_points[None], seg_points[-1:] * scale, KEYPOINT_WEIGHTS)
+        _, t2, x2, z2 = _align(arrival_points[None], last[None] * scale, KEYPOINT_WEIGHTS)
         if drift:
             r1, p1 = Placement(theta, x0, z0).apply_frames(seg_motion.rotations, root)
             r2, p2 = Placement(float(t2), float(x2), float(z2)).apply_frames(seg_motion.rotations, root)
-            m = len(root)
-            u = np.linspace(0.0, 1.0, m) if m > 1 else np.zeros(1)
+            u = np.clip((np.arange(m) - f0) / (f2 - f0), 0.0, 1.0) if f2 > f0 else np.zeros(m)
             rot = r1.copy()
             rot[:, 0] = slerp(r1[:, 0], r2[:, 0], u)
             return rot, p1 * (1 - u)[:, None] + p2 * u[:, None]

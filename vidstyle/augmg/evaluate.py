@@ -176,7 +176,8 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                    place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
                    context: int = 0, use_scores: bool = True, foreshortening: bool = False, max_match_cost: float = np.inf,
                    max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf, thresholds: dict | None = None,
-                   videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1) -> dict:
+                   videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1,
+                   anchor: str = "ends", hold: float = 0.0) -> dict:
     """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
     viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all);
     ``animate``: keep the poses and transitions of that source's queries under ``"animations"``
@@ -189,11 +190,24 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     ``max_match_cost`` and its enhanced distance at most ``max_enh_cost``, else the plain transition is
     kept (``transition_augmg_mm`` is then the plain error; ``transition_enhanced_mm`` is always the
     enhanced one), and its gain is at least ``min_gain_mm`` (:func:`accept`; ``thresholds``: per source). Defaults come from ``scripts/validate_augmg.py`` on validation performers, never on
-    the test performers."""
+    the test performers.
+
+    Placement of the library segment on the performer (:func:`.enhance.place_segment`): ``place`` =
+    ``first`` aligns onto the departure only, ``both`` averages that with the alignment onto the
+    arrival, ``drift`` moves from one to the other over the segment; ``anchor`` = ``ends`` aligns the
+    segment's own first and last frames, ``nodes`` the clip's enhancement nodes ``w_z0`` / ``w_z2``
+    (:func:`.enhance.enhancement_nodes`, the library frames that look like the departure and the
+    arrival). ``hold``: the fraction of the transition, centred on the reference pose, during which
+    the segment is followed with full weight (:func:`.enhance.two_half_transition`; 0: the thesis'
+    two-half blend, which reaches ``w_z`` at one frame only)."""
     if place not in ("first", "both", "drift"):
         raise ValueError(f"place: 'first', 'both' or 'drift', got {place!r}")
     if segment not in ("fixed", "nodes", "adaptive"):
         raise ValueError(f"segment: 'fixed', 'nodes' or 'adaptive', got {segment!r}")
+    if anchor not in ("ends", "nodes"):
+        raise ValueError(f"anchor: 'ends' or 'nodes', got {anchor!r}")
+    if not 0.0 <= hold < 1.0:
+        raise ValueError(f"hold: must be in [0, 1), got {hold}")
     if context < 0:
         raise ValueError(f"context: must be >= 0, got {context}")
     from ..logutil import progress
@@ -267,10 +281,18 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 lo, hi = max(0, lo), min(lm.n_frames - 1, hi)
                 seg = lm[lo:hi + 1]
                 seg_pts = lib.clips[c].points[lo:hi + 1]
+                align, at = None, None
+                if anchor == "nodes":  # align the library's own look-alikes of the endpoints, not the cut ends
+                    nodes = enhancement_nodes(pts3d, s - 1, lib.clips[c].points, z, pts3d, e, k=enh_window,
+                                              max_span=max_span)
+                    if nodes is not None:
+                        align = (lib.clips[c].points[nodes[0]], lib.clips[c].points[nodes[1]])
+                        at = (nodes[0] - lo, nodes[1] - lo)
                 srot, sroot = place_segment(seg, seg_pts, pts3d[s - 1], scale, pts3d[e] if place != "first" else None,
-                                           drift=place == "drift")
+                                           drift=place == "drift", align_points=align, align_frames=at)
                 rot, root = two_half_transition(motion.rotations[s - 1], motion.root_positions[s - 1], srot, sroot,
-                                                motion.rotations[e], motion.root_positions[e], L, centre=z - lo)
+                                                motion.rotations[e], motion.root_positions[e], L, centre=z - lo,
+                                                hold=hold)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
             err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
             return (err, gen) if keep else err
@@ -321,7 +343,8 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                                    "truth": truth_seg, "plain": plain_pts, "enhanced": enhanced_pts})
     params = dict(dataset=str(dataset), library=str(library), library_frames=idx_all.n_frames,
                   library_clips=len(lib.clips), k=k, n_views=n_views, noise=noise, seed=seed,
-                  enh_window=enh_window, place=place, segment=segment, segment_scale=segment_scale,
+                  enh_window=enh_window, place=place, anchor=anchor, hold=hold, segment=segment,
+                  segment_scale=segment_scale,
                   max_span=max_span, context=context, use_scores=use_scores, foreshortening=foreshortening,
                   max_match_cost=_finite(max_match_cost), max_enh_cost=_finite(max_enh_cost),
                   min_gain_mm=_finite(min_gain_mm), thresholds=thresholds,

@@ -19,11 +19,14 @@ log = logging.getLogger(__name__)
 # pipelines/kickboxing/validation/augmg.json): never on the test performers.
 SEGMENT = "adaptive"
 CONTEXT = 2
-SCORES = False
-FORESHORTENING = False
-MAX_MATCH_COST = ["model=0.627", "blazepose=0.839"]
-MAX_ENH_COST = ["model=4.351", "blazepose=5.926"]
-MIN_GAIN = ["gt=118.534", "noisy=111.448"]
+SCORES = True
+FORESHORTENING = True
+PLACE = "drift"
+ANCHOR = "nodes"
+HOLD = 0.2
+MAX_MATCH_COST = ["model=0.526", "blazepose=0.431"]
+MAX_ENH_COST = ["model=4.408"]
+MIN_GAIN = ["model=74.315", "gt=123.566", "noisy=95.722"]
 #: zoom factors of the pose stage's multi-scale inference (``vidstyle pose --scales``); None: one scale
 POSE_SCALES: list[float] | None = None
 
@@ -235,6 +238,9 @@ def evaluate_augmg_cmd(
     views: int = typer.Option(12, "--views", help="Azimuths the library is projected at."),
     segment: str = typer.Option(SEGMENT, "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
     segment_scale: float = typer.Option(1.0, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
+    place: str = typer.Option(PLACE, "--place", help="Placement of the library segment on the performer: first (aligned onto the departing pose), both (the mean of that and the alignment onto the arriving pose) or drift (moving from one to the other over the segment)."),
+    anchor: str = typer.Option(ANCHOR, "--anchor", help="Library poses aligned for --place: ends (the segment's first and last frames) or nodes (the clip's enhancement nodes: its frames most like the departure and the arrival)."),
+    hold: float = typer.Option(HOLD, "--hold", help="Fraction of the transition, centred on the reference pose, that follows the library segment with full weight (0: the thesis' two-half blend)."),
     enh_window: int = typer.Option(9, "--enh-window", help="Window (frames) of the enhanced distance."),
     context: int = typer.Option(CONTEXT, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
     scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
@@ -257,6 +263,12 @@ def evaluate_augmg_cmd(
 
     if segment not in ("fixed", "nodes", "adaptive"):
         raise InputError(f"--segment: fixed, nodes or adaptive, got {segment!r}")
+    if place not in ("first", "both", "drift"):
+        raise InputError(f"--place: first, both or drift, got {place!r}")
+    if anchor not in ("ends", "nodes"):
+        raise InputError(f"--anchor: ends or nodes, got {anchor!r}")
+    if not 0.0 <= hold < 1.0:
+        raise InputError(f"--hold: must be in [0, 1), got {hold}")
     if context < 0:
         raise InputError(f"--context: must be at least 0, got {context}")
     if enh_window < 1:
@@ -273,6 +285,7 @@ def evaluate_augmg_cmd(
     sources = [*poses, "gt", "noisy"]
     metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
                              k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
+                             place=place, anchor=anchor, hold=hold,
                              context=context, use_scores=scores, foreshortening=foreshortening, thresholds=_thresholds(sources, max_match_cost,
                                                                                         max_enh_cost, min_gain),
                              animate=next((x for x in ("model", "blazepose") if x in poses), "gt"), seed=seed, jobs=jobs)
