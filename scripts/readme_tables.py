@@ -282,7 +282,7 @@ AUGMG_FILES = {
 
 def augmg_table(items, root: Path) -> list[str]:
     names = {"model": "pictorial structures", "blazepose": "BlazePose", "gt": "true 2D", "noisy": "true 2D + 5 % noise"}
-    lines = ["| 2D source | marks | retrieval MPJPE | recall@10 | plain | AugMG | lower by | accepted | file |",
+    lines = ["| 2D source | marks | retrieval MPJPE | recall@10 | plain | AugMG | lower by (95 % bootstrap interval) | accepted | file |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for p, d in items:
         for src, b in (d.get("by_source") or {}).items():
@@ -290,7 +290,9 @@ def augmg_table(items, root: Path) -> list[str]:
             seed = d.get("seed", (d.get("params") or {}).get("seed"))
             lines.append(f"| {names.get(src, src)} (seed {seed}) | {b.get('queries')} | "
                          f"{b['retrieval_mpjpe_mm']:.1f} mm | {_pct(b.get('recall_at_10'))} | "
-                         f"{b['transition_plain_mm']:.1f} mm | {b['transition_augmg_mm']:.1f} mm | {_pct(red)} | "
+                         f"{b['transition_plain_mm']:.1f} mm | {b['transition_augmg_mm']:.1f} mm | {_pct(red)}"
+                         + (" ({} to {})".format(*(_pct(x) for x in b["transition_reduction_ci95"]))
+                            if b.get("transition_reduction_ci95") else "") + " | "
                          f"{_pct(b.get('accepted'))} | `{_rel(p, root)}` |")
     notes = [f"- `{_rel(p, root)}`: {AUGMG_FILES[Path(p).name]}" for p, _d in items if Path(p).name in AUGMG_FILES]
     if notes:

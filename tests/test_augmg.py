@@ -28,6 +28,7 @@ from vidstyle.augmg.projection import (
     relative_azimuth,
 )
 from vidstyle.cli import app
+from vidstyle.commands import augmg as augmg_cmd
 from vidstyle.demo.dataset import DatasetParams, make_performer, make_take
 from vidstyle.demo.timeline import apply_transition_styles, build_take, performance_plan
 from vidstyle.demo.transitions import TRANSITION_KINDS
@@ -283,6 +284,23 @@ def test_place_segment_anchored_at_nodes_recovers_the_rigid_move(rng):
     assert np.abs(root_ends - inv.apply_points(lib_root)).max() > 0.1
 
 
+def test_reduction_interval_brackets_the_estimate_and_is_exact_for_a_constant_ratio(rng):
+    from vidstyle.augmg.evaluate import reduction_interval
+
+    plain = rng.uniform(50, 200, 17)
+    assert reduction_interval(plain, 0.6 * plain) == pytest.approx([0.4, 0.4])  # every resample: 1 - 0.6
+    aug = plain * rng.uniform(0.2, 1.1, 17)
+    lo, hi = reduction_interval(plain, aug, seed=3)
+    est = 1 - aug.mean() / plain.mean()
+    assert lo < est < hi and hi - lo > 0.05
+    assert reduction_interval(plain, aug, seed=3) == [lo, hi]  # seeded
+    # more queries from the same population: a narrower interval
+    big = np.tile(plain, 8), np.tile(aug, 8)
+    lo2, hi2 = reduction_interval(*big, seed=3)
+    assert hi2 - lo2 < (hi - lo) * 0.6
+    assert reduction_interval(plain[:1], aug[:1]) is None
+
+
 # ------------------------------------------------------------------------------------------ formats + CLI
 def _poses_file(tmp_path: Path, take, view: str = "front") -> tuple[Path, int]:
     from vidstyle.formats.poses import PoseFrame, Poses, write_poses
@@ -365,6 +383,9 @@ def test_augment_adds_enhancement_edges_and_a_discarded_mark_adds_none(tmp_path,
         assert (n_enh > 0) == expect
         if expect:
             assert len(g2.segments_) == 1 and g2.segments_[0].label == f"{t['from']}->{t['to']}"
+            S = g2.segments_[0]  # the CLI's validated defaults: anchored at the clip's nodes, with a hold
+            assert S.hold == pytest.approx(augmg_cmd.HOLD)
+            assert (S.anchors is not None) == (augmg_cmd.ANCHOR == "nodes")
         # synthesis of that pair goes through the enhancement exactly when the mark is accepted
         walk = plan_walk(g2, [Step(t["from"], 20), Step(t["to"], 20)], strict=False)
         used = {int(g2.edge_kind_[e]) for e in walk.transitions_used}

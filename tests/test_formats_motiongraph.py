@@ -25,6 +25,10 @@ def graph():
     g = _tiny_graph()
     k = g.window
     sid = g.add_segment(*_segment_from(g, 6, bend=0.5), source="walk.bvh@0.2s", label="crouch")
+    # a second, anchored segment with a hold (its node windows either side of the centre)
+    f = np.arange(3, 3 + 2 * k + 3)
+    g.add_segment(g.rotations_[f], g.root_positions_[f], centre=k + 1, anchors=(k, k + 2), hold=0.25,
+                  source="walk.bvh@0.1s", label="hop")
     kept = np.flatnonzero(g.scc_)
     src = next(f for f in kept if g.frame_clip_[f + k] == g.frame_clip_[f])
     dst = next(f for f in kept[::-1] if g.frame_clip_[f - k + 1] == g.frame_clip_[f])
@@ -58,13 +62,38 @@ def test_v2_round_trip_keeps_edges_and_segments(graph, tmp_path):
     for name in ("edge_cost_", "edge_align_", "root_positions_"):
         np.testing.assert_allclose(getattr(g, name), getattr(graph, name))
     np.testing.assert_allclose(g.edge_align_segment_, graph.edge_align_segment_)  # NaN where not enhancement
-    assert len(g.segments_) == 1
+    assert len(g.segments_) == 2
     s0, s1 = g.segments_[0], graph.segments_[0]
-    assert (s0.centre, s0.source, s0.label) == (s1.centre, "walk.bvh@0.2s", "crouch")
+    assert (s0.centre, s0.source, s0.label, s0.anchors, s0.hold) == (s1.centre, "walk.bvh@0.2s", "crouch", None, 0.0)
     np.testing.assert_allclose(s0.rotations, s1.rotations)
+    k = graph.window
+    assert (g.segments_[1].anchors, g.segments_[1].hold) == ((k, k + 2), 0.25)
     steps = [Step("walk", 5), Step("run", 4), Step("walk", 4)]
     a, b = plan_walk(graph, steps, strict=False), plan_walk(g, steps, strict=False)
     assert a.cost == pytest.approx(b.cost, abs=1e-6) and a.transitions_used == b.transitions_used
+
+
+def test_files_without_segment_anchors_or_holds_load_with_none(good_bytes, tmp_path):
+    a = _arrays(good_bytes)
+    del a["segment_anchor"], a["segment_hold"]
+    p = tmp_path / "older.npz"
+    _npz(p, a)
+    g = read_graph(p)
+    assert [(s.anchors, s.hold) for s in g.segments_] == [(None, 0.0), (None, 0.0)]
+
+
+@pytest.mark.parametrize("key,value,problem", [("segment_anchor", [[-1, -1], [0, 5]], "anchor pair"),
+                                               ("segment_anchor", [[-1, -1], [5, 3]], "anchor pair"),
+                                               ("segment_hold", [0.0, 1.0], "hold outside"),
+                                               ("segment_hold", [0.0, np.nan], "NaN")])
+def test_bad_segment_anchors_and_holds_are_format_errors(good_bytes, tmp_path, key, value, problem):
+    a = _arrays(good_bytes)
+    a[key] = np.array(value)
+    p = tmp_path / "bad.npz"
+    _npz(p, a)
+    with pytest.raises(FormatError, match=problem) as e:
+        read_graph(p)
+    assert str(p) in str(e.value) and key in str(e.value)
 
 
 def _as_v1(arrays: dict) -> dict:

@@ -103,6 +103,73 @@ def test_enhancement_edge_is_taken_and_passes_through_the_segment_middle(base):
     np.testing.assert_array_equal(again.frames, plain.frames)
 
 
+def _anchored_segment(graph, a, b, middle, T):
+    """A library-like segment: A's departing window (a+1..a+k), ``middle`` frames, B's arriving window
+    (b-k+1..b), all moved by the floor transform ``T`` (the library clip's own coordinates), with its
+    nodes on those windows and its centre in the middle."""
+    k = graph.window
+    f = np.concatenate([np.arange(a + 1, a + k + 1), middle, np.arange(b - k + 1, b + 1)])
+    rot, root = T.apply_frames(graph.rotations_[f], graph.root_positions_[f])
+    m = len(middle)
+    return rot, root, k - 1 + (m + 1) // 2, (k - 1, k + m)
+
+
+def test_anchored_enhancement_is_aligned_by_its_nodes_and_holds_w_z(base):
+    from vidstyle.mocap.placement import Placement
+
+    graph = _copy(base)
+    k = graph.window
+    a, b = _walk_run_pair(graph)
+    T = Placement(1.1, 3.0, -2.0)
+    middle = np.arange(graph.clips_["start"][1] + 20, graph.clips_["start"][1] + 29)  # 9 frames of another clip
+    rot, root, centre, anchors = _anchored_segment(graph, a, b, middle, T)
+    plain_sid = graph.add_segment(rot, root, centre=centre)
+    sid = graph.add_segment(rot, root, centre=centre, anchors=anchors, hold=0.3)
+    [e_plain, e] = graph.add_edges([a, a], [b, b], EdgeKind.ENHANCEMENT, cost=0.0, segment=[plain_sid, sid])
+    # the node windows ARE A's and B's windows moved by T: the segment is placed by T^-1 exactly and B
+    # lands where it was (composite identity), both halves cost 0
+    np.testing.assert_allclose(graph.edge_align_segment_[e], T.inverse().as_array(), atol=1e-7)
+    np.testing.assert_allclose(graph.edge_align_[e], 0.0, atol=1e-7)
+    assert graph.edge_cost_[e] == 0.0
+    # aligned by the windows beside w_z instead, the placement is something else
+    assert np.abs(graph.edge_align_segment_[e_plain] - T.inverse().as_array()).max() > 1e-2
+    graph.remove_edges([e_plain])
+    graph.edge_cost_[graph.edges(EdgeKind.ENHANCEMENT)] = 0.0
+    walk = plan_walk(graph, [Step("walk", 40), Step("run", 40)])
+    [e] = [x for x in walk.transitions_used if graph.edge_kind_[x] == EdgeKind.ENHANCEMENT]
+    t0 = int(np.flatnonzero(walk.transition == e)[0])
+    motion = render_walk(graph, walk, foot_lock=False)
+    S = graph.segments_[sid]
+    held = int(round(0.3 * k))
+    # hold: output frames k-1-held .. k-1+held of the edge are W's w_{z-held} .. w_{z+held} alone
+    # (every non-root local rotation equal), the frames just outside are still blends
+    out = motion.rotations[t0 + k - 1 - held : t0 + k + held, 1:]
+    want = S.rotations[S.centre - held : S.centre + held + 1, 1:]
+    np.testing.assert_allclose(np.abs(np.sum(out * want, -1)), 1.0, atol=1e-9)
+    before = motion.rotations[t0 + k - 2 - held, 1:]
+    assert np.abs(np.sum(before * S.rotations[S.centre - held - 1, 1:], -1)).min() < 1 - 1e-6
+    with pytest.raises(ValueError, match="anchors"):
+        graph.add_segment(rot, root, centre=centre, anchors=(centre + 1, anchors[1]))
+    with pytest.raises(ValueError, match="hold"):
+        graph.add_segment(rot, root, centre=centre, hold=1.0)
+
+
+def test_blend_frames_ramp_moves_the_weight_only_inside_its_frames():
+    from vidstyle.motiongraph import blend_frames, blend_weight
+
+    k, r, start = 10, 6, 3
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (k, 2, 1))
+    _, root = blend_frames(q, np.zeros(3), q, np.ones(3), k, ramp=r, start=start)
+    t = root[:, 0]
+    np.testing.assert_allclose(t[:start], 0.0)  # A before the ramp
+    np.testing.assert_allclose(t[start : start + r], 1.0 - blend_weight(np.arange(r), r))
+    np.testing.assert_allclose(t[start + r - 1 :], 1.0)  # B from the ramp's last frame on
+    _, full = blend_frames(q, np.zeros(3), q, np.ones(3), k)
+    np.testing.assert_allclose(full[:, 0], 1.0 - blend_weight(np.arange(k), k))
+    with pytest.raises(ValueError, match="ramp"):
+        blend_frames(q, np.zeros(3), q, np.ones(3), k, ramp=8, start=3)
+
+
 def test_enhancement_is_not_taken_for_another_action_pair_or_when_dearer(base):
     graph = _copy(base)
     a, b = _walk_run_pair(graph)

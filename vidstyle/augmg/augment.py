@@ -60,7 +60,8 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
                   elevation_deg: float = 10.0, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
                   edges_per_side: int = 3, enhancement_cost: float = 0.5, context: int = 2,
                   use_scores: bool = False, max_match_cost: float | None = None, video_fps: float = 20.0,
-                  jobs: int = 1, foreshortening: bool = False) -> list[Insertion]:
+                  jobs: int = 1, foreshortening: bool = False, anchor: str = "ends", hold: float = 0.0,
+                  max_span_s: float = 1.0) -> list[Insertion]:
     """Add enhancement segments and edges to ``graph`` in place (module docstring).
 
     ``marks``: :func:`.annotations_io.read_marks` items; ``poses``: video stem -> {frame: FramePose}.
@@ -69,12 +70,24 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     bones); a reference point whose match cost exceeds ``max_match_cost`` is rejected and the pair keeps
     its plain transitions (the robust AugMG of ``vidstyle evaluate augmg``, thresholds from
     ``scripts/validate_augmg.py``).
+
+    ``anchor="nodes"``: the stored segment also reaches the library clip's enhancement nodes around
+    ``w_z`` (:func:`.enhance.enhancement_nodes` against the best departure and arrival windows, within
+    ``max_span_s`` seconds, as ``vidstyle evaluate augmg``'s 60 frames at 60 fps), and the enhancement
+    edges align those instead of the windows beside ``w_z`` (:class:`~vidstyle.motiongraph.graph.Segment`
+    ``anchors``); ``hold``: the segment's hold (the same options as ``vidstyle evaluate augmg
+    --anchor/--hold``). The graph places the segment from the departure only, and the arrival follows
+    it (a walk goes wherever the segment leads), like ``evaluate augmg --place first``.
     """
+    if anchor not in ("ends", "nodes"):
+        raise ValueError(f"anchor: 'ends' or 'nodes', got {anchor!r}")
+    if not 0.0 <= hold < 1.0:
+        raise ValueError(f"hold: must be in [0, 1), got {hold}")
     from ..mocap import read_bvh
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind
     from ..render.camera import parse_view
-    from .enhance import enhanced_distance
+    from .enhance import enhanced_distance, enhancement_nodes
     from .index import PoseIndex, library_clips, window_query
     from .keypoints import keypoint_positions
 
@@ -150,11 +163,22 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
             log.info("%s frame %d (%s -> %s): reference point rejected (match cost %.3f > %.3f); plain transition "
                      "kept", m["video"], m["frame"], a_name, b_name, cand_cost[cand], max_match_cost)
             continue
-        lm, _ = motions[c]
-        seg_motion, _ = retarget(lm[z - gk + 1:z + gk], graph.skeleton_, clips[c].path)
+        lm, lpts = motions[c]
+        lo, hi, anchors = z - gk + 1, z + gk, None
+        if anchor == "nodes":
+            # the clip's own look-alikes of the best departure / arrival windows (h = 0 as above)
+            i_best, j_best = int(ends_a[int(np.argmin(d_in))]), int(starts_b[int(np.argmin(d_out))])
+            nodes = enhancement_nodes(gpts, i_best, lpts, z, gpts, j_best, k=gk,
+                                      max_span=max(1, int(round(max_span_s * graph.fps))))
+            if nodes is not None:
+                z0, z2, _ = nodes
+                lo, hi = min(lo, z0 - gk + 1), max(hi, z2 + gk)
+                anchors = (z0 - lo, z2 - lo)
+        seg_motion, _ = retarget(lm[lo:hi], graph.skeleton_, clips[c].path)
         t = float(z / graph.fps)
-        seg = graph.add_segment(seg_motion.rotations, seg_motion.root_positions, centre=gk - 1,
-                                source=f"{clips[c].path}@{t:.3f}s", label=f"{a_name}->{b_name}")
+        seg = graph.add_segment(seg_motion.rotations, seg_motion.root_positions, centre=z - lo,
+                                source=f"{clips[c].path}@{t:.3f}s", label=f"{a_name}->{b_name}", anchors=anchors,
+                                hold=hold)
         # departures: the run end i of A (minus the best x of the window) -> the edge leaves at src = i - x
         # the edge blends src+1..src+k (A's frames ending x before the run end) and dst-k+1..dst (B's
         # frames starting y after the run start)

@@ -421,6 +421,20 @@ def _query_views(index, uv: np.ndarray, az: float, k: int, spread: int):
     return ids[keep][None], costs[keep][None]
 
 
+def reduction_interval(plain, augmg, seed: int = 0, reps: int = 2000, level: float = 0.95) -> list[float] | None:
+    """Percentile bootstrap interval of the transition-error reduction ``1 - mean(augmg) / mean(plain)``
+    over queries resampled with replacement (paired: a query keeps both its errors); None for fewer
+    than two queries. With a few held-out marks the reduction is uncertain, and this says by how much."""
+    p, a = np.asarray(plain, dtype=np.float64), np.asarray(augmg, dtype=np.float64)
+    if len(p) < 2:
+        return None
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 1414]))
+    idx = rng.integers(0, len(p), size=(reps, len(p)))
+    red = 1.0 - a[idx].mean(axis=1) / p[idx].mean(axis=1)
+    lo, hi = np.quantile(red, [(1 - level) / 2, (1 + level) / 2])
+    return [float(lo), float(hi)]
+
+
 def summarise(rows: list[dict], params: dict) -> dict:
     out: dict = {"params": params, "by_source": {}, "rows": rows}
     for source in params["sources"]:
@@ -443,6 +457,9 @@ def summarise(rows: list[dict], params: dict) -> dict:
             "accepted": mean("accepted"),
             "transition_oracle_mm": mean("transition_oracle_mm"),
             "transition_reduction": float(1.0 - aug / plain) if plain > 0 else 0.0,
+            "transition_reduction_ci95": reduction_interval([x["transition_plain_mm"] for x in r],
+                                                            [x["transition_augmg_mm"] for x in r],
+                                                            seed=int(params.get("seed", 0) or 0)),
             "by_kind": {kind: {"queries": len(rk), "plain_mm": float(np.mean([x["transition_plain_mm"] for x in rk])),
                                "augmg_mm": float(np.mean([x["transition_augmg_mm"] for x in rk])),
                                "enhanced_mm": float(np.mean([x["transition_enhanced_mm"] for x in rk])),

@@ -56,6 +56,8 @@ def augment(
     scores: bool = typer.Option(SCORES, "--scores/--no-scores", help="Weight bones by the poses' confidence scores."),
     foreshortening: bool = typer.Option(FORESHORTENING, "--foreshortening/--no-foreshortening", help="Also weight bones by their image length against their side-on length (a bone pointing at the camera counts less)."),
     max_match_cost: List[str] = typer.Option(MAX_MATCH_COST, "--max-match-cost", help="Reject a reference point whose match cost exceeds this (the pair keeps its plain transitions): VALUE, or SOURCE=VALUE per pose source (model = ps, blazepose); repeatable. Default: chosen on validation performers (scripts/validate_augmg.py)."),
+    anchor: str = typer.Option(ANCHOR, "--anchor", help="Align the enhancement segment by the library's enhancement nodes (nodes: its frames most like the departure and the arrival) or by the windows beside the reference pose (ends). Default: chosen on validation performers (as evaluate augmg)."),
+    hold: float = typer.Option(HOLD, "--hold", help="Fraction of an enhancement shown with the segment's full weight, about the reference pose (0: the thesis' two-half blend). Default: chosen on validation performers."),
     jobs: int = _JOBS,
 ) -> None:
     """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
@@ -67,6 +69,10 @@ def augment(
     from ..augmg.poses_io import read_frame_poses
     from ..motiongraph import MotionGraph
 
+    if anchor not in ("ends", "nodes"):
+        raise InputError(f"--anchor: ends or nodes, got {anchor!r}")
+    if not 0.0 <= hold < 1.0:
+        raise InputError(f"--hold: must be in [0, 1), got {hold}")
     marks = read_marks(annotations)
     if video is not None:
         from ..formats.annotations import file_sha256, read_annotations
@@ -106,7 +112,7 @@ def augment(
     fps = next((m["fps"] for m in marks), 20.0)
     inserted = augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
                              enhancement_cost=enhancement_cost, context=context, use_scores=scores,
-                             foreshortening=foreshortening,
+                             foreshortening=foreshortening, anchor=anchor, hold=hold,
                              max_match_cost=limit.get(source, limit.get("*")), video_fps=fps, jobs=jobs)
     graph.save(out)
     log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
@@ -327,14 +333,16 @@ def evaluate_augmg_cmd(
     table = Table(title=f"AugMG: {metrics['params']['queries']} held-out transitions, "
                         f"{metrics['params']['library_frames']} library frames")
     for col in ("2D source", "queries", "MPJPE top-1 mm", "MPJPE ref mm", "oracle mm", "R@1", "R@10",
-                "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm ", "reduction"):
+                "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm ", "reduction", "95 % interval"):
         table.add_column(col)
     for src, r in metrics["by_source"].items():
         table.add_row(src, str(r["queries"]), f"{r['retrieval_mpjpe_mm']:.1f}", f"{r['reference_mpjpe_mm']:.1f}",
                       f"{r['oracle_mpjpe_mm']:.1f}", f"{r['recall_at_1']:.2f}", f"{r['recall_at_10']:.2f}",
                       f"{r['transition_plain_mm']:.1f}", f"{r['transition_augmg_mm']:.1f}",
                       f"{r['accepted']:.2f}", f"{r['transition_enhanced_mm']:.1f}", f"{r['transition_oracle_mm']:.1f}",
-                      f"{100 * r['transition_reduction']:.0f} %")
+                      f"{100 * r['transition_reduction']:.0f} %",
+                      "-" if not r.get("transition_reduction_ci95") else
+                      "{:.0f} .. {:.0f} %".format(*(100 * x for x in r["transition_reduction_ci95"])))
     kinds = Table(title="AugMG transition error by kind (mm)")
     for col in ("2D source", "kind", "queries", "plain mm", "AugMG mm", "accepted", "enhanced mm", "oracle mm"):
         kinds.add_column(col)

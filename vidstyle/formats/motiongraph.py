@@ -41,6 +41,11 @@ segment_root_positions      (F_S, 3)
 segment_start, _frames      (S,) int        first row and frame count of each segment
 segment_centre              (S,) int        index of the middle pose ``w_z`` inside its segment
 segment_source, _label      (S,) str        where the segment came from; its label
+segment_anchor              (S, 2) int      optional: the segment's enhancement nodes ``(a_in, a_out)``,
+                                            ``k-1 <= a_in <= centre <= a_out <= frames-k``; ``(-1, -1)``
+                                            (and files without the key): none
+segment_hold                (S,)            optional: fraction in [0, 1) of an enhancement shown with the
+                                            segment's full weight (files without the key: 0)
 ==========================  ==============  ==============================================================
 
 A truncated or corrupted file, a missing key, a wrong shape or type, an index out of range or a
@@ -130,6 +135,9 @@ def write_graph(path: str | os.PathLike, graph: MotionGraph) -> None:
         segment_centre=np.array([s.centre for s in segs], dtype=np.int64),
         segment_source=np.array([s.source for s in segs], dtype=str),
         segment_label=np.array([s.label for s in segs], dtype=str),
+        segment_anchor=np.array([s.anchors if s.anchors is not None else (-1, -1) for s in segs],
+                                dtype=np.int64).reshape(len(segs), 2),
+        segment_hold=np.array([s.hold for s in segs], dtype=np.float64),
     )
     try:
         _validate(arrays, None, SCHEMA_VERSION)
@@ -360,6 +368,19 @@ def _validate(d: dict, path, version: int) -> dict[str, Any]:
             raise FormatError(path, "segment_start", "segment_start / segment_frames do not tile segment_rotations")
         if ((sc < k - 1) | (sc > sf - k)).any():
             raise FormatError(path, "segment_centre", f"a centre leaves fewer than window - 1 = {k - 1} frames on one side")
+    # optional keys (files written before they existed have neither)
+    anc = out["segment_anchor"] = (_arr(d, "segment_anchor", path, (max(S, 0), 2), "i") if "segment_anchor" in d
+                                   else np.full((max(S, 0), 2), -1, np.int64))
+    none = (anc == -1).all(axis=1)
+    if S > 0 and not none.all():
+        a_in, a_out, c, n = anc[~none, 0], anc[~none, 1], sc[~none], sf[~none]
+        if ((a_in < k - 1) | (a_in > c) | (a_out < c) | (a_out > n - k)).any():
+            raise FormatError(path, "segment_anchor", f"an anchor pair is not window - 1 = {k - 1} <= a_in <= centre "
+                                                      "<= a_out <= frames - window (nor -1, -1)")
+    hold = out["segment_hold"] = (_arr(d, "segment_hold", path, (max(S, 0),), "f") if "segment_hold" in d
+                                  else np.zeros(max(S, 0)))
+    if hold.size and ((hold < 0) | (hold >= 1)).any():
+        raise FormatError(path, "segment_hold", "a hold outside [0, 1)")
     del scc
     return out
 
@@ -389,9 +410,11 @@ def _build(c: dict[str, Any], path: Path) -> MotionGraph:
     g.edge_kind_ = c["edge_kind"].astype(np.int8)
     g.edge_in_scc_ = g.scc_[g.edge_src_] & g.scc_[g.edge_dst_]
     g.segments_ = [
-        Segment(c["segment_rotations"][s : s + n], c["segment_root_positions"][s : s + n], int(z), str(src), str(lab))
-        for s, n, z, src, lab in zip(c["segment_start"], c["segment_frames"], c["segment_centre"],
-                                     c["segment_source"], c["segment_label"])
+        Segment(c["segment_rotations"][s : s + n], c["segment_root_positions"][s : s + n], int(z), str(src), str(lab),
+                None if a[0] == -1 else (int(a[0]), int(a[1])), float(h))
+        for s, n, z, src, lab, a, h in zip(c["segment_start"], c["segment_frames"], c["segment_centre"],
+                                           c["segment_source"], c["segment_label"], c["segment_anchor"],
+                                           c["segment_hold"])
     ]
     g.clips_ = {
         "names": [str(x) for x in c["clip_names"]], "paths": [str(x) for x in c["clip_paths"]],

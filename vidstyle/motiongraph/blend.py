@@ -38,11 +38,18 @@ def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def blend_frames(
-    rot_a: np.ndarray, root_a: np.ndarray, rot_b: np.ndarray, root_b: np.ndarray, k: int
+    rot_a: np.ndarray, root_a: np.ndarray, rot_b: np.ndarray, root_b: np.ndarray, k: int,
+    ramp: int | None = None, start: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The k frames of a transition between placed frames A (departing) and B (arriving, already aligned
-    onto A): roots linearly, every joint rotation by slerp, both with weight ``1 - alpha(p)`` on B."""
-    t = 1.0 - blend_weight(np.arange(k), k)
+    onto A): roots linearly, every joint rotation by slerp, both with weight ``1 - alpha(p)`` on B.
+
+    ``ramp`` / ``start``: the weight moves from A to B over frames ``start .. start + ramp - 1`` only
+    (``alpha(p - start)`` of a ``ramp``-frame blend; A before, B after); default the whole ``k``."""
+    r = k if ramp is None else int(ramp)
+    if not (1 <= r and 0 <= start and start + r <= k):
+        raise ValueError(f"ramp/start: frames {start} .. {start + r - 1} must lie inside the {k}-frame blend")
+    t = 1.0 - blend_weight(np.clip(np.arange(k) - start, -1, r - 1), r)
     root = root_a * (1.0 - t)[:, None] + root_b * t[:, None]
     rot = slerp(rot_a, rot_b, np.broadcast_to(t[:, None], rot_a.shape[:2]))
     return rot, root

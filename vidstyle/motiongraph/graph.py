@@ -41,10 +41,15 @@ What an edge ``src -> dst`` puts into a walk (the walk has just shown frame ``sr
   when stored, has weight 0 and only refines the alignment). For labels (planner mismatches, walk
   labels) the first ``k`` frames count as the departing frames ``src+1..src+k``, the last ``k`` as the
   arriving ``dst-k+1..dst``. Default cost: the sum of the RMS distances of the two halves' aligned windows.
+  A segment with *anchors* (its enhancement nodes ``a_in < z < a_out``, the library frames that look like
+  the departure and the arrival) is aligned by those windows instead (``w_{a_in-k+1..a_in}`` onto A,
+  B onto ``w_{a_out..a_out+k-1}``), so the library's own travel from its nodes into ``w_z`` is kept; a
+  segment with a *hold* shows ``w_z``'s neighbourhood with full weight over about that fraction of the
+  ``2k`` frames (:func:`.blend.blend_frames` ``ramp``/``start``).
 
 A **segment** (:class:`Segment`, ``segments_``) is a short motion on the graph's skeleton:
 ``rotations`` (L, J, 4) local quaternions (x, y, z, w), ``root_positions`` (L, 3), ``centre`` (its ``w_z``,
-``k-1 <= centre <= L-k``), a ``source`` string and a ``label``.
+``k-1 <= centre <= L-k``), a ``source`` string, a ``label``, optional ``anchors`` and a ``hold``.
 
 Open API: :meth:`MotionGraph.add_segment`, :meth:`MotionGraph.add_edges`, :meth:`MotionGraph.remove_edges`,
 :meth:`MotionGraph.prune` (the largest-SCC pruning over all edges, re-run after edits; scipy.sparse.csgraph).
@@ -88,13 +93,19 @@ class EdgeKind(IntEnum):
 @dataclass
 class Segment:
     """A short motion stored in the graph, on the graph's skeleton: ``rotations`` (L, J, 4),
-    ``root_positions`` (L, 3), ``centre`` the index of its middle pose ``w_z``."""
+    ``root_positions`` (L, 3), ``centre`` the index of its middle pose ``w_z``. ``anchors``: optional
+    ``(a_in, a_out)``, the segment's enhancement nodes: enhancement edges align the departing window onto
+    ``w_{a_in-k+1..a_in}`` and the arriving window onto ``w_{a_out..a_out+k-1}`` instead of the windows
+    beside ``w_z`` (None). ``hold``: the fraction of an enhancement's ``2k`` frames, about ``w_z``, shown
+    with the segment's full weight (0: the two-half blend touches ``w_z`` at one frame)."""
 
     rotations: np.ndarray
     root_positions: np.ndarray
     centre: int
     source: str = ""
     label: str = ""
+    anchors: tuple[int, int] | None = None
+    hold: float = 0.0
 
     @property
     def n_frames(self) -> int:
@@ -348,13 +359,16 @@ class MotionGraph:
 
     # ------------------------------------------------------------------------------------------ open API
     def add_segment(self, rotations: np.ndarray, root_positions: np.ndarray, centre: int | None = None,
-                    source: str = "", label: str = "") -> int:
+                    source: str = "", label: str = "", anchors: tuple[int, int] | None = None,
+                    hold: float = 0.0) -> int:
         """Store a short motion ``W`` on the graph's skeleton and return its id (for ``add_edges``).
 
         ``rotations`` (L, J, 4) local joint quaternions (x, y, z, w; normalised here), ``root_positions``
         (L, 3) in the graph's length unit, ``centre`` the index of the middle pose ``w_z`` (default
         ``L // 2``); an enhancement needs ``window - 1`` frames on each side of it
         (``w_{z-k+1}..w_{z+k-1}``). ``source`` (e.g. ``"clip.bvh@3.25s"``) and ``label`` are kept as metadata.
+        ``anchors`` ``(a_in, a_out)``: the enhancement nodes (see :class:`Segment`), with
+        ``k - 1 <= a_in <= centre <= a_out <= L - k``; ``hold`` in [0, 1).
         """
         k = int(self.window)
         J = self.skeleton_.n_joints
@@ -374,7 +388,15 @@ class MotionGraph:
         if not (k - 1 <= c <= L - k):
             raise ValueError(f"centre: {c} leaves fewer than window - 1 = {k - 1} frames on one side of a "
                              f"{L}-frame segment (needs {k - 1} <= centre <= {L - k})")
-        self.segments_.append(Segment(rot / norm, root, c, str(source), str(label)))
+        if anchors is not None:
+            a_in, a_out = (int(x) for x in anchors)
+            if not (k - 1 <= a_in <= c <= a_out <= L - k):
+                raise ValueError(f"anchors: ({a_in}, {a_out}) must satisfy window - 1 = {k - 1} <= a_in <= centre = {c} "
+                                 f"<= a_out <= {L - k} (L - window)")
+            anchors = (a_in, a_out)
+        if not 0.0 <= float(hold) < 1.0:
+            raise ValueError(f"hold: must be in [0, 1), got {hold}")
+        self.segments_.append(Segment(rot / norm, root, c, str(source), str(label), anchors, float(hold)))
         return len(self.segments_) - 1
 
     def add_segment_from(self, motion: Motion, time: float, source: str = "", label: str = "") -> int:
@@ -522,13 +544,18 @@ class MotionGraph:
             S = self.segments_[int(s)]
             c = S.centre
             wpos = self._positions(S.rotations, S.root_positions)
-            # first half: W (w_{z-k+1}..w_z) onto A (src+1..src+k)
+            # first half: W (w_{z-k+1}..w_z, or the departure node's window) onto A (src+1..src+k)
+            a_in = c if S.anchors is None else S.anchors[0]
             pa = self._frame_positions(src[sel, None] + 1 + p)
-            D1, t1, x1, z1 = align_windows(pa, np.broadcast_to(wpos[c - k + 1 : c + 1], pa.shape), self.joint_weights_)
-            # second half: B (dst-k+1..) onto W (w_{z+1}..), over the frames W has (k or k-1)
-            m = min(k, S.n_frames - 1 - c)
+            D1, t1, x1, z1 = align_windows(pa, np.broadcast_to(wpos[a_in - k + 1 : a_in + 1], pa.shape), self.joint_weights_)
+            # second half: B (dst-k+1..) onto W (w_{z+1}.., over the frames W has (k or k-1); or the
+            # arrival node's window w_{a_out..a_out+k-1})
+            if S.anchors is None:
+                lo, m = c + 1, min(k, S.n_frames - 1 - c)
+            else:
+                lo, m = S.anchors[1], k
             pb = self._frame_positions(dst[sel, None] - k + 1 + np.arange(m))
-            D2, t2, x2, z2 = align_windows(np.broadcast_to(wpos[c + 1 : c + 1 + m], pb.shape), pb, self.joint_weights_)
+            D2, t2, x2, z2 = align_windows(np.broadcast_to(wpos[lo : lo + m], pb.shape), pb, self.joint_weights_)
             dist[sel] = self._rms(D1, k) + self._rms(D2, m)
             for r, i in enumerate(sel):
                 ws = Placement(t1[r], x1[r], z1[r])

@@ -539,8 +539,9 @@ def render_walk(graph: MotionGraph, walk: Walk, foot_lock: bool = True, ease: in
             rw2, pw2 = at_w.apply_frames(S.rotations[w2], S.root_positions[w2])
             here = here.then(Placement.from_array(graph.edge_align_[e]))
             rb, pb = here.apply_frames(graph.rotations_[fb], graph.root_positions_[fb])
-            rot[t : t + k], root[t : t + k] = blend_frames(ra, pa, rw1, pw1, k)
-            rot[t + k : t + 2 * k], root[t + k : t + 2 * k] = blend_frames(rw2, pw2, rb, pb, k)
+            held = min(k - 1, int(round(S.hold * k)))  # each half shows W alone over `held` frames
+            rot[t : t + k], root[t : t + k] = blend_frames(ra, pa, rw1, pw1, k, ramp=k - held)
+            rot[t + k : t + 2 * k], root[t + k : t + 2 * k] = blend_frames(rw2, pw2, rb, pb, k, ramp=k - held, start=held)
             t += 2 * k
         else:
             here = here.then(Placement.from_array(graph.edge_align_[e]))
