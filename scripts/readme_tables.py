@@ -230,8 +230,11 @@ def pose_table(items, root: Path) -> list[str]:
 
     # the default detectors first, then the thesis' HOG baseline; BlazePose once (the same frames)
     items = sorted(items, key=lambda x: ((x[1].get("params") or {}).get("model_params") or {}).get("detector", "hog") != "cnn")
-    seen_blazepose = False
+    seen_blazepose: set = set()
     for p, d in items:
+        # BlazePose once per set of held-out frames (the cnn and HOG files score the same frames)
+        frames_key = tuple((d.get("params") or {}).get(k) for k in ("seed", "demo_performers", "cmu_clips",
+                                                                  "views_per_clip", "seconds", "fps"))
         det = ((d.get("params") or {}).get("model_params") or {}).get("detector", "hog")
         ps = "pictorial structures, cnn detectors" if det == "cnn" else "pictorial structures, HOG detectors"
         names = {"ps": f"{ps}{' (default)' if det == 'cnn' else ' (thesis baseline)'}",
@@ -240,9 +243,9 @@ def pose_table(items, root: Path) -> list[str]:
         vp = d.get("viewpoint") or {}
         for key, block in (d.get("pcp") or {}).items():
             if key == "blazepose":
-                if seen_blazepose:
+                if frames_key in seen_blazepose:
                     continue
-                seen_blazepose = True
+                seen_blazepose.add(frames_key)
             if key == "ps":
                 c = vp.get(d.get("ps_viewpoint_method") or "")
             elif key == "blazepose":
@@ -256,13 +259,27 @@ def pose_table(items, root: Path) -> list[str]:
             if key not in (d.get("pcp") or {}):
                 lines.append(f"| {'cnn' if det == 'cnn' else 'HOG'} model's viewpoint classifier `{key}` | {d.get('n_frames')} | | | "
                              f"{accs(vp[key])} | `{_rel(p, root)}` |")
+    sets = []
+    for p, d in items:
+        q = d.get("params") or {}
+        if all(k in q for k in ("demo_performers", "cmu_clips", "views_per_clip")):
+            sets.append(f"- `{_rel(p, root)}`: {d.get('n_frames')} frames of {q['demo_performers']} held-out demo performers "
+                        f"and up to {q['cmu_clips']} held-out CMU clips, {q['views_per_clip']} azimuths each "
+                        f"(`vidstyle evaluate pose --demo-performers {q['demo_performers']} --cmu-clips {q['cmu_clips']} "
+                        f"--views-per-clip {q['views_per_clip']} --seed {q.get('seed', 0)}`)")
+    if sets:
+        lines += ["", "Held-out render sets:", "", *sets]
     notes = []
     for p, d in items:
         for key, c in sorted((d.get("viewpoint") or {}).items()):
             u = (c or {}).get("unambiguous")
             if u:
-                per = ", ".join(f"{v} {_pct(a)} (n {sum(row)})" for (v, a), row in
-                                zip(u["per_view_accuracy"].items(), u["counts"]) if sum(row))
+                from vidstyle.pose.evaluate import wilson_interval
+
+                per = ", ".join(f"{v} {_pct(a)} (n {sum(row)}; 95 % interval "
+                                + " to ".join(_pct(x) for x in wilson_interval(row[i], sum(row))) + ")"
+                                for i, ((v, a), row) in enumerate(zip(u["per_view_accuracy"].items(), u["counts"]))
+                                if sum(row))
                 notes.append(f"- viewpoint classifier `{key}` (`{_rel(p, root)}`), frames off view boundaries: {per}")
     if notes:
         lines += ["", "Viewpoint accuracy per true view, away from view boundaries:", "", *notes]

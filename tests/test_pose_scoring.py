@@ -211,3 +211,15 @@ def test_video_background_marks_the_performer(tmp_path, rng):
               if 0 <= round(x) < 160 and 0 <= round(y) < 120]
     # the moving upper body is foreground; feet planted for most of the clip join the median
     assert np.mean(np.array(inside) > 0.5) > 0.4
+
+
+def test_wilson_interval_matches_newcombes_published_values():
+    """Newcombe (1998), Statistics in Medicine 17:857, Table I, method 3 (score interval without
+    continuity correction)."""
+    from vidstyle.pose.evaluate import wilson_interval
+
+    for (hits, n), want in [((81, 263), (0.2553, 0.3662)), ((15, 148), (0.0624, 0.1605)), ((0, 20), (0.0, 0.1611)),
+                            ((1, 29), (0.0061, 0.1718))]:
+        assert wilson_interval(hits, n) == pytest.approx(want, abs=5e-5)
+    lo, hi = wilson_interval(29, 30)
+    assert lo < 29 / 30 < hi <= 1.0 and wilson_interval(0, 0) is None

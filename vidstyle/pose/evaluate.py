@@ -53,6 +53,19 @@ def confusion(true: list[str], pred: list[str], labels=VIEW_NAMES) -> dict:
             "accuracy": float(np.trace(M) / max(1, M.sum()))}
 
 
+def wilson_interval(hits: int, n: int, z: float = 1.959964) -> tuple[float, float] | None:
+    """Wilson score interval (95 % by default) of a proportion ``hits / n``; None for ``n = 0``. With
+    a few dozen frames per view a per-view accuracy is uncertain by several points, and this says how
+    many (Wilson rather than the normal approximation: it stays inside [0, 1] at 0 or n hits)."""
+    if n <= 0:
+        return None
+    p = hits / n
+    d = 1.0 + z * z / n
+    c = (p + z * z / (2 * n)) / d
+    h = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return float(max(0.0, c - h)), float(min(1.0, c + h))
+
+
 def viewpoint_scores(true: list[str], azimuths: list[float], pred: list[str], tol: float = BOUNDARY_TOL) -> dict:
     """Viewpoint confusion (rows: the nearest view of the camera azimuth, as :func:`confusion`) plus
     the scores that do not depend on how a tie is broken: ``unambiguous``, the confusion over the frames
