@@ -83,6 +83,8 @@ def train_pose(
     flip_test: bool = typer.Option(CNN_DEFAULTS["flip_test"], "--flip-test/--no-flip-test", help="cnn detector: "
                                    "average the heatmaps and viewpoint of each frame and its mirror image (twice "
                                    "the network's time)."),
+    refine: int = typer.Option(CNN_DEFAULTS["refine"], "--refine", help="cnn detector: radius (4-px cells) of the "
+                               "keypoint refinement on the full-resolution heatmaps after the tree (0 = off)."),
     augment: str = typer.Option(CNN_DEFAULTS["augment"], "--augment", help="cnn detector's training augmentation: "
                                 "flip (mirror images and colour jitter) or affine (also random scale 0.8-1.25, "
                                 "rotation up to 20 degrees and shift)."),
@@ -111,6 +113,8 @@ def train_pose(
         raise InputError(f"--viewpoint: {viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
     if not unary_weight > 0:
         raise InputError("--unary-weight: must be positive")
+    if refine < 0:
+        raise InputError(f"--refine: must be at least 0, got {refine}")
     if not fg_weight >= 0:
         raise InputError("--fg-weight: must be 0 or positive")
     if hard_rounds not in (0, 1):
@@ -126,7 +130,7 @@ def train_pose(
         from ..pose.cnn import CnnPoseModel
 
         model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
-                             channels=channels, refine=CNN_DEFAULTS["refine"], seed=seed,
+                             channels=channels, refine=refine, seed=seed,
                              stride=heatmap_stride, flip_test=flip_test, augment=augment)
     else:
         model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
