@@ -301,6 +301,25 @@ def test_reduction_interval_brackets_the_estimate_and_is_exact_for_a_constant_ra
     assert reduction_interval(plain[:1], aug[:1]) is None
 
 
+@pytest.mark.parametrize("ci,ok", [([0.41, 0.58], True), (None, True), ([0.58, 0.41], False), ([0.4], False),
+                                   ([0.4, float("nan")], False)])
+def test_metrics_reader_checks_the_reduction_interval(tmp_path, ci, ok):
+    from vidstyle.formats import FormatError
+    from vidstyle.formats.metrics import read_metrics
+
+    src = {"queries": 17, "retrieval_mpjpe_mm": 61.8, "transition_plain_mm": 169.0, "transition_augmg_mm": 84.7,
+           "recall_at_1": 0.76, "recall_at_10": 1.0, "transition_reduction_ci95": ci}
+    p = tmp_path / "augmg.json"
+    p.write_text(json.dumps({"kind": "vidstyle.metrics.augmg", "schema_version": 1, "seed": 0,
+                             "by_source": {"model": src}, "headline": {}}))
+    if ok:
+        read_metrics(p)
+    else:
+        with pytest.raises(FormatError) as e:  # NaN is refused as JSON already, before the field
+            read_metrics(p)
+        assert str(p) in str(e.value) and ("transition_reduction_ci95" in str(e.value) or "NaN" in str(e.value))
+
+
 # ------------------------------------------------------------------------------------------ formats + CLI
 def _poses_file(tmp_path: Path, take, view: str = "front") -> tuple[Path, int]:
     from vidstyle.formats.poses import PoseFrame, Poses, write_poses

@@ -155,6 +155,10 @@ def _augmg(f: Fields) -> None:
             s.number(key, min=0)
         for key in ("recall_at_1", "recall_at_10"):
             s.number(key, min=0, max=1)
+        if s.get("transition_reduction_ci95", required=False) is not None:  # optional: [low, high]
+            ci = s.array("transition_reduction_ci95", shape=(2,))
+            if not ci[0] <= ci[1]:
+                raise s.fail("transition_reduction_ci95", f"low {ci[0]} above high {ci[1]}")
     f.sub("headline")
 
 
