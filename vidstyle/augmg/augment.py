@@ -79,10 +79,9 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     --anchor/--hold``). The graph places the segment from the departure only, and the arrival follows
     it (a walk goes wherever the segment leads), like ``evaluate augmg --place first``.
     """
-    if anchor not in ("ends", "nodes"):
-        raise ValueError(f"anchor: 'ends' or 'nodes', got {anchor!r}")
-    if not 0.0 <= hold < 1.0:
-        raise ValueError(f"hold: must be in [0, 1), got {hold}")
+    from .enhance import check_placement
+
+    check_placement(anchor=anchor, hold=hold)
     from ..mocap import read_bvh
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind

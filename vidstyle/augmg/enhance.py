@@ -124,6 +124,22 @@ def enhancement_nodes(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.n
     return int(z0s[a]), int(z2s[b]), float(d0[a] + d2[b])
 
 
+PLACES = ("first", "both", "drift")
+ANCHORS = ("ends", "nodes")
+
+
+def check_placement(place: str | None = None, anchor: str | None = None, hold: float | None = None) -> None:
+    """``ValueError`` naming the first bad one of the placement options (``place`` in :data:`PLACES`,
+    ``anchor`` in :data:`ANCHORS`, ``hold`` in [0, 1)); None = not given. One check for the library
+    functions and the commands (which report it as ``--place: ...``)."""
+    if place is not None and place not in PLACES:
+        raise ValueError(f"place: first, both or drift, got {place!r}")
+    if anchor is not None and anchor not in ANCHORS:
+        raise ValueError(f"anchor: ends or nodes, got {anchor!r}")
+    if hold is not None and not 0.0 <= hold < 1.0:
+        raise ValueError(f"hold: must be in [0, 1), got {hold}")
+
+
 def _smooth(u: np.ndarray) -> np.ndarray:
     """C^1 ease ``3u^2 - 2u^3`` (``1 - alpha`` of the motion-graph blend weight)."""
     u = np.clip(u, 0.0, 1.0)
@@ -163,8 +179,7 @@ def two_half_transition(rot_a, root_a, seg_rot, seg_root, rot_b, root_b, n: int,
     weight, over the middle ``hold`` fraction of the transition: a performer who *holds* the
     transition pose (a crouch kept for a beat) is not just touched at one frame. 0 is the thesis'
     two-half blend."""
-    if not 0.0 <= hold < 1.0:
-        raise ValueError(f"hold: must be in [0, 1), got {hold}")
+    check_placement(hold=hold)
     c = (len(seg_rot) - 1) // 2 if centre is None else int(centre)
     n1 = n // 2 + 1  # output frames 0 .. n1-1 carry w_z0 .. w_z (the last one is w_z)
     r1, p1 = resample_segment(seg_rot[:c + 1], seg_root[:c + 1], n1)

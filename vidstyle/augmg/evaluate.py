@@ -200,14 +200,11 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
     arrival). ``hold``: the fraction of the transition, centred on the reference pose, during which
     the segment is followed with full weight (:func:`.enhance.two_half_transition`; 0: the thesis'
     two-half blend, which reaches ``w_z`` at one frame only)."""
-    if place not in ("first", "both", "drift"):
-        raise ValueError(f"place: 'first', 'both' or 'drift', got {place!r}")
+    from .enhance import check_placement
+
+    check_placement(place, anchor, hold)
     if segment not in ("fixed", "nodes", "adaptive"):
         raise ValueError(f"segment: 'fixed', 'nodes' or 'adaptive', got {segment!r}")
-    if anchor not in ("ends", "nodes"):
-        raise ValueError(f"anchor: 'ends' or 'nodes', got {anchor!r}")
-    if not 0.0 <= hold < 1.0:
-        raise ValueError(f"hold: must be in [0, 1), got {hold}")
     if context < 0:
         raise ValueError(f"context: must be >= 0, got {context}")
     from ..logutil import progress

@@ -69,10 +69,7 @@ def augment(
     from ..augmg.poses_io import read_frame_poses
     from ..motiongraph import MotionGraph
 
-    if anchor not in ("ends", "nodes"):
-        raise InputError(f"--anchor: ends or nodes, got {anchor!r}")
-    if not 0.0 <= hold < 1.0:
-        raise InputError(f"--hold: must be in [0, 1), got {hold}")
+    _check_placement(anchor=anchor, hold=hold)
     marks = read_marks(annotations)
     if video is not None:
         from ..formats.annotations import file_sha256, read_annotations
@@ -117,6 +114,16 @@ def augment(
     graph.save(out)
     log.info("wrote %s: %d reference points, %d enhancement edges", out, len(inserted),
              sum(len(i.edges) for i in inserted))
+
+
+def _check_placement(place: str | None = None, anchor: str | None = None, hold: float | None = None) -> None:
+    """The placement options' check (:func:`vidstyle.augmg.enhance.check_placement`) as a one-line CLI error."""
+    from ..augmg.enhance import check_placement
+
+    try:
+        check_placement(place, anchor, hold)
+    except ValueError as e:
+        raise InputError(f"--{e}") from None
 
 
 def per_source(values: list[str], option: str) -> dict:
@@ -269,12 +276,7 @@ def evaluate_augmg_cmd(
 
     if segment not in ("fixed", "nodes", "adaptive"):
         raise InputError(f"--segment: fixed, nodes or adaptive, got {segment!r}")
-    if place not in ("first", "both", "drift"):
-        raise InputError(f"--place: first, both or drift, got {place!r}")
-    if anchor not in ("ends", "nodes"):
-        raise InputError(f"--anchor: ends or nodes, got {anchor!r}")
-    if not 0.0 <= hold < 1.0:
-        raise InputError(f"--hold: must be in [0, 1), got {hold}")
+    _check_placement(place, anchor, hold)
     if context < 0:
         raise InputError(f"--context: must be at least 0, got {context}")
     if enh_window < 1:
