@@ -58,6 +58,8 @@ GRID = [  # (segment, context, scores, k, foreshortening, place, anchor, hold)
     *[(seg, 2, sc, 10, fs, place, "nodes", hold) for seg in ("fixed", "adaptive")
       for sc, fs in ((False, False), (False, True), (True, True)) for place in ("both", "drift") for hold in (0.0, 0.2)],
 ]
+#: the names of a GRID row's values, in order (the keys of each configuration in the output files)
+CONFIG = ("segment", "context", "scores", "k", "foreshortening", "place", "anchor", "hold")
 ESTIMATED = ("model", "blazepose")
 NOTE = ("seed-0 pipeline output; VAL = vidstyle pose --frames <key-2..key+2> of the validation videos, both "
         "backends")
@@ -134,8 +136,7 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
             cv_rows += accept([r for r in rows if held in r["video"]], thresholds=t)
         cv = summarise(cv_rows, m["params"])["by_source"]
         red = float(np.mean([cv[s]["transition_reduction"] for s in ESTIMATED]))
-        entry = {"pose": pose, "ps_dir": ps_dir, "segment": seg, "context": ctx, "scores": sc, "k": k,
-                 "foreshortening": fs, "place": place, "anchor": anchor, "hold": hold,
+        entry = {"pose": pose, "ps_dir": ps_dir, **dict(zip(CONFIG, (seg, ctx, sc, k, fs, place, anchor, hold))),
                  "no_threshold": {s: {kk: v for kk, v in m["by_source"][s].items()} for s in m["by_source"]},
                  "thresholds": thresholds, "estimated_reduction": red,
                  "cross_validated": {s: {kk: v for kk, v in cv[s].items()} for s in cv},
@@ -149,8 +150,7 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
               f"{cells} | {100 * red:.1f} %",
               flush=True)
     best = max(out_rows, key=lambda x: x["estimated_reduction"])
-    print(f"best: pose={best['pose'] or 'defaults'} segment={best['segment']} context={best['context']} scores={best['scores']} k={best['k']} "
-          f"foreshortening={best['foreshortening']} place={best['place']} anchor={best['anchor']} hold={best['hold']} "
+    print(f"best: pose={best['pose'] or 'defaults'} " + " ".join(f"{kk}={best[kk]}" for kk in CONFIG) + " "
           f"(estimated sources' mean reduction {100 * best['estimated_reduction']:.1f} % on "
           f"{best['queries']} validation transitions); thresholds:")
     for s, t in best["thresholds"].items():
@@ -165,21 +165,18 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
     Path("bench_results").mkdir(exist_ok=True)
     Path("bench_results/validate_augmg.json").write_text(json.dumps(
         {"dataset": dataset, "library": library, "validation_videos": VALIDATION_VIDEOS, "poses": [*ps_dirs, bp_dir],
-         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("pose", "segment", "context", "scores", "k",
-                                                                      "foreshortening", "place", "anchor", "hold",
-                                                                      "thresholds", "estimated_reduction")}},
+         "grid": GRID, "rows": out_rows, "best": {kk: best[kk] for kk in ("pose", *CONFIG, "thresholds",
+                                                                      "estimated_reduction")}},
         indent=2))
     # the chosen defaults, read by `vidstyle evaluate augmg --validation` (pipelines/kickboxing/validation/)
     Path("bench_results/validation_augmg_chosen.json").write_text(json.dumps(
         {"kind": "vidstyle.validation.augmg", "schema_version": 1, "chosen_on": VALIDATION_VIDEOS,
-         "pose": best["pose"], "segment": best["segment"], "context": best["context"], "scores": best["scores"], "k": best["k"],
-         "foreshortening": best["foreshortening"], "place": best["place"], "anchor": best["anchor"], "hold": best["hold"],
+         **{kk: best[kk] for kk in ("pose", *CONFIG)},
          "thresholds": best["thresholds"], "validation_reduction": {
              s: best["with_threshold"][s]["transition_reduction"] for s in best["with_threshold"]},
          "command": f"python scripts/validate_augmg.py {dataset} {library} {ps_dirs[0]} {bp_dir} "
                     + "".join(f"{d} " for d in ps_dirs[1:]) + f"({note})", "queries": best["queries"],
-         "table": [{"pose": r["pose"], "segment": r["segment"], "context": r["context"], "scores": r["scores"], "k": r["k"],
-                    "foreshortening": r["foreshortening"], "place": r["place"], "anchor": r["anchor"], "hold": r["hold"],
+         "table": [{**{kk: r[kk] for kk in ("pose", *CONFIG)},
                     "reduction_no_threshold": {s: round(r["no_threshold"][s]["transition_reduction"], 4)
                                                for s in r["no_threshold"]},
                     "reduction_cross_validated": {s: round(r["cross_validated"][s]["transition_reduction"], 4)
