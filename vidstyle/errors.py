@@ -1,5 +1,7 @@
 """Exceptions that the CLI turns into a one-line message and a non-zero exit."""
 
+from __future__ import annotations
+
 
 class VidstyleError(Exception):
     """Base class of every error caused by bad input (file, shape, parameter), not by a bug.
@@ -12,6 +14,18 @@ class VidstyleError(Exception):
 
 class InputError(VidstyleError):
     """A file or argument that cannot be used (missing, unreadable, wrong shape, wrong schema)."""
+
+
+class FormatError(InputError):
+    """A file that is not a valid artifact of its kind. The message names the file and the field."""
+
+    def __init__(self, path, field: str | None, problem: str) -> None:
+        self.path = None if path is None else str(path)
+        self.field = field
+        self.problem = problem
+        where = f"{self.path}: " if self.path else ""
+        what = f"{field}: " if field else ""
+        super().__init__(f"{where}{what}{problem}")
 
 
 class ParameterError(InputError):

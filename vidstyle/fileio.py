@@ -16,7 +16,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .errors import InputError
+from .errors import FormatError, InputError
 
 
 @contextlib.contextmanager
@@ -97,15 +97,47 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:
-    write_text(path, json.dumps(obj, indent=2, default=_json_default) + "\n")
+    write_text(path, json.dumps(obj, indent=2, default=json_default) + "\n")
+
+
+def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any:
+    """Parse ``path`` as UTF-8 JSON (a BOM is tolerated; UTF-16, binary, a directory are errors)."""
+    path = Path(path)
+    if path.is_dir():
+        raise FormatError(path, None, "is a directory, not a file")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise FormatError(path, None, "file not found") from None
+    except OSError as e:
+        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
+    if len(raw) > max_bytes:
+        raise FormatError(path, None, f"larger than {max_bytes} bytes")
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or (len(raw) > 1 and raw[1:2] == b"\x00"):
+        raise FormatError(path, None, "is UTF-16 text; save it as UTF-8")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise FormatError(path, None, f"not UTF-8 text (a binary file?) at byte {e.start}") from None
+    try:
+        return json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as e:
+        raise FormatError(path, None, f"not valid JSON ({e.msg} at line {e.lineno} column {e.colno})") from None
+    except (ValueError, RecursionError) as e:
+        raise FormatError(path, None, f"not valid JSON ({e})") from None
+
+
+def _reject_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
 
 
 def read_json(path: str | os.PathLike) -> Any:
-    """Strict UTF-8 JSON (see :func:`vidstyle.formats.read_json_document`): every problem is one
-    :class:`~vidstyle.formats.FormatError` naming the file. Artifacts have owner readers in
-    :mod:`vidstyle.formats`; this is for the few inputs without one (e.g. an appearance)."""
-    from .formats import read_json_document
-
+    """Strict UTF-8 JSON (:func:`read_json_document`): every problem is one :class:`FormatError` naming
+    the file. Artifacts have owner readers in :mod:`vidstyle.formats`; this is for the few inputs without
+    one (e.g. an appearance)."""
     return read_json_document(path)
 
 
@@ -119,7 +151,7 @@ def write_npy(path: str | os.PathLike, array: np.ndarray) -> None:
         np.save(tmp, array)
 
 
-def _json_default(o: Any) -> Any:
+def json_default(o: Any) -> Any:
     if isinstance(o, np.generic):
         return o.item()
     if isinstance(o, np.ndarray):

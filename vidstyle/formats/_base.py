@@ -13,59 +13,14 @@ import json
 import math
 import os
 from collections.abc import Iterable, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import _json_default, write_text
+from ..errors import FormatError
+from ..fileio import json_default, read_json_document, write_text
 
-
-class FormatError(InputError):
-    """A file that is not a valid artifact of its kind. The message names the file and the field."""
-
-    def __init__(self, path: str | os.PathLike | None, field: str | None, problem: str) -> None:
-        self.path = None if path is None else str(path)
-        self.field = field
-        self.problem = problem
-        where = f"{self.path}: " if self.path else ""
-        what = f"{field}: " if field else ""
-        super().__init__(f"{where}{what}{problem}")
-
-
-def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any:
-    """Parse ``path`` as UTF-8 JSON (a BOM is tolerated; UTF-16, binary, a directory are errors)."""
-    path = Path(path)
-    if path.is_dir():
-        raise FormatError(path, None, "is a directory, not a file")
-    try:
-        with open(path, "rb") as f:
-            raw = f.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise FormatError(path, None, "file not found") from None
-    except OSError as e:
-        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
-    if len(raw) > max_bytes:
-        raise FormatError(path, None, f"larger than {max_bytes} bytes")
-    if raw.startswith(b"\xef\xbb\xbf"):
-        raw = raw[3:]
-    if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or (len(raw) > 1 and raw[1:2] == b"\x00"):
-        raise FormatError(path, None, "is UTF-16 text; save it as UTF-8")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise FormatError(path, None, f"not UTF-8 text (a binary file?) at byte {e.start}") from None
-    try:
-        return json.loads(text, parse_constant=_reject_constant)
-    except json.JSONDecodeError as e:
-        raise FormatError(path, None, f"not valid JSON ({e.msg} at line {e.lineno} column {e.colno})") from None
-    except (ValueError, RecursionError) as e:
-        raise FormatError(path, None, f"not valid JSON ({e})") from None
-
-
-def _reject_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a JSON number")
+__all__ = ["FormatError", "read_json_document"]  # re-exported: formats' readers raise and use them
 
 
 def check_header(
@@ -95,7 +50,7 @@ def header(kind: str, version: int) -> dict[str, Any]:
 
 def write_json_document(path: str | os.PathLike, doc: Any) -> None:
     """Atomic, UTF-8, finite numbers only (``allow_nan=False``), newline at the end."""
-    write_text(path, json.dumps(doc, indent=2, allow_nan=False, default=_json_default) + "\n")
+    write_text(path, json.dumps(doc, indent=2, allow_nan=False, default=json_default) + "\n")
 
 
 def write_checked(path: str | os.PathLike, doc: dict, parse, what: str) -> None:

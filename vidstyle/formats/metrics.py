@@ -244,12 +244,12 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
     """Validate ``doc`` (of the kind it declares, or ``kind``, which is then set) and write it atomically."""
     import json
 
-    from ._base import _json_default
+    from ..fileio import json_default
 
     d = dict(doc.doc if isinstance(doc, Metrics) else doc)
     if kind is not None:
         d = {"kind": kind, "schema_version": SCHEMA_VERSION, **{k: v for k, v in d.items() if k not in ("kind", "schema_version")}}
-    d = json.loads(json.dumps(d, default=_json_default, allow_nan=True), parse_constant=lambda c: None)
+    d = json.loads(json.dumps(d, default=json_default, allow_nan=True), parse_constant=lambda c: None)
     parse_metrics(d, path)
     write_json_document(path, d)
 

@@ -251,8 +251,8 @@ def read_style(path: str | os.PathLike) -> Style:
 def write_style(path: str | os.PathLike, style: Style) -> None:
     import json
 
-    from ._base import _json_default
+    from ..fileio import json_default
 
-    doc = json.loads(json.dumps(style_to_dict(style), default=_json_default))
+    doc = json.loads(json.dumps(style_to_dict(style), default=json_default))
     parse_style(doc, path)  # an invalid style never reaches disk
     write_json_document(path, doc)
