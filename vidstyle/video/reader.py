@@ -12,6 +12,11 @@ presentation timestamp and the key frames; after that
   to each tick of the working clock, so constant and variable frame rate both work) and in space with
   area averaging (libswscale). The method runs at 20 fps on a figure about 60-100 px tall.
 
+Frames come *upright*, as a player shows them: the stream's display matrix (phones store portrait video
+as rotated landscape pictures) is applied exactly (:mod:`vidstyle.video.orientation`), so ``width`` and
+``height`` and every pixel coordinate refer to the displayed frame. ``autorotate=False`` gives the
+decoded pictures as coded.
+
 Unreadable, empty and truncated input raises :class:`vidstyle.errors.InputError` naming the file.
 """
 
@@ -28,6 +33,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .orientation import (
+    UPRIGHT,
+    Orientation,
+    orientation_from_matrix,
+    orientation_from_rotate_tag,
+    parse_display_matrix,
+    rotation_of,
+)
 
 log = logging.getLogger(__name__)
 
@@ -45,9 +58,20 @@ class VideoInfo:
     fps: float
     """average rate: (frames - 1) / (last timestamp - first timestamp); 0 for a one-frame video"""
     width: int
+    """displayed width (after the display matrix); the decoded pictures' is ``coded_size[0]``"""
     height: int
+    """displayed height"""
     timestamps: np.ndarray
     """float64 (frames,), seconds from the first frame, increasing"""
+    orientation: Orientation = UPRIGHT
+    """how the decoded pictures are turned for display (from the stream's display matrix)"""
+    rotation: float = 0.0
+    """the display matrix's counter-clockwise rotation in degrees (as ffprobe's ``rotation``; 0 if none)"""
+
+    @property
+    def coded_size(self) -> tuple[int, int]:
+        """(width, height) of the decoded pictures, before the display matrix"""
+        return self.orientation.coded_size(self.width, self.height)
 
     @property
     def duration(self) -> float:
@@ -80,12 +104,37 @@ def _open(path: Path):
     return container
 
 
+def _display_matrix(stream, packet) -> tuple[bool, tuple[int, ...] | None]:
+    """(a picture was decoded, its display matrix or None) for one demuxed packet."""
+    import av
+
+    try:
+        frames = stream.decode(packet)
+    except (av.error.FFmpegError, ValueError):
+        return False, None
+    for frame in frames:
+        for side in frame.side_data:
+            if getattr(side.type, "name", str(side.type)) == "DISPLAYMATRIX":
+                return True, parse_display_matrix(bytes(side))
+        return True, None
+    return False, None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _reason(e: Exception) -> str:
     return " ".join(str(getattr(e, "strerror", None) or e).split()) or type(e).__name__
 
 
-def probe(path: str | os.PathLike) -> VideoInfo:
-    """Index ``path`` by demuxing (not decoding) its video stream."""
+def probe(path: str | os.PathLike, autorotate: bool = True) -> VideoInfo:
+    """Index ``path`` by demuxing its video stream (decoding only the first picture, for its display
+    matrix). ``autorotate=False``: report the decoded pictures' size and no orientation."""
     import av
 
     path = Path(path)
@@ -95,10 +144,15 @@ def probe(path: str | os.PathLike) -> VideoInfo:
         tb = stream.time_base or Fraction(1, 1)
         pts: list[int] = []
         missing_pts = 0
+        matrix = None
+        need_matrix = True
         try:
             for packet in container.demux(stream):
                 if packet.size == 0:  # flush packet at the end
                     continue
+                if need_matrix:  # decode until the first picture: its side data carries the display matrix
+                    found, matrix = _display_matrix(stream, packet)
+                    need_matrix = not found and len(pts) < 64
                 if packet.pts is None:
                     missing_pts += 1
                     pts.append(packet.dts if packet.dts is not None else len(pts))
@@ -108,8 +162,20 @@ def probe(path: str | os.PathLike) -> VideoInfo:
             raise InputError(f"{path}: truncated or corrupt video ({_reason(e)})") from None
         width = int(stream.codec_context.width or 0)
         height = int(stream.codec_context.height or 0)
+        rotate_tag = stream.metadata.get("rotate")
     finally:
         container.close()
+    if matrix is not None:
+        orientation = orientation_from_matrix(matrix, str(path))
+        rotation = float(rotation_of(matrix))
+    else:
+        orientation = orientation_from_rotate_tag(rotate_tag, str(path))
+        rotation = -float(rotate_tag) if rotate_tag not in (None, "") and _is_number(rotate_tag) else 0.0
+    if not autorotate:
+        orientation, rotation = UPRIGHT, 0.0
+    if not orientation.identity:
+        log.info("%s: display matrix: %s", path, orientation.describe())
+    width, height = orientation.display_size(width, height)
     if not pts:
         raise InputError(f"{path}: cannot be read as video (no frame could be decoded)")
     if missing_pts:
@@ -121,7 +187,7 @@ def probe(path: str | os.PathLike) -> VideoInfo:
     # exact rational arithmetic, so that 39 frames over 39 * 1/20 s give 20.0, not 19.999999999999996
     span = int(order[-1] - order[0])
     fps = float(Fraction(len(t) - 1) / (span * Fraction(tb))) if len(t) > 1 and span > 0 else 0.0
-    info = VideoInfo(str(path), len(order), float(fps), width, height, t)
+    info = VideoInfo(str(path), len(order), float(fps), width, height, t, orientation, rotation)
     info.__dict__["_pts"] = order  # the raw timestamps, for exact seeking (not part of the public view)
     return info
 
@@ -133,7 +199,8 @@ class VideoReader:
     than ``fps`` keeps its own frames. ``height``: working height in pixels, width scaled to keep the
     aspect ratio (``None``: native size); with ``enlarge=False`` a video not taller than ``height`` keeps
     its size. ``gray``: single-channel frames. Frames are uint8, BGR (OpenCV's
-    order) unless ``gray``. Use as a context manager, or call :meth:`close`.
+    order) unless ``gray``, upright as a player shows them (the display matrix applied; ``autorotate=False``
+    keeps the decoded pictures as coded). Use as a context manager, or call :meth:`close`.
     """
 
     def __init__(
@@ -143,13 +210,15 @@ class VideoReader:
         height: int | None = None,
         gray: bool = False,
         enlarge: bool = True,
+        autorotate: bool = True,
     ) -> None:
         if fps is not None and not fps > 0:
             raise InputError(f"fps: must be positive, got {fps}")
         if height is not None and not (isinstance(height, (int, np.integer)) and height >= 8):
             raise InputError(f"height: must be an integer of at least 8 pixels, got {height!r}")
         self.path = Path(path)
-        self.info = probe(self.path)
+        self.info = probe(self.path, autorotate=autorotate)
+        self.orientation = self.info.orientation
         if self.info.width <= 0 or self.info.height <= 0:
             raise InputError(f"{self.path}: cannot be read as video (no frame size)")
         self.gray = gray
@@ -247,13 +316,15 @@ class VideoReader:
             from av.video.reformatter import VideoReformatter
 
             self._reformatter = VideoReformatter()
-        if (frame.width, frame.height) == self.size:
+        cw, ch = self.orientation.coded_size(*self.size)  # working size before the display matrix
+        if (frame.width, frame.height) == (cw, ch):
             img = self._reformatter.reformat(frame, format="bgr24").to_ndarray()
         else:
-            interp = "AREA" if self.size[1] < frame.height else "BILINEAR"
-            img = self._reformatter.reformat(frame, width=self.size[0], height=self.size[1], format="bgr24",
+            interp = "AREA" if ch < frame.height else "BILINEAR"
+            img = self._reformatter.reformat(frame, width=cw, height=ch, format="bgr24",
                                              interpolation=interp).to_ndarray()
         img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) if self.gray else np.ascontiguousarray(img)
+        img = self.orientation.apply(img)
         img.setflags(write=False)
         return img
 
