@@ -43,7 +43,7 @@ def take():
 
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
-    from vidstyle.augmg.library import LibraryParams, make_library
+    from vidstyle.demo.library import LibraryParams, make_library
 
     out = tmp_path_factory.mktemp("lib") / "lib"
     make_library(out, LibraryParams(performers=2, action_seconds=3.0), jobs=1)
@@ -111,7 +111,7 @@ def test_library_holds_each_pose_in_a_context_clip_but_no_action_to_action_trans
 
 
 def test_cmu_retarget_keeps_every_unbranched_bone_direction(cmu_dir):
-    from vidstyle.augmg.library import retarget_rest_corrected
+    from vidstyle.mocap.retarget import retarget_rest_corrected
     from vidstyle.demo.skeleton import build_skeleton
     from vidstyle.mocap import forward_kinematics, read_bvh
 
@@ -285,7 +285,7 @@ def test_place_segment_anchored_at_nodes_recovers_the_rigid_move(rng):
 
 
 def test_reduction_interval_brackets_the_estimate_and_is_exact_for_a_constant_ratio(rng):
-    from vidstyle.augmg.evaluate import reduction_interval
+    from vidstyle.evaluation.augmg import reduction_interval
 
     plain = rng.uniform(50, 200, 17)
     assert reduction_interval(plain, 0.6 * plain) == pytest.approx([0.4, 0.4])  # every resample: 1 - 0.6
