@@ -28,7 +28,7 @@ every configuration is scored with each, and the winner's settings are recorded 
 Prints the tables and writes bench_results/validate_augmg.json (every row) and
 bench_results/validation_augmg_chosen.json (the chosen defaults with the table they won on; it is
 committed as ``pipelines/kickboxing/validation/augmg.json``, and the defaults of ``vidstyle augment`` /
-``evaluate augmg`` in :mod:`vidstyle.commands.augmg` are its values).
+``evaluate augmg``, in :mod:`vidstyle.augmg.defaults`, are its values).
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def search_thresholds(rows: list[dict]) -> tuple[dict, float]:
     """Thresholds ``{"max_match_cost", "max_enh_cost", "min_gain_mm"}`` maximising the transition-error
     reduction of ``rows`` (one source); candidates are deciles of the rows' own values (None = no
     threshold). Returns (thresholds, reduction)."""
-    from vidstyle.augmg.evaluate import accept
+    from vidstyle.evaluation.augmg import accept
 
     def grid(key: str) -> list:
         vals = [r[key] for r in rows if r[key] is not None]
@@ -108,10 +108,9 @@ def pose_settings(ps_dir: str) -> dict:
 
 
 def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str = NOTE) -> None:
-    from vidstyle.augmg.evaluate import accept, evaluate_augmg, summarise  # noqa: F401
-    from vidstyle.commands.augmg import _read_poses_dir
+    from vidstyle.evaluation.augmg import accept, evaluate_augmg, read_poses_dir, summarise
 
-    bp = _read_poses_dir(Path(bp_dir))
+    bp = read_poses_dir(Path(bp_dir))
     sources = ("model", "blazepose", "gt", "noisy")
     out_rows = []
     hdr = (f"{'pose':18} {'segment':8} {'ctx':>3} {'scores':>6} {'k':>3} {'fore':>5} {'place':>5} {'anchor':>6} "
@@ -121,10 +120,11 @@ def main(dataset: str, library: str, ps_dirs: list[str], bp_dir: str, note: str 
           "(2-fold cross-validated over the takes)")
     print(hdr + " | estimated sources' mean (cross-validated)")
     for (pose, ps_dir), (seg, ctx, sc, k, fs, place, anchor, hold) in [(v, g) for v in [(pose_settings(d), d) for d in ps_dirs] for g in GRID]:
-        poses = dict([_read_poses_dir(Path(ps_dir)), bp])
+        poses = dict([read_poses_dir(Path(ps_dir)), bp])
+        # thresholds=None: every row as it comes (the thresholds are searched below)
         m = evaluate_augmg(Path(dataset), Path(library), sources=sources, poses=poses, segment=seg, context=ctx,
                            use_scores=sc, k=k, foreshortening=fs, place=place, anchor=anchor, hold=hold,
-                           videos=VALIDATION_VIDEOS)
+                           thresholds=None, videos=VALIDATION_VIDEOS)
         rows = m["rows"]
         thresholds = {s: search_thresholds([r for r in rows if r["source"] == s])[0] for s in sources}
         thr = summarise(accept(rows, thresholds=thresholds), m["params"])["by_source"]

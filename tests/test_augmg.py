@@ -28,7 +28,7 @@ from vidstyle.augmg.projection import (
     relative_azimuth,
 )
 from vidstyle.cli import app
-from vidstyle.commands import augmg as augmg_cmd
+from vidstyle.augmg import defaults as augmg_defaults
 from vidstyle.demo.dataset import DatasetParams, make_performer, make_take
 from vidstyle.demo.timeline import apply_transition_styles, build_take, performance_plan
 from vidstyle.demo.transitions import TRANSITION_KINDS
@@ -43,7 +43,7 @@ def take():
 
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
-    from vidstyle.augmg.library import LibraryParams, make_library
+    from vidstyle.demo.library import LibraryParams, make_library
 
     out = tmp_path_factory.mktemp("lib") / "lib"
     make_library(out, LibraryParams(performers=2, action_seconds=3.0), jobs=1)
@@ -111,7 +111,7 @@ def test_library_holds_each_pose_in_a_context_clip_but_no_action_to_action_trans
 
 
 def test_cmu_retarget_keeps_every_unbranched_bone_direction(cmu_dir):
-    from vidstyle.augmg.library import retarget_rest_corrected
+    from vidstyle.mocap.retarget import retarget_rest_corrected
     from vidstyle.demo.skeleton import build_skeleton
     from vidstyle.mocap import forward_kinematics, read_bvh
 
@@ -250,7 +250,9 @@ def test_two_half_transition_hold_follows_the_segment_over_the_held_middle(rng):
         assert on[mid] and not on[0] and not on[-1]
     assert two_half_transition(*args, centre=c, hold=0.0)[1][mid - 1, 0] < 0.5  # hold 0: one frame only
     assert np.count_nonzero(np.isclose(two_half_transition(*args, centre=c, hold=0.5)[1], seg_root[0]).all(-1)) >= n // 2
-    with pytest.raises(ValueError, match="hold"):
+    from vidstyle.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="hold"):
         two_half_transition(*args, hold=1.0)
 
 
@@ -285,7 +287,7 @@ def test_place_segment_anchored_at_nodes_recovers_the_rigid_move(rng):
 
 
 def test_reduction_interval_brackets_the_estimate_and_is_exact_for_a_constant_ratio(rng):
-    from vidstyle.augmg.evaluate import reduction_interval
+    from vidstyle.evaluation.augmg import reduction_interval
 
     plain = rng.uniform(50, 200, 17)
     assert reduction_interval(plain, 0.6 * plain) == pytest.approx([0.4, 0.4])  # every resample: 1 - 0.6
@@ -353,6 +355,37 @@ def test_match_pose_writes_matches_that_read_back(tmp_path, take, library):
     assert holder in Path(c[0].clip).stem  # the pose is found in the clip that holds it
 
 
+def test_match_pose_cli_and_library_defaults_write_the_same_bytes(tmp_path, take, library):
+    """A Python user calling vidstyle.augmg.match_poses with its defaults gets the CLI's file exactly."""
+    from vidstyle.augmg import match_poses
+    from vidstyle.formats.matches import write_matches
+
+    poses, _ = _poses_file(tmp_path, take)
+    cli, lib = tmp_path / "cli.json", tmp_path / "lib.json"
+    r = CliRunner().invoke(app, ["match-pose", str(poses), "--library", str(library / "clips"), "--out", str(cli)])
+    assert r.exit_code == 0, r.output
+    write_matches(lib, match_poses(poses, [library / "clips"]))
+    assert cli.read_bytes() == lib.read_bytes()
+    assert len(json.loads(lib.read_text())["frames"][0]["candidates"]) == augmg_defaults.K
+
+
+def test_library_parameter_checks_come_before_any_file_is_read(tmp_path):
+    from vidstyle.augmg import augment, match_poses
+    from vidstyle.errors import ParameterError
+    from vidstyle.evaluation.augmg import evaluate
+
+    none = tmp_path / "none"
+    for call, param in ((lambda: match_poses(none, [none], k=0), "k"),
+                        (lambda: augment(none, none, [none], context=-1), "context"),
+                        (lambda: augment(none, none, [none], max_match_cost={"model": float("nan")}), "max_match_cost"),
+                        (lambda: evaluate(none, none, segment="middle"), "segment"),
+                        (lambda: evaluate(none, none, min_gain=float("inf")), "min_gain"),
+                        (lambda: evaluate(none, none, enh_window=0), "enh_window")):
+        with pytest.raises(ParameterError) as e:
+            call()
+        assert e.value.param == param
+
+
 def test_bad_matches_file_names_the_field(tmp_path):
     from vidstyle.formats import FormatError
     from vidstyle.formats.matches import read_matches
@@ -403,8 +436,8 @@ def test_augment_adds_enhancement_edges_and_a_discarded_mark_adds_none(tmp_path,
         if expect:
             assert len(g2.segments_) == 1 and g2.segments_[0].label == f"{t['from']}->{t['to']}"
             S = g2.segments_[0]  # the CLI's validated defaults: anchored at the clip's nodes, with a hold
-            assert S.hold == pytest.approx(augmg_cmd.HOLD)
-            assert (S.anchors is not None) == (augmg_cmd.ANCHOR == "nodes")
+            assert S.hold == pytest.approx(augmg_defaults.HOLD)
+            assert (S.anchors is not None) == (augmg_defaults.ANCHOR == "nodes")
         # synthesis of that pair goes through the enhancement exactly when the mark is accepted
         walk = plan_walk(g2, [Step(t["from"], 20), Step(t["to"], 20)], strict=False)
         used = {int(g2.edge_kind_[e]) for e in walk.transitions_used}
@@ -426,6 +459,44 @@ def test_evaluate_augmg_beats_the_plain_transition_with_true_2d(tmp_path, librar
     assert gt["transition_augmg_mm"] < gt["transition_plain_mm"]
     assert m["by_source"]["noisy"]["retrieval_mpjpe_mm"] >= gt["oracle_mpjpe_mm"]
     assert set(m["headline"]) >= {"augmg.retrieval_mpjpe", "augmg.transition_error_plain", "augmg.transition_error_augmg"}
+
+
+@pytest.mark.slow
+def test_evaluate_augmg_cli_equals_the_library_and_reports_in_the_datasets_unit(tmp_path, library):
+    """vidstyle evaluate augmg and vidstyle.evaluation.augmg.evaluate with defaults write the same metrics
+    file byte for byte; the millimetres come from the dataset manifest's mocap unit (twice the unit: twice
+    every distance that does not depend on the acceptance thresholds), and a manifest without it is refused."""
+    import shutil
+
+    from vidstyle.demo.dataset import make_dataset
+    from vidstyle.errors import InputError
+    from vidstyle.evaluation.augmg import evaluate
+    from vidstyle.formats.metrics import AUGMG, write_metrics
+
+    ds = tmp_path / "ds"
+    make_dataset(ds, DatasetParams.small(performers=1, views=("front",), performances=1, performance_seconds=24.0,
+                                         render=False), jobs=1)
+    cli, lib = tmp_path / "cli.json", tmp_path / "lib.json"
+    r = CliRunner().invoke(app, ["evaluate", "augmg", "--dataset", str(ds), "--library", str(library), "--out", str(cli)])
+    assert r.exit_code == 0, r.output
+    metrics, doc = evaluate(ds, library)
+    assert doc is None
+    write_metrics(lib, metrics, kind=AUGMG)
+    assert cli.read_bytes() == lib.read_bytes()
+    gt = metrics["by_source"]["gt"]
+    assert gt["queries"] > 0 and metrics["params"]["thresholds"]["gt"]["min_gain_mm"] == augmg_defaults.MIN_GAIN["gt"]
+    double, _ = evaluate(ds, library, unit_mm=2 * 56.4, min_gain=None, max_match_cost=None, max_enh_cost=None)
+    single, _ = evaluate(ds, library, min_gain=None, max_match_cost=None, max_enh_cost=None)
+    for key in ("transition_plain_mm", "transition_enhanced_mm", "retrieval_mpjpe_mm", "oracle_mpjpe_mm"):
+        assert double["by_source"]["gt"][key] == pytest.approx(2 * single["by_source"]["gt"][key], rel=1e-12)
+    man = json.loads((ds / "dataset.json").read_text())
+    assert man["mocap_unit_m"] == pytest.approx(0.0564)
+    bare = tmp_path / "bare"
+    shutil.copytree(ds, bare)
+    del man["mocap_unit_m"]
+    (bare / "dataset.json").write_text(json.dumps(man))
+    with pytest.raises(InputError, match="mocap_unit_m"):
+        evaluate(bare, library)
 
 
 def test_bundled_demo_annotations_mark_frames_inside_the_true_transitions():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from vidstyle.augmg.enhance import adaptive_halves, window_distance
-from vidstyle.augmg.evaluate import accept
+from vidstyle.evaluation.augmg import accept
 from vidstyle.augmg.index import LibraryClip, PoseIndex, weighted_feature_distance, window_query
 from vidstyle.augmg.keypoints import BONE_INDEX
 from vidstyle.augmg.projection import angle_features, facing_normalised, facing_of_keypoints, project
@@ -128,7 +128,7 @@ def test_report_shows_one_animated_entry_per_accepted_annotation(tmp_path):
     library pose, plain / AugMG / true animations) per accepted mark, none for the discarded one."""
     from typer.testing import CliRunner
 
-    from vidstyle.augmg.library import LibraryParams, make_library
+    from vidstyle.demo.library import LibraryParams, make_library
     from vidstyle.cli import app
     from vidstyle.demo.dataset import DatasetParams, make_dataset
     from vidstyle.formats.annotations import Annotations, Transition, VideoAnnotations, write_annotations

@@ -24,11 +24,15 @@ rerun with changed decisions gives exactly the graph those decisions describe.
 from __future__ import annotations
 
 import logging
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
+from . import defaults as D
 
 log = logging.getLogger(__name__)
 
@@ -56,12 +60,12 @@ def _runs(labels: np.ndarray, clip: np.ndarray, code: int) -> tuple[np.ndarray, 
     return np.flatnonzero(on & ~nxt), np.flatnonzero(on & ~prev)
 
 
-def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int = 10, n_views: int = 12,
-                  elevation_deg: float = 10.0, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
-                  edges_per_side: int = 3, enhancement_cost: float = 0.5, context: int = 2,
-                  use_scores: bool = False, max_match_cost: float | None = None, video_fps: float = 20.0,
-                  jobs: int = 1, foreshortening: bool = False, anchor: str = "ends", hold: float = 0.0,
-                  max_span_s: float = 1.0) -> list[Insertion]:
+def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int = D.K, n_views: int = D.N_VIEWS,
+                  elevation_deg: float = D.ELEVATION_DEG, max_x: int = 10, max_y: int = 10, lam: float = 0.5,
+                  edges_per_side: int = D.EDGES_PER_SIDE, enhancement_cost: float = D.ENHANCEMENT_COST,
+                  context: int = D.CONTEXT, use_scores: bool = D.SCORES, max_match_cost: float | None = None,
+                  video_fps: float = D.VIDEO_FPS, jobs: int = 1, foreshortening: bool = D.FORESHORTENING,
+                  anchor: str = D.ANCHOR, hold: float = D.HOLD, max_span_s: float = 1.0) -> list[Insertion]:
     """Add enhancement segments and edges to ``graph`` in place (module docstring).
 
     ``marks``: :func:`.annotations_io.read_marks` items; ``poses``: video stem -> {frame: FramePose}.
@@ -78,10 +82,12 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     ``anchors``); ``hold``: the segment's hold (the same options as ``vidstyle evaluate augmg
     --anchor/--hold``). The graph places the segment from the departure only, and the arrival follows
     it (a walk goes wherever the segment leads), like ``evaluate augmg --place first``.
-    """
-    from .enhance import check_placement
 
-    check_placement(anchor=anchor, hold=hold)
+    Defaults: the validated ones (:mod:`.defaults`); ``max_match_cost`` is one source's threshold
+    (:func:`augment` picks it from :data:`.defaults.MAX_MATCH_COST` by the poses' source).
+    """
+    check_augment_params(k=k, n_views=n_views, edges_per_side=edges_per_side, context=context, anchor=anchor,
+                         hold=hold, max_match_cost=max_match_cost)
     from ..mocap import read_bvh
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind
@@ -201,3 +207,114 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
                  a_name, b_name, clips[c].path, t, len(ok))
     graph.prune()
     return out
+
+
+def check_augment_params(k: int = D.K, n_views: int = D.N_VIEWS, edges_per_side: int = D.EDGES_PER_SIDE,
+                         context: int = D.CONTEXT, anchor: str = D.ANCHOR, hold: float = D.HOLD,
+                         max_match_cost=None) -> None:
+    """:class:`~vidstyle.errors.ParameterError` naming the first bad parameter of :func:`augment_graph` /
+    :func:`augment` (``max_match_cost``: a number, None, or per source ``{source or "*": number or None}``)."""
+    from .enhance import check_placement
+
+    check_placement(anchor=anchor, hold=hold)
+    for name, value, low in (("k", k, 1), ("views", n_views, 1), ("edges_per_side", edges_per_side, 1),
+                             ("context", context, 0)):
+        if value < low:
+            raise ParameterError(name, f"must be at least {low}, got {value}")
+    check_thresholds(max_match_cost=max_match_cost)
+
+
+def check_thresholds(**thresholds) -> None:
+    """:class:`~vidstyle.errors.ParameterError` unless every threshold is None (none) or a finite number;
+    a value may also be a dict ``{source or "*": number or None}`` (per 2D source)."""
+    for name, value in thresholds.items():
+        for source, v in (value.items() if isinstance(value, dict) else [(None, value)]):
+            if v is None:
+                continue
+            try:
+                ok = bool(np.isfinite(float(v)))
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                where = "" if source is None else f"{source}="
+                raise ParameterError(name, f"{where}{v!r}: must be a finite number (or None for no threshold)")
+
+
+def source_threshold(values, source: str | None):
+    """The threshold of ``source`` from a number / None (every source) or a per-source dict
+    ``{source or "*": number or None}`` (``"*"``: every source not named; a source not named and no
+    ``"*"``: None, no threshold)."""
+    if not isinstance(values, dict):
+        return values
+    return values.get(source, values.get("*"))
+
+
+def augment(graph, annotations: str | os.PathLike, library: Sequence[str | os.PathLike],
+            video: str | os.PathLike | None = None, poses: Sequence[str | os.PathLike] = (),
+            pose_model: str | os.PathLike | None = None, pose_scales: list[float] | None = D.POSE_SCALES,
+            k: int = D.K, views: int = D.N_VIEWS, edges_per_side: int = D.EDGES_PER_SIDE,
+            enhancement_cost: float = D.ENHANCEMENT_COST, context: int = D.CONTEXT, scores: bool = D.SCORES,
+            foreshortening: bool = D.FORESHORTENING, max_match_cost=D.MAX_MATCH_COST, anchor: str = D.ANCHOR,
+            hold: float = D.HOLD, jobs: int = 1) -> tuple[object, list[Insertion]]:
+    """``vidstyle augment`` as a library call: insert enhancement nodes for the accepted transition marks
+    of ``annotations`` into ``graph`` (a :class:`~vidstyle.motiongraph.MotionGraph`, changed in place, or
+    the path of a plain graph file, loaded after the checks) and return (the graph, what was inserted);
+    save the graph with its ``save``.
+
+    The marked frames' poses come from ``poses`` (poses.json files of the pose stage, one per video) or
+    are estimated with ``pose_model`` (pictorial structures, at ``pose_scales``; needs ``video``, whose
+    marks alone are used when given). ``max_match_cost``: a number, None or per pose source
+    (``{"model": .., "blazepose": .., "*": ..}``; the source is the poses' backend, ``model`` for
+    pictorial structures). Other parameters: :func:`augment_graph`; defaults: :mod:`.defaults` (the
+    CLI's). Every parameter is checked before any file is read."""
+    from ..formats.annotations import file_sha256, read_annotations
+    from ..formats.poses import read_poses
+    from ..motiongraph import MotionGraph
+    from .annotations_io import read_marks
+    from .poses_io import read_frame_poses
+
+    check_augment_params(k=k, n_views=views, edges_per_side=edges_per_side, context=context, anchor=anchor,
+                         hold=hold, max_match_cost=max_match_cost)
+    if pose_model is not None and video is None:
+        raise ParameterError("pose_model", "give video too (the poses of its marked frames are estimated)")
+    marks = read_marks(annotations)
+    if video is not None:
+        video = Path(video)
+        if not video.is_file():
+            raise ParameterError("video", f"{video}: no such file")
+        ann = read_annotations(annotations)
+        va = next((v for v in ann.videos if Path(v.path).stem == video.stem), None)
+        if va is not None and va.sha256 != file_sha256(video):
+            raise InputError(f"{annotations}: {video} is not the annotated video (its sha256 differs)")
+        marks = [m for m in marks if m["video"] == video.stem]
+        if not marks:
+            raise InputError(f"{annotations}: no transition marks for {video.name}")
+    by_video: dict = {}
+    if pose_model is not None:
+        frames = sorted({m["frame"] + d for m in marks for d in range(-context, context + 1) if m["frame"] + d >= 0})
+        by_video[video.stem] = estimate_mark_poses(pose_model, video, frames, pose_scales)
+    source = "model" if pose_model is not None else None
+    for p in poses:
+        source = source or ("model" if read_poses(p).backend == "ps" else str(read_poses(p).backend))
+        vid, frames = read_frame_poses(p)
+        by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
+    if not by_video and any(m["status"] == "accepted" for m in marks):
+        raise ParameterError("poses", "give poses.json files of the marked frames, or pose_model with video")
+    if not isinstance(graph, MotionGraph):
+        graph = MotionGraph.load(graph)
+    fps = next((m["fps"] for m in marks), D.VIDEO_FPS)
+    return graph, augment_graph(graph, marks, by_video, library, k=k, n_views=views, edges_per_side=edges_per_side,
+                                enhancement_cost=enhancement_cost, context=context, use_scores=scores,
+                                foreshortening=foreshortening, anchor=anchor, hold=hold,
+                                max_match_cost=source_threshold(max_match_cost, source), video_fps=fps, jobs=jobs)
+
+
+def estimate_mark_poses(model: str | os.PathLike, video: str | os.PathLike, frames: list[int],
+                        scales: list[float] | None = None) -> dict:
+    """{frame: :class:`.poses_io.FramePose`} of ``frames`` of ``video`` by the pose stage (pictorial
+    structures ``model``; ``scales``: multi-scale inference)."""
+    from ..pose.run import estimate_video
+    from .poses_io import FramePose
+
+    doc = estimate_video(Path(video), backend="ps", model_path=Path(model), frames=frames, jobs=1, scales=scales)
+    return {f.frame: FramePose(int(f.frame), str(f.viewpoint), f.xy.copy(), f.scores.copy()) for f in doc.frames}

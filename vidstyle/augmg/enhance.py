@@ -129,15 +129,17 @@ ANCHORS = ("ends", "nodes")
 
 
 def check_placement(place: str | None = None, anchor: str | None = None, hold: float | None = None) -> None:
-    """``ValueError`` naming the first bad one of the placement options (``place`` in :data:`PLACES`,
-    ``anchor`` in :data:`ANCHORS`, ``hold`` in [0, 1)); None = not given. One check for the library
-    functions and the commands (which report it as ``--place: ...``)."""
+    """:class:`~vidstyle.errors.ParameterError` naming the first bad one of the placement options
+    (``place`` in :data:`PLACES`, ``anchor`` in :data:`ANCHORS`, ``hold`` in [0, 1)); None = not given.
+    One check for the library functions; the commands show it as ``--place: ...``."""
+    from ..errors import ParameterError
+
     if place is not None and place not in PLACES:
-        raise ValueError(f"place: first, both or drift, got {place!r}")
+        raise ParameterError("place", f"first, both or drift, got {place!r}")
     if anchor is not None and anchor not in ANCHORS:
-        raise ValueError(f"anchor: ends or nodes, got {anchor!r}")
+        raise ParameterError("anchor", f"ends or nodes, got {anchor!r}")
     if hold is not None and not 0.0 <= hold < 1.0:
-        raise ValueError(f"hold: must be in [0, 1), got {hold}")
+        raise ParameterError("hold", f"must be in [0, 1), got {hold}")
 
 
 def _smooth(u: np.ndarray) -> np.ndarray:

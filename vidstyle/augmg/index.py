@@ -351,3 +351,23 @@ def _window_cost(index: PoseIndex, view: int, cand: np.ndarray, feats: np.ndarra
         dist = weighted_feature_distance(feats[d], F[jc], None if w is None else w[d])
         total += dist.min(axis=1)
     return total / len(off)
+
+
+def query_views(index, uv: np.ndarray, az: float, k: int, spread: int):
+    """kNN of one 2D pose ``uv`` (15, 2) at the view nearest ``az`` (degrees relative to the facing) and,
+    with ``spread`` > 0, at that many neighbouring views either side (a named viewpoint is a class), merged
+    by cost: ((1, <=k) library frame ids, (1, <=k) costs) of a fitted :class:`PoseIndex`."""
+    if spread == 0:
+        return index.query(uv[None], az, k)
+    step = 360.0 / index.n_views
+    ids, costs = [], []
+    for d in range(-spread, spread + 1):
+        i, c = index.query(uv[None], az + d * step, k)
+        ids.append(i[0])
+        costs.append(c[0])
+    ids, costs = np.concatenate(ids), np.concatenate(costs)
+    order = np.argsort(costs, kind="stable")
+    ids, costs = ids[order], costs[order]
+    _, first = np.unique(ids, return_index=True)
+    keep = np.sort(first)[:k]
+    return ids[keep][None], costs[keep][None]

@@ -40,6 +40,7 @@ from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels
 from .actions import ACTIONS, CLASSES
 from .performer import Performer
+from .skeleton import UNIT_M
 from .timeline import Take, build_take, performance_plan, single_action_plan
 
 log = logging.getLogger(__name__)
@@ -280,6 +281,7 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
             "seed": params.seed,
             "fps": params.fps,
             "mocap_fps": params.mocap_fps,
+            "mocap_unit_m": UNIT_M,  # metres per BVH length unit (CMU units): evaluations report mm
             "size": list(params.size),
             "actions": list(ACTIONS),
             "classes": list(CLASSES),

@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..mocap import Motion, Skeleton
+from ..mocap.quat import continuous_quaternions
 from .skeleton import Body, build_skeleton
 
 CHANNELS: tuple[str, ...] = (
@@ -189,12 +190,3 @@ def solve_motion(channels: np.ndarray, body: Body, fps: float, skeleton: Skeleto
     quats = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat().reshape(F, J, 4)
     quats = continuous_quaternions(quats)
     return Motion(sk, quats, None, fps, root_positions=root)
-
-
-def continuous_quaternions(q: np.ndarray) -> np.ndarray:
-    """Flip signs along the frame axis so consecutive quaternions of a joint lie in one hemisphere."""
-    if q.shape[0] < 2:
-        return q.copy()
-    step = np.where(np.sum(q[1:] * q[:-1], axis=-1) < 0, -1.0, 1.0)  # (F-1, J)
-    sign = np.concatenate([np.ones((1,) + step.shape[1:]), np.cumprod(step, axis=0)])
-    return q * sign[..., None]

@@ -12,7 +12,7 @@ Three kinds, written for an orthodox fighter as ``(phase, pose)`` keys like :mod
 - ``hop``: a small hop to a square stance (both feet side by side, in the air) and back;
 - ``step_back``: a step back with the guard dropped to the waist, leaning away, then back in.
 
-The mocap library of :mod:`vidstyle.augmg.library` holds the same poses in *other* contexts (a dodge,
+The mocap library of :mod:`vidstyle.demo.library` holds the same poses in *other* contexts (a dodge,
 a double stance switch, a stop), never between the two actions of a performer's transition.
 """
 

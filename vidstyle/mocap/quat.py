@@ -44,3 +44,12 @@ def from_intrinsic_euler(seq: str, angles_deg: np.ndarray) -> np.ndarray:
         out = np.zeros(half.shape[:-1] + (4,))
         out[..., 3] = 1.0
     return out
+
+
+def continuous_quaternions(q: np.ndarray) -> np.ndarray:
+    """Flip signs along the frame axis so consecutive quaternions of a joint lie in one hemisphere."""
+    if q.shape[0] < 2:
+        return q.copy()
+    step = np.where(np.sum(q[1:] * q[:-1], axis=-1) < 0, -1.0, 1.0)  # (F-1, J)
+    sign = np.concatenate([np.ones((1,) + step.shape[1:]), np.cumprod(step, axis=0)])
+    return q * sign[..., None]

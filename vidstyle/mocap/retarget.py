@@ -100,3 +100,45 @@ def library_keypoints(motion: Motion, reference: Skeleton | None = None) -> np.n
         return pts
     h, h_ref = leg_length(motion.skeleton), leg_length(reference)
     return pts * (h_ref / h if h > 1e-12 and h_ref > 1e-12 else 1.0)
+
+
+def retarget_rest_corrected(motion: Motion, target: Skeleton) -> Motion:
+    """``motion`` on skeleton ``target`` of the same hierarchy but another *rest pose*: every bone keeps
+    its global direction (the rest-pose difference of each non-branching joint's bone is absorbed into
+    that joint's rotation), and the root path is scaled by the leg-length ratio. Unlike
+    :func:`retarget`, which keeps local rotations (right when the rest poses
+    agree), this is needed for CMU clips on the library's clean T-pose: CMU's rest legs splay 20 degrees,
+    and copied rotations would turn the knees inwards."""
+    from scipy.spatial.transform import Rotation
+
+    from .kinematics import forward_kinematics
+
+    src = motion.skeleton
+    if not src.same_hierarchy(target):
+        raise InputError("retarget: the clip's skeleton does not have the library skeleton's joints")
+    J = src.n_joints
+    # rest correction C_j: a rotation taking the target's rest direction of j's (first) child bone onto
+    # the source's; global target rotation G'_j = G_j C_j keeps every bone's world direction.
+    corr = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (J, 1))
+    for j in range(J):
+        kids = src.children(j)
+        if len(kids) != 1:  # a branching joint (hips, chest, hand) keeps its rotation
+            continue
+        a = np.asarray(src.offsets[kids[0]], float)
+        b = np.asarray(target.offsets[kids[0]], float)
+        if np.linalg.norm(a) < 1e-9 or np.linalg.norm(b) < 1e-9:
+            continue
+        r, _ = Rotation.align_vectors([a], [b])
+        corr[j] = r.as_quat()
+    _, mats = forward_kinematics(motion)  # (F, J, 3, 3) global rotations
+    C = Rotation.from_quat(corr).as_matrix()
+    G = mats @ C[None]
+    local = np.empty_like(G)
+    for j in range(J):
+        p = src.parents[j]
+        local[:, j] = G[:, j] if p < 0 else np.swapaxes(G[:, p], 1, 2) @ G[:, j]
+    q = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat().reshape(-1, J, 4)
+    from .quat import continuous_quaternions
+
+    scale = leg_length(target) / max(leg_length(src), 1e-9)
+    return Motion(target, continuous_quaternions(q), None, motion.fps, root_positions=motion.root_positions * scale)

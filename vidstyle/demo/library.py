@@ -12,7 +12,8 @@ contains
   with the guard dropped). None of them goes from one action into another through the pose.
 
 Real CMU clips can be added (``cmu_dir``); they are retargeted onto the library skeleton
-(:func:`retarget`), resampled to the library rate, and their calibration T-pose frame dropped.
+(:func:`vidstyle.mocap.retarget.retarget_rest_corrected`), resampled to the library rate, and their
+calibration T-pose frame dropped.
 
 Layout of ``DIR``::
 
@@ -63,7 +64,7 @@ class LibraryParams:
 
 def library_performer(params: LibraryParams, index: int):
     """Library performer ``index``: a seed stream no dataset performer uses ([seed, 7919, index])."""
-    from ..demo.performer import Performer
+    from .performer import Performer
 
     rng = np.random.default_rng(np.random.SeedSequence([params.seed, 7919, index]))
     return Performer.random(f"lib{index:02d}", rng, video_fps=params.fps)
@@ -71,7 +72,7 @@ def library_performer(params: LibraryParams, index: int):
 
 def scaled_pose(pose: dict, factor: float, extra: dict | None = None) -> dict:
     """``pose`` moved ``factor`` of the way from the reference guard (1 = the pose itself)."""
-    from ..demo.actions import GUARD
+    from .actions import GUARD
 
     out = {}
     for name, value in pose.items():
@@ -86,9 +87,9 @@ def scaled_pose(pose: dict, factor: float, extra: dict | None = None) -> dict:
 
 def _context_plan(kind: str, p, rng: np.random.Generator):
     """Plan of one context clip (segments with their own keys) of library performer ``p``."""
-    from ..demo.actions import ANKLE, BASE_SECONDS
-    from ..demo.timeline import Segment
-    from ..demo.transitions import CROUCH_POSE, HOP_POSE, STEP_BACK_POSE
+    from .actions import ANKLE, BASE_SECONDS
+    from .timeline import Segment
+    from .transitions import CROUCH_POSE, HOP_POSE, STEP_BACK_POSE
 
     fps = p.chain.video_fps
 
@@ -125,7 +126,7 @@ def _context_plan(kind: str, p, rng: np.random.Generator):
 
 
 def library_jobs(params: LibraryParams) -> list[tuple[LibraryParams, int, str]]:
-    from ..demo.actions import ACTIONS
+    from .actions import ACTIONS
 
     names = [a.lower() for a in ACTIONS] + list(CONTEXT_KINDS)
     return [(params, i, n) for i in range(params.performers) for n in names]
@@ -133,8 +134,8 @@ def library_jobs(params: LibraryParams) -> list[tuple[LibraryParams, int, str]]:
 
 def make_library_clip(job: tuple[LibraryParams, int, str]):
     """(name, Motion, labels, entry) of one library clip. Module level for the parallel path."""
-    from ..demo.actions import ACTIONS
-    from ..demo.timeline import build_take, single_action_plan
+    from .actions import ACTIONS
+    from .timeline import build_take, single_action_plan
 
     params, index, what = job
     p = library_performer(params, index)
@@ -155,7 +156,7 @@ def make_library_clip(job: tuple[LibraryParams, int, str]):
 def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | os.PathLike | None = None,
                  overwrite: bool = False, jobs: int = -1, scheduler: str | None = None) -> Path:
     """Write the library into ``out`` (see the module docstring); returns the manifest path."""
-    from ..demo.dataset import label_document
+    from .dataset import label_document
     from ..formats.library import library_document, write_library
     from ..mocap import write_bvh
     from ..parallel import parallel_map
@@ -197,10 +198,11 @@ def _write_clip_labels(path: Path, doc: dict) -> None:
 
 
 def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[dict]:
-    from ..demo.dataset import label_document
+    from .dataset import label_document
     from ..mocap import read_bvh, write_bvh
     from ..motiongraph.graph import has_tpose_first_frame
     from ..motiongraph.labels import LabelBook
+    from ..mocap.retarget import retarget_rest_corrected
 
     files = sorted(cmu_dir.glob("*.bvh"))
     if not files:
@@ -225,47 +227,3 @@ def _add_cmu(cmu_dir: Path, tmp: Path, params: LibraryParams, skeleton) -> list[
         entries.append({"name": name, "performer": f"cmu{f.stem.split('_')[0]}", "kind": "cmu", "holds_pose": None,
                         "frames": m.n_frames, "bvh": bvh, "labels": f"clips/{name}.labels.json", "source": str(f)})
     return entries
-
-
-def retarget_rest_corrected(motion, target):
-    """``motion`` on skeleton ``target`` of the same hierarchy but another *rest pose*: every bone keeps
-    its global direction (the rest-pose difference of each non-branching joint's bone is absorbed into
-    that joint's rotation), and the root path is scaled by the leg-length ratio. Unlike
-    :func:`vidstyle.mocap.retarget.retarget`, which keeps local rotations (right when the rest poses
-    agree), this is needed for CMU clips on the library's clean T-pose: CMU's rest legs splay 20 degrees,
-    and copied rotations would turn the knees inwards."""
-    from scipy.spatial.transform import Rotation
-
-    from ..mocap import Motion, forward_kinematics
-
-    src = motion.skeleton
-    if not src.same_hierarchy(target):
-        raise InputError("retarget: the clip's skeleton does not have the library skeleton's joints")
-    J = src.n_joints
-    # rest correction C_j: a rotation taking the target's rest direction of j's (first) child bone onto
-    # the source's; global target rotation G'_j = G_j C_j keeps every bone's world direction.
-    corr = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (J, 1))
-    for j in range(J):
-        kids = src.children(j)
-        if len(kids) != 1:  # a branching joint (hips, chest, hand) keeps its rotation
-            continue
-        a = np.asarray(src.offsets[kids[0]], float)
-        b = np.asarray(target.offsets[kids[0]], float)
-        if np.linalg.norm(a) < 1e-9 or np.linalg.norm(b) < 1e-9:
-            continue
-        r, _ = Rotation.align_vectors([a], [b])
-        corr[j] = r.as_quat()
-    _, mats = forward_kinematics(motion)  # (F, J, 3, 3) global rotations
-    C = Rotation.from_quat(corr).as_matrix()
-    G = mats @ C[None]
-    local = np.empty_like(G)
-    for j in range(J):
-        p = src.parents[j]
-        local[:, j] = G[:, j] if p < 0 else np.swapaxes(G[:, p], 1, 2) @ G[:, j]
-    q = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat().reshape(-1, J, 4)
-    from ..demo.rig import continuous_quaternions
-    from ..mocap.retarget import leg_length
-
-    scale = leg_length(target) / max(leg_length(src), 1e-9)
-    return Motion(target, continuous_quaternions(q), None, motion.fps, root_positions=motion.root_positions * scale)
-

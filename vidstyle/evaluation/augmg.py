@@ -2,7 +2,7 @@
 
 Queries: every styled transition (:mod:`vidstyle.demo.transitions`) of every performance video of the
 dataset, at its key frame, or at the frames of an annotations file (accepted marks only). The dataset's
-performers are never library performers and the library holds no transition (:mod:`.library`), so every
+performers are never library performers and the library holds no transition (:mod:`vidstyle.demo.library`), so every
 query is a held-out performer and a held-out transition.
 
 For each query and each 2D source (``gt``: the exact projection of the true pose with the video's camera;
@@ -17,24 +17,80 @@ For each query and each 2D source (``gt``: the exact projection of the true pose
   transition with the same endpoints (the frame before the transition and the frame after it):
   ``plain`` blends straight from one endpoint into the other (the motion-graph transition),
   ``augmg`` passes through the reference point chosen by the enhanced distance among the top-k
-  (:mod:`.enhance`), using the library segment between its enhancement nodes ``w_z0 .. w_z2``
-  (:func:`.enhance.enhancement_nodes`; ``segment="fixed"``: ``w_{z-h} .. w_{z+h}`` with ``h`` =
+  (:mod:`vidstyle.augmg.enhance`), using the library segment between its enhancement nodes ``w_z0 .. w_z2``
+  (:func:`vidstyle.augmg.enhance.enhancement_nodes`; ``segment="fixed"``: ``w_{z-h} .. w_{z+h}`` with ``h`` =
   ``segment_scale`` x half the transition), ``augmg_top1`` through the top-1 match, ``oracle`` through the oracle frame.
 """
 
 from __future__ import annotations
 
 import logging
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..augmg import defaults as D
+from ..errors import InputError, ParameterError
 
 log = logging.getLogger(__name__)
 
-MM_PER_UNIT = 56.4  # CMU length unit (vidstyle.demo.skeleton.UNIT_M) in millimetres
+#: the dataset manifest's key for its mocap length unit (metres per BVH length unit)
+UNIT_KEY = "mocap_unit_m"
+#: the 2D sources of the validation (``model`` = pictorial structures)
+SOURCES = ("model", "blazepose", "gt", "noisy")
+
+
+def source_thresholds(sources, max_match_cost=D.MAX_MATCH_COST, max_enh_cost=D.MAX_ENH_COST,
+                      min_gain=D.MIN_GAIN) -> dict:
+    """Per-source acceptance thresholds ``{source: {"max_match_cost", "max_enh_cost", "min_gain_mm"}}``
+    (None = no threshold) of ``sources`` from numbers / None or per-source dicts ``{source or "*": value}``
+    (:func:`vidstyle.augmg.augment.source_threshold`); defaults: the validated ones."""
+    from ..augmg.augment import check_thresholds, source_threshold
+
+    check_thresholds(max_match_cost=max_match_cost, max_enh_cost=max_enh_cost, min_gain=min_gain)
+    return {s: {"max_match_cost": source_threshold(max_match_cost, s), "max_enh_cost": source_threshold(max_enh_cost, s),
+                "min_gain_mm": source_threshold(min_gain, s)} for s in sources}
+
+
+#: the validated acceptance thresholds of every validation source (:mod:`vidstyle.augmg.defaults`)
+THRESHOLDS = source_thresholds(SOURCES)
+
+
+def mocap_unit_mm(manifest: dict, dataset) -> float:
+    """Millimetres per mocap length unit of a dataset manifest (its ``mocap_unit_m``)."""
+    unit = manifest.get(UNIT_KEY)
+    if not isinstance(unit, (int, float)) or isinstance(unit, bool) or not np.isfinite(unit) or unit <= 0:
+        raise InputError(f"{dataset}: {UNIT_KEY}: missing or not a positive number (the mocap's length unit in "
+                         "metres; give unit_mm / --unit-mm)")
+    return 1000.0 * float(unit)
+
+
+def check_evaluate_params(segment: str = D.SEGMENT, segment_scale: float = D.SEGMENT_SCALE, place: str = D.PLACE,
+                          anchor: str = D.ANCHOR, hold: float = D.HOLD, enh_window: int = D.ENH_WINDOW,
+                          context: int = D.CONTEXT, k: int = D.K, views: int = D.N_VIEWS,
+                          noise: float = D.NOISE) -> None:
+    """:class:`~vidstyle.errors.ParameterError` naming the first bad parameter of :func:`evaluate` /
+    :func:`evaluate_augmg` (checked before any file is read)."""
+    from ..augmg.enhance import check_placement
+
+    if segment not in ("fixed", "nodes", "adaptive"):
+        raise ParameterError("segment", f"fixed, nodes or adaptive, got {segment!r}")
+    check_placement(place, anchor, hold)
+    if context < 0:
+        raise ParameterError("context", f"must be at least 0, got {context}")
+    if enh_window < 1:
+        raise ParameterError("enh_window", f"must be at least 1, got {enh_window}")
+    if not 0 < segment_scale <= 1:
+        raise ParameterError("segment_scale", f"must be in (0, 1], got {segment_scale}")
+    if k < 1:
+        raise ParameterError("k", f"must be at least 1, got {k}")
+    if views < 1:
+        raise ParameterError("views", f"must be at least 1, got {views}")
+    if not (np.isfinite(noise) and noise >= 0):
+        raise ParameterError("noise", f"must be a finite number >= 0, got {noise}")
 
 
 @dataclass
@@ -86,7 +142,7 @@ def dataset_queries(dataset: Path, annotations=None) -> tuple[dict, list[Query]]
         for a in marks.get(v.id, []):
             t = next((t for t in styled if t["start"] <= a["frame"] < t["end"]), None)
             if t is None:
-                log.warning("%s frame %d: no styled transition there; skipped", v["id"], a["frame"])
+                log.warning("%s frame %d: no styled transition there; skipped", v.id, a["frame"])
                 continue
             out.append(Query(**base, frame=int(a["frame"]), transition=t, annotation=a))
     return manifest, out
@@ -96,7 +152,7 @@ class _Library:
     """The indexed library plus lazily loaded clip motions."""
 
     def __init__(self, library: Path, n_views: int, elevation: float, jobs: int) -> None:
-        from .index import PoseIndex, library_clips
+        from ..augmg.index import PoseIndex, library_clips
 
         clips_dir = library / "clips" if (library / "clips").is_dir() else library
         self.clips = library_clips([clips_dir])
@@ -115,9 +171,9 @@ class _Library:
 
 def aligned_mpjpe(true: np.ndarray, cand: np.ndarray) -> np.ndarray:
     """MPJPE (length units) of candidate poses (N, 15, 3) against ``true`` (15, 3) after aligning each
-    candidate (vertical rotation + floor translation, :func:`.enhance.window_distance`'s alignment)."""
+    candidate (vertical rotation + floor translation, :func:`vidstyle.augmg.enhance.window_distance`'s alignment)."""
     from ..motiongraph.distance import align_windows
-    from .enhance import KEYPOINT_WEIGHTS
+    from ..augmg.enhance import KEYPOINT_WEIGHTS
 
     p = np.broadcast_to(true[None, None], (len(cand), 1) + true.shape)
     q = cand[:, None]
@@ -135,8 +191,8 @@ def _query_2d(q: Query, pts3d: np.ndarray, cam, source: str, rng, noise: float, 
     scores or None, viewpoint (degrees relative to facing), view spread), for the marked frame and the
     frames up to ``context`` either side (an estimated source only has the frames its poses hold; the
     marked frame must be among them); None when the source has no pose of the marked frame."""
-    from .keypoints import KP
-    from .projection import facing_of_keypoints, relative_azimuth
+    from ..augmg.keypoints import KP
+    from ..augmg.projection import facing_of_keypoints, relative_azimuth
 
     offsets = np.arange(-context, context + 1)
     if source not in ("gt", "noisy"):
@@ -172,12 +228,13 @@ def _camera(q: Query, motion, manifest: dict):
 
 
 def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses: dict | None = None,
-                   annotations=None, noise: float = 0.05, k: int = 10, n_views: int = 12, enh_window: int = 9,
-                   place: str = "first", segment: str = "fixed", segment_scale: float = 1.0, max_span: int = 60,
-                   context: int = 0, use_scores: bool = True, foreshortening: bool = False, max_match_cost: float = np.inf,
-                   max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf, thresholds: dict | None = None,
-                   videos=None, animate: str | None = None, seed: int = 0, jobs: int = 1,
-                   anchor: str = "ends", hold: float = 0.0) -> dict:
+                   annotations=None, noise: float = D.NOISE, k: int = D.K, n_views: int = D.N_VIEWS,
+                   enh_window: int = D.ENH_WINDOW, place: str = D.PLACE, segment: str = D.SEGMENT,
+                   segment_scale: float = D.SEGMENT_SCALE, max_span: int = 60, context: int = D.CONTEXT,
+                   use_scores: bool = D.SCORES, foreshortening: bool = D.FORESHORTENING,
+                   max_match_cost: float = np.inf, max_enh_cost: float = np.inf, min_gain_mm: float = -np.inf,
+                   thresholds: dict | None = THRESHOLDS, videos=None, animate: str | None = None, seed: int = 0,
+                   jobs: int = 1, anchor: str = D.ANCHOR, hold: float = D.HOLD, unit_mm: float | None = None) -> dict:
     """Metrics dict (module docstring); ``poses``: source name -> video id -> {frame: ((15, 2) points,
     viewpoint_deg, spread, (15,) scores)}; ``videos``: only these video ids (default: all);
     ``animate``: keep the poses and transitions of that source's queries under ``"animations"``
@@ -185,32 +242,31 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
 
     Robustness (thesis 5.2.5: a bad enhancement node is discarded and the plain transition kept):
     ``context`` > 0 matches the marked frame together with ``context`` video frames either side
-    (:func:`.index.window_query`, temporal coherence); ``use_scores`` weights bones by the pose's
+    (:func:`vidstyle.augmg.index.window_query`, temporal coherence); ``use_scores`` weights bones by the pose's
     confidence scores; an enhancement is *accepted* only when its match cost is at most
     ``max_match_cost`` and its enhanced distance at most ``max_enh_cost``, else the plain transition is
     kept (``transition_augmg_mm`` is then the plain error; ``transition_enhanced_mm`` is always the
     enhanced one), and its gain is at least ``min_gain_mm`` (:func:`accept`; ``thresholds``: per source). Defaults come from ``scripts/validate_augmg.py`` on validation performers, never on
     the test performers.
 
-    Placement of the library segment on the performer (:func:`.enhance.place_segment`): ``place`` =
+    Placement of the library segment on the performer (:func:`vidstyle.augmg.enhance.place_segment`): ``place`` =
     ``first`` aligns onto the departure only, ``both`` averages that with the alignment onto the
     arrival, ``drift`` moves from one to the other over the segment; ``anchor`` = ``ends`` aligns the
     segment's own first and last frames, ``nodes`` the clip's enhancement nodes ``w_z0`` / ``w_z2``
-    (:func:`.enhance.enhancement_nodes`, the library frames that look like the departure and the
+    (:func:`vidstyle.augmg.enhance.enhancement_nodes`, the library frames that look like the departure and the
     arrival). ``hold``: the fraction of the transition, centred on the reference pose, during which
-    the segment is followed with full weight (:func:`.enhance.two_half_transition`; 0: the thesis'
-    two-half blend, which reaches ``w_z`` at one frame only)."""
-    from .enhance import check_placement
+    the segment is followed with full weight (:func:`vidstyle.augmg.enhance.two_half_transition`; 0: the thesis'
+    two-half blend, which reaches ``w_z`` at one frame only).
 
-    check_placement(place, anchor, hold)
-    if segment not in ("fixed", "nodes", "adaptive"):
-        raise ValueError(f"segment: 'fixed', 'nodes' or 'adaptive', got {segment!r}")
-    if context < 0:
-        raise ValueError(f"context: must be >= 0, got {context}")
+    Defaults: the validated ones (:mod:`vidstyle.augmg.defaults`; ``thresholds``: :data:`THRESHOLDS`,
+    per source; None = no thresholds). Errors are reported in millimetres: ``unit_mm`` millimetres per
+    mocap length unit, by default the dataset manifest's ``mocap_unit_m`` (:data:`UNIT_KEY`)."""
+    check_evaluate_params(segment=segment, segment_scale=segment_scale, place=place, anchor=anchor, hold=hold,
+                          enh_window=enh_window, context=context, k=k, views=n_views, noise=noise)
     from ..logutil import progress
     from ..mocap import Motion, read_bvh
     from ..mocap.retarget import leg_length
-    from .enhance import (
+    from ..augmg.enhance import (
         adaptive_halves,
         enhanced_distance,
         enhancement_nodes,
@@ -218,10 +274,11 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
         plain_transition,
         two_half_transition,
     )
-    from .index import window_query
-    from .keypoints import keypoint_positions
+    from ..augmg.index import window_query
+    from ..augmg.keypoints import keypoint_positions
 
     manifest, queries = dataset_queries(Path(dataset), annotations)
+    mm_per_unit = mocap_unit_mm(manifest, dataset) if unit_mm is None else float(unit_mm)
     if videos is not None:
         queries = [q for q in queries if q.video in set(videos)]
     if not queries:
@@ -291,7 +348,7 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                                                 motion.rotations[e], motion.root_positions[e], L, centre=z - lo,
                                                 hold=hold)
             gen = keypoint_positions(Motion(motion.skeleton, rot, None, motion.fps, root_positions=root))
-            err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * MM_PER_UNIT)
+            err = float(np.linalg.norm(gen - truth_seg, axis=-1).mean() * mm_per_unit)
             return (err, gen) if keep else err
 
         plain, plain_pts = transition_error(None, keep=True)
@@ -320,17 +377,17 @@ def evaluate_augmg(dataset: Path, library: Path, sources=("gt", "noisy"), poses:
                 "top1_clip": Path(lib.clips[int(idx_all.clip_[top[0]])].path).stem,
                 "reference_clip": Path(lib.clips[int(idx_all.clip_[best])].path).stem,
                 "reference_time_s": float(idx_all.time_of(np.array([best]))[0]),
-                "top1_mpjpe_mm": float(err_lib[top[0]] * MM_PER_UNIT),
-                "reference_mpjpe_mm": float(err_lib[best] * MM_PER_UNIT),
-                "oracle_mpjpe_mm": float(err_lib[oracle] * MM_PER_UNIT),
+                "top1_mpjpe_mm": float(err_lib[top[0]] * mm_per_unit),
+                "reference_mpjpe_mm": float(err_lib[best] * mm_per_unit),
+                "oracle_mpjpe_mm": float(err_lib[oracle] * mm_per_unit),
                 "recall_at_1": bool(near[0]), "recall_at_10": bool(near[:10].any()),
                 "match_cost": float(costs[best_rank]), "enhanced_cost": _finite(best_cost),
-                "gain_mm": float(aligned_mpjpe(plain_mid, lib.points[int(best):int(best) + 1] * scale)[0] * MM_PER_UNIT),
+                "gain_mm": float(aligned_mpjpe(plain_mid, lib.points[int(best):int(best) + 1] * scale)[0] * mm_per_unit),
                 "transition_plain_mm": plain, "transition_enhanced_mm": enhanced,
                 "transition_augmg_top1_mm": transition_error(int(top[0])), "transition_oracle_mm": oracle_err,
             })
             if source == animate:
-                from .projection import facing_normalised, facing_of_keypoints, project
+                from ..augmg.projection import facing_normalised, facing_of_keypoints, project
 
                 lp = lib.points[int(best):int(best) + 1]
                 lib2d = project(facing_normalised(lp, facing_of_keypoints(lp)), az,
@@ -400,24 +457,6 @@ def accept(rows: list[dict], max_match_cost: float | None = None, max_enh_cost: 
     return out
 
 
-def _query_views(index, uv: np.ndarray, az: float, k: int, spread: int):
-    """kNN at the view nearest ``az`` and, with ``spread`` > 0, its neighbours; merged by cost."""
-    if spread == 0:
-        return index.query(uv[None], az, k)
-    step = 360.0 / index.n_views
-    ids, costs = [], []
-    for d in range(-spread, spread + 1):
-        i, c = index.query(uv[None], az + d * step, k)
-        ids.append(i[0])
-        costs.append(c[0])
-    ids, costs = np.concatenate(ids), np.concatenate(costs)
-    order = np.argsort(costs, kind="stable")
-    ids, costs = ids[order], costs[order]
-    _, first = np.unique(ids, return_index=True)
-    keep = np.sort(first)[:k]
-    return ids[keep][None], costs[keep][None]
-
-
 def reduction_interval(plain, augmg, seed: int = 0, reps: int = 2000, level: float = 0.95) -> list[float] | None:
     """Percentile bootstrap interval of the transition-error reduction ``1 - mean(augmg) / mean(plain)``
     over queries resampled with replacement (paired: a query keeps both its errors); None for fewer
@@ -465,3 +504,100 @@ def summarise(rows: list[dict], params: dict) -> dict:
                         for kind in sorted({x["kind"] for x in r}) for rk in [[x for x in r if x["kind"] == kind]]},
         }
     return out
+
+
+def read_poses_dir(d: str | os.PathLike) -> tuple[str, dict]:
+    """(source name, video id -> {frame: (points, viewpoint_deg, view spread, scores)}) of a directory of
+    poses.json files (``<video id>.poses.json``), as :func:`evaluate_augmg`'s ``poses`` takes them; the
+    source is named by the backend (``model`` for pictorial structures)."""
+    from ..augmg.match import view_spread
+    from ..formats.poses import read_poses
+    from ..render.camera import parse_view
+
+    d = Path(d)
+    files = sorted(d.glob("*.poses.json"))
+    if not files:
+        raise ParameterError("poses_dir", f"no *.poses.json in {d}")
+    out: dict = {}
+    backends = set()
+    for f in files:
+        doc = read_poses(f)
+        backends.add(str(doc.backend))
+        vid = f.name[: -len(".poses.json")]
+        out[vid] = {int(fp.frame): (fp.xy.copy(), parse_view(fp.viewpoint), view_spread(fp.viewpoint),
+                                    fp.scores.copy()) for fp in doc.frames}
+    if len(backends) != 1:
+        raise ParameterError("poses_dir", f"{d} mixes pose backends {sorted(backends)}")
+    backend = backends.pop()
+    return ("model" if backend == "ps" else backend), out
+
+
+def headline(metrics: dict) -> dict:
+    """The ``augmg.*`` headline keys of an :func:`evaluate_augmg` result: the thesis' own estimated pose
+    (pictorial structures, ``model``) when evaluated, else BlazePose, else ``gt`` (fixed in advance, not
+    the better of the estimated sources), plus every other source's retrieval and AugMG errors."""
+    head = next((x for x in ("model", "blazepose", "gt") if x in metrics["by_source"]), "gt")
+    main = metrics["by_source"][head]
+    out = {
+        "augmg.retrieval_mpjpe": main["retrieval_mpjpe_mm"],
+        "augmg.transition_error_plain": main["transition_plain_mm"],
+        "augmg.transition_error_augmg": main["transition_augmg_mm"],
+        "augmg.source": head,
+    }
+    for src, r in metrics["by_source"].items():
+        if src != head:
+            out[f"augmg.{src}.retrieval_mpjpe"] = r["retrieval_mpjpe_mm"]
+            out[f"augmg.{src}.transition_error_augmg"] = r["transition_augmg_mm"]
+    return out
+
+
+def evaluate(dataset: str | os.PathLike, library: str | os.PathLike, annotations: str | os.PathLike | None = None,
+             poses_dir: Sequence[str | os.PathLike] = (), noise: float = D.NOISE, k: int = D.K,
+             views: int = D.N_VIEWS, segment: str = D.SEGMENT, segment_scale: float = D.SEGMENT_SCALE,
+             place: str = D.PLACE, anchor: str = D.ANCHOR, hold: float = D.HOLD, enh_window: int = D.ENH_WINDOW,
+             context: int = D.CONTEXT, scores: bool = D.SCORES, foreshortening: bool = D.FORESHORTENING,
+             max_match_cost=D.MAX_MATCH_COST, max_enh_cost=D.MAX_ENH_COST, min_gain=D.MIN_GAIN, seed: int = 0,
+             unit_mm: float | None = None, transitions: bool = False, jobs: int = 1):
+    """``vidstyle evaluate augmg`` as a library call: (the metrics document, the report's transitions
+    document or None).
+
+    Sources: one per ``poses_dir`` (:func:`read_poses_dir`, named by its backend), then ``gt`` and
+    ``noisy``; queries: every styled transition's key frame, or the accepted marks of ``annotations``.
+    The metrics are :func:`evaluate_augmg`'s with ``"seed"`` first and the ``"headline"`` keys
+    (:func:`headline`); with ``transitions`` the animations of the headline's estimated source (``gt``
+    without one) as :class:`vidstyle.formats.augmg_transitions.AugmgTransitions`. Thresholds: numbers,
+    None or per source ``{source or "*": value}`` (:func:`source_thresholds`). Defaults: the validated
+    ones (:mod:`vidstyle.augmg.defaults`), the CLI's; every parameter is checked before any file is read."""
+    from ..augmg.annotations_io import read_marks
+
+    check_evaluate_params(segment=segment, segment_scale=segment_scale, place=place, anchor=anchor, hold=hold,
+                          enh_window=enh_window, context=context, k=k, views=views, noise=noise)
+    from ..augmg.augment import check_thresholds
+
+    check_thresholds(max_match_cost=max_match_cost, max_enh_cost=max_enh_cost, min_gain=min_gain)
+    dataset, library = Path(dataset), Path(library)
+    marks = read_marks(annotations) if annotations else None
+    poses: dict = {}
+    for d in poses_dir:
+        name, doc = read_poses_dir(d)
+        if name in poses:
+            raise ParameterError("poses_dir", f"{d}: a second directory of {name} poses")
+        poses[name] = doc
+    sources = [*poses, "gt", "noisy"]
+    animations_source = next((x for x in ("model", "blazepose") if x in poses), "gt")
+    metrics = evaluate_augmg(dataset, library, sources=tuple(sources), poses=poses, annotations=marks, noise=noise,
+                             k=k, n_views=views, segment=segment, segment_scale=segment_scale, enh_window=enh_window,
+                             place=place, anchor=anchor, hold=hold, context=context, use_scores=scores,
+                             foreshortening=foreshortening,
+                             thresholds=source_thresholds(sources, max_match_cost, max_enh_cost, min_gain),
+                             animate=animations_source, seed=seed, jobs=jobs, unit_mm=unit_mm)
+    metrics["headline"] = headline(metrics)
+    doc = None
+    if transitions:
+        from ..formats.dataset import read_dataset
+
+        man = read_dataset(dataset)
+        step = max(1, int(man.extra["mocap_fps"] // man.fps))
+        doc = transitions_document(metrics, animations_source, float(man.fps), step)
+    metrics.pop("animations", None)
+    return {"seed": seed, **metrics}, doc
