@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .keypoints import KEYPOINTS
 from ._base import (
     Fields,
     FormatError,
@@ -35,6 +34,7 @@ from ._base import (
     read_json_document,
     write_json_document,
 )
+from .keypoints import KEYPOINTS
 
 KIND = "vidstyle.poses"
 SCHEMA_VERSION = 1

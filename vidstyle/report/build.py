@@ -151,7 +151,7 @@ def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
     for path in styles[:3]:
         st = read_style(path)
         actions = list(st.actions)
-        learned = np.asarray(st.model_a.transition_, float)
+        learned = np.asarray(st.model_a.transition, float)
         who = st.performer or path.stem
         body.append(svg.heatmap(learned, actions, actions, f"{who}: learned (HMM a)",
                                 vmax=1.0, xlabel="next action", ylabel="action"))
