@@ -5,12 +5,17 @@ component, and walks that realise an action sequence at minimum transition cost.
 
 >>> from vidstyle.motiongraph import MotionGraph, load_clips, plan_walk, render_walk   # doctest: +SKIP
 >>> graph = MotionGraph(window=10, fps=30).fit(load_clips(["clips/"], ["clips.csv"]))  # doctest: +SKIP
+>>> from vidstyle.motiongraph import build_graph, synthesize, save_synthesis   # the CLI's stages  # doctest: +SKIP
+>>> save_synthesis(synthesize(build_graph(["clips/"], ["clips.csv"]), "seq.json"), "out.bvh")  # doctest: +SKIP
+
+Defaults (shared with the CLI): :mod:`vidstyle.motiongraph.defaults`.
 """
 
 from .blend import blend_frames, blend_weight, slerp
 from .distance import WindowSet, align_windows, all_pair_candidates, compute_tile, joint_weights
 from .graph import SCHEMA, Clip, EdgeKind, MotionGraph, Segment, has_tpose_first_frame, load_clips
 from .labels import CMU_KEYWORDS, LabelBook, cmu_action
+from .pipeline import Synthesis, build_graph, labels_path, save_synthesis, synthesize
 from .synthesis import Step, Walk, edge_frames, parse_sequence, plan_walk, read_sequence, render_walk, walk_labels
 
 __all__ = [
@@ -22,22 +27,27 @@ __all__ = [
     "SCHEMA",
     "Segment",
     "Step",
+    "Synthesis",
     "Walk",
     "WindowSet",
     "align_windows",
     "all_pair_candidates",
     "blend_frames",
     "blend_weight",
+    "build_graph",
     "cmu_action",
     "compute_tile",
     "edge_frames",
     "has_tpose_first_frame",
     "joint_weights",
+    "labels_path",
     "load_clips",
     "parse_sequence",
     "plan_walk",
     "read_sequence",
     "render_walk",
+    "save_synthesis",
     "slerp",
+    "synthesize",
     "walk_labels",
 ]

@@ -72,9 +72,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FormatError, InputError
+from ..errors import FormatError, InputError, ParameterError
 from ..formats.motiongraph import MotionGraphRecord, read_graph, write_graph
 from ..mocap import Motion, Skeleton, global_positions
+from . import defaults
 from .distance import WindowSet, align_windows, all_pair_candidates, joint_weights, sample_distances
 from .labels import UNLABELLED, LabelBook, resample_labels
 
@@ -206,19 +207,19 @@ class MotionGraph:
 
     def __init__(
         self,
-        window: int = 10,
-        fps: float = 30.0,
+        window: int = defaults.WINDOW,
+        fps: float = defaults.FPS,
         threshold: float | None = None,
-        threshold_quantile: float = 0.05,
+        threshold_quantile: float = defaults.THRESHOLD_QUANTILE,
         min_gap: int | None = None,
-        drop_tpose: bool = True,
-        tile: int = 2048,
-        dtype: str = "float32",
-        n_jobs: int = 1,
+        drop_tpose: bool = defaults.DROP_TPOSE,
+        tile: int = defaults.TILE,
+        dtype: str = defaults.DTYPE,
+        n_jobs: int = defaults.N_JOBS,
         scheduler: str | None = None,
-        n_samples: int = 200_000,
-        random_state: int = 0,
-        mirror: bool = False,
+        n_samples: int = defaults.N_SAMPLES,
+        random_state: int = defaults.RANDOM_STATE,
+        mirror: bool = defaults.MIRROR,
     ) -> None:
         self.window = window
         self.fps = fps
@@ -240,10 +241,22 @@ class MotionGraph:
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
 
+    def check_params(self) -> None:
+        """Raise :class:`ParameterError` naming the first parameter out of range (``fit`` calls this)."""
+        if self.dtype not in defaults.DTYPES:
+            raise ParameterError("dtype", f"float32 or float64, got {self.dtype!r}")
+        if not 0 < self.threshold_quantile < 1:
+            raise ParameterError("threshold_quantile", f"must be in (0, 1), got {self.threshold_quantile}")
+        if self.threshold is not None and not self.threshold > 0:
+            raise ParameterError("threshold", f"must be positive, got {self.threshold}")
+        if self.tile < defaults.MIN_TILE:
+            raise ParameterError("tile", f"must be at least {defaults.MIN_TILE}, got {self.tile}")
+
     # ------------------------------------------------------------------------------------------ fit
     def fit(self, clips: Sequence[Clip]) -> MotionGraph:
         from ..mocap.retarget import retarget_clips
 
+        self.check_params()
         k = int(self.window)
         if k < 2:
             raise InputError(f"window: must be at least 2 frames, got {k}")
