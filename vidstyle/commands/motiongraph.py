@@ -11,7 +11,6 @@ import typer
 
 from ..errors import InputError
 from ..motiongraph import defaults as D
-from ..motiongraph.pipeline import labels_path
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
