@@ -9,7 +9,6 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..render import bvh as defaults
 from ._flags import as_flags
 
 log = logging.getLogger(__name__)
@@ -34,18 +33,18 @@ def render(
     motion_file: Path = typer.Argument(..., metavar="MOTION.bvh", help="Motion to render (BVH)."),
     out: Path = typer.Option(..., "--out", "-o", help="Video to write (.mp4 or .avi); the sidecar "
                              "<stem>.truth.npz is written beside it."),
-    view: str = typer.Option(defaults.VIEW, "--view", help="front, left, right, back or an azimuth in degrees "
+    view: str = typer.Option("front", "--view", help="front, left, right, back or an azimuth in degrees "
                              "relative to the performer's facing (+90 = their left side)."),
-    elevation: float = typer.Option(defaults.ELEVATION_DEG, "--elevation", help="Camera elevation in degrees."),
+    elevation: float = typer.Option(10.0, "--elevation", help="Camera elevation in degrees."),
     distance: float = typer.Option(None, "--distance", help="Camera distance (motion units); default: "
                                    "fit the whole clip in the image."),
-    size: str = typer.Option("x".join(map(str, defaults.SIZE)), "--size", help="WIDTHxHEIGHT in pixels."),
-    fps: float = typer.Option(defaults.FPS, "--fps", help="Video frame rate (the motion is resampled)."),
-    background: str = typer.Option(defaults.BACKGROUND, "--background", help="plain or texture (or texture:brick|grass|gravel)."),
-    appearance: str = typer.Option(defaults.APPEARANCE, "--appearance", help="Performer look: 'default', an integer "
+    size: str = typer.Option("160x120", "--size", help="WIDTHxHEIGHT in pixels."),
+    fps: float = typer.Option(20.0, "--fps", help="Video frame rate (the motion is resampled)."),
+    background: str = typer.Option("plain", "--background", help="plain or texture (or texture:brick|grass|gravel)."),
+    appearance: str = typer.Option("default", "--appearance", help="Performer look: 'default', an integer "
                                    "seed for a random look, or an appearance .json."),
-    noise: float = typer.Option(defaults.NOISE_SIGMA, "--noise", help="Sensor noise sigma (grey levels)."),
-    seed: int = typer.Option(defaults.SEED, "--seed", help="Seed of background choice and noise."),
+    noise: float = typer.Option(2.0, "--noise", help="Sensor noise sigma (grey levels)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of background choice and noise."),
     labels: Path = typer.Option(None, "--labels", help='Labels JSON of the motion (vidstyle.formats.labels: '
                                 '"labels" one per mocap frame, optional "transitions" frame indices), e.g. a '
                                 'demo mocap/<take>.labels.json.'),
