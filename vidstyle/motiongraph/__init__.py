@@ -20,7 +20,16 @@ if TYPE_CHECKING:  # pragma: no cover
     from .graph import SCHEMA, Clip, EdgeKind, MotionGraph, Segment, has_tpose_first_frame, load_clips
     from .labels import CMU_KEYWORDS, LabelBook, cmu_action
     from .pipeline import Synthesis, build_graph, labels_path, save_synthesis, synthesize
-    from .synthesis import Step, Walk, edge_frames, parse_sequence, plan_walk, read_sequence, render_walk, walk_labels
+    from .synthesis import (
+        Step,
+        Walk,
+        edge_frames,
+        parse_sequence,
+        plan_walk,
+        read_sequence,
+        render_walk,
+        walk_labels,
+    )
 
 # The names below load their submodule on first use (PEP 562), so ``vidstyle.motiongraph.defaults`` (read
 # by the CLI when it builds its options) does not import numpy/scipy at start-up.
@@ -69,11 +78,11 @@ def __getattr__(name: str):
 
 __all__ = [
     "CMU_KEYWORDS",
+    "SCHEMA",
     "Clip",
     "EdgeKind",
     "LabelBook",
     "MotionGraph",
-    "SCHEMA",
     "Segment",
     "Step",
     "Synthesis",
