@@ -77,7 +77,6 @@ def worker(graph_path: str, n_enh: int, runs: int) -> dict:
 
 def build(tmp: Path) -> tuple[Path, Path]:
     sys.path.insert(0, str(ROOT))
-    from vidstyle.formats.motiongraph import write_graph
     from vidstyle.motiongraph import EdgeKind, MotionGraph, load_clips
     from vidstyle.motiongraph.labels import cmu_action
 
@@ -85,7 +84,7 @@ def build(tmp: Path) -> tuple[Path, Path]:
     files = [CMU / r["file"] for r in rows if cmu_action(r["description"]) in ("walk", "run", "jump")]
     g = MotionGraph(mirror=True).fit(load_clips(files, [CMU / "clips.csv"]))
     v2 = tmp / "g2.npz"
-    write_graph(v2, g)
+    g.save(v2)
     # the same graph in the layout the baseline revision reads (schema 1)
     with np.load(v2, allow_pickle=False) as z:
         a = {k: z[k] for k in z.files}

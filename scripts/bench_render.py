@@ -37,7 +37,7 @@ from _benchutil import SHARED, machine, write_results
 
 from vidstyle.mocap import read_bvh
 from vidstyle.render import Appearance, Camera, render_motion, render_to_file
-from vidstyle.render.core import _Job
+from vidstyle.render.core import RenderJob
 from vidstyle.render.samples import sample_motion
 
 GOAL_FPS = 200.0
@@ -89,7 +89,7 @@ def main() -> int:
                 def full(m=m, cam=cam):
                     render_motion(m, cam, fps=20.0, appearance=look, background="texture", seed=1)
 
-                job = _Job(m, cam, 20.0, look, "texture", 2.0, 1, None, None)
+                job = RenderJob(m, cam, 20.0, look, "texture", 2.0, 1, None, None)
 
                 def raster_only(job=job):
                     for _ in job.frames(False):

@@ -22,7 +22,7 @@ from vidstyle.formats.library import parse_library, read_library, write_library
 from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
-from vidstyle.formats.style import parse_style, read_style, style_to_dict, write_style
+from vidstyle.formats.style import StyleRecord, parse_style, read_style, style_to_dict, write_style
 from vidstyle.formats.truth import parse_truth, read_truth, write_truth
 from vidstyle.formats.walk import parse_walk_labels, read_walk_labels, write_walk_labels
 
@@ -92,7 +92,7 @@ def style_doc():
         labels += [str(rng.choice(["Jab", "Hook", "Cross"]))] * int(rng.integers(4, 8)) + ["Guard"] * 3
     track = FrameLabels(labels, ("Jab", "Hook", "Cross", "Guard"), 20.0, video="v.mp4")
     style = Style.from_tracks([track], StyleParams(events=EventParams(ignore=("Guard",)), n_init=1, k_range=(1, 2)))
-    return json.loads(json.dumps(style_to_dict(style), default=lambda o: np.asarray(o).tolist()))
+    return json.loads(json.dumps(style.to_dict(), default=lambda o: np.asarray(o).tolist()))
 
 
 METRICS = {
@@ -203,10 +203,7 @@ def _np(o):
 
 
 def _to_doc(obj):
-    from vidstyle.formats.style import style_to_dict
-    from vidstyle.style.artifact import Style
-
-    if isinstance(obj, Style):
+    if isinstance(obj, StyleRecord):
         return style_to_dict(obj)
     if hasattr(obj, "to_dict"):
         return obj.to_dict()
@@ -245,15 +242,66 @@ def test_structure_mutations_raise_only_formaterror(name, ops, tmp_path):
     _check_structure(parse, write, read, _mutate(make(), ops), tmp_path)
 
 
+def _style_parse(doc, path):
+    from vidstyle.style.artifact import Style
+
+    return Style.from_dict(doc, path)
+
+
+def _style_write(path, style):
+    style.save(path)
+
+
+def _style_read(path):
+    from vidstyle.style.artifact import Style
+
+    return Style.load(path)
+
+
+# the owner's record functions, and the Style built from the record (whose parameter ranges the domain checks)
+STYLE_LEVELS = {"record": (parse_style, write_style, read_style), "style": (_style_parse, _style_write, _style_read)}
+
+
+@pytest.mark.parametrize("level", list(STYLE_LEVELS))
 @_FUZZ
 @given(ops=st.lists(_op, min_size=1, max_size=3))
-def test_style_structure_mutations_raise_only_formaterror(style_doc, ops, tmp_path):
-    _check_structure(parse_style, write_style, read_style, _mutate(style_doc, ops), tmp_path)
+def test_style_structure_mutations_raise_only_formaterror(style_doc, level, ops, tmp_path):
+    _check_structure(*STYLE_LEVELS[level], _mutate(style_doc, ops), tmp_path)
 
 
-def test_style_document_round_trips(style_doc, tmp_path):
-    _check_structure(parse_style, write_style, read_style, style_doc, tmp_path)
-    parse_style(style_doc)
+@pytest.mark.parametrize("level", list(STYLE_LEVELS))
+def test_style_document_round_trips(style_doc, level, tmp_path):
+    _check_structure(*STYLE_LEVELS[level], style_doc, tmp_path)
+    assert isinstance(parse_style(style_doc), StyleRecord)
+
+
+def test_style_record_round_trip_rebuilds_the_same_style(style_doc, tmp_path):
+    """Style -> record -> file -> record -> Style keeps every model array and the generated sequences."""
+    from vidstyle.style.artifact import Style
+
+    style = Style.from_dict(style_doc, "s.json")
+    p = tmp_path / "s.json"
+    write_style(p, style.to_record())
+    back = Style.from_record(read_style(p), p)
+    assert back.params == style.params and back.actions == style.actions
+    for m in ("model_a", "model_b", "bigram"):
+        for attr in ("start_", "transition_"):
+            np.testing.assert_array_equal(getattr(getattr(back, m), attr), getattr(getattr(style, m), attr))
+    np.testing.assert_array_equal(back.durations.mu_, style.durations.mu_)
+    assert json.dumps(back.to_dict(), default=_np) == json.dumps(style.to_dict(), default=_np)
+    for model in ("a", "b", "bigram"):
+        assert back.generate(30, seed=4, model=model) == style.generate(30, seed=4, model=model)
+
+
+def test_style_parameter_out_of_range_is_a_format_error_naming_params(style_doc):
+    from vidstyle.style.artifact import Style
+
+    doc = json.loads(json.dumps(style_doc))
+    doc["params"]["alpha"] = -1.0
+    assert parse_style(doc, "s.json").params["alpha"] == -1.0  # the owner checks types; the range is the domain's
+    with pytest.raises(FormatError, match=r"^s\.json: params") as e:
+        Style.from_dict(doc, "s.json")
+    assert "alpha" in str(e.value)
 
 
 # ----------------------------------------------------------------------------- byte mutations

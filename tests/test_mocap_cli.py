@@ -80,3 +80,26 @@ def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
     assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "mocap"}
     for command in listed:  # every listed command answers --help
         assert main([command, "--help"]) == 0
+
+
+def test_info_and_convert_are_library_calls(tmp_path, capsys):
+    """``mocap info --json`` prints vidstyle.mocap.describe.describe; ``mocap convert`` writes what
+    convert writes; both check their parameters in the library (fps before the file is read)."""
+    import pytest
+
+    from vidstyle.errors import ParameterError
+    from vidstyle.mocap.describe import convert, describe
+
+    p = tmp_path / "a.bvh"
+    p.write_text(TWO_JOINT)
+    assert main(["mocap", "info", str(p), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == json.loads(json.dumps(describe(read_bvh(p), p)))
+    assert main(["mocap", "convert", str(p), str(tmp_path / "cli.bvh"), "--fps", "60", "--start", "1"]) == 0
+    m = convert(p, tmp_path / "lib.bvh", fps=60.0, start=1)
+    assert (tmp_path / "cli.bvh").read_bytes() == (tmp_path / "lib.bvh").read_bytes()
+    assert m.fps == 60.0 and m.n_frames == 3  # frames 1..2 at 30 fps -> 1/30 s at 60 fps
+    with pytest.raises(ParameterError) as e:
+        convert(tmp_path / "absent.bvh", tmp_path / "x.bvh", fps=0.0)
+    assert e.value.param == "fps" and not (tmp_path / "x.bvh").exists()
+    assert main(["mocap", "convert", str(p), str(tmp_path / "y.bvh"), "--fps", "-1"]) == 2
+    assert "--fps: must be positive" in capsys.readouterr().err and not (tmp_path / "y.bvh").exists()

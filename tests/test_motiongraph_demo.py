@@ -11,7 +11,7 @@ import pytest
 from vidstyle.cli import main
 from vidstyle.mocap import read_bvh
 from vidstyle.motiongraph import MotionGraph, Step, plan_walk, render_walk, walk_labels
-from vidstyle.motiongraph.evaluate import evaluate_walk
+from vidstyle.evaluation.motion import evaluate_walk
 from vidstyle.motiongraph.footlock import leg_chains, two_bone_ik
 
 

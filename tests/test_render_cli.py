@@ -94,3 +94,35 @@ def test_bad_labels_file(tmp_path, bvh, capsys):
 def test_bad_output_suffix(tmp_path, bvh, capsys):
     assert main(["render", str(bvh), "--out", str(tmp_path / "o.gif")]) == 2
     assert ".mp4" in capsys.readouterr().err
+
+
+def test_library_render_bvh_with_defaults_writes_what_the_cli_writes(tmp_path, bvh):
+    """``vidstyle render`` is render_bvh plus argument parsing: same defaults, same frames and truth."""
+    from vidstyle.render.bvh import render_bvh
+    from vidstyle.video import VideoReader
+
+    cli, lib = tmp_path / "cli" / "w.mp4", tmp_path / "lib" / "w.mp4"
+    assert main(["render", str(bvh), "--out", str(cli)]) == 0
+    side = render_bvh(bvh, lib)
+    assert side == tmp_path / "lib" / "w.truth.npz"
+    a, b = load_truth(tmp_path / "cli" / "w.truth.npz"), load_truth(side)
+    assert sorted(a) == sorted(b)
+    for key in a:
+        np.testing.assert_array_equal(np.asarray(a[key]), np.asarray(b[key]), err_msg=key)
+    with VideoReader(cli) as r1, VideoReader(lib) as r2:
+        f1, f2 = list(r1), list(r2)
+    assert len(f1) == len(f2) == 20 and all(np.array_equal(x, y) for x, y in zip(f1, f2))
+    assert tuple(a["size"]) == (160, 120) and float(a["noise_sigma"]) == 2.0  # the documented defaults
+
+
+def test_library_render_bvh_checks_parameters_before_writing(tmp_path, bvh):
+    from vidstyle.errors import ParameterError
+    from vidstyle.render.bvh import render_bvh
+
+    for kw, param in (({"fps": 0.0}, "fps"), ({"noise_sigma": -1.0}, "noise_sigma"), ({"appearance": "pretty"}, "appearance")):
+        with pytest.raises(ParameterError) as e:
+            render_bvh(bvh, tmp_path / "o.mp4", **kw)
+        assert e.value.param == param
+    with pytest.raises(ParameterError, match="video must end in"):
+        render_bvh(bvh, tmp_path / "o.gif")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["walk.bvh"]

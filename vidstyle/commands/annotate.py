@@ -11,8 +11,6 @@ from pathlib import Path
 
 import typer
 
-from ..errors import InputError
-
 log = logging.getLogger(__name__)
 
 
@@ -42,33 +40,8 @@ def annotate(
 
     Frames are decoded on the server by index and the annotations file is saved atomically, tied to each
     video's sha256 and decoded frame count. Press ? in the page for the keys."""
-    from ..annotate.overlays import load_overlays
-    from ..annotate.server import new_session, serve
-    from ..annotate.session import Store, open_videos
+    from ..annotate.launch import annotate as serve_page
+    from ..demo import CLASSES  # the page's classes when nothing else names any
 
-    if not 0 <= port < 65536:
-        raise InputError(f"--port: must be in 0..65535, got {port}")
-    if max_body_mb <= 0:
-        raise InputError(f"--max-body-mb: must be positive, got {max_body_mb}")
-    if host not in ("127.0.0.1", "localhost", "::1"):
-        log.warning("annotate: listening on %s: anyone who can reach this address can read the videos; "
-                    "saving still needs the page's session token", host)
-    vids = open_videos(videos)
-    overlays = load_overlays(vids, labels, poses, matches)
-    if classes:
-        names = [c.strip() for c in classes.split(",") if c.strip()]
-    elif annotations.exists():
-        names = []
-    else:
-        names = []
-        for ov in overlays.values():
-            for c in ov.get("recognized", {}).get("classes", []):
-                if c not in names:
-                    names.append(c)
-        if not names:
-            from ..demo import CLASSES
-
-            names = list(CLASSES)
-    store = Store(annotations, vids, names)
-    serve(new_session(vids, store, overlays, max_body=int(max_body_mb * (1 << 20))), host, port,
-          open_browser=not no_browser)
+    serve_page(videos, annotations, labels=labels, poses=poses, matches=matches, classes=classes,
+               default_classes=CLASSES, host=host, port=port, open_browser=not no_browser, max_body_mb=max_body_mb)

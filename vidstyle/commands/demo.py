@@ -106,34 +106,9 @@ def performer_cmd(
     fps: int = typer.Option(60, "--fps", help="Mocap frame rate (a multiple of 20)."),
 ) -> None:
     """Write one procedural clip as BVH: a performer repeating an action, or performing their chain."""
-    import numpy as np
+    from ..demo.clip import write_performer_clip
 
-    from ..demo.actions import ACTIONS
-    from ..demo.dataset import DatasetParams, label_document, make_performer
-    from ..demo.timeline import build_take, performance_plan, single_action_plan
-    from ..formats.labels import write_labels
-    from ..mocap import write_bvh
-
-    if action is not None:
-        match = [a for a in ACTIONS if a.lower() == action.lower()]
-        if not match:
-            raise InputError(f"--action: unknown action {action!r} (one of {', '.join(ACTIONS)})")
-        action = match[0]
-    if fps <= 0 or fps % 20:
-        raise InputError(f"--fps: must be a positive multiple of 20, got {fps}")
-    if seconds < 1.5:
-        raise InputError(f"--seconds: must be at least 1.5, got {seconds}")
-    if index < 0:
-        raise InputError(f"--performer: must be >= 0, got {index}")
-    params = DatasetParams(seed=seed, mocap_fps=fps)
-    performer = make_performer(params, index)
-    rng = np.random.default_rng(np.random.SeedSequence([seed, index, 999]))
-    n = int(round(seconds * 20))
-    plan = single_action_plan(performer, action, n, rng) if action else performance_plan(performer, n, rng)
-    take = build_take(performer, plan, rng, video_fps=20, ratio=fps // 20)
-    write_bvh(take.motion, out)
-    labels_path = out.with_name(out.stem + ".labels.json")
-    write_labels(labels_path, label_document(take.labels, float(fps), take.chain, bvh=out.name, performer=performer.id))
+    performer, take, labels_path = write_performer_clip(out, seed, index, action, seconds, fps)
     log.info("wrote %s (%d frames at %d fps, %s) and %s", out, take.motion.n_frames, fps,
              performer.style.lead, labels_path)
 

@@ -27,37 +27,11 @@ def info(
 ) -> None:
     """Joints, frames, fps, duration, bounding box (joints and End Sites, all frames), leg length, and
     where the 15 body keypoints sit on the skeleton (by name or by topology)."""
-    from ..mocap import end_site_positions, forward_kinematics, read_bvh
-    from ..mocap.keypoints import KeypointMappingError, keypoint_joints
-    from ..mocap.retarget import leg_length
+    from ..mocap import read_bvh
+    from ..mocap.describe import describe
 
-    motion = read_bvh(file)
-    pos, mats = forward_kinematics(motion)
-    pos = np.concatenate([pos, end_site_positions(motion, mats, pos)[1]], axis=1)
-    lo = pos.reshape(-1, 3).min(axis=0) if motion.n_frames else np.zeros(3)
-    hi = pos.reshape(-1, 3).max(axis=0) if motion.n_frames else np.zeros(3)
-    try:
-        mapping = keypoint_joints(motion.skeleton)
-        keypoints = {k: {"joint": m.joint_name, "index": m.joint, "end_site": m.end_site, "how": m.how}
-                     for k, m in mapping.items()}
-        keypoint_error = None
-    except KeypointMappingError as e:
-        keypoints, keypoint_error = None, str(e)
-    summary = {
-        "file": str(file),
-        "joints": motion.n_joints,
-        "joint_names": motion.skeleton.names,
-        "frames": motion.n_frames,
-        "fps": motion.fps,
-        "duration_s": motion.duration,
-        "bbox_min": lo.round(4).tolist(),
-        "bbox_max": hi.round(4).tolist(),
-        "channels": int(sum(len(c) for c in motion.skeleton.channels)),
-        "end_sites": len(motion.skeleton.end_sites),
-        "leg_length": round(leg_length(motion.skeleton), 6),
-        "keypoints": keypoints,
-        "keypoint_error": keypoint_error,
-    }
+    summary = describe(read_bvh(file), file)
+    keypoints, keypoint_error = summary["keypoints"], summary["keypoint_error"]
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
@@ -117,23 +91,7 @@ def convert(
     stop: int = typer.Option(None, "--stop", help="Frame after the last to keep."),
 ) -> None:
     """Rewrite a BVH, optionally cut, resampled, mirrored or facing-normalised."""
-    from ..mocap import read_bvh, write_bvh
+    from ..mocap.describe import convert as convert_bvh
 
-    if fps is not None and not fps > 0:
-        raise InputError(f"--fps: must be positive, got {fps}")
-    motion = read_bvh(src)
-    if start is not None or stop is not None:
-        motion = motion[start:stop]
-        if motion.n_frames == 0:
-            raise InputError(f"{src}: --start/--stop select no frames (file has {len(read_bvh(src))})")
-    if fps is not None:
-        motion = motion.resample(fps)
-    if mirror:
-        try:
-            motion = motion.mirror()
-        except ValueError as e:
-            raise InputError(f"{src}: cannot mirror: {e}") from None
-    if normalize_facing and motion.n_frames:
-        motion = motion.normalize_facing()
-    write_bvh(motion, dst)
+    motion = convert_bvh(src, dst, start=start, stop=stop, fps=fps, mirror=mirror, normalize_facing=normalize_facing)
     log.info("wrote %s (%d frames at %g fps)", dst, motion.n_frames, motion.fps)

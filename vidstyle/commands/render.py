@@ -6,10 +6,10 @@ import logging
 import re
 from pathlib import Path
 
-import numpy as np
 import typer
 
 from ..errors import InputError
+from ._flags import as_flags
 
 log = logging.getLogger(__name__)
 
@@ -27,37 +27,6 @@ def parse_size(text: str) -> tuple[int, int]:
     if not (2 <= w <= 8192 and 2 <= h <= 8192):
         raise InputError(f"--size: {w}x{h} is out of range (2..8192 per side)")
     return w, h
-
-
-def load_labels(path: Path, n_frames: int) -> tuple[list[str], np.ndarray | None]:
-    """Labels (one per mocap frame) and transition flags of a labels file (:mod:`vidstyle.formats.labels`)."""
-    from ..formats.labels import check_length, read_labels
-
-    track = read_labels(path)
-    check_length(track, n_frames, "the motion")
-    flags = None
-    if track.transitions is not None:
-        flags = np.zeros(n_frames, dtype=bool)
-        flags[track.transitions] = True
-    return track.labels, flags
-
-
-def _appearance(spec: str):
-    from ..render import Appearance
-
-    if spec == "default":
-        return Appearance()
-    if re.fullmatch(r"\d+", spec):
-        return Appearance.random(int(spec))
-    path = Path(spec)
-    if path.suffix.lower() == ".json":
-        from ..fileio import read_json
-
-        try:
-            return Appearance.from_dict(read_json(path))
-        except (TypeError, ValueError) as e:
-            raise InputError(f"{path}: not a valid appearance ({e})") from None
-    raise InputError(f"--appearance: expected 'default', a seed (integer) or a .json file, got {spec!r}")
 
 
 def render(
@@ -81,33 +50,10 @@ def render(
                                 'demo mocap/<take>.labels.json.'),
 ) -> None:
     """Render a BVH motion to video with per-frame ground truth (2D/3D joints, visibility, camera, labels)."""
-    from ..mocap import read_bvh
-    from ..render import Camera, render_to_file
-    from ..render.background import parse_background
-    from ..render.camera import parse_view
-    from ..video import CODECS
+    from ..render.bvh import render_bvh
 
-    wh = parse_size(size)
-    if out.suffix.lower() not in CODECS:
-        raise InputError(f"--out {out}: video must end in {', '.join(CODECS)}")
-    if not (fps > 0 and np.isfinite(fps)):
-        raise InputError(f"--fps: must be positive, got {fps}")
-    if not noise >= 0:
-        raise InputError(f"--noise: must be >= 0, got {noise}")
-    try:
-        parse_view(view)
-        parse_background(background)
-    except ValueError as e:
-        raise InputError(f"{e}") from None
-    look = _appearance(appearance)
-    motion = read_bvh(motion_file)
-    if motion.n_frames == 0:
-        raise InputError(f"{motion_file}: the motion has no frames")
-    lab, trans = load_labels(labels, motion.n_frames) if labels is not None else (None, None)
-    try:
-        camera = Camera.for_view(motion, view=view, elevation_deg=elevation, distance=distance, size=wh)
-        side = render_to_file(motion, out, camera=camera, fps=fps, appearance=look, background=background,
-                              noise_sigma=noise, seed=seed, labels=lab, transitions=trans)
-    except ValueError as e:
-        raise InputError(f"{motion_file}: {e}") from None
+    with as_flags(out="--out", noise_sigma="--noise", elevation_deg="--elevation"):
+        side = render_bvh(motion_file, out, view=view, elevation_deg=elevation, distance=distance,
+                          size=parse_size(size), fps=fps, background=background, appearance=appearance,
+                          noise_sigma=noise, seed=seed, labels=labels)
     log.info("wrote %s and %s", out, side)

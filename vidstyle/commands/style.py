@@ -88,7 +88,6 @@ def learn_style(
     """
     from ..formats.dataset import read_dataset
     from ..formats.labels import read_labels
-    from ..formats.style import write_style
     from ..style.artifact import Style, dataset_styles
 
     params = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
@@ -105,7 +104,7 @@ def learn_style(
         styles = [(Path(out_dir) / f"{pid}.json", style)
                   for pid, style in dataset_styles(read_dataset(dataset), params, labels_dir, wanted)]
     for dest, style in styles:
-        write_style(dest, style)
+        style.save(dest)
         log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
                  style.model_b.n_modes_)
 
@@ -122,11 +121,11 @@ def generate(
     """Generate a new action sequence (with durations) in a learned style."""
     from ..fileio import write_text
     from ..formats.sequence import ActionSequence, format_sequence, write_sequence
-    from ..formats.style import read_style
+    from ..style.artifact import Style
 
     if fmt not in FORMATS:
         raise InputError(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
-    style = read_style(style_path)
+    style = Style.load(style_path)
     events = style.generate(length, start=start, seed=seed, model=model)
     seq = ActionSequence.from_events(events, style.fps, style=str(style_path), model=model, seed=seed)
     text = format_sequence(seq, fmt)

@@ -50,21 +50,24 @@ segment_hold                (S,)            optional: fraction in [0, 1) of an e
 
 A truncated or corrupted file, a missing key, a wrong shape or type, an index out of range or a
 non-finite number raises :class:`FormatError` naming the file and the key.
+
+The owner reads and writes a :class:`MotionGraphRecord` (the file's keys as typed fields);
+:class:`vidstyle.motiongraph.MotionGraph` builds itself from one (``MotionGraph.from_record``) and
+returns one (``graph.to_record()``).
 """
 
 from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ..fileio import write_npz
 from ._base import FormatError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..motiongraph.graph import MotionGraph
 
 KIND = "vidstyle.motiongraph"
 SCHEMA_VERSION = 2
@@ -80,64 +83,105 @@ _V2 = ("edge_src", "edge_dst", "edge_kind", "edge_cost", "edge_segment", "edge_a
 _V1 = ("trans_from", "trans_to", "trans_cost", "trans_theta", "trans_x0", "trans_z0")
 
 
-# ---------------------------------------------------------------------------------------------- write
-def write_graph(path: str | os.PathLike, graph: MotionGraph) -> None:
-    """Write ``graph`` (schema version 2) atomically; the arrays are checked first, so an invalid graph
-    never reaches disk (``ValueError``)."""
-    from ..fileio import write_npz
+@dataclass
+class MotionGraphRecord:
+    """The content of a graph file, one field per key of the table above (``params_json`` split into
+    ``params``, ``threshold_used`` and ``stats``; ``channels_json`` as ``channels``). Lists or arrays are
+    accepted when writing; the reader returns checked arrays (float64, int64, bool) and lists of str.
+    ``edge_in_scc`` as read is derived from ``scc`` (both ends in the component)."""
 
-    sk = graph.skeleton_
-    end_sites = np.full((sk.n_joints, 3), np.nan)
-    for j, off in sk.end_sites.items():
-        end_sites[j] = off
-    segs = graph.segments_
-    J = sk.n_joints
-    frames = [s.n_frames for s in segs]
+    params: dict[str, Any]
+    threshold_used: float | None
+    stats: dict[str, Any]
+    fps: float
+    window: int
+    clip_names: Any
+    clip_paths: Any
+    clip_sha256: Any
+    clip_start: Any
+    clip_frames: Any
+    clip_src_first: Any
+    clip_src_fps: Any
+    clip_scale: Any
+    joint_names: Any
+    parents: Any
+    offsets: Any
+    channels: list
+    end_sites: Any
+    rotations: Any
+    root_positions: Any
+    frame_clip: Any
+    label_names: Any
+    labels: Any
+    joint_weights: Any
+    scc: Any
+    edge_src: Any
+    edge_dst: Any
+    edge_kind: Any
+    edge_cost: Any
+    edge_segment: Any
+    edge_align: Any
+    edge_align_segment: Any
+    edge_in_scc: Any
+    segment_rotations: Any
+    segment_root_positions: Any
+    segment_start: Any
+    segment_frames: Any
+    segment_centre: Any
+    segment_source: Any
+    segment_label: Any
+    segment_anchor: Any
+    segment_hold: Any
+
+
+# ---------------------------------------------------------------------------------------------- write
+def write_graph(path: str | os.PathLike, rec: MotionGraphRecord) -> None:
+    """Write ``rec`` (schema version 2) atomically; the arrays are checked first, so an invalid graph
+    never reaches disk (``ValueError``)."""
     arrays = dict(
         kind=np.array(KIND),
         schema_version=np.array(SCHEMA_VERSION),
-        params_json=np.array(json.dumps(dict(graph.get_params(), threshold_used=graph.threshold_, stats=graph.stats_),
+        params_json=np.array(json.dumps(dict(rec.params, threshold_used=rec.threshold_used, stats=rec.stats),
                                         default=str, allow_nan=False)),
-        fps=np.array(float(graph.fps)),
-        window=np.array(int(graph.window)),
-        clip_names=np.array(graph.clips_["names"], dtype=str),
-        clip_paths=np.array(graph.clips_["paths"], dtype=str),
-        clip_sha256=np.array(graph.clips_["sha"], dtype=str),
-        clip_start=np.array(graph.clips_["start"], dtype=np.int64),
-        clip_frames=np.array(graph.clips_["frames"], dtype=np.int64),
-        clip_src_first=np.array(graph.clips_["first"], dtype=np.int64),
-        clip_src_fps=np.array(graph.clips_["src_fps"], dtype=np.float64),
-        clip_scale=np.array(graph.clips_["scale"], dtype=np.float64),
-        joint_names=np.array(sk.names, dtype=str),
-        parents=sk.parents,
-        offsets=sk.offsets,
-        channels_json=np.array(json.dumps([list(c) for c in sk.channels])),
-        end_sites=end_sites,
-        rotations=graph.rotations_.astype(np.float32),
-        root_positions=graph.root_positions_,
-        frame_clip=graph.frame_clip_,
-        label_names=np.array(graph.label_names_, dtype=str),
-        labels=graph.labels_,
-        joint_weights=graph.joint_weights_,
-        scc=graph.scc_,
-        edge_src=graph.edge_src_,
-        edge_dst=graph.edge_dst_,
-        edge_kind=graph.edge_kind_.astype(np.int8),
-        edge_cost=graph.edge_cost_,
-        edge_segment=graph.edge_segment_,
-        edge_align=graph.edge_align_,
-        edge_align_segment=graph.edge_align_segment_,
-        edge_in_scc=graph.edge_in_scc_,
-        segment_rotations=np.concatenate([s.rotations for s in segs]) if segs else np.zeros((0, J, 4)),
-        segment_root_positions=np.concatenate([s.root_positions for s in segs]) if segs else np.zeros((0, 3)),
-        segment_start=np.concatenate([[0], np.cumsum(frames)[:-1]]).astype(np.int64) if segs else np.zeros(0, np.int64),
-        segment_frames=np.array(frames, dtype=np.int64),
-        segment_centre=np.array([s.centre for s in segs], dtype=np.int64),
-        segment_source=np.array([s.source for s in segs], dtype=str),
-        segment_label=np.array([s.label for s in segs], dtype=str),
-        segment_anchor=np.array([s.anchors if s.anchors is not None else (-1, -1) for s in segs],
-                                dtype=np.int64).reshape(len(segs), 2),
-        segment_hold=np.array([s.hold for s in segs], dtype=np.float64),
+        fps=np.array(float(rec.fps)),
+        window=np.array(int(rec.window)),
+        clip_names=np.array(rec.clip_names, dtype=str),
+        clip_paths=np.array(rec.clip_paths, dtype=str),
+        clip_sha256=np.array(rec.clip_sha256, dtype=str),
+        clip_start=np.array(rec.clip_start, dtype=np.int64),
+        clip_frames=np.array(rec.clip_frames, dtype=np.int64),
+        clip_src_first=np.array(rec.clip_src_first, dtype=np.int64),
+        clip_src_fps=np.array(rec.clip_src_fps, dtype=np.float64),
+        clip_scale=np.array(rec.clip_scale, dtype=np.float64),
+        joint_names=np.array(rec.joint_names, dtype=str),
+        parents=np.asarray(rec.parents),
+        offsets=np.asarray(rec.offsets),
+        channels_json=np.array(json.dumps([list(c) for c in rec.channels])),
+        end_sites=np.asarray(rec.end_sites),
+        rotations=np.asarray(rec.rotations).astype(np.float32),
+        root_positions=np.asarray(rec.root_positions),
+        frame_clip=np.asarray(rec.frame_clip),
+        label_names=np.array(rec.label_names, dtype=str),
+        labels=np.asarray(rec.labels),
+        joint_weights=np.asarray(rec.joint_weights),
+        scc=np.asarray(rec.scc),
+        edge_src=np.asarray(rec.edge_src),
+        edge_dst=np.asarray(rec.edge_dst),
+        edge_kind=np.asarray(rec.edge_kind).astype(np.int8),
+        edge_cost=np.asarray(rec.edge_cost),
+        edge_segment=np.asarray(rec.edge_segment),
+        edge_align=np.asarray(rec.edge_align),
+        edge_align_segment=np.asarray(rec.edge_align_segment),
+        edge_in_scc=np.asarray(rec.edge_in_scc),
+        segment_rotations=np.asarray(rec.segment_rotations),
+        segment_root_positions=np.asarray(rec.segment_root_positions),
+        segment_start=np.asarray(rec.segment_start),
+        segment_frames=np.asarray(rec.segment_frames),
+        segment_centre=np.asarray(rec.segment_centre),
+        segment_source=np.array(rec.segment_source, dtype=str),
+        segment_label=np.array(rec.segment_label, dtype=str),
+        segment_anchor=np.asarray(rec.segment_anchor),
+        segment_hold=np.asarray(rec.segment_hold),
     )
     try:
         _validate(arrays, None, SCHEMA_VERSION)
@@ -147,8 +191,9 @@ def write_graph(path: str | os.PathLike, graph: MotionGraph) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- read
-def read_graph(path: str | os.PathLike) -> MotionGraph:
-    """Read a graph file (schema version 1 or 2) into a fitted :class:`~vidstyle.motiongraph.MotionGraph`."""
+def read_graph(path: str | os.PathLike) -> MotionGraphRecord:
+    """Read a graph file (schema version 1 or 2) into a checked :class:`MotionGraphRecord`
+    (:meth:`vidstyle.motiongraph.MotionGraph.load` builds the graph from it)."""
     path = Path(path)
     d = _load_arrays(path)
     version = _version(d, path)
@@ -159,7 +204,7 @@ def read_graph(path: str | os.PathLike) -> MotionGraph:
         _require(d, path, _CORE + _V2)
     checked = _validate(d, path, version)
     try:
-        return _build(checked, path)
+        return _record(checked, path)
     except (ValueError, TypeError, IndexError, KeyError) as e:  # what the checks above could not foresee
         raise FormatError(path, None, f"not a consistent motion graph ({e})") from None
 
@@ -385,45 +430,29 @@ def _validate(d: dict, path, version: int) -> dict[str, Any]:
     return out
 
 
-def _build(c: dict[str, Any], path: Path) -> MotionGraph:
-    from ..mocap import Skeleton
-    from ..motiongraph.graph import MotionGraph, Segment
-
+def _record(c: dict[str, Any], path: Path) -> MotionGraphRecord:
     params = dict(c["params"])
     stats = params.pop("stats", {})
     thr = params.pop("threshold_used", None)
-    known = {k: v for k, v in params.items() if k in MotionGraph.PARAMS}
-    g = MotionGraph(**known)
-    g.window, g.fps = c["window"], c["fps"]
-    end_sites = {j: c["end_sites"][j] for j in range(len(c["parents"])) if np.isfinite(c["end_sites"][j]).all()}
-    g.skeleton_ = Skeleton([str(x) for x in c["joint_names"]], c["parents"], c["offsets"],
-                           [tuple(x) for x in c["channels"]], end_sites)
-    g.rotations_ = c["rotations"]
-    g.root_positions_ = c["root_positions"]
-    g.frame_clip_ = c["frame_clip"]
-    g.label_names_ = [str(x) for x in c["label_names"]]
-    g.labels_ = c["labels"]
-    g.joint_weights_ = c["joint_weights"]
-    g.scc_ = c["scc"].astype(bool)
-    for key in ("src", "dst", "cost", "segment", "align", "align_segment"):
-        setattr(g, f"edge_{key}_", c[f"edge_{key}"])
-    g.edge_kind_ = c["edge_kind"].astype(np.int8)
-    g.edge_in_scc_ = g.scc_[g.edge_src_] & g.scc_[g.edge_dst_]
-    g.segments_ = [
-        Segment(c["segment_rotations"][s : s + n], c["segment_root_positions"][s : s + n], int(z), str(src), str(lab),
-                None if a[0] == -1 else (int(a[0]), int(a[1])), float(h))
-        for s, n, z, src, lab, a, h in zip(c["segment_start"], c["segment_frames"], c["segment_centre"],
-                                           c["segment_source"], c["segment_label"], c["segment_anchor"],
-                                           c["segment_hold"])
-    ]
-    g.clips_ = {
-        "names": [str(x) for x in c["clip_names"]], "paths": [str(x) for x in c["clip_paths"]],
-        "sha": [str(x) for x in c["clip_sha256"]], "start": c["clip_start"].tolist(),
-        "frames": c["clip_frames"].tolist(), "first": c["clip_src_first"].tolist(),
-        "src_fps": c["clip_src_fps"].tolist(), "scale": c["clip_scale"].tolist(),
-    }
     if thr is not None and not (isinstance(thr, (int, float)) and not isinstance(thr, bool) and np.isfinite(thr) and thr > 0):
         raise FormatError(path, "params_json.threshold_used", f"expected a positive number, got {thr!r}")
-    g.threshold_ = thr
-    g.stats_ = stats if isinstance(stats, dict) else {}
-    return g
+    scc = c["scc"].astype(bool)
+    return MotionGraphRecord(
+        params=params, threshold_used=thr, stats=stats if isinstance(stats, dict) else {},
+        fps=c["fps"], window=c["window"],
+        clip_names=[str(x) for x in c["clip_names"]], clip_paths=[str(x) for x in c["clip_paths"]],
+        clip_sha256=[str(x) for x in c["clip_sha256"]], clip_start=c["clip_start"], clip_frames=c["clip_frames"],
+        clip_src_first=c["clip_src_first"], clip_src_fps=c["clip_src_fps"], clip_scale=c["clip_scale"],
+        joint_names=[str(x) for x in c["joint_names"]], parents=c["parents"], offsets=c["offsets"],
+        channels=c["channels"], end_sites=c["end_sites"],
+        rotations=c["rotations"], root_positions=c["root_positions"], frame_clip=c["frame_clip"],
+        label_names=[str(x) for x in c["label_names"]], labels=c["labels"], joint_weights=c["joint_weights"],
+        scc=scc,
+        edge_src=c["edge_src"], edge_dst=c["edge_dst"], edge_kind=c["edge_kind"].astype(np.int8),
+        edge_cost=c["edge_cost"], edge_segment=c["edge_segment"], edge_align=c["edge_align"],
+        edge_align_segment=c["edge_align_segment"], edge_in_scc=scc[c["edge_src"]] & scc[c["edge_dst"]],
+        segment_rotations=c["segment_rotations"], segment_root_positions=c["segment_root_positions"],
+        segment_start=c["segment_start"], segment_frames=c["segment_frames"], segment_centre=c["segment_centre"],
+        segment_source=[str(x) for x in c["segment_source"]], segment_label=[str(x) for x in c["segment_label"]],
+        segment_anchor=c["segment_anchor"], segment_hold=c["segment_hold"],
+    )

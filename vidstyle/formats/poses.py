@@ -5,7 +5,7 @@ Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 1)::
     {"kind": "vidstyle.poses", "schema_version": 1,
      "video": "clip.mp4",                       # the input video, as given
      "backend": "ps" | "blazepose",
-     "keypoints": ["head_top", "neck", ...],    # the 15 names of vidstyle.mocap.keypoints.KEYPOINTS, in order
+     "keypoints": ["head_top", "neck", ...],    # the 15 names of vidstyle.formats.keypoints.KEYPOINTS, in order
      "params": {"scales": [1.0, 1.2, 1.4]},     # optional: the backend's inference settings
      "frames": [{"frame": 12,                   # decoded frame index (vidstyle.video.VideoReader)
                  "viewpoint": "front",          # front | left | right | back | unknown (nobody found)
@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..mocap.keypoints import KEYPOINTS
 from ._base import (
     Fields,
     FormatError,
@@ -35,6 +34,7 @@ from ._base import (
     read_json_document,
     write_json_document,
 )
+from .keypoints import KEYPOINTS
 
 KIND = "vidstyle.poses"
 SCHEMA_VERSION = 1

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ._base import FormatError, read_json_document, write_json_document
-from .labels import SCHEMA_VERSION, FrameLabels, _opt_str, parse_common
+from .framelabels import SCHEMA_VERSION, FrameLabels, check_length, opt_str, parse_common
 
 KIND = "vidstyle.recognised_labels"
 _KNOWN = ("kind", "schema_version", "video", "bvh", "fps", "classes", "labels", "confidence", "performer", "view",
@@ -73,13 +73,11 @@ def parse_recognised(doc: Any, path: str | os.PathLike | None = None) -> Recogni
     window = f.int("smoothing_window", required=False, min=1) if doc.get("smoothing_window") is not None else None
     extra = {k: v for k, v in doc.items() if k not in _KNOWN}
     return RecognisedLabels(**kw, extra=extra, path="" if path is None else str(path), raw=raw, raw_confidence=raw_conf,
-                            smoothing=_opt_str(f, "smoothing"), smoothing_window=window, model=_opt_str(f, "model"),
-                            features=_opt_str(f, "features"))
+                            smoothing=opt_str(f, "smoothing"), smoothing_window=window, model=opt_str(f, "model"),
+                            features=opt_str(f, "features"))
 
 
 def read_recognised(path: str | os.PathLike, n_frames: int | None = None) -> RecognisedLabels:
-    from .labels import check_length
-
     track = parse_recognised(read_json_document(path), path)
     if n_frames is not None:
         check_length(track, n_frames)

@@ -28,26 +28,102 @@ rows and columns in the order of ``actions``; modes of model (b) are rows of its
                              "sd_frames" | null}}
     }
 
-Log-likelihoods are natural logs over the training events. The typed object is
-:class:`vidstyle.style.artifact.Style`; :func:`read_style` / :func:`write_style` convert.
+Log-likelihoods are natural logs over the training events. The owner reads and writes a
+:class:`StyleRecord` (the document's fields, checked and typed); the learned object
+:class:`vidstyle.style.artifact.Style` builds itself from one (``Style.from_record``) and returns one
+(``style.to_record()``). The ranges of the estimator parameters are the domain's (``StyleParams``); this
+module checks their types.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
-
-if TYPE_CHECKING:
-    from ..style.artifact import Style
+from ..fileio import json_default
+from ._base import (
+    Fields,
+    FormatError,
+    check_header,
+    check_int,
+    check_number,
+    header,
+    read_json_document,
+    write_json_document,
+)
 
 KIND = "vidstyle.style"
 SCHEMA_VERSION = 1
+
+
+@dataclass
+class ActionHMMRecord:
+    """Model (a): ``start`` (A,), ``transition`` (A, A), ``emission`` (A, A), row-stochastic."""
+
+    start: Any
+    transition: Any
+    emission: Any
+    log_likelihood: float
+    restart_log_likelihoods: list[float] = field(default_factory=list)  # NaN: a restart that failed
+    converged: bool = True
+    n_iter: int = 0
+
+
+@dataclass
+class ModeHMMRecord(ActionHMMRecord):
+    """Model (b): ``start`` (K,), ``transition`` (K, K), ``emission`` (K, A). ``criterion`` None: the file
+    names none (the style's ``params.mode_criterion`` holds). ``action_transition`` is derived (written for
+    readers of the file, not read back)."""
+
+    n_modes: int = 1
+    bic: float = float("nan")
+    criterion: str | None = None
+    selection_scores: dict[int, float] = field(default_factory=dict)
+    action_transition: Any = None
+
+
+@dataclass
+class BigramRecord:
+    start: Any
+    transition: Any
+    log_likelihood: float
+
+
+@dataclass
+class DurationsRecord:
+    """Per action (in the order of ``actions``): log-normal ``mu``, ``sigma``, event ``count``, and the mean
+    and standard deviation in frames (NaN: none)."""
+
+    mu: Any
+    sigma: Any
+    count: Any
+    mean_frames: Any
+    sd_frames: Any
+
+
+@dataclass
+class StyleRecord:
+    """The content of a ``style.json``. ``params``: the document's ``params`` object (``events`` a dict,
+    ``k_range`` a list; keys the file lacks are absent)."""
+
+    actions: list[str]
+    classes: list[str]
+    params: dict[str, Any]
+    seed: int
+    model_a: ActionHMMRecord
+    model_b: ModeHMMRecord
+    bigram: BigramRecord
+    durations: DurationsRecord
+    fps: float = 20.0
+    performer: str | None = None
+    sources: list[dict] = field(default_factory=list)
+    n_sequences: int = 0
+    action_counts: Any = None
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -55,46 +131,47 @@ def _finite_or_none(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def style_to_dict(style: Style) -> dict[str, Any]:
-    a, b, g, d = style.model_a, style.model_b, style.bigram, style.durations
+def style_to_dict(rec: StyleRecord) -> dict[str, Any]:
+    a, b, g, d = rec.model_a, rec.model_b, rec.bigram, rec.durations
+    counts = np.zeros(len(rec.actions), np.int64) if rec.action_counts is None else np.asarray(rec.action_counts)
     return {
         **header(KIND, SCHEMA_VERSION),
-        "seed": style.params.seed,
-        "params": style.params.to_dict(),
-        "classes": list(style.classes),
-        "actions": list(style.actions),
-        "fps": style.fps,
-        "performer": style.performer,
-        "sources": style.sources,
-        "n_sequences": style.n_sequences,
-        "n_events": int(style.action_counts.sum()),
-        "action_counts": {n: int(c) for n, c in zip(style.actions, style.action_counts)},
+        "seed": rec.seed,
+        "params": rec.params,
+        "classes": list(rec.classes),
+        "actions": list(rec.actions),
+        "fps": rec.fps,
+        "performer": rec.performer,
+        "sources": rec.sources,
+        "n_sequences": rec.n_sequences,
+        "n_events": int(counts.sum()),
+        "action_counts": {n: int(c) for n, c in zip(rec.actions, counts)},
         "model_a": {
             "type": "action-hmm",
-            "start": a.start_, "transition": a.transition_, "emission": a.emission_,
-            "log_likelihood": a.log_likelihood_,
-            "restart_log_likelihoods": [_finite_or_none(x) for x in a.restart_log_likelihoods_],
-            "converged": bool(a.converged_), "n_iter": int(a.n_iter_),
+            "start": a.start, "transition": a.transition, "emission": a.emission,
+            "log_likelihood": a.log_likelihood,
+            "restart_log_likelihoods": [_finite_or_none(x) for x in a.restart_log_likelihoods],
+            "converged": bool(a.converged), "n_iter": int(a.n_iter),
         },
         "model_b": {
             "type": "mode-hmm",
-            "n_modes": b.n_modes_,
-            "start": b.start_, "transition": b.transition_, "emission": b.emission_,
-            "log_likelihood": b.log_likelihood_, "bic": _finite_or_none(b.bic_),
+            "n_modes": b.n_modes,
+            "start": b.start, "transition": b.transition, "emission": b.emission,
+            "log_likelihood": b.log_likelihood, "bic": _finite_or_none(b.bic),
             "selection": {"criterion": b.criterion,
-                          "scores": {str(k): _finite_or_none(v) for k, v in b.selection_scores_.items()}},
-            "restart_log_likelihoods": [_finite_or_none(x) for x in b.restart_log_likelihoods_],
-            "converged": bool(b.converged_), "n_iter": int(b.n_iter_),
-            "action_transition": b.action_transition(),
+                          "scores": {str(k): _finite_or_none(v) for k, v in b.selection_scores.items()}},
+            "restart_log_likelihoods": [_finite_or_none(x) for x in b.restart_log_likelihoods],
+            "converged": bool(b.converged), "n_iter": int(b.n_iter),
+            "action_transition": b.action_transition,
         },
-        "bigram": {"type": "bigram", "start": g.start_, "transition": g.transition_,
-                   "log_likelihood": g.log_likelihood_},
+        "bigram": {"type": "bigram", "start": g.start, "transition": g.transition,
+                   "log_likelihood": g.log_likelihood},
         "durations": {
-            n: {"distribution": "lognormal", "mu": float(d.mu_[i]), "sigma": float(d.sigma_[i]),
-                "n": int(d.count_[i]),
-                "mean_frames": _finite_or_none(d.mean_frames_[i]),
-                "sd_frames": _finite_or_none(d.sd_frames_[i])}
-            for i, n in enumerate(style.actions)
+            n: {"distribution": "lognormal", "mu": float(d.mu[i]), "sigma": float(d.sigma[i]),
+                "n": int(d.count[i]),
+                "mean_frames": _finite_or_none(d.mean_frames[i]),
+                "sd_frames": _finite_or_none(d.sd_frames[i])}
+            for i, n in enumerate(rec.actions)
         },
     }
 
@@ -114,56 +191,42 @@ def _numbers(f: Fields, key: str) -> list[float]:
         if x is None:
             out.append(float("nan"))
             continue
-        from ._base import check_number
-
         out.append(check_number(x, f.path, f"{f.name(key)}[{i}]"))
     return out
 
 
-def _params(f: Fields):
-    from ..style.artifact import StyleParams
-    from ..style.events import EventParams
-
+def _params(f: Fields) -> dict[str, Any]:
+    """The ``params`` object, every value type-checked (ranges: ``StyleParams``, when a Style is built)."""
     p = f.sub("params")
     e = p.sub("events")
-    try:
-        ev = EventParams(
-            ignore=tuple(e.str_list("ignore")), min_confidence=e.number("min_confidence", min=0, max=1),
-            min_run=e.int("min_run", min=1), max_gap=e.int("max_gap", min=0), split_repeats=e.bool("split_repeats"),
-            repeat_factor=e.number("repeat_factor", required=False, default=1.5),
-        )
-        kw: dict[str, Any] = {"events": ev, "seed": p.int("seed", required=False, default=f.obj.get("seed", 0) or 0)}
-        for key in ("alpha", "emission_prior", "emission_eps", "tol", "mode_alpha", "mode_emission_alpha"):
-            if p.has(key):
-                kw[key] = p.number(key)
-        for key in ("n_init", "n_iter"):
-            if p.has(key):
-                kw[key] = p.int(key, min=1)
-        if p.has("learn_emission"):
-            kw["learn_emission"] = p.bool("learn_emission")
-        if p.has("k_range"):
-            ks = p.list("k_range", min_len=1)
-            kw["k_range"] = tuple(_int_item(p, "k_range", i, x) for i, x in enumerate(ks))
-        if p.has("mode_criterion"):
-            kw["mode_criterion"] = p.str("mode_criterion", choices=("heldout", "bic"))
-        return StyleParams(**kw)
-    except FormatError:
-        raise
-    except InputError as e:  # a parameter out of range for the library
-        raise FormatError(f.path, "params", str(e)) from None
+    ev = dict(
+        ignore=list(e.str_list("ignore")), min_confidence=e.number("min_confidence", min=0, max=1),
+        min_run=e.int("min_run", min=1), max_gap=e.int("max_gap", min=0), split_repeats=e.bool("split_repeats"),
+        repeat_factor=e.number("repeat_factor", required=False, default=1.5),
+    )
+    kw: dict[str, Any] = {"events": ev, "seed": p.int("seed", required=False, default=f.obj.get("seed", 0) or 0)}
+    for key in ("alpha", "emission_prior", "emission_eps", "tol", "mode_alpha", "mode_emission_alpha"):
+        if p.has(key):
+            kw[key] = p.number(key)
+    for key in ("n_init", "n_iter"):
+        if p.has(key):
+            kw[key] = p.int(key, min=1)
+    if p.has("learn_emission"):
+        kw["learn_emission"] = p.bool("learn_emission")
+    if p.has("k_range"):
+        ks = p.list("k_range", min_len=1)
+        kw["k_range"] = [_int_item(p, "k_range", i, x) for i, x in enumerate(ks)]
+    if p.has("mode_criterion"):
+        kw["mode_criterion"] = p.str("mode_criterion", choices=("heldout", "bic"))
+    return kw
 
 
 def _int_item(p: Fields, key: str, i: int, x: Any) -> int:
-    from ._base import check_int
-
     return check_int(x, p.path, f"{p.name(key)}[{i}]", 1)
 
 
-def parse_style(doc: Any, path: str | os.PathLike | None = None) -> Style:
-    """Validate a style document and build the :class:`~vidstyle.style.artifact.Style` it describes."""
-    from ..style.artifact import Style
-    from ..style.models import ActionHMM, BigramModel, DurationModel, ModeHMM
-
+def parse_style(doc: Any, path: str | os.PathLike | None = None) -> StyleRecord:
+    """Validate a style document and return its :class:`StyleRecord`."""
     check_header(doc, path, KIND, (SCHEMA_VERSION,))
     f = Fields(doc, path)
     actions = f.str_list("actions", unique=True, min_len=2)
@@ -188,71 +251,66 @@ def parse_style(doc: Any, path: str | os.PathLike | None = None) -> Style:
     counts = np.array([ac.int(n, min=0) for n in actions], dtype=np.int64)
 
     fa = f.sub("model_a")
-    a = ActionHMM(n_actions=A, random_state=params.seed)
-    a.n_actions_ = A
-    a.start_ = _stochastic(fa, "start", (A,))
-    a.transition_ = _stochastic(fa, "transition", (A, A))
-    a.emission_ = _stochastic(fa, "emission", (A, A))
-    a.log_likelihood_ = fa.number("log_likelihood")
-    a.restart_log_likelihoods_ = _numbers(fa, "restart_log_likelihoods")
-    a.converged_ = fa.bool("converged", required=False, default=True)
-    a.n_iter_ = fa.int("n_iter", required=False, default=0, min=0)
+    a = ActionHMMRecord(
+        start=_stochastic(fa, "start", (A,)),
+        transition=_stochastic(fa, "transition", (A, A)),
+        emission=_stochastic(fa, "emission", (A, A)),
+        log_likelihood=fa.number("log_likelihood"),
+        restart_log_likelihoods=_numbers(fa, "restart_log_likelihoods"),
+        converged=fa.bool("converged", required=False, default=True),
+        n_iter=fa.int("n_iter", required=False, default=0, min=0),
+    )
 
     fb = f.sub("model_b")
     K = fb.int("n_modes", min=1)
-    b = ModeHMM(n_modes=K, n_actions=A, random_state=params.seed + 1)
-    b.n_actions_, b.n_modes_ = A, K
-    b.start_ = _stochastic(fb, "start", (K,))
-    b.transition_ = _stochastic(fb, "transition", (K, K))
-    b.emission_ = _stochastic(fb, "emission", (K, A))
-    b.log_likelihood_ = fb.number("log_likelihood")
-    b.restart_log_likelihoods_ = _numbers(fb, "restart_log_likelihoods")
-    b.converged_ = fb.bool("converged", required=False, default=True)
-    b.n_iter_ = fb.int("n_iter", required=False, default=0, min=0)
-    b.bic_ = float("nan") if doc["model_b"].get("bic") is None else fb.number("bic")
+    b = ModeHMMRecord(
+        n_modes=K,
+        start=_stochastic(fb, "start", (K,)),
+        transition=_stochastic(fb, "transition", (K, K)),
+        emission=_stochastic(fb, "emission", (K, A)),
+        log_likelihood=fb.number("log_likelihood"),
+        restart_log_likelihoods=_numbers(fb, "restart_log_likelihoods"),
+        converged=fb.bool("converged", required=False, default=True),
+        n_iter=fb.int("n_iter", required=False, default=0, min=0),
+        action_transition=doc["model_b"].get("action_transition"),
+    )
+    b.bic = float("nan") if doc["model_b"].get("bic") is None else fb.number("bic")
     sel = fb.sub("selection", required=False)
-    b.criterion = params.mode_criterion
-    b.selection_scores_ = {}
     if sel is not None:
-        b.criterion = sel.str("criterion", required=False, default=params.mode_criterion, choices=("heldout", "bic"))
+        b.criterion = sel.str("criterion", required=False, default=params.get("mode_criterion"),
+                              choices=("heldout", "bic"))
         scores = sel.sub("scores", required=False)
         for k, v in (scores.obj.items() if scores is not None else ()):
             try:
                 kk = int(k)
             except ValueError:
                 raise FormatError(path, scores.name(k), "mode counts must be integers") from None
-            b.selection_scores_[kk] = float("nan") if v is None else scores.number(k)
+            b.selection_scores[kk] = float("nan") if v is None else scores.number(k)
 
     fg = f.sub("bigram")
-    g = BigramModel(n_actions=A, alpha=params.alpha)
-    g.n_actions_ = A
-    g.start_ = _stochastic(fg, "start", (A,))
-    g.transition_ = _stochastic(fg, "transition", (A, A))
-    g.log_likelihood_ = fg.number("log_likelihood")
+    g = BigramRecord(start=_stochastic(fg, "start", (A,)), transition=_stochastic(fg, "transition", (A, A)),
+                     log_likelihood=fg.number("log_likelihood"))
 
     fd = f.sub("durations")
-    d = DurationModel(n_actions=A)
-    d.n_actions_ = A
     rows = [fd.sub(n) for n in actions]
-    d.mu_ = np.array([r.number("mu") for r in rows])
-    d.sigma_ = np.array([r.number("sigma", min=0) for r in rows])
-    d.count_ = np.array([r.int("n", min=0) for r in rows], dtype=np.int64)
-    d.mean_frames_ = np.array([np.nan if r.obj.get("mean_frames") is None else r.number("mean_frames", min=0)
-                               for r in rows])
-    d.sd_frames_ = np.array([np.nan if r.obj.get("sd_frames") is None else r.number("sd_frames", min=0) for r in rows])
-    return Style(actions, classes, params, a, b, g, d, fps=fps, sources=sources, performer=performer,
-                 action_counts=counts, n_sequences=n_sequences)
+    d = DurationsRecord(
+        mu=np.array([r.number("mu") for r in rows]),
+        sigma=np.array([r.number("sigma", min=0) for r in rows]),
+        count=np.array([r.int("n", min=0) for r in rows], dtype=np.int64),
+        mean_frames=np.array([np.nan if r.obj.get("mean_frames") is None else r.number("mean_frames", min=0)
+                              for r in rows]),
+        sd_frames=np.array([np.nan if r.obj.get("sd_frames") is None else r.number("sd_frames", min=0)
+                            for r in rows]),
+    )
+    return StyleRecord(actions, classes, params, params["seed"], a, b, g, d, fps=fps, performer=performer,
+                       sources=sources, n_sequences=n_sequences, action_counts=counts)
 
 
-def read_style(path: str | os.PathLike) -> Style:
+def read_style(path: str | os.PathLike) -> StyleRecord:
     return parse_style(read_json_document(path), path)
 
 
-def write_style(path: str | os.PathLike, style: Style) -> None:
-    import json
-
-    from ..fileio import json_default
-
-    doc = json.loads(json.dumps(style_to_dict(style), default=json_default))
+def write_style(path: str | os.PathLike, rec: StyleRecord) -> None:
+    doc = json.loads(json.dumps(style_to_dict(rec), default=json_default))
     parse_style(doc, path)  # an invalid style never reaches disk
     write_json_document(path, doc)

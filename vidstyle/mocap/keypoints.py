@@ -35,15 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..formats.keypoints import KEYPOINTS
 from .kinematics import forward_kinematics
 from .motion import Motion
 from .skeleton import Skeleton
 
-KEYPOINTS: tuple[str, ...] = (
-    "head_top", "neck", "pelvis",
-    "left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist",
-    "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle",
-)
 KEYPOINT_INDEX = {k: i for i, k in enumerate(KEYPOINTS)}
 
 # (part name, (proximal keypoint, distal keypoint)); the torso (root) goes neck -> pelvis.

@@ -72,8 +72,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import FormatError, InputError, ParameterError
+from ..formats.motiongraph import MotionGraphRecord, read_graph, write_graph
 from ..mocap import Motion, Skeleton, global_positions
+from . import defaults
 from .distance import WindowSet, align_windows, all_pair_candidates, joint_weights, sample_distances
 from .labels import UNLABELLED, LabelBook, resample_labels
 
@@ -205,19 +207,19 @@ class MotionGraph:
 
     def __init__(
         self,
-        window: int = 10,
-        fps: float = 30.0,
+        window: int = defaults.WINDOW,
+        fps: float = defaults.FPS,
         threshold: float | None = None,
-        threshold_quantile: float = 0.05,
+        threshold_quantile: float = defaults.THRESHOLD_QUANTILE,
         min_gap: int | None = None,
-        drop_tpose: bool = True,
-        tile: int = 2048,
-        dtype: str = "float32",
-        n_jobs: int = 1,
+        drop_tpose: bool = defaults.DROP_TPOSE,
+        tile: int = defaults.TILE,
+        dtype: str = defaults.DTYPE,
+        n_jobs: int = defaults.N_JOBS,
         scheduler: str | None = None,
-        n_samples: int = 200_000,
-        random_state: int = 0,
-        mirror: bool = False,
+        n_samples: int = defaults.N_SAMPLES,
+        random_state: int = defaults.RANDOM_STATE,
+        mirror: bool = defaults.MIRROR,
     ) -> None:
         self.window = window
         self.fps = fps
@@ -239,10 +241,22 @@ class MotionGraph:
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
 
+    def check_params(self) -> None:
+        """Raise :class:`ParameterError` naming the first parameter out of range (``fit`` calls this)."""
+        if self.dtype not in defaults.DTYPES:
+            raise ParameterError("dtype", f"float32 or float64, got {self.dtype!r}")
+        if not 0 < self.threshold_quantile < 1:
+            raise ParameterError("threshold_quantile", f"must be in (0, 1), got {self.threshold_quantile}")
+        if self.threshold is not None and not self.threshold > 0:
+            raise ParameterError("threshold", f"must be positive, got {self.threshold}")
+        if self.tile < defaults.MIN_TILE:
+            raise ParameterError("tile", f"must be at least {defaults.MIN_TILE}, got {self.tile}")
+
     # ------------------------------------------------------------------------------------------ fit
     def fit(self, clips: Sequence[Clip]) -> MotionGraph:
         from ..mocap.retarget import retarget_clips
 
+        self.check_params()
         k = int(self.window)
         if k < 2:
             raise InputError(f"window: must be at least 2 frames, got {k}")
@@ -564,18 +578,93 @@ class MotionGraph:
         return dist, align, align_seg
 
     # ------------------------------------------------------------------------------------------ I/O
+    def to_record(self) -> MotionGraphRecord:
+        """The fitted graph as the file's record (:class:`vidstyle.formats.motiongraph.MotionGraphRecord`)."""
+        sk = self.skeleton_
+        end_sites = np.full((sk.n_joints, 3), np.nan)
+        for j, off in sk.end_sites.items():
+            end_sites[j] = off
+        segs = self.segments_
+        J = sk.n_joints
+        frames = [s.n_frames for s in segs]
+        c = self.clips_
+        return MotionGraphRecord(
+            params=self.get_params(), threshold_used=self.threshold_, stats=self.stats_,
+            fps=self.fps, window=self.window,
+            clip_names=c["names"], clip_paths=c["paths"], clip_sha256=c["sha"], clip_start=c["start"],
+            clip_frames=c["frames"], clip_src_first=c["first"], clip_src_fps=c["src_fps"], clip_scale=c["scale"],
+            joint_names=sk.names, parents=sk.parents, offsets=sk.offsets, channels=[list(x) for x in sk.channels],
+            end_sites=end_sites,
+            rotations=self.rotations_, root_positions=self.root_positions_, frame_clip=self.frame_clip_,
+            label_names=self.label_names_, labels=self.labels_, joint_weights=self.joint_weights_, scc=self.scc_,
+            edge_src=self.edge_src_, edge_dst=self.edge_dst_, edge_kind=self.edge_kind_, edge_cost=self.edge_cost_,
+            edge_segment=self.edge_segment_, edge_align=self.edge_align_, edge_align_segment=self.edge_align_segment_,
+            edge_in_scc=self.edge_in_scc_,
+            segment_rotations=np.concatenate([s.rotations for s in segs]) if segs else np.zeros((0, J, 4)),
+            segment_root_positions=np.concatenate([s.root_positions for s in segs]) if segs else np.zeros((0, 3)),
+            segment_start=(np.concatenate([[0], np.cumsum(frames)[:-1]]).astype(np.int64) if segs
+                           else np.zeros(0, np.int64)),
+            segment_frames=np.array(frames, dtype=np.int64),
+            segment_centre=np.array([s.centre for s in segs], dtype=np.int64),
+            segment_source=np.array([s.source for s in segs], dtype=str),
+            segment_label=np.array([s.label for s in segs], dtype=str),
+            segment_anchor=np.array([s.anchors if s.anchors is not None else (-1, -1) for s in segs],
+                                    dtype=np.int64).reshape(len(segs), 2),
+            segment_hold=np.array([s.hold for s in segs], dtype=np.float64),
+        )
+
+    @classmethod
+    def from_record(cls, rec: MotionGraphRecord) -> MotionGraph:
+        """A fitted graph from a record (as :func:`vidstyle.formats.motiongraph.read_graph` returns it).
+        Unknown parameters (of newer or older versions) are ignored."""
+        known = {k: v for k, v in rec.params.items() if k in cls.PARAMS}
+        g = cls(**known)
+        g.window, g.fps = int(rec.window), float(rec.fps)
+        end_sites = np.asarray(rec.end_sites, dtype=np.float64)
+        parents = np.asarray(rec.parents)
+        ends = {j: end_sites[j] for j in range(len(parents)) if np.isfinite(end_sites[j]).all()}
+        g.skeleton_ = Skeleton([str(x) for x in rec.joint_names], parents, np.asarray(rec.offsets),
+                               [tuple(x) for x in rec.channels], ends)
+        g.rotations_ = np.asarray(rec.rotations)
+        g.root_positions_ = np.asarray(rec.root_positions)
+        g.frame_clip_ = np.asarray(rec.frame_clip)
+        g.label_names_ = [str(x) for x in rec.label_names]
+        g.labels_ = np.asarray(rec.labels)
+        g.joint_weights_ = np.asarray(rec.joint_weights)
+        g.scc_ = np.asarray(rec.scc).astype(bool)
+        for key in ("src", "dst", "cost", "segment", "align", "align_segment"):
+            setattr(g, f"edge_{key}_", np.asarray(getattr(rec, f"edge_{key}")))
+        g.edge_kind_ = np.asarray(rec.edge_kind).astype(np.int8)
+        g.edge_in_scc_ = g.scc_[g.edge_src_] & g.scc_[g.edge_dst_]
+        g.segments_ = [
+            Segment(rec.segment_rotations[s : s + n], rec.segment_root_positions[s : s + n], int(z), str(src),
+                    str(lab), None if a[0] == -1 else (int(a[0]), int(a[1])), float(h))
+            for s, n, z, src, lab, a, h in zip(rec.segment_start, rec.segment_frames, rec.segment_centre,
+                                               rec.segment_source, rec.segment_label, rec.segment_anchor,
+                                               rec.segment_hold)
+        ]
+        g.clips_ = {
+            "names": [str(x) for x in rec.clip_names], "paths": [str(x) for x in rec.clip_paths],
+            "sha": [str(x) for x in rec.clip_sha256], "start": np.asarray(rec.clip_start).tolist(),
+            "frames": np.asarray(rec.clip_frames).tolist(), "first": np.asarray(rec.clip_src_first).tolist(),
+            "src_fps": np.asarray(rec.clip_src_fps).tolist(), "scale": np.asarray(rec.clip_scale).tolist(),
+        }
+        g.threshold_ = rec.threshold_used
+        g.stats_ = rec.stats
+        return g
+
     def save(self, path: str | Path) -> None:
         """Write the graph file (:mod:`vidstyle.formats.motiongraph`, schema version 2)."""
-        from ..formats.motiongraph import write_graph
-
-        write_graph(path, self)
+        write_graph(path, self.to_record())
 
     @classmethod
     def load(cls, path: str | Path) -> MotionGraph:
         """Read a graph file (schema version 1 or 2); malformed files raise ``FormatError``."""
-        from ..formats.motiongraph import read_graph
-
-        return read_graph(path)
+        rec = read_graph(path)
+        try:
+            return cls.from_record(rec)
+        except (ValueError, TypeError, IndexError, KeyError) as e:  # what the reader's checks could not foresee
+            raise FormatError(path, None, f"not a consistent motion graph ({e})") from None
 
     # ------------------------------------------------------------------------------------------ helpers
     @property

@@ -113,7 +113,7 @@ class LabelBook:
 
     def _load_json(self, path: Path) -> None:
         from ..formats import FormatError, read_json_document
-        from ..formats.labels import parse_labels
+        from ..formats.labels import parse_labels, parse_segment
 
         data = read_json_document(path)
         items = data if isinstance(data, list) else [data]
@@ -131,12 +131,10 @@ class LabelBook:
                 spec.per_frame = track.labels
                 events = track.events or []
             else:
-                from ..formats.labels import _segment
-
                 raw = item.get("events") or []
                 if not isinstance(raw, list):
                     raise FormatError(path, "events", "expected a list")
-                events = [_segment(ev, path, f"events[{k}]", 1 << 62, _AnyClass()) for k, ev in enumerate(raw)]
+                events = [parse_segment(ev, path, f"events[{k}]", 1 << 62, _AnyClass()) for k, ev in enumerate(raw)]
             for ev in events:
                 spec.ranges.append((ev.start, ev.end, ev.label))
 

@@ -57,8 +57,10 @@ def _map_transitions(transitions, n_src: int, src_fps: float, fps: float, n_out:
     return out
 
 
-class _Job:
-    """Everything precomputed (vectorised over frames) for rendering one motion from one camera."""
+class RenderJob:
+    """Everything precomputed (vectorised over frames) for rendering one motion from one camera
+    (:func:`render_motion` and :func:`render_to_file` build one; ``scripts/bench_render.py`` times its
+    parts). ``frames()`` yields the rendered frames."""
 
     def __init__(self, motion: Motion, camera: Camera, fps: float, appearance: Appearance | None,
                  background, noise_sigma: float, seed: int, labels, transitions) -> None:
@@ -253,7 +255,7 @@ def render_motion(
     schema in :mod:`vidstyle.render`); with ``return_masks=True`` also (F, H, W) part-id masks
     (int8; the joint index owning the front-most body part at the pixel, -1 for background).
     """
-    job = _Job(motion, camera, fps, appearance, background, noise_sigma, seed, labels, transitions)
+    job = RenderJob(motion, camera, fps, appearance, background, noise_sigma, seed, labels, transitions)
     W, H = camera.size
     frames = np.empty((job.n_frames, H, W, 3), dtype=np.uint8)
     masks = np.empty((job.n_frames, H, W), dtype=job.mask_dtype) if return_masks else None
@@ -294,7 +296,7 @@ def render_to_file(
         raise InputError(f"{out}: video must end in {', '.join(CODECS)}")
     if camera is None:
         camera = Camera.for_view(motion, view=view, elevation_deg=elevation_deg, distance=distance, size=size)
-    job = _Job(motion, camera, fps, appearance, background, noise_sigma, seed, labels, transitions)
+    job = RenderJob(motion, camera, fps, appearance, background, noise_sigma, seed, labels, transitions)
     side = sidecar_path(out)
     # the writer renames its temporary file when its block ends without error; an error anywhere
     # (rendering, the sidecar) leaves neither file

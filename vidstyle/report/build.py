@@ -151,7 +151,7 @@ def _style_section(page: Page, run: Path, dataset: Dataset | None) -> None:
     for path in styles[:3]:
         st = read_style(path)
         actions = list(st.actions)
-        learned = np.asarray(st.model_a.transition_, float)
+        learned = np.asarray(st.model_a.transition, float)
         who = st.performer or path.stem
         body.append(svg.heatmap(learned, actions, actions, f"{who}: learned (HMM a)",
                                 vmax=1.0, xlabel="next action", ylabel="action"))
@@ -200,9 +200,9 @@ def _motion_section(page: Page, run: Path) -> None:
         from ..formats.motiongraph import read_graph
 
         g = read_graph(gpath)
-        rows = [[k.replace("_", " "), v] for k, v in g.stats_.items() if isinstance(v, (int, float))]
+        rows = [[k.replace("_", " "), v] for k, v in g.stats.items() if isinstance(v, (int, float))]
         body.append(table(rows, ["motion graph", "value"]))
-        body.append(f'<p class="note">labels: {esc(", ".join(g.label_names_))}; window {g.window} frames at '
+        body.append(f'<p class="note">labels: {esc(", ".join(g.label_names))}; window {g.window} frames at '
                     f'{g.fps:g} fps</p>')
     else:
         body.append(_missing("motion graph", gpath))

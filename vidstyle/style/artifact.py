@@ -13,8 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ParameterError
+from ..errors import FormatError, InputError, ParameterError
+from ..formats import style as style_format
 from ..formats.labels import FrameLabels
+from ..formats.style import ActionHMMRecord, BigramRecord, DurationsRecord, ModeHMMRecord, StyleRecord
 from .events import EventParams, EventSequence, action_names_of, tracks_to_events
 from .models import ActionHMM, BigramModel, DurationModel, ModeHMM, require_transitions
 
@@ -222,28 +224,79 @@ class Style:
 
     # -- serialisation (the schema is owned by vidstyle.formats.style) ---------------------------------
 
-    def to_dict(self) -> dict[str, Any]:
-        from ..formats.style import style_to_dict
+    def to_record(self) -> StyleRecord:
+        """The style as its file's record (:class:`vidstyle.formats.style.StyleRecord`)."""
+        a, b, g, d = self.model_a, self.model_b, self.bigram, self.durations
+        return StyleRecord(
+            actions=list(self.actions), classes=list(self.classes), params=self.params.to_dict(),
+            seed=self.params.seed,
+            model_a=ActionHMMRecord(a.start_, a.transition_, a.emission_, a.log_likelihood_,
+                                    list(a.restart_log_likelihoods_), a.converged_, a.n_iter_),
+            model_b=ModeHMMRecord(b.start_, b.transition_, b.emission_, b.log_likelihood_,
+                                  list(b.restart_log_likelihoods_), b.converged_, b.n_iter_, n_modes=b.n_modes_,
+                                  bic=b.bic_, criterion=b.criterion, selection_scores=dict(b.selection_scores_),
+                                  action_transition=b.action_transition()),
+            bigram=BigramRecord(g.start_, g.transition_, g.log_likelihood_),
+            durations=DurationsRecord(d.mu_, d.sigma_, d.count_, d.mean_frames_, d.sd_frames_),
+            fps=self.fps, performer=self.performer, sources=self.sources, n_sequences=self.n_sequences,
+            action_counts=self.action_counts,
+        )
 
-        return style_to_dict(self)
+    @classmethod
+    def from_record(cls, rec: StyleRecord, path: str | Path | None = None) -> Style:
+        """The style a record describes. Parameters out of the estimators' ranges raise ``FormatError``
+        naming ``path`` and ``params``."""
+        p = dict(rec.params)
+        ev = dict(p.pop("events"))
+        try:
+            events = EventParams(**dict(ev, ignore=tuple(ev["ignore"])))
+            if "k_range" in p:
+                p["k_range"] = tuple(p["k_range"])
+            params = StyleParams(**dict(p, events=events))
+        except InputError as e:  # a parameter out of range for the library
+            raise FormatError(path, "params", str(e)) from None
+        A = len(rec.actions)
+        ra, rb, rg, rd = rec.model_a, rec.model_b, rec.bigram, rec.durations
+        a = ActionHMM(n_actions=A, random_state=params.seed)
+        a.n_actions_ = A
+        a.start_, a.transition_, a.emission_ = ra.start, ra.transition, ra.emission
+        a.log_likelihood_ = ra.log_likelihood
+        a.restart_log_likelihoods_ = list(ra.restart_log_likelihoods)
+        a.converged_, a.n_iter_ = ra.converged, ra.n_iter
+        K = rb.n_modes
+        b = ModeHMM(n_modes=K, n_actions=A, random_state=params.seed + 1)
+        b.n_actions_, b.n_modes_ = A, K
+        b.start_, b.transition_, b.emission_ = rb.start, rb.transition, rb.emission
+        b.log_likelihood_ = rb.log_likelihood
+        b.restart_log_likelihoods_ = list(rb.restart_log_likelihoods)
+        b.converged_, b.n_iter_ = rb.converged, rb.n_iter
+        b.bic_ = rb.bic
+        b.criterion = params.mode_criterion if rb.criterion is None else rb.criterion
+        b.selection_scores_ = dict(rb.selection_scores)
+        g = BigramModel(n_actions=A, alpha=params.alpha)
+        g.n_actions_ = A
+        g.start_, g.transition_, g.log_likelihood_ = rg.start, rg.transition, rg.log_likelihood
+        d = DurationModel(n_actions=A)
+        d.n_actions_ = A
+        d.mu_, d.sigma_, d.count_, d.mean_frames_, d.sd_frames_ = rd.mu, rd.sigma, rd.count, rd.mean_frames, rd.sd_frames
+        return cls(rec.actions, rec.classes, params, a, b, g, d, fps=rec.fps, sources=rec.sources,
+                   performer=rec.performer, action_counts=rec.action_counts, n_sequences=rec.n_sequences)
+
+    def to_dict(self) -> dict[str, Any]:
+        return style_format.style_to_dict(self.to_record())
 
     @classmethod
     def from_dict(cls, doc: Any, path: str = "style.json") -> Style:
         """Rebuild a style from its JSON document (validated: a FormatError names the file and field)."""
-        from ..formats.style import parse_style
-
-        return parse_style(doc, path)
+        return cls.from_record(style_format.parse_style(doc, path), path)
 
     @classmethod
     def load(cls, path: str | Path) -> Style:
-        from ..formats.style import read_style
-
-        return read_style(path)
+        """Read ``style.json`` (:mod:`vidstyle.formats.style`); a bad file raises ``FormatError``."""
+        return cls.from_record(style_format.read_style(path), path)
 
     def save(self, path: str | Path) -> None:
-        from ..formats.style import write_style
-
-        write_style(path, self)
+        style_format.write_style(path, self.to_record())
 
 
 def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None) -> list[tuple[str, Style]]:

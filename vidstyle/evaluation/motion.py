@@ -8,13 +8,25 @@
   foot height of that motion, default 5 % of the body height) and moving little vertically: the foot
   should be planted. Reported at seams and inside the original clips.
 * **label fidelity**: fraction of output frames whose source label equals the requested label.
+
+The protocol of ``vidstyle evaluate motion`` is :func:`evaluate` (the command writes its result through
+:mod:`vidstyle.formats.metrics` and prints a table).
 """
 
 from __future__ import annotations
 
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
 import numpy as np
 
-from ..mocap import Motion, global_positions
+from ..errors import ParameterError
+from ..formats.walk import read_walk_labels
+from ..mocap import Motion, global_positions, read_bvh
+from ..motiongraph import MotionGraph, Step, defaults, plan_walk, read_sequence, render_walk, walk_labels
+from ..motiongraph.pipeline import labels_path
 
 FOOT_NAMES = ("toe", "foot", "ankle")
 
@@ -157,3 +169,83 @@ def summarise(results: list[dict], original: dict) -> dict:
             row[f"seam_over_original_{key}"] = seam / orig if seam is not None and orig else None
         summary[metric] = row
     return summary
+
+
+def random_sequences(graph: MotionGraph, walks: int, steps: int, actions: str | Sequence[str] | None,
+                     min_seconds: float, max_seconds: float, seed: int) -> list[list[Step]]:
+    """``walks`` seeded random sequences of ``steps`` steps (no action twice in a row), over ``actions``
+    (names, or one comma-separated string; default: every label with at least 2 s of frames in the
+    graph's component)."""
+    rng = np.random.default_rng(seed)
+    lab = graph.labels_[graph.scc_]
+    counts = {name: int((lab == i).sum()) for i, name in enumerate(graph.label_names_)}
+    if actions:
+        pool = [a.strip() for a in actions.split(",") if a.strip()] if isinstance(actions, str) else list(actions)
+    else:
+        pool = [a for a, c in counts.items() if c >= 2 * graph.fps and a != "unlabelled"]
+    if not pool:
+        raise ParameterError("actions", f"no action with enough frames in the graph ({counts})")
+    out = []
+    for _ in range(walks):
+        seq, prev = [], None
+        for _ in range(steps):
+            choices = [a for a in pool if a != prev] or pool
+            prev = str(rng.choice(choices))
+            seq.append(Step(prev, int(rng.integers(int(min_seconds * graph.fps), int(max_seconds * graph.fps) + 1))))
+        out.append(seq)
+    return out
+
+
+def evaluate(
+    graph: MotionGraph,
+    motions: Sequence[str | os.PathLike] = (),
+    *,
+    sequence: str | os.PathLike | None = None,
+    walks: int = defaults.EVAL_WALKS,
+    steps: int = defaults.EVAL_STEPS,
+    actions: str | Sequence[str] | None = None,
+    min_seconds: float = defaults.EVAL_MIN_SECONDS,
+    max_seconds: float = defaults.EVAL_MAX_SECONDS,
+    seed: int = 0,
+    foot_lock: bool = defaults.FOOT_LOCK,
+    max_in_degree: int | None = None,
+) -> dict:
+    """Seam quality, foot skid, label fidelity and transitions used of synthesised motion: of the given
+    BVH ``motions`` (each with ``<stem>.labels.json``), else of ``sequence`` synthesised, else of
+    ``walks`` seeded random sequences. Returns the metrics document's content (without the graph's path):
+    ``graph_stats``, ``seed``, ``parameters``, ``summary``, ``original`` (the graph's own clips), ``walks``."""
+    original = original_stats(graph, seed=seed)
+    results = []
+    synth_seconds, synth_frames = 0.0, 0
+
+    def walk_of(seq: list[Step], name: str) -> None:
+        nonlocal synth_seconds, synth_frames
+        t0 = time.perf_counter()
+        walk = plan_walk(graph, seq, strict=False, max_in_degree=max_in_degree)
+        motion = render_walk(graph, walk, foot_lock=foot_lock)
+        synth_seconds += time.perf_counter() - t0
+        synth_frames += motion.n_frames
+        results.append(evaluate_walk(motion, walk_labels(graph, walk, name)))
+
+    if motions:
+        for m in motions:
+            motion = read_bvh(m)
+            results.append(evaluate_walk(motion, read_walk_labels(labels_path(m), motion.n_frames).doc))
+    elif sequence is not None:
+        walk_of(read_sequence(sequence, graph.fps), Path(sequence).stem + ".bvh")
+    else:
+        for w, seq in enumerate(random_sequences(graph, walks, steps, actions, min_seconds, max_seconds, seed)):
+            walk_of(seq, f"walk{w}.bvh")
+    summary = summarise(results, original)
+    if synth_frames:
+        summary["synthesis_x_real_time"] = synth_frames / graph.fps / max(synth_seconds, 1e-9)
+    return {
+        "graph_stats": graph.stats_,
+        "seed": seed,
+        "parameters": {"walks": walks, "steps": steps, "actions": actions if actions is None or isinstance(actions, str) else ",".join(actions),
+                       "min_seconds": min_seconds, "max_seconds": max_seconds, "foot_lock": foot_lock,
+                       "sequence": str(sequence) if sequence else None, "max_in_degree": max_in_degree},
+        "summary": summary,
+        "original": original,
+        "walks": results,
+    }

@@ -1,0 +1,72 @@
+"""``vidstyle annotate`` as a library call: open the videos, load the overlays, pick the class list and
+serve the annotation page until interrupted."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..errors import ParameterError
+
+log = logging.getLogger(__name__)
+
+HOST = "127.0.0.1"
+PORT = 8765
+MAX_BODY_MB = 16.0
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+
+
+def class_names(classes: str | Sequence[str] | None, annotations: Path, overlays: dict,
+                default_classes: Sequence[str] = ()) -> list[str]:
+    """The page's class list: ``classes`` (names or one comma-separated string); else none when the
+    annotations file exists (it holds its own); else the recognised labels' classes, in order of first
+    appearance; else ``default_classes``."""
+    if classes:
+        if isinstance(classes, str):
+            return [c.strip() for c in classes.split(",") if c.strip()]
+        return list(classes)
+    if annotations.exists():
+        return []
+    names: list[str] = []
+    for ov in overlays.values():
+        for c in ov.get("recognized", {}).get("classes", []):
+            if c not in names:
+                names.append(c)
+    return names or list(default_classes)
+
+
+def annotate(
+    videos: Sequence[str | os.PathLike],
+    annotations: str | os.PathLike,
+    *,
+    labels: Sequence[str | os.PathLike] = (),
+    poses: Sequence[str | os.PathLike] = (),
+    matches: Sequence[str | os.PathLike] = (),
+    classes: str | Sequence[str] | None = None,
+    default_classes: Sequence[str] = (),
+    host: str = HOST,
+    port: int = PORT,
+    open_browser: bool = True,
+    max_body_mb: float = MAX_BODY_MB,
+) -> None:
+    """Serve the annotation page for ``videos`` editing ``annotations`` (see :mod:`vidstyle.annotate`);
+    parameters are checked before any video is opened."""
+    from . import server
+    from .overlays import load_overlays
+    from .session import Store, open_videos
+
+    if not 0 <= port < 65536:
+        raise ParameterError("port", f"must be in 0..65535, got {port}")
+    if max_body_mb <= 0:
+        raise ParameterError("max_body_mb", f"must be positive, got {max_body_mb}")
+    if host not in LOOPBACK:
+        log.warning("annotate: listening on %s: anyone who can reach this address can read the videos; "
+                    "saving still needs the page's session token", host)
+    annotations = Path(annotations)
+    vids = open_videos(list(videos))
+    overlays = load_overlays(vids, list(labels), list(poses), list(matches))
+    store = Store(annotations, vids, class_names(classes, annotations, overlays, default_classes))
+    server.serve(server.new_session(vids, store, overlays, max_body=int(max_body_mb * (1 << 20))), host, port,
+                 open_browser=open_browser)
