@@ -1,0 +1,111 @@
+"""Following one performer among several people, scored against truth (the ``demo make-crowd`` take).
+
+Per view: every frame's pose from a backend, alone (``naive``: the backend's own choice of person each
+frame) or followed (:class:`vidstyle.pose.people.PerformerTracker`). Each estimated pose is assigned the
+identity of the true person whose keypoints it lies closest to (mean distance over the keypoints the
+backend found); an *identity switch* is a frame whose identity differs from the previous estimated
+frame's. PCK@0.2 (torso-normalised, true torso) is scored against the person the pose stage chose in its
+first frame with a pose; frames without a pose count as misses.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..formats.keypoints import KEYPOINTS
+
+NECK, PELVIS = KEYPOINTS.index("neck"), KEYPOINTS.index("pelvis")
+
+
+def identities(estimates: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(F,) index of the true person nearest each estimate, -1 where there is none.
+
+    ``estimates`` (F, 15, 3) x, y, score (NaN rows: no pose); ``truth`` (P, F, 15, 2)."""
+    F = estimates.shape[0]
+    out = np.full(F, -1, dtype=np.int64)
+    for f in range(F):
+        ok = np.isfinite(estimates[f, :, 0]) & (np.nan_to_num(estimates[f, :, 2]) > 0)
+        if ok.sum() < 3:
+            continue
+        d = [np.linalg.norm(truth[p, f, ok] - estimates[f, ok, :2], axis=-1).mean() for p in range(truth.shape[0])]
+        out[f] = int(np.argmin(d))
+    return out
+
+
+def switches(ids: np.ndarray) -> int:
+    seen = ids[ids >= 0]
+    return int(np.sum(seen[1:] != seen[:-1]))
+
+
+def pck(estimates: np.ndarray, truth_person: np.ndarray, threshold: float = 0.2) -> float:
+    """PCK over every keypoint of every frame (missing poses / keypoints are misses)."""
+    torso = np.linalg.norm(truth_person[:, NECK] - truth_person[:, PELVIS], axis=-1)
+    d = np.linalg.norm(estimates[..., :2] - truth_person, axis=-1) / torso[:, None]
+    found = np.isfinite(d) & (np.nan_to_num(estimates[..., 2]) > 0)
+    return float(np.mean(found & (np.nan_to_num(d, nan=np.inf) < threshold)))
+
+
+def score_view(estimates: np.ndarray, truth: np.ndarray) -> dict:
+    ids = identities(estimates, truth)
+    first = ids[ids >= 0]
+    chosen = int(first[0]) if len(first) else -1
+    F = len(ids)
+    return {"frames": F, "found": int((ids >= 0).sum()), "chosen": chosen,
+            "identity_switches": switches(ids), "switches_per_100_frames": 100.0 * switches(ids) / max(F, 1),
+            "pck@0.2": pck(estimates, truth[chosen]) if chosen >= 0 else 0.0,
+            "frames_on_chosen": float(np.mean(ids == chosen)) if chosen >= 0 else 0.0}
+
+
+def run_view(video: str | Path, backend, tracked: bool, person=None) -> np.ndarray:
+    """(F, 15, 3) poses of every frame of ``video`` (NaN rows where none)."""
+    from ..pose.people import PerformerTracker
+    from ..video import VideoReader
+
+    out = []
+    tracker = PerformerTracker(backend, person=person) if tracked else None
+    with VideoReader(video) as reader:
+        for i, frame in reader.iter_frames():
+            if tracker is not None:
+                pose = tracker.step(frame, i).pose
+            else:
+                pose = backend.estimate(frame, i)
+                if pose.viewpoint == "unknown":
+                    pose = None
+            out.append(np.full((15, 3), np.nan) if pose is None else pose.points)
+    return np.stack(out)
+
+
+def evaluate_crowd(crowd_dir: str | Path, backend_factory, modes=("naive", "tracked")) -> dict:
+    """Scores of every mode on every view of a crowd take, and the multi-view PCK of each mode's poses."""
+    from ..formats.calibration import read_calibration
+    from ..formats.keypoints import KEYPOINTS as NAMES
+    from .multiview import leave_one_view_out, summarise
+
+    crowd_dir = Path(crowd_dir)
+    truth = np.load(crowd_dir / "truth.npz")
+    kp2 = truth["keypoints2d"].astype(np.float64)
+    views = [str(v) for v in truth["views"]]
+    calib = read_calibration(crowd_dir / "calibration.toml")
+    result = {"views": views, "people": int(kp2.shape[1]), "frames": int(kp2.shape[2]), "modes": {}}
+    for mode in modes:
+        per_view, poses = {}, []
+        for v, name in enumerate(views):
+            backend = backend_factory()
+            est = run_view(crowd_dir / f"{name}.mp4", backend, tracked=(mode == "tracked"))
+            getattr(backend, "close", lambda: None)()
+            per_view[name] = score_view(est, kp2[v])
+            poses.append(est)
+        errors, _ = leave_one_view_out(calib.cameras, np.stack(poses), (NECK, PELVIS))
+        mv = summarise(errors, views, NAMES)["overall"]
+        total_sw = sum(p["identity_switches"] for p in per_view.values())
+        total_f = sum(p["frames"] for p in per_view.values())
+        result["modes"][mode] = {
+            "per_view": per_view,
+            "identity_switches_per_100_frames": 100.0 * total_sw / max(total_f, 1),
+            "pck@0.2": float(np.mean([p["pck@0.2"] for p in per_view.values()])),
+            "same_person_in_every_view": len({p["chosen"] for p in per_view.values()}) == 1,
+            "multiview_pck@0.2": mv["pck@0.2"],
+        }
+    return result
