@@ -2,7 +2,7 @@
 
 Diagnostics only - nothing here trains, tunes or selects anything (the recognizer is used as given,
 and no default is chosen from these numbers). Each variant goes through the same evaluation
-(:func:`vidstyle.recognition.realmocap.evaluate_strikes`: same cameras, looks, seed, action-frame rule
+(:func:`vidstyle.evaluation.realmocap.evaluate_strikes`: same cameras, looks, seed, action-frame rule
 recomputed on the variant's own motion):
 
 * ``original``  - CMU 02_05 as captured (orthodox stance, nine right-hand = rear-hand straight punches);
@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidstyle.fileio import atomic_path
 from vidstyle.mocap import Motion, read_bvh, write_bvh
-from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
+from vidstyle.evaluation.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
 
 log = logging.getLogger("strikes_diagnostics")
 

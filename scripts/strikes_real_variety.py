@@ -178,7 +178,7 @@ def main(argv=None) -> int:
     if not a.real and not a.cameras:
         ap.error("give --real and/or --cameras")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
-    from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, evaluate_strikes, strikes_table
+    from vidstyle.evaluation.realmocap import DEFAULT_CAMERAS, evaluate_strikes, strikes_table
     from vidstyle.recognition.recognizer import load_model, read_header
 
     global POINTS

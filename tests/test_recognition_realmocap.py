@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from vidstyle.cli import main
 from vidstyle.demo.skeleton import build_skeleton
 from vidstyle.mocap import Motion
-from vidstyle.recognition.realmocap import (
+from vidstyle.evaluation.realmocap import (
     KICKS,
     PUNCHES,
     StrikeRule,
@@ -210,7 +210,7 @@ def test_labelled_action_frames(tmp_path):
     from vidstyle.demo.dataset import label_document
     from vidstyle.errors import InputError
     from vidstyle.formats.labels import write_labels
-    from vidstyle.recognition.realmocap import labelled_action_frames
+    from vidstyle.evaluation.realmocap import labelled_action_frames
 
     labels = ["Guard"] * 5 + ["Jab"] * 4 + ["Guard"] * 3 + ["LowKick"] * 2 + ["Uppercut"] * 3
     write_labels(tmp_path / "l.json", label_document(labels, 60.0, ["Jab", "LowKick", "Uppercut"], bvh="t.bvh"))

@@ -38,13 +38,13 @@ def test_search_scores_only_the_validation_videos(tmp_path, monkeypatch):
     ds = load_dataset(tmp_path)
     split = make_split(ds, seed=0)
     read = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         read.extend(ids)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1)
     rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 3.0), ("vote", None)])
     assert set(read) == set(split.vocab + split.train + split.val) and not set(read) & set(split.test)
@@ -97,13 +97,13 @@ def test_points_candidates_read_their_own_features(tmp_path, monkeypatch):
     ds = load_dataset(tmp_path)
     split = make_split(ds, seed=0)
     dirs = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         dirs.append(Path(fdir).name)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1,
                   points_features={20: str(tmp_path / "features20")})
     s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0)])
@@ -126,14 +126,14 @@ def test_validation_camera_scores_only_the_validation_performers(tmp_path, monke
     ds, cam = load_dataset(tmp_path / "d"), load_dataset(tmp_path / "c")
     split = make_split(ds, seed=0)
     read = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         if Path(fdir).parent.name == "c":
             read.extend(ids)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "d" / "features")}, split, 0, 1,
                   camera_dataset=cam, camera_features={("scovanner2007", 10): str(tmp_path / "c" / "features")})
     rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0), ("vote", None)])

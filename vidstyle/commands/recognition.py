@@ -451,7 +451,7 @@ def evaluate_recognition(
     With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
     from ..formats.metrics import write_metrics
-    from ..recognition.evaluate import confusion_png, evaluate_recognition as run, score_labels_dir
+    from ..evaluation.recognition import confusion_png, evaluate_recognition as run, score_labels_dir
     from ..formats.dataset import read_dataset
 
     ds = read_dataset(dataset)

@@ -1,5 +1,5 @@
 """``vidstyle evaluate strikes``: real mocap of punches, filmed from several cameras, through a trained
-recognizer (:mod:`vidstyle.recognition.realmocap`)."""
+recognizer (:mod:`vidstyle.evaluation.realmocap`)."""
 
 from __future__ import annotations
 
@@ -58,13 +58,13 @@ def evaluate_strikes_cmd(
     Renders BVH from several cameras with the demo's renderer, looks and backgrounds, runs MODEL on each
     video, and reports how many of the clip's action frames come out as
     punches (Jab, Hook, Uppercut) rather than kicks (LowKick, RoundhouseKick). Action frames come from
-    the mocap alone (an arm extended and reaching forward; vidstyle.recognition.realmocap), never from
+    the mocap alone (an arm extended and reaching forward; vidstyle.evaluation.realmocap), never from
     the recognizer; the clip trains, tunes and selects nothing. Prints a Markdown table."""
     from ..errors import InputError, ParameterError
     from ..formats.labels import write_labels
     from ..formats.metrics import STRIKES, write_metrics
     from ..mocap import read_bvh
-    from ..recognition.realmocap import (
+    from ..evaluation.realmocap import (
         StrikeEvalParams,
         StrikeRule,
         action_frames,

@@ -170,7 +170,7 @@ def evaluate_style(
 ) -> None:
     """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
     from ..formats.metrics import write_metrics
-    from ..style.evaluate import EvalParams, evaluate_dataset
+    from ..evaluation.style import EvalParams, evaluate_dataset
 
     if labels_dir is not None and not labels_dir.is_dir():
         raise InputError(f"{labels_dir}: --labels-dir is not a directory")

@@ -164,19 +164,22 @@ class ActionRecognizer(BaseEstimator):
                   for b in range(self.n_blocks)]
         return blocks[0] if len(blocks) == 1 else np.hstack(blocks)
 
-    def _histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
+    def histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
+        """:meth:`histograms` of several videos (threads with ``n_jobs``), in order."""
         from joblib import Parallel, delayed
 
         if len(videos) <= 1 or self.n_jobs in (None, 1):
             return [self.histograms(v) for v in videos]
         return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.histograms)(v) for v in videos)
 
-    def _embed(self, H: sp.spmatrix) -> np.ndarray:
+    def embed(self, H: sp.spmatrix) -> np.ndarray:
+        """PCA frame features (n_frames, n_components) of context histograms ``H`` (:meth:`histograms`):
+        word grouping, normalisation, then the fitted PCA."""
         return self.pca_.transform(self._grouped(H))
 
     def transform(self, video) -> np.ndarray:
         """PCA frame features (n_frames, n_components) of one video."""
-        return self._embed(self.histograms(video))
+        return self.embed(self.histograms(video))
 
     # ----------------------------------------------------------------- fit
     def fit(self, X: Sequence, y: Sequence[Sequence[str]], classes: Sequence[str] | None = None):
@@ -215,7 +218,7 @@ class ActionRecognizer(BaseEstimator):
         )
 
         self.fit_durations(y_original)
-        Hs = self._histograms_many(videos)
+        Hs = self.histograms_many(videos)
         H = sp.vstack(Hs).tocsr()
         rng = np.random.default_rng(self.random_state)
         rows = _sample_per_class(yi, self.max_frames_per_class, rng)
@@ -258,16 +261,28 @@ class ActionRecognizer(BaseEstimator):
         full[:, present] = scores
         return present[pred], full, conf
 
-    def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
+    def frame_scores(self, H: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Unsmoothed per-frame output of context histograms ``H`` (:meth:`histograms`):
+        ``(raw, scores, confidence)`` with ``raw`` the class index into ``classes_`` per frame,
+        ``scores`` (n_frames, n_classes) the classifier's class scores (0 for classes absent in training)
+        and ``confidence`` the raw label's. :meth:`smooth` turns them into the smoothed labels; the two
+        together are :meth:`predict_histograms` (a validation search scores once and smooths many ways)."""
         if H.shape[0] == 0:
+            return np.zeros(0, np.int64), np.zeros((0, len(self.classes_))), np.zeros(0)
+        return self._scores_full(*self.clf_.predict_with_scores(self.embed(H)))
+
+    def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
+        """:meth:`smooth` of :meth:`frame_scores`: see :meth:`predict_video`."""
+        return self.smooth(*self.frame_scores(H))
+
+    def smooth(self, raw: np.ndarray, scores: np.ndarray, conf: np.ndarray) -> dict[str, np.ndarray]:
+        """Smooth :meth:`frame_scores` output with the recognizer's ``smoothing``, ``smoothing_window``
+        and ``emission_weight`` (and its learned ``transitions_`` / ``durations_``); returns the
+        :meth:`predict_video` dict (``raw``, ``scores``, ``confidence``, ``smoothed``, ``smoothed_confidence``)."""
+        if len(raw) == 0:
             e = np.zeros(0, np.int64)
             return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
                     "smoothed": e, "smoothed_confidence": np.zeros(0)}
-        Z = self._embed(H)
-        raw, scores, conf = self._scores_full(*self.clf_.predict_with_scores(Z))
-        return self._finish(raw, scores, conf)
-
-    def _finish(self, raw, scores, conf) -> dict[str, np.ndarray]:
         sm, sconf = smooth_labels(
             raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing,
             transitions=getattr(self, "transitions_", None), emission_weight=self.emission_weight,

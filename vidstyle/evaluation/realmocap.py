@@ -279,7 +279,7 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     from ..features.extract import process_video
     from ..features.salient import SalientParams
     from ..render import Appearance, render_to_file
-    from .io import load_features
+    from ..recognition.io import load_features
 
     look_seed = int(np.random.SeedSequence([seed, index, 3]).generate_state(1)[0])
     render_seed = int(np.random.SeedSequence([seed, index, 2]).generate_state(1)[0])
@@ -344,7 +344,7 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     from ..formats.annotations import file_sha256
     from ..logutil import progress
     from ..mocap import read_bvh
-    from .recognizer import load_model
+    from ..recognition.recognizer import load_model
 
     rule = (rule or StrikeRule()).validate()
     params = params or StrikeEvalParams()

@@ -31,8 +31,8 @@ from ..errors import InputError, ParameterError
 from ..formats.dataset import Dataset
 from ..formats.labels import check_length, read_labels
 from ..formats.recognised import read_recognised
-from .io import features_path, load_features
-from .splits import make_split
+from ..recognition.io import features_path, load_features
+from ..recognition.splits import make_split
 
 log = logging.getLogger(__name__)
 
@@ -172,7 +172,10 @@ def ablation_params(ablation: str) -> dict[str, Any]:
     }[ablation]
 
 
-def _load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None):
+def load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None = None):
+    """``(features, labels)`` of the videos ``ids`` of ``dataset``: each video's features file
+    ``<features_dir>/<id>.npz`` and its ground-truth labels track (lengths checked), in ``ids`` order,
+    loaded with ``n_jobs`` threads."""
     from joblib import Parallel, delayed
 
     by_id = dataset.by_id()
@@ -208,8 +211,8 @@ def evaluate_recognition(
 
     ``test_dataset`` / ``test_features_dir``: the unseen-camera videos and their features
     (``split_kind="unseen-camera"``)."""
-    from .recognizer import ActionRecognizer
-    from .vocabulary import Vocabulary
+    from ..recognition.recognizer import ActionRecognizer
+    from ..recognition.vocabulary import Vocabulary
 
     if score_set not in ("test", "val"):
         raise InputError(f"score_set: must be test or val, got {score_set!r}")
@@ -231,7 +234,7 @@ def evaluate_recognition(
     params.setdefault("n_jobs", n_jobs)
 
     t0 = time.perf_counter()
-    feats_a, _ = _load_set(dataset, features_dir, split.vocab, n_jobs)
+    feats_a, _ = load_set(dataset, features_dir, split.vocab, n_jobs)
     desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
     voc = Vocabulary(n_words=n_words, method=vocab_method, random_state=seed).fit(desc)
     voc.training_files_ = [f.path for f in feats_a]
@@ -239,17 +242,17 @@ def evaluate_recognition(
     del feats_a, desc
 
     t0 = time.perf_counter()
-    feats_b, labels_b = _load_set(dataset, features_dir, split.train, n_jobs)
+    feats_b, labels_b = load_set(dataset, features_dir, split.train, n_jobs)
     classes = dataset.classes or sorted({c for t in labels_b for c in t.labels})
     rec = ActionRecognizer(vocabulary=voc, **params).fit(feats_b, [t.labels for t in labels_b], classes=classes)
     t_train = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    feats_t, labels_t = _load_set(score_ds, score_dir, score_ids, n_jobs)
+    feats_t, labels_t = load_set(score_ds, score_dir, score_ids, n_jobs)
     unknown = sorted({c for t in labels_t for c in t.labels} - set(rec.classes_))
     if unknown:
         raise InputError(f"test labels: classes not seen in training: {unknown[:5]}")
-    Hs = rec._histograms_many(feats_t)
+    Hs = rec.histograms_many(feats_t)
     outputs = [rec.predict_histograms(H) for H in Hs]
     t_pred = time.perf_counter() - t0
 
@@ -318,7 +321,7 @@ def score_labels_dir(
     Every test video needs a labels file; a model whose training files include a test video
     is refused (its scores would not be of unseen data)."""
     from ..formats import FormatError
-    from .recognizer import read_header
+    from ..recognition.recognizer import read_header
 
     labels_dir = Path(labels_dir)
     if not labels_dir.is_dir():
