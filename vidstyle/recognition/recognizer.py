@@ -20,10 +20,12 @@ import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
 from ..errors import InputError, ParameterError
+from . import defaults as D
 from .classifier import OvaOvoSVC, OvrSVC
 from .histograms import (NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, context_sum, frame_word_counts,
                          normalize_rows)
 from .io import VideoFeatures, load_features
+from .smoothing import METHODS as SMOOTHERS
 from .smoothing import duration_model, smooth_labels, transition_matrix
 from .vocabulary import Vocabulary
 
@@ -77,28 +79,26 @@ class ActionRecognizer(BaseEstimator):
     def __init__(
         self,
         vocabulary: Vocabulary | None = None,
-        context: int = 2,
-        coarse_context: int = 0,
-        grouping: bool = True,
-        grouping_threshold: float = 0.8,
+        context: int = D.CONTEXT,
+        coarse_context: int = D.COARSE_CONTEXT,
+        grouping: bool = D.GROUPING,
+        grouping_threshold: float = D.GROUPING_THRESHOLD,
         grouping_distribution: str = "frames",
         grouping_pooling: str = "components",
-        normalize: str = "sqrt",
-        n_components: int = 128,
-        classifier: str = "ova-ovo",
+        normalize: str = D.NORMALIZE,
+        n_components: int = D.N_COMPONENTS,
+        classifier: str = D.CLASSIFIER,
         # C, the per-class cap, the grouping threshold, the coarse context, the smoother and its emission
-        # weight: chosen by scripts/validate_recognition.py, which scores candidates on the demo's validation
-        # performers (never the test performers); pipelines/kickboxing/validation/recognition.json records
-        # every candidate, the value chosen and the validation score it won with.
-        C: float = 100.0,
+        # weight: validated defaults, see vidstyle.recognition.defaults.
+        C: float = D.C,
         gamma: float | str = "scale",
-        max_frames_per_class: int | None = 1500,
-        smoothing_window: int = 6,
-        smoothing: str = "duration",
-        emission_weight: float = 1.0,
-        mirror: bool = True,
+        max_frames_per_class: int | None = D.MAX_FRAMES_PER_CLASS,
+        smoothing_window: int = D.SMOOTHING_WINDOW,
+        smoothing: str = D.SMOOTHING,
+        emission_weight: float = D.EMISSION_WEIGHT,
+        mirror: bool = D.MIRROR,
         n_jobs: int | None = None,
-        random_state: int | None = 0,
+        random_state: int | None = D.SEED,
     ):
         self.vocabulary = vocabulary
         self.context = context
@@ -134,6 +134,20 @@ class ActionRecognizer(BaseEstimator):
             raise ParameterError("coarse_context", f"must be >= 0, got {self.coarse_context}")
         if self.n_components < 1:
             raise ParameterError("n_components", f"must be >= 1, got {self.n_components}")
+        self._check_prediction_params()
+        if not self.C > 0:
+            raise ParameterError("C", f"must be > 0, got {self.C}")
+        if self.max_frames_per_class is not None and self.max_frames_per_class < 1:
+            raise ParameterError("max_frames_per_class", f"must be >= 1 (or None for all), got {self.max_frames_per_class}")
+
+    def _check_prediction_params(self) -> None:
+        """Checks of the parameters :meth:`smooth` uses (they may be changed on a fitted model)."""
+        if self.smoothing not in SMOOTHERS:
+            raise ParameterError("smoothing", f"must be one of {', '.join(SMOOTHERS)}, got {self.smoothing!r}")
+        if self.smoothing_window < 1:
+            raise ParameterError("window", f"must be >= 1, got {self.smoothing_window}")
+        if not self.emission_weight > 0:
+            raise ParameterError("emission_weight", f"must be > 0, got {self.emission_weight}")
 
     @property
     def n_blocks(self) -> int:
@@ -279,6 +293,7 @@ class ActionRecognizer(BaseEstimator):
         """Smooth :meth:`frame_scores` output with the recognizer's ``smoothing``, ``smoothing_window``
         and ``emission_weight`` (and its learned ``transitions_`` / ``durations_``); returns the
         :meth:`predict_video` dict (``raw``, ``scores``, ``confidence``, ``smoothed``, ``smoothed_confidence``)."""
+        self._check_prediction_params()
         if len(raw) == 0:
             e = np.zeros(0, np.int64)
             return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
