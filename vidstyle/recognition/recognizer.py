@@ -1,7 +1,8 @@
 """The frame-wise action recognizer: vocabulary -> context histograms -> word grouping -> normalisation
 -> PCA -> SVMs -> smoothing (thesis 4.2-4.3), as one estimator.
 
-Model file (``.joblib``): ``{"header": <JSON str>, "model": ActionRecognizer}``; the header holds
+Model file (``.joblib``, owner :mod:`vidstyle.formats.recognizer_model` on the one model-file machinery
+:mod:`vidstyle.formats.models`): ``{"header": <JSON str>, "model": ActionRecognizer}``; the header holds
 ``kind`` ("vidstyle.recognizer"), ``schema_version``, ``params``, ``seed``, ``classes``, ``training_files``
 (features and labels of set B), ``vocabulary`` (its params and training files = set A), ``sklearn``
 and ``vidstyle`` versions, ``n_train_frames`` and grouping statistics. :func:`read_header` reads it without
@@ -31,7 +32,6 @@ from .vocabulary import Vocabulary
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 CLASSIFIERS = ("ova-ovo", "svc-ovr")
 
 
@@ -367,17 +367,14 @@ def _sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) 
 
 
 # ------------------------------------------------------------------- files
-def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
-    import joblib
+def model_header(model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
+    """What a model file records of the fitted ``model`` (see the module docstring)."""
     import sklearn
 
     from .. import __version__
-    from ..fileio import atomic_path
 
     voc = model.vocabulary
     header = {
-        "kind": "vidstyle.recognizer",
-        "schema_version": SCHEMA_VERSION,
         "params": model.public_params(),
         "seed": model.random_state,
         "classes": [str(c) for c in model.classes_],
@@ -394,32 +391,29 @@ def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequen
     }
     if extra:
         header.update(extra)
-    with atomic_path(path) as tmp:
-        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
-    return header
+    return json.loads(json.dumps(header, default=str))
+
+
+def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
+    """Write the fitted ``model`` to a model file (:mod:`vidstyle.formats.recognizer_model`); return its header."""
+    from ..formats.recognizer_model import write_recognizer_model
+
+    return write_recognizer_model(path, model, model_header(model, training_files, extra))
 
 
 def load_model(path: str | Path) -> tuple[ActionRecognizer, dict]:
-    import joblib
-
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: model file not found")
-    try:
-        obj = joblib.load(path)
-    except Exception as e:
-        raise InputError(f"{path}: not a readable model file ({type(e).__name__})") from None
-    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), ActionRecognizer):
-        raise InputError(f"{path}: not a vidstyle recognizer model")
-    header = json.loads(obj["header"])
-    if header.get("schema_version") != SCHEMA_VERSION:
-        raise InputError(f"{path}: model schema {header.get('schema_version')}, expected {SCHEMA_VERSION}")
+    """``(recognizer, header)`` of a model file (:mod:`vidstyle.formats.recognizer_model`); warns when it was
+    saved with another scikit-learn."""
     import sklearn
 
+    from ..formats.recognizer_model import read_recognizer_model
+
+    model, header = read_recognizer_model(path, ActionRecognizer)
     if header.get("sklearn") != sklearn.__version__:
         log.warning("%s was saved with scikit-learn %s, running %s", path, header.get("sklearn"), sklearn.__version__)
-    return obj["model"], header
+    return model, header
 
 
 def read_header(path: str | Path) -> dict:
+    """The header of a model file (the model is loaded too: the header alone is not trusted)."""
     return load_model(path)[1]
