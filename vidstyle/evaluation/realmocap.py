@@ -406,21 +406,32 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     }
 
 
+def strikes_rows(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    """The rows of a strikes metrics document: one per camera, then ``overall`` (named "all cameras"),
+    each with ``name``, ``azimuth_deg``/``elevation_deg``/``background`` (None for overall),
+    ``action_video_frames``, ``overall`` (bool) and the ``smoothed`` and ``raw`` counts and fractions."""
+    rows = []
+    for c in [*(doc.get("cameras") or []), {"name": "all cameras", **(doc.get("overall") or {}), "overall": True}]:
+        sm, raw = c.get("smoothed") or {}, c.get("raw") or {}
+        frames = c.get("action_video_frames", sum(int(sm.get(k) or 0) for k in ("punch", "kick", "other")))
+        rows.append({"name": c.get("name"), "azimuth_deg": c.get("azimuth_deg"), "elevation_deg": c.get("elevation_deg"),
+                     "background": c.get("background"), "action_video_frames": frames,
+                     "overall": bool(c.get("overall")), "smoothed": sm, "raw": raw})
+    return rows
+
+
 def strikes_table(doc: dict[str, Any]) -> str:
-    """A Markdown table of a strikes metrics document: per camera and overall."""
-    rows = [("| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
-             "punch share of punch+kick | punch (raw) |"), "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
+    """A Markdown table of a strikes metrics document: per camera and overall (:func:`strikes_rows`)."""
+    lines = [("| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
+              "punch share of punch+kick | punch (raw) |"), "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
 
     def pct(v):
         return "n/a" if v is None else f"{100 * v:.1f} %"
 
-    for c in doc["cameras"]:
-        s, r = c["smoothed"], c["raw"]
-        rows.append(f"| {c['name']} | {c['azimuth_deg']:g} | {c['elevation_deg']:g} | {c['background']} | "
-                    f"{c['action_video_frames']} | {pct(s['punch_fraction'])} | {pct(s['kick_fraction'])} | "
-                    f"{pct(s['punch_share_of_strikes'])} | {pct(r['punch_fraction'])} |")
-    o = doc["overall"]
-    rows.append(f"| **overall** | | | | {o['action_video_frames']} | {pct(o['smoothed']['punch_fraction'])} | "
-                f"{pct(o['smoothed']['kick_fraction'])} | {pct(o['smoothed']['punch_share_of_strikes'])} | "
-                f"{pct(o['raw']['punch_fraction'])} |")
-    return "\n".join(rows)
+    for r in strikes_rows(doc):
+        s, raw = r["smoothed"], r["raw"]
+        head = ("| **overall** | | | " if r["overall"] else
+                f"| {r['name']} | {r['azimuth_deg']:g} | {r['elevation_deg']:g} | {r['background']} ")
+        lines.append(f"{head}| {r['action_video_frames']} | {pct(s['punch_fraction'])} | {pct(s['kick_fraction'])} | "
+                     f"{pct(s['punch_share_of_strikes'])} | {pct(raw['punch_fraction'])} |")
+    return "\n".join(lines)
