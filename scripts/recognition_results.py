@@ -47,6 +47,8 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from vidstyle.formats.features import directory_params  # noqa: E402
+
 log = logging.getLogger("recognition_results")
 
 
@@ -131,7 +133,7 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
 def _by_points(dirs) -> dict:
     out = {}
     for fdir in dirs:
-        fp = _features_params(fdir)
+        fp = directory_params(fdir)
         out[(fp["variant"], int(fp["salient"]["n_points"]))] = Path(fdir)
     return out
 
@@ -142,18 +144,6 @@ def _pick(dirs: dict, rp: dict, option: str) -> Path:
         raise SystemExit(f"{option}: no features of {key[0]} with {key[1]} points per frame among "
                          f"{sorted(dirs)}")
     return dirs[key]
-
-
-def _features_params(fdir: Path) -> dict:
-    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
-    them); a missing or unreadable directory ends the script with the format's one-line error."""
-    from vidstyle.formats._base import FormatError
-    from vidstyle.formats.features import directory_params
-
-    try:
-        return directory_params(fdir)
-    except FormatError as e:
-        raise SystemExit(str(e)) from None
 
 
 def main() -> None:
@@ -194,4 +184,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from vidstyle.errors import VidstyleError
+
+    try:
+        main()
+    except VidstyleError as e:  # bad input (e.g. an unreadable features directory): one line, not a traceback
+        raise SystemExit(str(e)) from None

@@ -83,6 +83,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidstyle.evaluation.recognition import load_set, score_videos  # noqa: E402
 from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
+from vidstyle.formats.features import directory_params  # noqa: E402
 from vidstyle.recognition.splits import make_split  # noqa: E402
 
 log = logging.getLogger("validate_recognition")
@@ -319,21 +320,9 @@ def _candidate(args) -> list[dict]:
     return search.run(step, cfg, smoothers=_smoothers())
 
 
-def _features_params(fdir: str | Path) -> dict:
-    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
-    them); a missing or unreadable directory ends the script with the format's one-line error."""
-    from vidstyle.formats._base import FormatError
-    from vidstyle.formats.features import directory_params
-
-    try:
-        return directory_params(fdir)
-    except FormatError as e:
-        raise SystemExit(str(e)) from None
-
-
 def features_points(fdir: str | Path) -> int:
     """Salient points per frame that the features files of ``fdir`` were extracted with (their params)."""
-    return int(_features_params(fdir)["salient"]["n_points"])
+    return int(directory_params(fdir)["salient"]["n_points"])
 
 
 def check_start_model(path: Path, start: dict, split, seed: int) -> None:
@@ -428,7 +417,7 @@ def main() -> None:
     if args.camera_dataset is not None:
         cam_dirs = {}
         for d in args.camera_features:
-            fp = _features_params(d)
+            fp = directory_params(d)
             cam_dirs[(fp["variant"], int(fp["salient"]["n_points"]))] = str(d)
         camera = (str(args.camera_dataset), cam_dirs)
     ctx = (str(args.dataset), features, points_features, variant_points, camera, args.seed, args.cache_dir)
@@ -563,4 +552,9 @@ def table(doc: dict) -> str:
 
 
 if __name__ == "__main__":
-    main()
+    from vidstyle.errors import VidstyleError
+
+    try:
+        main()
+    except VidstyleError as e:  # bad input (e.g. an unreadable features directory): one line, not a traceback
+        raise SystemExit(str(e)) from None
