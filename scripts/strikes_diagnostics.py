@@ -28,7 +28,6 @@ and writes all documents to ``--out`` (kind ``vidstyle.metrics.strikes`` per var
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import sys
 import tempfile
@@ -36,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.fileio import atomic_path
+from vidstyle.formats.validation import write_validation
 from vidstyle.mocap import Motion, read_bvh, write_bvh
 from vidstyle.evaluation.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
 
@@ -119,10 +118,9 @@ def main(argv: list[str] | None = None) -> int:
                      f"{pct(o['punch_share_of_strikes'])} |")
     table = "\n".join(lines)
     print(table)
-    with atomic_path(a.out, suffix=".json") as t:
-        Path(t).write_text(json.dumps({"kind": "vidstyle.strikes_diagnostics", "schema_version": 1, "seed": a.seed,
-                                       "command": "python scripts/strikes_diagnostics.py " + " ".join(argv or sys.argv[1:]),
-                                       "table": table, "variants": docs}, indent=1, default=str))
+    write_validation(a.out, {"kind": "vidstyle.strikes_diagnostics", "schema_version": 1, "seed": a.seed,
+                             "command": "python scripts/strikes_diagnostics.py " + " ".join(argv or sys.argv[1:]),
+                             "table": table, "variants": docs})
     return 0
 
 

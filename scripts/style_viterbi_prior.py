@@ -37,6 +37,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidstyle.fileio import write_json  # noqa: E402
+from vidstyle.formats.validation import write_validation  # noqa: E402
 from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
 from vidstyle.formats.labels import read_labels as load_labels  # noqa: E402
 from vidstyle.recognition.io import features_path, load_features  # noqa: E402
@@ -125,7 +126,7 @@ def main() -> None:
     doc = {"kind": "vidstyle.metrics.style_viterbi_prior", "schema_version": 1, "model": str(args.model),
            "seed": header.get("seed"), "emission_weight": rec.emission_weight, "test_performers": sorted(test_perf), "n_videos": len(vids),
            "command": "python scripts/style_viterbi_prior.py " + " ".join(sys.argv[1:]), "rows": rows}
-    write_json(args.out, doc)
+    write_validation(args.out, doc)
     lines = [f"Style on the test performers ({', '.join(sorted(test_perf))}; identification among "
              f"{len(test_perf)}), seed {header.get('seed')}", "",
              "| labels | transition MAE (a) | identification (a) | by true chain | held-out seqs identified | JSD 2-gram same / other |",

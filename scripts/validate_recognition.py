@@ -84,6 +84,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from vidstyle.evaluation.recognition import load_set, score_videos  # noqa: E402
 from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
 from vidstyle.formats.features import directory_params  # noqa: E402
+from vidstyle.formats.validation import write_validation  # noqa: E402
 from vidstyle.recognition.splits import make_split  # noqa: E402
 
 log = logging.getLogger("validate_recognition")
@@ -516,10 +517,7 @@ def main() -> None:
                                                   "camera_video_accuracy", "n_camera_frames") if k in final},
         "rows": rows,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    tmp.replace(args.out)
+    write_validation(args.out, doc)
     print(table(doc))
     log.info("wrote %s", args.out)
 

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from vidstyle.errors import FormatError
 from vidstyle.formats.recognizer_model import read_recognizer_model, write_recognizer_model
-from vidstyle.formats.vocabulary import VocabularyRecord, read_vocabulary, write_vocabulary
+from vidstyle.formats.vocabulary import read_vocabulary
 from vidstyle.recognition import Vocabulary
 
 FUZZ = settings(max_examples=60, deadline=None, derandomize=True,

@@ -143,3 +143,24 @@ def test_validation_camera_scores_only_the_validation_performers(tmp_path, monke
         assert 0.0 <= r["camera_frame_accuracy_smoothed"] <= 1.0 and r["n_camera_frames"] > 0
         assert r["score"] == pytest.approx((r["frame_accuracy_smoothed"] + r["camera_frame_accuracy_smoothed"]) / 2)
     assert vr._key(rows[0]) == (rows[0]["score"], rows[0]["video_accuracy"])
+
+
+def test_committed_validation_documents_are_rewritten_byte_for_byte_by_their_owner():
+    """The scripts write through vidstyle.formats.validation: every committed document of its kinds comes
+    back from the owner's writer unchanged, header checked (a layout change would rewrite them all)."""
+    import glob
+    import json
+    from pathlib import Path
+
+    from vidstyle.formats.validation import LAYOUTS, dumps_validation, read_validation
+
+    root = Path(__file__).resolve().parents[1] / "pipelines"
+    seen = set()
+    for f in sorted(glob.glob(str(root / "**" / "*.json"), recursive=True)):
+        text = Path(f).read_text()
+        doc = json.loads(text)
+        if isinstance(doc, dict) and doc.get("kind") in LAYOUTS:
+            assert dumps_validation(doc) == text, f
+            assert read_validation(f, doc["kind"]) == doc
+            seen.add(doc["kind"])
+    assert seen == set(LAYOUTS)
