@@ -26,9 +26,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import InputError
+from . import defaults as D
 
 #: The default variant of the library and of ``vidstyle features --variant`` (see that option's note).
-DEFAULT_VARIANT = "scovanner2007"
+DEFAULT_VARIANT = D.VARIANT
 
 REGISTRY: dict[str, type["Descriptor"]] = {}
 
