@@ -219,3 +219,15 @@ def test_labelled_action_frames(tmp_path):
     assert labelled_action_frames(tmp_path / "l.json", 17, ("Uppercut",))[14:].all()
     with pytest.raises(InputError):
         labelled_action_frames(tmp_path / "l.json", 16, ("Jab",), start=2)
+
+
+@pytest.mark.parametrize("kw,param", [({"start": -1}, "start"), ({"start": 5, "stop": 5}, "stop"),
+                                      ({"points": 0}, "points")])
+def test_strike_parameters_are_checked_by_the_library(kw, param):
+    from vidstyle.errors import ParameterError
+    from vidstyle.evaluation.realmocap import StrikeEvalParams
+
+    with pytest.raises(ParameterError) as e:
+        StrikeEvalParams(**kw)
+    assert e.value.param == param
+    assert StrikeEvalParams(start=0, stop=None, points=1).stop is None  # the edges are allowed

@@ -251,6 +251,28 @@ class StrikeEvalParams:
     start: int = 1  # first motion frame (frame 0 of a CMU file is the conversion's T-pose)
     stop: int | None = None  # motion frame after the last (None: the end)
 
+    def __post_init__(self) -> None:
+        if self.start < 0:
+            raise ParameterError("start", f"must be >= 0, got {self.start}")
+        if self.stop is not None and self.stop <= self.start:
+            raise ParameterError("stop", f"must be 0 (the end) or above start ({self.start}), got {self.stop}")
+        if self.points < 1:
+            raise ParameterError("points", f"must be >= 1, got {self.points}")
+
+    @classmethod
+    def for_model(cls, model_path: str | os.PathLike, variant: str | None = None, points: int | None = None,
+                  start: int = 1, stop: int | None = None) -> "StrikeEvalParams":
+        """Checked parameters for the recognizer ``model_path``: ``variant`` / ``points`` default to those
+        its training features were extracted with (its header), else scovanner2007 / 10; ``stop`` 0 or
+        None is the end of the clip."""
+        if variant is None or points is None:
+            from ..recognition.recognizer import read_header
+
+            fp = read_header(model_path).get("features_params") or {}
+            variant = variant or fp.get("variant", "scovanner2007")
+            points = points if points is not None else int((fp.get("salient") or {}).get("n_points", 10))
+        return cls(variant=variant, points=points, start=start, stop=stop or None)
+
     def to_dict(self) -> dict:
         d = asdict(self)
         d["size"] = list(self.size)
