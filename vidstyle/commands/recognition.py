@@ -191,44 +191,18 @@ def evaluate_recognition(
 
     With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
+    from ..evaluation.recognition import confusion_png, run_evaluation
     from ..formats.metrics import write_metrics
-    from ..evaluation.recognition import confusion_png, evaluate_recognition as run, score_labels_dir
-    from ..formats.dataset import read_dataset
 
-    ds = read_dataset(dataset)
-    if labels_dir is not None:
-        if features_dir is not None:
-            raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
-        tds = read_dataset(test_dataset) if test_dataset is not None else None
-        if (split == "unseen-camera") != (tds is not None):
-            raise InputError("--test-dataset: required with, and only used with, --split unseen-camera")
-        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view,
-                             test_dataset=tds)
-        ablation = "none" if model is None else "from model"
-        words = (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?")
-    else:
-        if features_dir is None:
-            raise InputError("evaluate recognition: give --features-dir (train and test) or --labels-dir (score)")
-        if model is not None:
-            raise InputError("--model: only used with --labels-dir")
-        params = {
-            "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": components,
-            "coarse_context": coarse_context,
-            "max_frames_per_class": max_frames_per_class or None, "smoothing_window": window,
-            "smoothing": smoothing, "C": c, "emission_weight": emission_weight, "mirror": mirror,
-        }
-        tds = None
-        if split == "unseen-camera":
-            if test_dataset is None or test_features_dir is None:
-                raise InputError("--split unseen-camera: give --test-dataset and --test-features-dir")
-            tds = read_dataset(test_dataset)
-        elif test_dataset is not None or test_features_dir is not None:
-            raise InputError("--test-dataset/--test-features-dir: only used with --split unseen-camera")
-        m = run(
-            ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
-            recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=jobs,
-            test_dataset=tds, test_features_dir=test_features_dir,
-        )
+    r = run_evaluation(
+        dataset, features_dir=features_dir, labels_dir=labels_dir, model=model, split=split, test_view=test_view,
+        ablation=ablation, words=words, vocab_method=vocab_method, classifier=classifier, baseline=baseline,
+        grouping_threshold=grouping_threshold, n_components=components, coarse_context=coarse_context,
+        max_frames_per_class=max_frames_per_class, smoothing_window=window, smoothing=smoothing, C=c,
+        emission_weight=emission_weight, mirror=mirror, test_dataset=test_dataset,
+        test_features_dir=test_features_dir, seed=seed, n_jobs=jobs,
+    )
+    m, ablation, words = r.metrics, r.ablation, r.words
     write_metrics(out, m)
     png = out.with_suffix(".png")
     cm = np.asarray(m["confusion"]["smoothed"])

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -32,6 +33,7 @@ from ..formats.dataset import Dataset
 from ..formats.labels import check_length, read_labels
 from ..formats.recognised import read_recognised
 from ..recognition.io import features_path, load_features
+from ..recognition import defaults as D
 from ..recognition.splits import make_split
 
 log = logging.getLogger(__name__)
@@ -193,11 +195,11 @@ def load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: i
 def evaluate_recognition(
     dataset: Dataset,
     features_dir: str | Path,
-    split_kind: str = "unseen-performer",
-    seed: int = 0,
+    split_kind: str = D.SPLIT,
+    seed: int = D.SEED,
     ablation: str = "none",
-    n_words: int = 1000,
-    vocab_method: str = "minibatch",
+    n_words: int = D.N_WORDS,
+    vocab_method: str = D.VOCAB_METHOD,
     recognizer_params: dict | None = None,
     baseline: bool = True,
     test_view: str | None = None,
@@ -397,3 +399,83 @@ def score_labels_dir(
         "decoding": [{"smoothing": a, "emission_weight": b, "smoothing_window": c} for a, b, c in sorted(decoding, key=str)],
         **metrics,
     }
+
+
+@dataclass
+class RecognitionRun:
+    """A recognition evaluation: its metrics document, and the ablation and words it ran with."""
+
+    metrics: dict[str, Any]
+    ablation: str
+    words: int | str
+
+
+def run_evaluation(
+    dataset: str | Path,
+    *,
+    features_dir: str | Path | None = None,
+    labels_dir: str | Path | None = None,
+    model: str | Path | None = None,
+    split: str = D.SPLIT,
+    test_view: str | None = None,
+    ablation: str = "none",
+    words: int = D.N_WORDS,
+    vocab_method: str = D.VOCAB_METHOD,
+    classifier: str = D.CLASSIFIER,
+    baseline: bool = True,
+    grouping_threshold: float = D.GROUPING_THRESHOLD,
+    n_components: int = D.N_COMPONENTS,
+    coarse_context: int = D.COARSE_CONTEXT,
+    max_frames_per_class: int | None = D.MAX_FRAMES_PER_CLASS,
+    smoothing_window: int = D.SMOOTHING_WINDOW,
+    smoothing: str = D.SMOOTHING,
+    C: float = D.C,
+    emission_weight: float = D.EMISSION_WEIGHT,
+    mirror: bool = D.MIRROR,
+    test_dataset: str | Path | None = None,
+    test_features_dir: str | Path | None = None,
+    seed: int = D.SEED,
+    n_jobs: int | None = -1,
+) -> "RecognitionRun":
+    """What ``vidstyle evaluate recognition`` computes, with the recognizer's validated defaults: with
+    ``features_dir``, train a vocabulary (set A) and recognizer (set B) on ``split`` of ``dataset`` and score
+    the held-out videos (:func:`evaluate_recognition`; ``unseen-camera`` tests on ``test_dataset`` /
+    ``test_features_dir``); with ``labels_dir``, score the label files ``vidstyle recognize`` wrote
+    (:func:`score_labels_dir`; the test videos are those of ``model``'s split, else of ``split``/``seed``).
+    Returns the metrics document with the ablation and vocabulary size it ran with."""
+    from ..formats.dataset import read_dataset
+
+    ds = read_dataset(dataset)
+    if labels_dir is not None:
+        if features_dir is not None:
+            raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
+        tds = read_dataset(test_dataset) if test_dataset is not None else None
+        if (split == "unseen-camera") != (tds is not None):
+            raise InputError("--test-dataset: required with, and only used with, --split unseen-camera")
+        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view,
+                             test_dataset=tds)
+        return RecognitionRun(m, "none" if model is None else "from model",
+                              (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?"))
+    if features_dir is None:
+        raise InputError("evaluate recognition: give --features-dir (train and test) or --labels-dir (score)")
+    if model is not None:
+        raise InputError("--model: only used with --labels-dir")
+    params = {
+        "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": n_components,
+        "coarse_context": coarse_context,
+        "max_frames_per_class": max_frames_per_class or None, "smoothing_window": smoothing_window,
+        "smoothing": smoothing, "C": C, "emission_weight": emission_weight, "mirror": mirror,
+    }
+    tds = None
+    if split == "unseen-camera":
+        if test_dataset is None or test_features_dir is None:
+            raise InputError("--split unseen-camera: give --test-dataset and --test-features-dir")
+        tds = read_dataset(test_dataset)
+    elif test_dataset is not None or test_features_dir is not None:
+        raise InputError("--test-dataset/--test-features-dir: only used with --split unseen-camera")
+    m = evaluate_recognition(
+        ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
+        recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=n_jobs,
+        test_dataset=tds, test_features_dir=test_features_dir,
+    )
+    return RecognitionRun(m, ablation, words)
