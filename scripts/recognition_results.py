@@ -116,10 +116,14 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
         return dict(rp)
     import json
 
+    from vidstyle.formats.validation import RECOGNITION, read_validation
+
     docs = []
     for f in sorted(Path(args.validation).glob("*.json")):
-        d = json.loads(f.read_text())
-        if d.get("kind") == "vidstyle.validation.recognition" and d.get("seed") == seed:
+        if json.loads(f.read_text()).get("kind") != RECOGNITION:
+            continue
+        d = read_validation(f, RECOGNITION)  # header checked by the format's owner
+        if d.get("seed") == seed:
             docs.append((f, d))
     if len(docs) != 1:
         raise SystemExit(f"{args.validation}: {len(docs)} recognition validation files of seed {seed} (need one)")
