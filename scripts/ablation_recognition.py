@@ -2,7 +2,7 @@
 """Ablation table of the recognition stage (issue 4, item 6): which of the thesis' choices help?
 
 Every row trains the vocabulary on set A and the recognizer on set B of the same seeded split and scores
-the same held-out test videos (``vidstyle.recognition.evaluate.evaluate_recognition``); only the named
+the same held-out test videos (``vidstyle.evaluation.recognition.evaluate_recognition``); only the named
 choice differs from the reference row ("vidstyle defaults"):
 
 - ``no word grouping``, ``no +/-2 frame context`` (histogram of frame n only), ``no smoothing`` (window 1),
@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _benchutil import RESULTS, machine, write_results
 
-from vidstyle.recognition.evaluate import evaluate_recognition
+from vidstyle.evaluation.recognition import evaluate_recognition
 from vidstyle.formats.dataset import read_dataset as load_dataset
 
 log = logging.getLogger("ablation")

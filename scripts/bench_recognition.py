@@ -30,7 +30,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _benchutil import machine, timeit, write_results  # noqa: E402
 
-from vidstyle.recognition.evaluate import score_videos  # noqa: E402
+from vidstyle.evaluation.recognition import score_videos  # noqa: E402
 from vidstyle.recognition.recognizer import ActionRecognizer  # noqa: E402
 from vidstyle.recognition.synthetic import ACTIONS, SyntheticWorld, performance_sequence, single_sequence  # noqa: E402
 from vidstyle.recognition.vocabulary import Vocabulary  # noqa: E402
@@ -71,16 +71,16 @@ def main_real(args) -> None:
     """Vocabulary + recognizer training on the real features of a demo dataset (issue 4, item 8)."""
     from threadpoolctl import threadpool_limits
 
-    from vidstyle.recognition.evaluate import _load_set
+    from vidstyle.evaluation.recognition import load_set
     from vidstyle.formats.dataset import read_dataset as load_dataset
     from vidstyle.recognition.splits import make_split
 
     ds = load_dataset(args.dataset)
     sp = make_split(ds, "unseen-performer", seed=0)
     t0 = time.perf_counter()
-    fa, _ = _load_set(ds, Path(args.features_dir), sp.vocab, args.jobs)
-    fb, lb = _load_set(ds, Path(args.features_dir), sp.train, args.jobs)
-    ft, lt = _load_set(ds, Path(args.features_dir), sp.test, args.jobs)
+    fa, _ = load_set(ds, Path(args.features_dir), sp.vocab, args.jobs)
+    fb, lb = load_set(ds, Path(args.features_dir), sp.train, args.jobs)
+    ft, lt = load_set(ds, Path(args.features_dir), sp.test, args.jobs)
     load_s = time.perf_counter() - t0
     XA = np.concatenate([f.descriptors for f in fa if f.descriptors.shape[0]])
     yB = [t.labels for t in lb]

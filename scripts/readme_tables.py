@@ -318,14 +318,15 @@ def augmg_table(items, root: Path) -> list[str]:
 
 
 def strikes_table(items, root: Path) -> list[str]:
+    from vidstyle.evaluation.realmocap import strikes_rows
+
     lines = ["| clip, camera | action frames | punch (smoothed) | kick (smoothed) | punch share smoothed | raw | file |",
              "|---|---:|---:|---:|---:|---:|---|"]
     for p, d in items:
         clip = Path(str(d.get("bvh") or "?")).stem
-        for c in [*(d.get("cameras") or []), {"name": "all cameras", **(d.get("overall") or {})}]:
-            sm, raw = c.get("smoothed") or {}, c.get("raw") or {}
-            frames = c.get("action_video_frames", sum(int(sm.get(k) or 0) for k in ("punch", "kick", "other")))
-            lines.append(f"| {clip}, {c.get('name')} | {frames} | {sm.get('punch')} | {sm.get('kick')} | "
+        for r in strikes_rows(d):
+            sm, raw = r["smoothed"], r["raw"]
+            lines.append(f"| {clip}, {r['name']} | {r['action_video_frames']} | {sm.get('punch')} | {sm.get('kick')} | "
                          f"{_pct(sm.get('punch_fraction'))} | {_pct(raw.get('punch_fraction'))} | `{_rel(p, root)}` |")
     return lines
 

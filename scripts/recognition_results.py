@@ -47,6 +47,8 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from vidstyle.formats.features import directory_params  # noqa: E402
+
 log = logging.getLogger("recognition_results")
 
 
@@ -114,10 +116,14 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
         return dict(rp)
     import json
 
+    from vidstyle.formats.validation import RECOGNITION, read_validation
+
     docs = []
     for f in sorted(Path(args.validation).glob("*.json")):
-        d = json.loads(f.read_text())
-        if d.get("kind") == "vidstyle.validation.recognition" and d.get("seed") == seed:
+        if json.loads(f.read_text()).get("kind") != RECOGNITION:
+            continue
+        d = read_validation(f, RECOGNITION)  # header checked by the format's owner
+        if d.get("seed") == seed:
             docs.append((f, d))
     if len(docs) != 1:
         raise SystemExit(f"{args.validation}: {len(docs)} recognition validation files of seed {seed} (need one)")
@@ -131,7 +137,7 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
 def _by_points(dirs) -> dict:
     out = {}
     for fdir in dirs:
-        fp = _features_params(fdir)
+        fp = directory_params(fdir)
         out[(fp["variant"], int(fp["salient"]["n_points"]))] = Path(fdir)
     return out
 
@@ -142,18 +148,6 @@ def _pick(dirs: dict, rp: dict, option: str) -> Path:
         raise SystemExit(f"{option}: no features of {key[0]} with {key[1]} points per frame among "
                          f"{sorted(dirs)}")
     return dirs[key]
-
-
-def _features_params(fdir: Path) -> dict:
-    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
-    them); a missing or unreadable directory ends the script with the format's one-line error."""
-    from vidstyle.formats._base import FormatError
-    from vidstyle.formats.features import directory_params
-
-    try:
-        return directory_params(fdir)
-    except FormatError as e:
-        raise SystemExit(str(e)) from None
 
 
 def main() -> None:
@@ -194,4 +188,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from vidstyle.errors import VidstyleError
+
+    try:
+        main()
+    except VidstyleError as e:  # bad input (e.g. an unreadable features directory): one line, not a traceback
+        raise SystemExit(str(e)) from None

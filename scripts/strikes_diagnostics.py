@@ -2,7 +2,7 @@
 
 Diagnostics only - nothing here trains, tunes or selects anything (the recognizer is used as given,
 and no default is chosen from these numbers). Each variant goes through the same evaluation
-(:func:`vidstyle.recognition.realmocap.evaluate_strikes`: same cameras, looks, seed, action-frame rule
+(:func:`vidstyle.evaluation.realmocap.evaluate_strikes`: same cameras, looks, seed, action-frame rule
 recomputed on the variant's own motion):
 
 * ``original``  - CMU 02_05 as captured (orthodox stance, nine right-hand = rear-hand straight punches);
@@ -28,7 +28,6 @@ and writes all documents to ``--out`` (kind ``vidstyle.metrics.strikes`` per var
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import sys
 import tempfile
@@ -36,9 +35,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.fileio import atomic_path
+from vidstyle.formats.validation import write_validation
 from vidstyle.mocap import Motion, read_bvh, write_bvh
-from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
+from vidstyle.evaluation.realmocap import DEFAULT_CAMERAS, StrikeEvalParams, evaluate_strikes
 
 log = logging.getLogger("strikes_diagnostics")
 
@@ -119,10 +118,9 @@ def main(argv: list[str] | None = None) -> int:
                      f"{pct(o['punch_share_of_strikes'])} |")
     table = "\n".join(lines)
     print(table)
-    with atomic_path(a.out, suffix=".json") as t:
-        Path(t).write_text(json.dumps({"kind": "vidstyle.strikes_diagnostics", "schema_version": 1, "seed": a.seed,
-                                       "command": "python scripts/strikes_diagnostics.py " + " ".join(argv or sys.argv[1:]),
-                                       "table": table, "variants": docs}, indent=1, default=str))
+    write_validation(a.out, {"kind": "vidstyle.strikes_diagnostics", "schema_version": 1, "seed": a.seed,
+                             "command": "python scripts/strikes_diagnostics.py " + " ".join(argv or sys.argv[1:]),
+                             "table": table, "variants": docs})
     return 0
 
 

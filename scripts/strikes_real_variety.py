@@ -29,7 +29,6 @@ out/models/recognizer.joblib: its header names set B's files, whose recipe is re
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import sys
 from pathlib import Path
@@ -38,7 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.fileio import atomic_path
+from vidstyle.formats.validation import write_validation
 
 log = logging.getLogger("strikes_real_variety")
 
@@ -178,7 +177,7 @@ def main(argv=None) -> int:
     if not a.real and not a.cameras:
         ap.error("give --real and/or --cameras")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", stream=sys.stderr)
-    from vidstyle.recognition.realmocap import DEFAULT_CAMERAS, evaluate_strikes, strikes_table
+    from vidstyle.evaluation.realmocap import DEFAULT_CAMERAS, evaluate_strikes, strikes_table
     from vidstyle.recognition.recognizer import load_model, read_header
 
     global POINTS
@@ -209,14 +208,13 @@ def main(argv=None) -> int:
         print(f"| {key if key == 'baseline' else name} | {100 * v['frame_accuracy_smoothed']:.1f} % | {100 * v['frame_accuracy_raw']:.1f} % | "
               f"{100 * (v['video_accuracy'] or 0):.1f} % | {100 * (o['punch_fraction'] or 0):.1f} % | "
               f"{100 * (o['punch_share_of_strikes'] or 0):.1f} % |")
-    with atomic_path(a.out, suffix=".json") as t:
-        Path(t).write_text(json.dumps({"kind": "vidstyle.strikes_real_variety", "schema_version": 1, "seed": a.seed,
+    write_validation(a.out, {"kind": "vidstyle.strikes_real_variety", "schema_version": 1, "seed": a.seed,
                                        "variant": name, "real_clips": list(CLIPS) if a.real else [],
                                        "real_views": list(VIEWS), "seconds": SECONDS, "extra_cameras": list(views),
                                        "camera_elevation": a.camera_elevation,
                                        "command": "python scripts/strikes_real_variety.py " + " ".join(argv or sys.argv[1:]),
                                        "validation": val, "acceptable_on_validation": bool(acceptable),
-                                       "strikes": strikes}, indent=1, default=str))
+                                       "strikes": strikes})
     return 0
 
 

@@ -15,7 +15,7 @@ performers' performance videos once (frame scores of the model) and decodes them
 - ``vote (no prior)``: the thesis' window-6 vote;
 - ``raw``: no smoothing;
 
-then runs the style evaluation (``vidstyle.style.evaluate``, defaults of ``vidstyle evaluate style``) on
+then runs the style evaluation (``vidstyle.evaluation.style``, defaults of ``vidstyle evaluate style``) on
 the test performers for each, beside their ground truth. Prints a table and writes JSON (``--out``).
 
 Usage::
@@ -37,12 +37,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidstyle.fileio import write_json  # noqa: E402
+from vidstyle.formats.validation import write_validation  # noqa: E402
 from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
 from vidstyle.formats.labels import read_labels as load_labels  # noqa: E402
 from vidstyle.recognition.io import features_path, load_features  # noqa: E402
 from vidstyle.recognition.recognizer import load_model  # noqa: E402
 from vidstyle.recognition.smoothing import duration_model, smooth_labels, transition_matrix  # noqa: E402
-from vidstyle.style.evaluate import EvalParams, evaluate_performers, load_performers  # noqa: E402
+from vidstyle.evaluation.style import EvalParams, evaluate_performers, load_performers  # noqa: E402
 
 log = logging.getLogger("style_viterbi_prior")
 
@@ -90,8 +91,7 @@ def main() -> None:
     scored = []
     for v in vids:
         f = load_features(features_path(args.features_dir, v.id))
-        Z = rec._embed(rec.histograms(f))
-        scored.append((v, rec._scores_full(*rec.clf_.predict_with_scores(Z))))
+        scored.append((v, rec.frame_scores(rec.histograms(f))))
     classes = [str(c) for c in rec.classes_]
     results = {}
     manifest, params = ds, EvalParams()
@@ -126,7 +126,7 @@ def main() -> None:
     doc = {"kind": "vidstyle.metrics.style_viterbi_prior", "schema_version": 1, "model": str(args.model),
            "seed": header.get("seed"), "emission_weight": rec.emission_weight, "test_performers": sorted(test_perf), "n_videos": len(vids),
            "command": "python scripts/style_viterbi_prior.py " + " ".join(sys.argv[1:]), "rows": rows}
-    write_json(args.out, doc)
+    write_validation(args.out, doc)
     lines = [f"Style on the test performers ({', '.join(sorted(test_perf))}; identification among "
              f"{len(test_perf)}), seed {header.get('seed')}", "",
              "| labels | transition MAE (a) | identification (a) | by true chain | held-out seqs identified | JSD 2-gram same / other |",

@@ -81,8 +81,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.recognition.evaluate import _load_set, score_videos  # noqa: E402
+from vidstyle.evaluation.recognition import load_set, score_videos  # noqa: E402
 from vidstyle.formats.dataset import read_dataset as load_dataset  # noqa: E402
+from vidstyle.formats.features import directory_params  # noqa: E402
+from vidstyle.formats.validation import write_validation  # noqa: E402
 from vidstyle.recognition.splits import make_split  # noqa: E402
 
 log = logging.getLogger("validate_recognition")
@@ -148,7 +150,7 @@ class Search:
         key = self.features_dir(variant, points)
         if key not in self._sets:
             fdir = Path(self.features_dir(variant, points))
-            self._sets[key] = {k: _load_set(self.ds, fdir, ids, self.jobs)
+            self._sets[key] = {k: load_set(self.ds, fdir, ids, self.jobs)
                                for k, ids in (("A", self.split.vocab), ("B", self.split.train), ("V", self.split.val))}
         return self._sets[key]
 
@@ -204,7 +206,7 @@ class Search:
                 smoothing=cfg["smoothing"], emission_weight=cfg["emission_weight"],
                 smoothing_window=cfg["smoothing_window"], n_jobs=self.jobs, random_state=self.seed,
             ).fit(feats_b, [t.labels for t in labels_b], classes=self.ds.classes or None)
-        raw = [rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))) for H in rec._histograms_many(feats_v)]
+        raw = [rec.frame_scores(H) for H in rec.histograms_many(feats_v)]
         train_s = time.perf_counter() - t0
         self._memo[key] = (rec, raw, train_s)
         if cache is not None:
@@ -226,7 +228,7 @@ class Search:
             if missing:
                 raise SystemExit(f"--camera-dataset: no video of the validation performers {sorted(missing)}")
             ids = [v.id for v in videos]
-            feats, labels = _load_set(self.camera_dataset, Path(self.camera_features[key]), ids, self.jobs)
+            feats, labels = load_set(self.camera_dataset, Path(self.camera_features[key]), ids, self.jobs)
             self._camera_sets[key] = (feats, labels, ids, [v.action if v.kind == "single" else None for v in videos])
         return self._camera_sets[key]
 
@@ -237,7 +239,7 @@ class Search:
         cam = None
         if self.camera_dataset is not None:
             feats_c, labels_c, ids_c, actions_c = self.camera_set(cfg["variant"], cfg.get("points"))
-            cam = ([rec._scores_full(*rec.clf_.predict_with_scores(rec._embed(H))) for H in rec._histograms_many(feats_c)],
+            cam = ([rec.frame_scores(H) for H in rec.histograms_many(feats_c)],
                    labels_c, ids_c, actions_c)
         labels_v = self.sets(cfg["variant"], cfg.get("points"))["V"][1]
         if not hasattr(rec, "durations_") and hasattr(rec, "fit_durations"):  # trained before the duration smoother
@@ -247,7 +249,7 @@ class Search:
             rec.smoothing = smoothing
             if weight is not None:
                 rec.emission_weight = weight
-            outs = [rec._finish(*r) for r in raw]
+            outs = [rec.smooth(*r) for r in raw]
             m = score_videos(rec.classes_, [t.labels for t in labels_v], outs, self.split.val, self.actions)
             c = {**cfg, "smoothing": smoothing, "emission_weight": weight if weight is not None else cfg["emission_weight"]}
             row = {"step": step, "config": c, "frame_accuracy_raw": m["frame_accuracy"]["raw"],
@@ -255,7 +257,7 @@ class Search:
                    "per_class_recall_smoothed": {k: v["recall_smoothed"] for k, v in m["per_class"].items()},
                    "n_val_frames": m["n_test_frames"], "train_s": train_s}
             if cam is not None:
-                mc = score_videos(rec.classes_, [t.labels for t in cam[1]], [rec._finish(*r) for r in cam[0]],
+                mc = score_videos(rec.classes_, [t.labels for t in cam[1]], [rec.smooth(*r) for r in cam[0]],
                                   cam[2], cam[3])
                 row.update({"camera_frame_accuracy_raw": mc["frame_accuracy"]["raw"],
                             "camera_frame_accuracy_smoothed": mc["frame_accuracy"]["smoothed"],
@@ -319,21 +321,9 @@ def _candidate(args) -> list[dict]:
     return search.run(step, cfg, smoothers=_smoothers())
 
 
-def _features_params(fdir: str | Path) -> dict:
-    """The extraction parameters recorded in the features files of ``fdir`` (their format's owner reads
-    them); a missing or unreadable directory ends the script with the format's one-line error."""
-    from vidstyle.formats._base import FormatError
-    from vidstyle.formats.features import directory_params
-
-    try:
-        return directory_params(fdir)
-    except FormatError as e:
-        raise SystemExit(str(e)) from None
-
-
 def features_points(fdir: str | Path) -> int:
     """Salient points per frame that the features files of ``fdir`` were extracted with (their params)."""
-    return int(_features_params(fdir)["salient"]["n_points"])
+    return int(directory_params(fdir)["salient"]["n_points"])
 
 
 def check_start_model(path: Path, start: dict, split, seed: int) -> None:
@@ -428,7 +418,7 @@ def main() -> None:
     if args.camera_dataset is not None:
         cam_dirs = {}
         for d in args.camera_features:
-            fp = _features_params(d)
+            fp = directory_params(d)
             cam_dirs[(fp["variant"], int(fp["salient"]["n_points"]))] = str(d)
         camera = (str(args.camera_dataset), cam_dirs)
     ctx = (str(args.dataset), features, points_features, variant_points, camera, args.seed, args.cache_dir)
@@ -527,10 +517,7 @@ def main() -> None:
                                                   "camera_video_accuracy", "n_camera_frames") if k in final},
         "rows": rows,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    tmp.replace(args.out)
+    write_validation(args.out, doc)
     print(table(doc))
     log.info("wrote %s", args.out)
 
@@ -563,4 +550,9 @@ def table(doc: dict) -> str:
 
 
 if __name__ == "__main__":
-    main()
+    from vidstyle.errors import VidstyleError
+
+    try:
+        main()
+    except VidstyleError as e:  # bad input (e.g. an unreadable features directory): one line, not a traceback
+        raise SystemExit(str(e)) from None

@@ -123,3 +123,39 @@ def test_npz_keys_and_load_errors(video, tmp_path):
         read_features(tmp_path / "other.npz")
     with pytest.raises(InputError, match="not found"):
         read_features(tmp_path / "nope.npz")
+
+
+def test_library_with_defaults_writes_the_cli_features(video, tmp_path):
+    """vidstyle.features.extract_videos with its defaults (features/defaults.py) = `vidstyle features`."""
+    import inspect
+
+    import typer.main
+
+    from vidstyle.cli import app
+    from vidstyle.features import defaults as D
+    from vidstyle.features import extract_videos
+
+    path = video[0]
+    assert main(["features", str(path), "--out", str(tmp_path / "cli"), "--jobs", "1"]) == 0
+    extract_videos([path], tmp_path / "lib", jobs=1)
+    a, b = (read_features(tmp_path / d / f"{path.stem}.npz") for d in ("cli", "lib"))
+    np.testing.assert_array_equal(a.descriptors, b.descriptors)
+    np.testing.assert_array_equal(a.points, b.points)
+    assert a.params == b.params and a.params["variant"] == D.VARIANT
+    cli = {p.name: p.default for p in typer.main.get_command(app).commands["features"].params}
+    lib = inspect.signature(extract_videos).parameters
+    for name in ("variant", "fps", "height", "points", "threshold", "min_distance", "flow", "subregions",
+                 "subregion_size", "smooth"):
+        assert cli[name] == lib[name].default, name
+
+
+@pytest.mark.parametrize("kw,param", [({"variant": "sift4d"}, "variant"), ({"height": 4}, "height"),
+                                      ({"fps": -1.0}, "fps"), ({"jobs": 0}, "jobs"),
+                                      ({"subregions": 4}, "variant")])
+def test_library_checks_its_parameters_before_any_work(video, tmp_path, kw, param):
+    from vidstyle.errors import ParameterError
+    from vidstyle.features import extract_videos
+
+    with pytest.raises(ParameterError) as e:
+        extract_videos([video[0]], tmp_path / "out", **kw)
+    assert e.value.param == param and not (tmp_path / "out").exists()

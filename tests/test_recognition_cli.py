@@ -189,7 +189,7 @@ def test_recognize_out_dir_then_score_labels_dir(ds, tmp_path, capsys):
     assert m["split"]["test"] == test and m["n_test_videos"] == len(test)
     assert m["source"]["model"] == str(tmp_path / "m.joblib") and m["params"]["recognizer"]["smoothing"] == "viterbi"
     # the same numbers as scoring the predictions in memory
-    from vidstyle.recognition.evaluate import score_videos
+    from vidstyle.evaluation.recognition import score_videos
     from vidstyle.formats.dataset import read_dataset as load_dataset
     from vidstyle.formats.labels import read_labels as load_labels
 

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from vidstyle.cli import main
 from vidstyle.demo.skeleton import build_skeleton
 from vidstyle.mocap import Motion
-from vidstyle.recognition.realmocap import (
+from vidstyle.evaluation.realmocap import (
     KICKS,
     PUNCHES,
     StrikeRule,
@@ -210,7 +210,7 @@ def test_labelled_action_frames(tmp_path):
     from vidstyle.demo.dataset import label_document
     from vidstyle.errors import InputError
     from vidstyle.formats.labels import write_labels
-    from vidstyle.recognition.realmocap import labelled_action_frames
+    from vidstyle.evaluation.realmocap import labelled_action_frames
 
     labels = ["Guard"] * 5 + ["Jab"] * 4 + ["Guard"] * 3 + ["LowKick"] * 2 + ["Uppercut"] * 3
     write_labels(tmp_path / "l.json", label_document(labels, 60.0, ["Jab", "LowKick", "Uppercut"], bvh="t.bvh"))
@@ -219,3 +219,15 @@ def test_labelled_action_frames(tmp_path):
     assert labelled_action_frames(tmp_path / "l.json", 17, ("Uppercut",))[14:].all()
     with pytest.raises(InputError):
         labelled_action_frames(tmp_path / "l.json", 16, ("Jab",), start=2)
+
+
+@pytest.mark.parametrize("kw,param", [({"start": -1}, "start"), ({"start": 5, "stop": 5}, "stop"),
+                                      ({"points": 0}, "points")])
+def test_strike_parameters_are_checked_by_the_library(kw, param):
+    from vidstyle.errors import ParameterError
+    from vidstyle.evaluation.realmocap import StrikeEvalParams
+
+    with pytest.raises(ParameterError) as e:
+        StrikeEvalParams(**kw)
+    assert e.value.param == param
+    assert StrikeEvalParams(start=0, stop=None, points=1).stop is None  # the edges are allowed

@@ -11,7 +11,7 @@ from vidstyle.errors import InputError
 from vidstyle.formats.dataset import read_dataset as load_dataset
 from vidstyle.formats.labels import read_labels as load_labels
 from vidstyle.recognition import ActionRecognizer, Vocabulary, load_features
-from vidstyle.recognition.evaluate import evaluate_recognition, score_videos, video_label
+from vidstyle.evaluation.recognition import evaluate_recognition, score_videos, video_label
 from vidstyle.recognition.io import VideoFeatures
 from vidstyle.recognition.onnx_export import OnnxRecognizer, export_onnx
 from vidstyle.recognition.recognizer import load_model, save_model

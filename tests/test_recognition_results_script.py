@@ -42,7 +42,7 @@ def test_each_seed_trains_with_its_own_validation_choice(tmp_path):
     base = {"variant": "scovanner2007", "points": 10, "words": 1000, "grouping_threshold": 0.8, "C": 100.0,
             "max_frames_per_class": 1500, "coarse_context": 0, "smoothing": "duration", "emission_weight": 1.0}
     for seed, points, c in ((0, 20, 100.0), (1, 40, 30.0)):
-        doc = {"kind": "vidstyle.validation.recognition", "seed": seed, "split": {"val_performers": ["p0"]},
+        doc = {"kind": "vidstyle.validation.recognition", "schema_version": 2, "seed": seed, "split": {"val_performers": ["p0"]},
                "final_config": {**base, "points": points, "C": c}}
         (tmp_path / f"recognition_seed{seed}.json").write_text(json.dumps(doc))
     (tmp_path / "pose.json").write_text(json.dumps({"kind": "vidstyle.validation.pose", "seed": 2}))

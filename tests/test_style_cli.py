@@ -180,3 +180,43 @@ def test_learn_style_dataset_mode_errors_write_nothing(dataset, tmp_path, capsys
     assert not out_dir.exists()
     assert main(["learn-style", "--dataset", str(dataset), "--out", str(tmp_path / "x.json")]) == 2
     assert main(["learn-style"]) == 2
+
+
+def test_library_with_defaults_is_the_cli(dataset, tmp_path, capsys):
+    """vidstyle.style.learn / generate_sequence with the defaults of style/defaults.py give the files and
+    sequences of `vidstyle learn-style` / `vidstyle generate` with theirs."""
+    import dataclasses
+    import inspect
+
+    import typer.main
+
+    from vidstyle.cli import app
+    from vidstyle.formats.sequence import format_sequence
+    from vidstyle.style import defaults as D
+    from vidstyle.style import generate_sequence, learn, style_params
+    from vidstyle.style.artifact import StyleParams
+    from vidstyle.style.events import EventParams
+
+    labels = [dataset / "labels" / f"p00_perf{i}.json" for i in range(2)]
+    assert main(["learn-style", *map(str, labels), "--out", str(tmp_path / "cli.json")]) == 0
+    [(pid, style)] = learn(labels)
+    style.save(tmp_path / "lib.json")
+    assert pid is None and (tmp_path / "lib.json").read_text() == (tmp_path / "cli.json").read_text()
+    capsys.readouterr()
+    assert main(["generate", "--style", str(tmp_path / "cli.json")]) == 0
+    cli_text = capsys.readouterr().out
+    seq = generate_sequence(style, style_path=tmp_path / "cli.json")
+    assert format_sequence(seq, "text") == cli_text
+    # one set of defaults: the module, the library's parameter objects, the library calls and the CLI
+    assert style_params() == StyleParams(k_range=(1, 2, 3, 4, 5, 6))
+    assert dataclasses.asdict(StyleParams()) == dataclasses.asdict(style_params())
+    assert EventParams().ignore == D.IGNORE and EventParams().min_run == D.MIN_RUN
+    cmd = {p.name: p.default for p in typer.main.get_command(app).commands["learn-style"].params}
+    lib = inspect.signature(style_params).parameters
+    for name in ("min_confidence", "min_run", "max_gap", "split_repeats", "seed", "n_init", "n_iter", "alpha",
+                 "learn_emission", "emission_prior", "modes", "mode_criterion"):
+        assert cmd[name] == lib[name].default, name
+    assert cmd["ignore"] == ",".join(lib["ignore"].default)
+    gen = {p.name: p.default for p in typer.main.get_command(app).commands["generate"].params}
+    sig = inspect.signature(generate_sequence).parameters
+    assert (gen["length"], gen["model"], gen["seed"]) == (sig["length"].default, sig["model"].default, sig["seed"].default)

@@ -109,7 +109,7 @@ def _seq(starts, durations, source):
 
 
 def test_split_never_holds_out_another_view_of_a_training_moment():
-    from vidstyle.style.evaluate import _split
+    from vidstyle.evaluation.style import _split
 
     # one take seen from two views: recognised events differ a little, the cut is one frame for both
     front = _seq([0, 10, 20, 30, 40, 50], [10] * 6, "front")

@@ -38,13 +38,13 @@ def test_search_scores_only_the_validation_videos(tmp_path, monkeypatch):
     ds = load_dataset(tmp_path)
     split = make_split(ds, seed=0)
     read = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         read.extend(ids)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1)
     rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 3.0), ("vote", None)])
     assert set(read) == set(split.vocab + split.train + split.val) and not set(read) & set(split.test)
@@ -97,13 +97,13 @@ def test_points_candidates_read_their_own_features(tmp_path, monkeypatch):
     ds = load_dataset(tmp_path)
     split = make_split(ds, seed=0)
     dirs = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         dirs.append(Path(fdir).name)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "features")}, split, 0, 1,
                   points_features={20: str(tmp_path / "features20")})
     s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0)])
@@ -126,14 +126,14 @@ def test_validation_camera_scores_only_the_validation_performers(tmp_path, monke
     ds, cam = load_dataset(tmp_path / "d"), load_dataset(tmp_path / "c")
     split = make_split(ds, seed=0)
     read = []
-    real = vr._load_set
+    real = vr.load_set
 
     def spy(dataset, fdir, ids, jobs):
         if Path(fdir).parent.name == "c":
             read.extend(ids)
         return real(dataset, fdir, ids, jobs)
 
-    monkeypatch.setattr(vr, "_load_set", spy)
+    monkeypatch.setattr(vr, "load_set", spy)
     s = vr.Search(ds, {"scovanner2007": str(tmp_path / "d" / "features")}, split, 0, 1,
                   camera_dataset=cam, camera_features={("scovanner2007", 10): str(tmp_path / "c" / "features")})
     rows = s.run("start", {**vr.START, "words": 40}, smoothers=[("viterbi", 1.0), ("vote", None)])
@@ -143,3 +143,24 @@ def test_validation_camera_scores_only_the_validation_performers(tmp_path, monke
         assert 0.0 <= r["camera_frame_accuracy_smoothed"] <= 1.0 and r["n_camera_frames"] > 0
         assert r["score"] == pytest.approx((r["frame_accuracy_smoothed"] + r["camera_frame_accuracy_smoothed"]) / 2)
     assert vr._key(rows[0]) == (rows[0]["score"], rows[0]["video_accuracy"])
+
+
+def test_committed_validation_documents_are_rewritten_byte_for_byte_by_their_owner():
+    """The scripts write through vidstyle.formats.validation: every committed document of its kinds comes
+    back from the owner's writer unchanged, header checked (a layout change would rewrite them all)."""
+    import glob
+    import json
+    from pathlib import Path
+
+    from vidstyle.formats.validation import LAYOUTS, dumps_validation, read_validation
+
+    root = Path(__file__).resolve().parents[1] / "pipelines"
+    seen = set()
+    for f in sorted(glob.glob(str(root / "**" / "*.json"), recursive=True)):
+        text = Path(f).read_text()
+        doc = json.loads(text)
+        if isinstance(doc, dict) and doc.get("kind") in LAYOUTS:
+            assert dumps_validation(doc) == text, f
+            assert read_validation(f, doc["kind"]) == doc
+            seen.add(doc["kind"])
+    assert seen == set(LAYOUTS)

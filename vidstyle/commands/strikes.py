@@ -1,5 +1,5 @@
 """``vidstyle evaluate strikes``: real mocap of punches, filmed from several cameras, through a trained
-recognizer (:mod:`vidstyle.recognition.realmocap`)."""
+recognizer (:mod:`vidstyle.evaluation.realmocap`)."""
 
 from __future__ import annotations
 
@@ -58,13 +58,13 @@ def evaluate_strikes_cmd(
     Renders BVH from several cameras with the demo's renderer, looks and backgrounds, runs MODEL on each
     video, and reports how many of the clip's action frames come out as
     punches (Jab, Hook, Uppercut) rather than kicks (LowKick, RoundhouseKick). Action frames come from
-    the mocap alone (an arm extended and reaching forward; vidstyle.recognition.realmocap), never from
+    the mocap alone (an arm extended and reaching forward; vidstyle.evaluation.realmocap), never from
     the recognizer; the clip trains, tunes and selects nothing. Prints a Markdown table."""
     from ..errors import InputError, ParameterError
     from ..formats.labels import write_labels
     from ..formats.metrics import STRIKES, write_metrics
     from ..mocap import read_bvh
-    from ..recognition.realmocap import (
+    from ..evaluation.realmocap import (
         StrikeEvalParams,
         StrikeRule,
         action_frames,
@@ -80,17 +80,9 @@ def evaluate_strikes_cmd(
         rule = StrikeRule(extension_min=extension_min, reach_min=reach_min).validate()
     except ParameterError as e:
         raise InputError(f"--{e.param.replace('_', '-')}: {e.problem}") from None
-    if start < 0 or stop < 0 or (stop and stop <= start):
-        raise InputError("--start must be >= 0 and --stop 0 or above --start")
-    if variant is None or points is None:
-        from ..recognition.recognizer import read_header
-
-        fp = read_header(model).get("features_params") or {}
-        variant = variant or fp.get("variant", "scovanner2007")
-        points = points if points is not None else int((fp.get("salient") or {}).get("n_points", 10))
-    if points < 1:
-        raise InputError(f"--points: must be >= 1, got {points}")
-    params = StrikeEvalParams(variant=variant, points=points, start=start, stop=stop or None)
+    if stop < 0:
+        raise InputError(f"--stop: must be 0 (the end) or above --start, got {stop}")
+    params = StrikeEvalParams.for_model(model, variant=variant, points=points, start=start, stop=stop or None)
     labels_list = [x.strip() for x in action_labels.split(",") if x.strip()]
     if actions is not None and not labels_list:
         raise InputError("--action-labels: give at least one label")

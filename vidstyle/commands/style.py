@@ -13,6 +13,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ..style import defaults as D
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
@@ -25,35 +26,28 @@ def _style_params(
     n_init: int, n_iter: int, alpha: float, learn_emission: bool, emission_prior: float, modes: str,
     mode_criterion: str,
 ):
-    from ..style.artifact import StyleParams, parse_k_range
-    from ..style.events import EventParams
+    from ..style.learn import style_params
 
-    events = EventParams(
-        ignore=tuple(x.strip() for x in ignore.split(",") if x.strip()), min_confidence=min_confidence,
-        min_run=min_run, max_gap=max_gap, split_repeats=split_repeats,
-    )
-    return StyleParams(
-        events=events, seed=seed, alpha=alpha, learn_emission=learn_emission, emission_prior=emission_prior,
-        n_init=n_init, n_iter=n_iter, k_range=parse_k_range(modes), mode_criterion=mode_criterion,
-    )
+    return style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter, alpha,
+                        learn_emission, emission_prior, modes, mode_criterion)
 
 
 # option declarations shared by learn-style and evaluate style
-_IGNORE = typer.Option("Guard,Step", "--ignore", help="Comma-separated filler classes that are not actions.")
-_MIN_CONF = typer.Option(0.5, "--min-confidence", help="Frames below this confidence are dropped.")
-_MIN_RUN = typer.Option(3, "--min-run", help="Runs shorter than this (frames) are noise.")
-_MAX_GAP = typer.Option(4, "--max-gap", help="A run resumed after at most this many noise frames is one event.")
-_SPLIT = typer.Option(True, "--split-repeats/--no-split-repeats",
+_IGNORE = typer.Option(",".join(D.IGNORE), "--ignore", help="Comma-separated filler classes that are not actions.")
+_MIN_CONF = typer.Option(D.MIN_CONFIDENCE, "--min-confidence", help="Frames below this confidence are dropped.")
+_MIN_RUN = typer.Option(D.MIN_RUN, "--min-run", help="Runs shorter than this (frames) are noise.")
+_MAX_GAP = typer.Option(D.MAX_GAP, "--max-gap", help="A run resumed after at most this many noise frames is one event.")
+_SPLIT = typer.Option(D.SPLIT_REPEATS, "--split-repeats/--no-split-repeats",
                       help="Cut runs of several back-to-back occurrences of an action into events.")
-_SEED = typer.Option(0, "--seed", help="Seed of every random choice (restarts, folds, sampling).")
-_N_INIT = typer.Option(4, "--n-init", help="EM restarts per model; the best training likelihood is kept.")
-_N_ITER = typer.Option(200, "--n-iter", help="Maximum EM iterations per restart.")
-_ALPHA = typer.Option(0.5, "--alpha", help="Dirichlet pseudo-count per transition cell (smoothing).")
-_LEARN_E = typer.Option(True, "--learn-emission/--fixed-emission",
+_SEED = typer.Option(D.SEED, "--seed", help="Seed of every random choice (restarts, folds, sampling).")
+_N_INIT = typer.Option(D.N_INIT, "--n-init", help="EM restarts per model; the best training likelihood is kept.")
+_N_ITER = typer.Option(D.N_ITER, "--n-iter", help="Maximum EM iterations per restart.")
+_ALPHA = typer.Option(D.ALPHA, "--alpha", help="Dirichlet pseudo-count per transition cell (smoothing).")
+_LEARN_E = typer.Option(D.LEARN_EMISSION, "--learn-emission/--fixed-emission",
                         help="Model (a): learn recognition confusions (else emissions = identity).")
-_E_PRIOR = typer.Option(10.0, "--emission-prior", help="Model (a): pseudo-events per row of the diagonal prior.")
-_MODES = typer.Option("1-6", "--modes", help="Model (b): candidate numbers of behaviour modes, e.g. 1-6.")
-_CRIT = typer.Option("heldout", "--mode-criterion", help="Model (b): choose modes by 'heldout' or 'bic'.")
+_E_PRIOR = typer.Option(D.EMISSION_PRIOR, "--emission-prior", help="Model (a): pseudo-events per row of the diagonal prior.")
+_MODES = typer.Option(D.MODES, "--modes", help="Model (b): candidate numbers of behaviour modes, e.g. 1-6.")
+_CRIT = typer.Option(D.MODE_CRITERION, "--mode-criterion", help="Model (b): choose modes by 'heldout' or 'bic'.")
 
 
 def learn_style(
@@ -86,9 +80,7 @@ def learn_style(
     Either LABELS... --out style.json (one performer), or --dataset DIR --out-dir DIR [--labels-dir REC]
     (one <performer>.json per performer of the dataset, from its performance videos).
     """
-    from ..formats.dataset import read_dataset
-    from ..formats.labels import read_labels
-    from ..style.artifact import Style, dataset_styles
+    from ..style.learn import learn
 
     params = _style_params(ignore, min_confidence, min_run, max_gap, split_repeats, seed, n_init, n_iter,
                            alpha, learn_emission, emission_prior, modes, mode_criterion)
@@ -96,13 +88,11 @@ def learn_style(
     if dataset is None:
         if not labels or out is None:
             raise InputError("learn-style: give LABELS... --out FILE, or --dataset DIR --out-dir DIR")
-        styles = [(out, Style.from_tracks([read_labels(p) for p in labels], params))]
-    else:
-        if labels or out is not None or out_dir is None:
-            raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
-        wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
-        styles = [(Path(out_dir) / f"{pid}.json", style)
-                  for pid, style in dataset_styles(read_dataset(dataset), params, labels_dir, wanted)]
+    elif labels or out is not None or out_dir is None:
+        raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
+    wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
+    learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params)
+    styles = [(out if pid is None else Path(out_dir) / f"{pid}.json", style) for pid, style in learned]
     for dest, style in styles:
         style.save(dest)
         log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
@@ -112,22 +102,22 @@ def learn_style(
 def generate(
     style_path: Path = typer.Option(..., "--style", "-s", help="style.json from learn-style."),
     start: str | None = typer.Option(None, "--start", help="First action (default: drawn from the model)."),
-    length: int = typer.Option(40, "--length", "-n", help="Number of action events."),
-    seed: int = typer.Option(0, "--seed", help="Random seed; the output is a function of it."),
+    length: int = typer.Option(D.GENERATE_LENGTH, "--length", "-n", help="Number of action events."),
+    seed: int = typer.Option(D.SEED, "--seed", help="Random seed; the output is a function of it."),
     fmt: str = typer.Option("text", "--format", "-f", help="text (thesis Table 4 style), json or csv."),
-    model: str = typer.Option("a", "--model", "-m", help="a (thesis HMM), b (behaviour modes) or bigram."),
+    model: str = typer.Option(D.MODEL, "--model", "-m", help="a (thesis HMM), b (behaviour modes) or bigram."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
 ) -> None:
     """Generate a new action sequence (with durations) in a learned style."""
     from ..fileio import write_text
-    from ..formats.sequence import ActionSequence, format_sequence, write_sequence
+    from ..formats.sequence import format_sequence, write_sequence
     from ..style.artifact import Style
+    from ..style.learn import generate_sequence
 
     if fmt not in FORMATS:
         raise InputError(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
     style = Style.load(style_path)
-    events = style.generate(length, start=start, seed=seed, model=model)
-    seq = ActionSequence.from_events(events, style.fps, style=str(style_path), model=model, seed=seed)
+    seq = generate_sequence(style, length, start=start, seed=seed, model=model, style_path=style_path)
     text = format_sequence(seq, fmt)
     log.info("generated %d events with model %s (seed %d) from %s", len(seq.events), model, seed, style_path)
     if out is not None and fmt == "json":
@@ -169,7 +159,7 @@ def evaluate_style(
 ) -> None:
     """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
     from ..formats.metrics import write_metrics
-    from ..style.evaluate import EvalParams, evaluate_dataset
+    from ..evaluation.style import EvalParams, evaluate_dataset
 
     if labels_dir is not None and not labels_dir.is_dir():
         raise InputError(f"{labels_dir}: --labels-dir is not a directory")

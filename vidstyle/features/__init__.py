@@ -17,12 +17,14 @@ Modules:
   frame patch at the point, rotated to the dominant orientation, 128-D.
 - :mod:`~vidstyle.features.extract` — one video -> one ``.npz`` (schema in
   :mod:`vidstyle.formats.features`), streamed through :class:`vidstyle.video.VideoReader` in windows of
-  frames; many videos in parallel.
+  frames; many videos in parallel; :func:`~vidstyle.features.extract.extract_videos` is the stage with
+  its validated defaults (:mod:`~vidstyle.features.defaults`), what ``vidstyle features`` runs.
 """
 
 from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
+from .extract import extract_videos
 from .salient import SalientParams, salient_points
 from .sift3d import Sift3DParams
 
-__all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "get_descriptor",
+__all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "extract_videos", "get_descriptor",
            "salient_points"]

@@ -26,9 +26,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import InputError
+from . import defaults as D
 
 #: The default variant of the library and of ``vidstyle features --variant`` (see that option's note).
-DEFAULT_VARIANT = "scovanner2007"
+DEFAULT_VARIANT = D.VARIANT
 
 REGISTRY: dict[str, type["Descriptor"]] = {}
 
@@ -57,10 +58,10 @@ class Descriptor(ABC):
     def _describe(self, volume: np.ndarray, points: np.ndarray) -> np.ndarray: ...
 
     def describe(self, volume: np.ndarray, points: np.ndarray) -> np.ndarray:
-        from .sift3d import _check_points, _check_volume
+        from .sift3d import check_points, check_volume
 
-        vol = _check_volume(volume)
-        pts = _check_points(vol, points)
+        vol = check_volume(volume)
+        pts = check_points(vol, points)
         return self._describe(vol, pts)
 
     def mirror_permutation(self) -> np.ndarray | None:
@@ -141,12 +142,12 @@ class Thesis(Descriptor):
         return {"variant": self.name, **self.params.to_dict()}
 
     def _describe(self, volume, points):
-        from .sift3d import _batches, _describe_batch
+        from .sift3d import neighbourhood_batches, describe_batch
 
         p = self.params
         out = np.zeros((len(points), p.dim), dtype=np.float32)
-        for idx, arrays in _batches(volume, points, p):
-            out[idx] = _describe_batch(*arrays, p)[0]
+        for idx, arrays in neighbourhood_batches(volume, points, p):
+            out[idx] = describe_batch(*arrays, p)[0]
         return out
 
 

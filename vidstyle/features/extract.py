@@ -21,10 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, ResourceError
+from ..errors import InputError, ParameterError, ResourceError
 from ..fileio import outputs_by_stem
 from ..parallel import limit_threads
-from .descriptors import DEFAULT_VARIANT, Descriptor, get_descriptor
+from . import defaults as D
+from .descriptors import DEFAULT_VARIANT, REGISTRY, Descriptor, get_descriptor
 from .salient import SalientParams, salient_points
 
 log = logging.getLogger(__name__)
@@ -32,8 +33,8 @@ log = logging.getLogger(__name__)
 #: schema of the ``params`` JSON inside a features file
 FEATURES_SCHEMA = 2
 #: working rate and height of the method (``vidstyle features --fps/--height`` defaults)
-WORKING_FPS = 20.0
-WORKING_HEIGHT = 120
+WORKING_FPS = D.WORKING_FPS
+WORKING_HEIGHT = D.WORKING_HEIGHT
 #: working frames described per window
 WINDOW = 128
 
@@ -183,3 +184,45 @@ def run_features(
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     items = [(str(v), str(o), descriptor, salient, None, fps, height) for v, o in zip(videos, outs)]
     return parallel_map(_process_item, items, jobs=jobs, scheduler=scheduler, description="features")
+
+
+def extract_videos(
+    videos: Sequence[str | os.PathLike],
+    out_dir: str | os.PathLike,
+    *,
+    variant: str = D.VARIANT,
+    fps: float | None = D.WORKING_FPS,
+    height: int | None = D.WORKING_HEIGHT,
+    points: int = D.N_POINTS,
+    threshold: float = D.THRESHOLD,
+    min_distance: float = D.MIN_DISTANCE,
+    flow: str = D.FLOW,
+    subregions: int = D.SUBREGIONS,
+    subregion_size: float = D.SUBREGION_SIZE,
+    smooth: float = D.SMOOTH,
+    jobs: int = -1,
+    scheduler: str | None = None,
+) -> list[dict[str, Any]]:
+    """The features stage (``vidstyle features``) with its validated defaults
+    (:mod:`vidstyle.features.defaults`): per-frame salient points and their descriptors of every video,
+    ``<out_dir>/<video stem>.npz`` each, at the working ``fps`` / ``height`` (0 or None: the video's own).
+    ``subregions``, ``subregion_size`` and ``smooth`` apply to the ``thesis`` variant only. Parameters are
+    checked before any work (:class:`ParameterError` naming the parameter); returns one summary per video."""
+    from .sift3d import Sift3DParams
+
+    if variant not in REGISTRY:
+        raise ParameterError("variant", f"expected one of {', '.join(REGISTRY)}, got {variant!r}")
+    if jobs == 0:
+        raise ParameterError("jobs", "must be a positive number of workers or -1 for all cores")
+    if fps is not None and not fps >= 0:
+        raise ParameterError("fps", f"must be >= 0, got {fps}")
+    if height is not None and (height < 0 or 0 < height < D.MIN_HEIGHT):
+        raise ParameterError("height", f"must be 0 or at least {D.MIN_HEIGHT}, got {height}")
+    if variant != "thesis" and (subregions != D.SUBREGIONS or subregion_size != D.SUBREGION_SIZE
+                                or smooth != D.SMOOTH):
+        raise ParameterError("variant", f"{variant}: subregions/subregion_size/smooth do not apply")
+    salient = SalientParams(n_points=points, threshold=threshold, min_distance=min_distance, flow=flow)
+    sift = (Sift3DParams(n_subregions=subregions, subregion_size=subregion_size, smooth_sigma=smooth)
+            if variant == "thesis" else None)
+    return run_features([str(v) for v in videos], out_dir, jobs=jobs, variant=variant, salient=salient,
+                        params=sift, scheduler=scheduler, fps=fps or None, height=height or None)

@@ -371,10 +371,10 @@ def quantise(hist: np.ndarray) -> np.ndarray:
 
 def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
     """The float64 640-bin histograms (before quantisation) of ``points`` (n, 3: frame, row, col)."""
-    from .sift3d import _check_points, _check_volume
+    from .sift3d import check_points, check_volume
 
-    vol = np.asarray(_check_volume(volume), dtype=np.float64)
-    pts = _check_points(vol, points)
+    vol = np.asarray(check_volume(volume), dtype=np.float64)
+    pts = check_points(vol, points)
     T, H, W = vol.shape
     out = np.zeros((len(pts), DIM), dtype=np.float64)
     if len(pts) == 0:

@@ -330,7 +330,9 @@ def ball_offsets(radius: float) -> np.ndarray:
     return np.stack([dt[keep], dr[keep], dc[keep]], axis=1)
 
 
-def _check_points(volume: np.ndarray, points: Any) -> np.ndarray:
+def check_points(volume: np.ndarray, points: Any) -> np.ndarray:
+    """``points`` as an (n, 3) int64 array of (frame, row, column) inside ``volume``; raises
+    :class:`InputError` for another shape, non-integer or out-of-volume coordinates."""
     pts = np.asarray(points)
     if pts.size == 0:
         return np.zeros((0, 3), dtype=np.int64)
@@ -347,7 +349,8 @@ def _check_points(volume: np.ndarray, points: Any) -> np.ndarray:
     return pts
 
 
-def _check_volume(volume: Any) -> np.ndarray:
+def check_volume(volume: Any) -> np.ndarray:
+    """``volume`` as a non-empty real (frames, height, width) array; raises :class:`InputError` otherwise."""
     vol = np.asarray(volume)
     if vol.ndim != 3 or min(vol.shape) < 1:
         raise InputError(f"volume: expected a non-empty (frames, height, width) array, got shape {vol.shape}")
@@ -385,19 +388,19 @@ def dominant_orientation(
     volume: np.ndarray, points: np.ndarray, params: Sift3DParams | None = None, **overrides: Any
 ) -> tuple[np.ndarray, np.ndarray]:
     """Dominant gradient direction (theta, phi) around each point, as used by the thesis variant."""
-    vol = _check_volume(volume)
-    pts = _check_points(vol, points)
+    vol = check_volume(volume)
+    pts = check_points(vol, points)
     p = replace(params if params is not None else Sift3DParams(), rotate=True, **overrides)
     theta = np.zeros(len(pts))
     phi = np.zeros(len(pts))
-    for idx, arrays in _batches(vol, pts, p):
-        _, c = _describe_batch(*arrays, p)
+    for idx, arrays in neighbourhood_batches(vol, pts, p):
+        _, c = describe_batch(*arrays, p)
         theta[idx] = np.arctan2(c[:, 1], c[:, 0])
         phi[idx] = np.arctan2(c[:, 2], np.hypot(c[:, 0], c[:, 1]))
     return theta, phi
 
 
-def _batches(vol: np.ndarray, pts: np.ndarray, p: Sift3DParams):
+def neighbourhood_batches(vol: np.ndarray, pts: np.ndarray, p: Sift3DParams):
     """Yield (indices into pts, (gradients (P, 3, N) in x, y, t, offsets (3, N) in x, y, t, gauss (N,)))."""
     T, H, W = vol.shape
     offs = ball_offsets(p.sample_radius)
@@ -435,7 +438,7 @@ def _batches(vol: np.ndarray, pts: np.ndarray, p: Sift3DParams):
         start = stop
 
 
-def _describe_batch(
+def describe_batch(
     g: np.ndarray, xyt: np.ndarray, gauss: np.ndarray, p: Sift3DParams
 ) -> tuple[np.ndarray, np.ndarray]:
     """Descriptors (P, d) and dominant directions (P, 3) of gathered neighbourhoods g (P, 3, N)."""

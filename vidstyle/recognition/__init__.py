@@ -12,13 +12,19 @@ Modules:
 - :mod:`~vidstyle.recognition.recognizer` — :class:`ActionRecognizer`, model files.
 - :mod:`~vidstyle.recognition.onnx_export` — ONNX graph + :class:`OnnxRecognizer`.
 - :mod:`~vidstyle.recognition.splits` — disjoint sets A / B / test by performer or view.
-- :mod:`~vidstyle.recognition.evaluate` — metrics, confusion PNG, the evaluation run.
+- :mod:`~vidstyle.recognition.defaults` — the validated defaults of the library and the CLI.
+- :mod:`~vidstyle.recognition.pipeline` — the stage as library calls: :func:`train_vocabulary`,
+  :func:`train`, :func:`recognize_file`, :func:`recognize` (what the commands run).
+
+Evaluation (metrics, confusion PNG, the evaluation run) lives in :mod:`vidstyle.evaluation.recognition`.
 - :mod:`~vidstyle.recognition.synthetic` — synthetic feature files with known labels (tests, benchmarks).
 """
 
 from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
 from .histograms import FrameFeaturizer, WordGrouping, normalize_rows
 from .io import VideoFeatures, load_features
+from .pipeline import (TrainingRun, VocabularyRun, load_recognizer, recognize, recognize_file, train,
+                       train_vocabulary)
 from .recognizer import ActionRecognizer, load_model, save_model
 from .smoothing import smooth_labels
 from .splits import Split, make_split
@@ -26,6 +32,8 @@ from .vocabulary import Vocabulary
 
 __all__ = [
     "ActionRecognizer",
+    "TrainingRun",
+    "VocabularyRun",
     "FrameFeaturizer",
     "OvaOvoSVC",
     "OvrSVC",
@@ -36,8 +44,13 @@ __all__ = [
     "combine_ova_ovo",
     "load_features",
     "load_model",
+    "load_recognizer",
     "make_split",
     "normalize_rows",
+    "recognize",
+    "recognize_file",
     "save_model",
     "smooth_labels",
+    "train",
+    "train_vocabulary",
 ]

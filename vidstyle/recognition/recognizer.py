@@ -1,7 +1,8 @@
 """The frame-wise action recognizer: vocabulary -> context histograms -> word grouping -> normalisation
 -> PCA -> SVMs -> smoothing (thesis 4.2-4.3), as one estimator.
 
-Model file (``.joblib``): ``{"header": <JSON str>, "model": ActionRecognizer}``; the header holds
+Model file (``.joblib``, owner :mod:`vidstyle.formats.recognizer_model` on the one model-file machinery
+:mod:`vidstyle.formats.models`): ``{"header": <JSON str>, "model": ActionRecognizer}``; the header holds
 ``kind`` ("vidstyle.recognizer"), ``schema_version``, ``params``, ``seed``, ``classes``, ``training_files``
 (features and labels of set B), ``vocabulary`` (its params and training files = set A), ``sklearn``
 and ``vidstyle`` versions, ``n_train_frames`` and grouping statistics. :func:`read_header` reads it without
@@ -20,16 +21,17 @@ import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
 from ..errors import InputError, ParameterError
+from . import defaults as D
 from .classifier import OvaOvoSVC, OvrSVC
 from .histograms import (NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, context_sum, frame_word_counts,
                          normalize_rows)
 from .io import VideoFeatures, load_features
+from .smoothing import METHODS as SMOOTHERS
 from .smoothing import duration_model, smooth_labels, transition_matrix
 from .vocabulary import Vocabulary
 
 log = logging.getLogger(__name__)
 
-SCHEMA_VERSION = 1
 CLASSIFIERS = ("ova-ovo", "svc-ovr")
 
 
@@ -77,28 +79,26 @@ class ActionRecognizer(BaseEstimator):
     def __init__(
         self,
         vocabulary: Vocabulary | None = None,
-        context: int = 2,
-        coarse_context: int = 0,
-        grouping: bool = True,
-        grouping_threshold: float = 0.8,
+        context: int = D.CONTEXT,
+        coarse_context: int = D.COARSE_CONTEXT,
+        grouping: bool = D.GROUPING,
+        grouping_threshold: float = D.GROUPING_THRESHOLD,
         grouping_distribution: str = "frames",
         grouping_pooling: str = "components",
-        normalize: str = "sqrt",
-        n_components: int = 128,
-        classifier: str = "ova-ovo",
+        normalize: str = D.NORMALIZE,
+        n_components: int = D.N_COMPONENTS,
+        classifier: str = D.CLASSIFIER,
         # C, the per-class cap, the grouping threshold, the coarse context, the smoother and its emission
-        # weight: chosen by scripts/validate_recognition.py, which scores candidates on the demo's validation
-        # performers (never the test performers); pipelines/kickboxing/validation/recognition.json records
-        # every candidate, the value chosen and the validation score it won with.
-        C: float = 100.0,
+        # weight: validated defaults, see vidstyle.recognition.defaults.
+        C: float = D.C,
         gamma: float | str = "scale",
-        max_frames_per_class: int | None = 1500,
-        smoothing_window: int = 6,
-        smoothing: str = "duration",
-        emission_weight: float = 1.0,
-        mirror: bool = True,
+        max_frames_per_class: int | None = D.MAX_FRAMES_PER_CLASS,
+        smoothing_window: int = D.SMOOTHING_WINDOW,
+        smoothing: str = D.SMOOTHING,
+        emission_weight: float = D.EMISSION_WEIGHT,
+        mirror: bool = D.MIRROR,
         n_jobs: int | None = None,
-        random_state: int | None = 0,
+        random_state: int | None = D.SEED,
     ):
         self.vocabulary = vocabulary
         self.context = context
@@ -134,6 +134,20 @@ class ActionRecognizer(BaseEstimator):
             raise ParameterError("coarse_context", f"must be >= 0, got {self.coarse_context}")
         if self.n_components < 1:
             raise ParameterError("n_components", f"must be >= 1, got {self.n_components}")
+        self._check_prediction_params()
+        if not self.C > 0:
+            raise ParameterError("C", f"must be > 0, got {self.C}")
+        if self.max_frames_per_class is not None and self.max_frames_per_class < 1:
+            raise ParameterError("max_frames_per_class", f"must be >= 1 (or None for all), got {self.max_frames_per_class}")
+
+    def _check_prediction_params(self) -> None:
+        """Checks of the parameters :meth:`smooth` uses (they may be changed on a fitted model)."""
+        if self.smoothing not in SMOOTHERS:
+            raise ParameterError("smoothing", f"must be one of {', '.join(SMOOTHERS)}, got {self.smoothing!r}")
+        if self.smoothing_window < 1:
+            raise ParameterError("window", f"must be >= 1, got {self.smoothing_window}")
+        if not self.emission_weight > 0:
+            raise ParameterError("emission_weight", f"must be > 0, got {self.emission_weight}")
 
     @property
     def n_blocks(self) -> int:
@@ -164,19 +178,22 @@ class ActionRecognizer(BaseEstimator):
                   for b in range(self.n_blocks)]
         return blocks[0] if len(blocks) == 1 else np.hstack(blocks)
 
-    def _histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
+    def histograms_many(self, videos: Sequence) -> list[sp.csr_matrix]:
+        """:meth:`histograms` of several videos (threads with ``n_jobs``), in order."""
         from joblib import Parallel, delayed
 
         if len(videos) <= 1 or self.n_jobs in (None, 1):
             return [self.histograms(v) for v in videos]
         return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.histograms)(v) for v in videos)
 
-    def _embed(self, H: sp.spmatrix) -> np.ndarray:
+    def embed(self, H: sp.spmatrix) -> np.ndarray:
+        """PCA frame features (n_frames, n_components) of context histograms ``H`` (:meth:`histograms`):
+        word grouping, normalisation, then the fitted PCA."""
         return self.pca_.transform(self._grouped(H))
 
     def transform(self, video) -> np.ndarray:
         """PCA frame features (n_frames, n_components) of one video."""
-        return self._embed(self.histograms(video))
+        return self.embed(self.histograms(video))
 
     # ----------------------------------------------------------------- fit
     def fit(self, X: Sequence, y: Sequence[Sequence[str]], classes: Sequence[str] | None = None):
@@ -215,7 +232,7 @@ class ActionRecognizer(BaseEstimator):
         )
 
         self.fit_durations(y_original)
-        Hs = self._histograms_many(videos)
+        Hs = self.histograms_many(videos)
         H = sp.vstack(Hs).tocsr()
         rng = np.random.default_rng(self.random_state)
         rows = _sample_per_class(yi, self.max_frames_per_class, rng)
@@ -258,16 +275,29 @@ class ActionRecognizer(BaseEstimator):
         full[:, present] = scores
         return present[pred], full, conf
 
-    def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
+    def frame_scores(self, H: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Unsmoothed per-frame output of context histograms ``H`` (:meth:`histograms`):
+        ``(raw, scores, confidence)`` with ``raw`` the class index into ``classes_`` per frame,
+        ``scores`` (n_frames, n_classes) the classifier's class scores (0 for classes absent in training)
+        and ``confidence`` the raw label's. :meth:`smooth` turns them into the smoothed labels; the two
+        together are :meth:`predict_histograms` (a validation search scores once and smooths many ways)."""
         if H.shape[0] == 0:
+            return np.zeros(0, np.int64), np.zeros((0, len(self.classes_))), np.zeros(0)
+        return self._scores_full(*self.clf_.predict_with_scores(self.embed(H)))
+
+    def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
+        """:meth:`smooth` of :meth:`frame_scores`: see :meth:`predict_video`."""
+        return self.smooth(*self.frame_scores(H))
+
+    def smooth(self, raw: np.ndarray, scores: np.ndarray, conf: np.ndarray) -> dict[str, np.ndarray]:
+        """Smooth :meth:`frame_scores` output with the recognizer's ``smoothing``, ``smoothing_window``
+        and ``emission_weight`` (and its learned ``transitions_`` / ``durations_``); returns the
+        :meth:`predict_video` dict (``raw``, ``scores``, ``confidence``, ``smoothed``, ``smoothed_confidence``)."""
+        self._check_prediction_params()
+        if len(raw) == 0:
             e = np.zeros(0, np.int64)
             return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
                     "smoothed": e, "smoothed_confidence": np.zeros(0)}
-        Z = self._embed(H)
-        raw, scores, conf = self._scores_full(*self.clf_.predict_with_scores(Z))
-        return self._finish(raw, scores, conf)
-
-    def _finish(self, raw, scores, conf) -> dict[str, np.ndarray]:
         sm, sconf = smooth_labels(
             raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing,
             transitions=getattr(self, "transitions_", None), emission_weight=self.emission_weight,
@@ -337,17 +367,14 @@ def _sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) 
 
 
 # ------------------------------------------------------------------- files
-def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
-    import joblib
+def model_header(model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
+    """What a model file records of the fitted ``model`` (see the module docstring)."""
     import sklearn
 
     from .. import __version__
-    from ..fileio import atomic_path
 
     voc = model.vocabulary
     header = {
-        "kind": "vidstyle.recognizer",
-        "schema_version": SCHEMA_VERSION,
         "params": model.public_params(),
         "seed": model.random_state,
         "classes": [str(c) for c in model.classes_],
@@ -364,32 +391,29 @@ def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequen
     }
     if extra:
         header.update(extra)
-    with atomic_path(path) as tmp:
-        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
-    return header
+    return json.loads(json.dumps(header, default=str))
+
+
+def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequence[dict] = (), extra: dict | None = None) -> dict:
+    """Write the fitted ``model`` to a model file (:mod:`vidstyle.formats.recognizer_model`); return its header."""
+    from ..formats.recognizer_model import write_recognizer_model
+
+    return write_recognizer_model(path, model, model_header(model, training_files, extra))
 
 
 def load_model(path: str | Path) -> tuple[ActionRecognizer, dict]:
-    import joblib
-
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: model file not found")
-    try:
-        obj = joblib.load(path)
-    except Exception as e:
-        raise InputError(f"{path}: not a readable model file ({type(e).__name__})") from None
-    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), ActionRecognizer):
-        raise InputError(f"{path}: not a vidstyle recognizer model")
-    header = json.loads(obj["header"])
-    if header.get("schema_version") != SCHEMA_VERSION:
-        raise InputError(f"{path}: model schema {header.get('schema_version')}, expected {SCHEMA_VERSION}")
+    """``(recognizer, header)`` of a model file (:mod:`vidstyle.formats.recognizer_model`); warns when it was
+    saved with another scikit-learn."""
     import sklearn
 
+    from ..formats.recognizer_model import read_recognizer_model
+
+    model, header = read_recognizer_model(path, ActionRecognizer)
     if header.get("sklearn") != sklearn.__version__:
         log.warning("%s was saved with scikit-learn %s, running %s", path, header.get("sklearn"), sklearn.__version__)
-    return obj["model"], header
+    return model, header
 
 
 def read_header(path: str | Path) -> dict:
+    """The header of a model file (the model is loaded too: the header alone is not trusted)."""
     return load_model(path)[1]

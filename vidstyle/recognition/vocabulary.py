@@ -18,7 +18,6 @@ node, -1 for inner nodes); node 0 is the root and the children of a node are con
 
 from __future__ import annotations
 
-import json
 import logging
 from pathlib import Path
 from typing import Sequence
@@ -86,7 +85,7 @@ class Vocabulary(TransformerMixin, BaseEstimator):
         if self.method not in METHODS:
             raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
         if self.assign not in ("tree", "exact"):
-            raise InputError(f"assign: must be 'tree' or 'exact', got {self.assign!r}")
+            raise ParameterError("assign", f"must be 'tree' or 'exact', got {self.assign!r}")
         X = np.asarray(X)
         if X.ndim != 2 or X.shape[0] == 0:
             raise InputError(f"descriptors: need a non-empty (n, d) array, got shape {X.shape}")
@@ -161,48 +160,46 @@ class Vocabulary(TransformerMixin, BaseEstimator):
 
     # ------------------------------------------------------------------ I/O
     def save(self, path: str | Path, training_files: Sequence[str] = (), extra: dict | None = None) -> None:
-        from ..fileio import write_npz
+        """Write the fitted vocabulary (:func:`vidstyle.formats.vocabulary.write_vocabulary`)."""
+        from ..formats.vocabulary import write_vocabulary
 
-        arrays = dict(
-            centres=self.cluster_centers_,
-            method=np.array(self.method),
-            params=np.array(json.dumps(self.get_params(), sort_keys=True)),
-            dim=np.array(self.n_features_in_),
-            descriptor_dtype=np.array(self.descriptor_dtype_),
-            training_files=np.array(json.dumps([str(f) for f in training_files])),
-            n_descriptors=np.array(self.n_fit_descriptors_),
-            seed=np.array(-1 if self.random_state is None else self.random_state),
-            extra=np.array(json.dumps(extra or {}, sort_keys=True, default=str)),
+        write_vocabulary(path, self.to_record(training_files, extra))
+
+    def to_record(self, training_files: Sequence[str] = (), extra: dict | None = None):
+        """The :class:`~vidstyle.formats.vocabulary.VocabularyRecord` of the fitted vocabulary."""
+        from ..formats.vocabulary import VocabularyRecord
+
+        return VocabularyRecord(
+            centres=self.cluster_centers_, params=self.get_params(), dim=int(self.n_features_in_),
+            descriptor_dtype=self.descriptor_dtype_, n_descriptors=int(self.n_fit_descriptors_),
+            training_files=[str(f) for f in training_files], extra=dict(extra or {}), seed=self.random_state,
+            tree=self.tree_, method=self.method,
         )
-        if self.tree_ is not None:
-            arrays.update({f"tree_{k}": v for k, v in self.tree_.items()})
-        write_npz(path, **arrays)
+
+    @classmethod
+    def from_record(cls, record, path: str | Path | None = None) -> "Vocabulary":
+        """The fitted vocabulary of a :class:`~vidstyle.formats.vocabulary.VocabularyRecord`."""
+        from ..errors import FormatError
+
+        try:
+            voc = cls(**record.params)
+        except TypeError as e:
+            raise FormatError(path, "params", f"not the parameters of a vocabulary ({e})") from None
+        voc.cluster_centers_ = record.centres.astype(np.float32)
+        voc.n_features_in_ = int(record.dim)
+        voc.descriptor_dtype_ = str(record.descriptor_dtype)
+        voc.n_fit_descriptors_ = int(record.n_descriptors)
+        voc.training_files_ = list(record.training_files)
+        voc.extra_ = dict(record.extra)
+        voc.tree_ = record.tree
+        return voc
 
     @classmethod
     def load(cls, path: str | Path) -> "Vocabulary":
-        path = Path(path)
-        if not path.is_file():
-            raise InputError(f"{path}: vocabulary file not found")
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-            params = json.loads(str(data["params"]))
-            voc = cls(**params)
-            voc.cluster_centers_ = data["centres"].astype(np.float32)
-            voc.n_features_in_ = int(data["dim"])
-            voc.descriptor_dtype_ = str(data["descriptor_dtype"])
-            voc.n_fit_descriptors_ = int(data["n_descriptors"])
-            voc.training_files_ = json.loads(str(data["training_files"]))
-            voc.extra_ = json.loads(str(data["extra"])) if "extra" in data else {}
-            tree = {k[5:]: data[k] for k in data if k.startswith("tree_")}
-            voc.tree_ = tree or None
-        except InputError:
-            raise
-        except Exception as e:
-            raise InputError(f"{path}: not a vocabulary file ({type(e).__name__}: {e})") from None
-        if voc.cluster_centers_.ndim != 2 or voc.cluster_centers_.shape[1] != voc.n_features_in_:
-            raise InputError(f"{path}: 'centres' has shape {voc.cluster_centers_.shape}")
-        return voc
+        """Read a vocabulary file (:func:`vidstyle.formats.vocabulary.read_vocabulary`)."""
+        from ..formats.vocabulary import read_vocabulary
+
+        return cls.from_record(read_vocabulary(path), path)
 
 
 # ---------------------------------------------------------------------- tree

@@ -24,10 +24,11 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..formats.labels import FrameLabels
+from . import defaults as D
 
 log = logging.getLogger(__name__)
 
-DEFAULT_IGNORE: tuple[str, ...] = ("Guard", "Step")
+DEFAULT_IGNORE: tuple[str, ...] = D.IGNORE
 
 
 @dataclass(frozen=True)
@@ -35,10 +36,10 @@ class EventParams:
     """How frame labels become events (all lengths in frames)."""
 
     ignore: tuple[str, ...] = DEFAULT_IGNORE
-    min_confidence: float = 0.5
-    min_run: int = 3
-    max_gap: int = 4
-    split_repeats: bool = True
+    min_confidence: float = D.MIN_CONFIDENCE
+    min_run: int = D.MIN_RUN
+    max_gap: int = D.MAX_GAP
+    split_repeats: bool = D.SPLIT_REPEATS
     repeat_factor: float = 1.5
 
     def __post_init__(self) -> None:

@@ -251,6 +251,28 @@ class StrikeEvalParams:
     start: int = 1  # first motion frame (frame 0 of a CMU file is the conversion's T-pose)
     stop: int | None = None  # motion frame after the last (None: the end)
 
+    def __post_init__(self) -> None:
+        if self.start < 0:
+            raise ParameterError("start", f"must be >= 0, got {self.start}")
+        if self.stop is not None and self.stop <= self.start:
+            raise ParameterError("stop", f"must be 0 (the end) or above start ({self.start}), got {self.stop}")
+        if self.points < 1:
+            raise ParameterError("points", f"must be >= 1, got {self.points}")
+
+    @classmethod
+    def for_model(cls, model_path: str | os.PathLike, variant: str | None = None, points: int | None = None,
+                  start: int = 1, stop: int | None = None) -> "StrikeEvalParams":
+        """Checked parameters for the recognizer ``model_path``: ``variant`` / ``points`` default to those
+        its training features were extracted with (its header), else scovanner2007 / 10; ``stop`` 0 or
+        None is the end of the clip."""
+        if variant is None or points is None:
+            from ..recognition.recognizer import read_header
+
+            fp = read_header(model_path).get("features_params") or {}
+            variant = variant or fp.get("variant", "scovanner2007")
+            points = points if points is not None else int((fp.get("salient") or {}).get("n_points", 10))
+        return cls(variant=variant, points=points, start=start, stop=stop or None)
+
     def to_dict(self) -> dict:
         d = asdict(self)
         d["size"] = list(self.size)
@@ -279,7 +301,7 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     from ..features.extract import process_video
     from ..features.salient import SalientParams
     from ..render import Appearance, render_to_file
-    from .io import load_features
+    from ..recognition.io import load_features
 
     look_seed = int(np.random.SeedSequence([seed, index, 3]).generate_state(1)[0])
     render_seed = int(np.random.SeedSequence([seed, index, 2]).generate_state(1)[0])
@@ -344,7 +366,7 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     from ..formats.annotations import file_sha256
     from ..logutil import progress
     from ..mocap import read_bvh
-    from .recognizer import load_model
+    from ..recognition.recognizer import load_model
 
     rule = (rule or StrikeRule()).validate()
     params = params or StrikeEvalParams()
@@ -406,21 +428,32 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     }
 
 
+def strikes_rows(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    """The rows of a strikes metrics document: one per camera, then ``overall`` (named "all cameras"),
+    each with ``name``, ``azimuth_deg``/``elevation_deg``/``background`` (None for overall),
+    ``action_video_frames``, ``overall`` (bool) and the ``smoothed`` and ``raw`` counts and fractions."""
+    rows = []
+    for c in [*(doc.get("cameras") or []), {"name": "all cameras", **(doc.get("overall") or {}), "overall": True}]:
+        sm, raw = c.get("smoothed") or {}, c.get("raw") or {}
+        frames = c.get("action_video_frames", sum(int(sm.get(k) or 0) for k in ("punch", "kick", "other")))
+        rows.append({"name": c.get("name"), "azimuth_deg": c.get("azimuth_deg"), "elevation_deg": c.get("elevation_deg"),
+                     "background": c.get("background"), "action_video_frames": frames,
+                     "overall": bool(c.get("overall")), "smoothed": sm, "raw": raw})
+    return rows
+
+
 def strikes_table(doc: dict[str, Any]) -> str:
-    """A Markdown table of a strikes metrics document: per camera and overall."""
-    rows = [("| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
-             "punch share of punch+kick | punch (raw) |"), "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
+    """A Markdown table of a strikes metrics document: per camera and overall (:func:`strikes_rows`)."""
+    lines = [("| camera | azimuth | elevation | background | action frames | punch (smoothed) | kick (smoothed) | "
+              "punch share of punch+kick | punch (raw) |"), "|---|---:|---:|---|---:|---:|---:|---:|---:|"]
 
     def pct(v):
         return "n/a" if v is None else f"{100 * v:.1f} %"
 
-    for c in doc["cameras"]:
-        s, r = c["smoothed"], c["raw"]
-        rows.append(f"| {c['name']} | {c['azimuth_deg']:g} | {c['elevation_deg']:g} | {c['background']} | "
-                    f"{c['action_video_frames']} | {pct(s['punch_fraction'])} | {pct(s['kick_fraction'])} | "
-                    f"{pct(s['punch_share_of_strikes'])} | {pct(r['punch_fraction'])} |")
-    o = doc["overall"]
-    rows.append(f"| **overall** | | | | {o['action_video_frames']} | {pct(o['smoothed']['punch_fraction'])} | "
-                f"{pct(o['smoothed']['kick_fraction'])} | {pct(o['smoothed']['punch_share_of_strikes'])} | "
-                f"{pct(o['raw']['punch_fraction'])} |")
-    return "\n".join(rows)
+    for r in strikes_rows(doc):
+        s, raw = r["smoothed"], r["raw"]
+        head = ("| **overall** | | | " if r["overall"] else
+                f"| {r['name']} | {r['azimuth_deg']:g} | {r['elevation_deg']:g} | {r['background']} ")
+        lines.append(f"{head}| {r['action_video_frames']} | {pct(s['punch_fraction'])} | {pct(s['kick_fraction'])} | "
+                     f"{pct(s['punch_share_of_strikes'])} | {pct(raw['punch_fraction'])} |")
+    return "\n".join(lines)

@@ -34,10 +34,10 @@ from ..errors import InputError, ParameterError
 from ..formats import FormatError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from .artifact import Style, StyleParams
-from .events import EventSequence, tracks_to_events
-from .models import BigramModel, normalise_rows
-from .ngram import ngram_jsd
+from ..style.artifact import Style, StyleParams
+from ..style.events import EventSequence, tracks_to_events
+from ..style.models import BigramModel, normalise_rows
+from ..style.ngram import ngram_jsd
 
 log = logging.getLogger(__name__)
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -31,8 +32,9 @@ from ..errors import InputError, ParameterError
 from ..formats.dataset import Dataset
 from ..formats.labels import check_length, read_labels
 from ..formats.recognised import read_recognised
-from .io import features_path, load_features
-from .splits import make_split
+from ..recognition.io import features_path, load_features
+from ..recognition import defaults as D
+from ..recognition.splits import make_split
 
 log = logging.getLogger(__name__)
 
@@ -172,7 +174,10 @@ def ablation_params(ablation: str) -> dict[str, Any]:
     }[ablation]
 
 
-def _load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None):
+def load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None = None):
+    """``(features, labels)`` of the videos ``ids`` of ``dataset``: each video's features file
+    ``<features_dir>/<id>.npz`` and its ground-truth labels track (lengths checked), in ``ids`` order,
+    loaded with ``n_jobs`` threads."""
     from joblib import Parallel, delayed
 
     by_id = dataset.by_id()
@@ -190,11 +195,11 @@ def _load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: 
 def evaluate_recognition(
     dataset: Dataset,
     features_dir: str | Path,
-    split_kind: str = "unseen-performer",
-    seed: int = 0,
+    split_kind: str = D.SPLIT,
+    seed: int = D.SEED,
     ablation: str = "none",
-    n_words: int = 1000,
-    vocab_method: str = "minibatch",
+    n_words: int = D.N_WORDS,
+    vocab_method: str = D.VOCAB_METHOD,
     recognizer_params: dict | None = None,
     baseline: bool = True,
     test_view: str | None = None,
@@ -208,8 +213,8 @@ def evaluate_recognition(
 
     ``test_dataset`` / ``test_features_dir``: the unseen-camera videos and their features
     (``split_kind="unseen-camera"``)."""
-    from .recognizer import ActionRecognizer
-    from .vocabulary import Vocabulary
+    from ..recognition.recognizer import ActionRecognizer
+    from ..recognition.vocabulary import Vocabulary
 
     if score_set not in ("test", "val"):
         raise InputError(f"score_set: must be test or val, got {score_set!r}")
@@ -231,7 +236,7 @@ def evaluate_recognition(
     params.setdefault("n_jobs", n_jobs)
 
     t0 = time.perf_counter()
-    feats_a, _ = _load_set(dataset, features_dir, split.vocab, n_jobs)
+    feats_a, _ = load_set(dataset, features_dir, split.vocab, n_jobs)
     desc = np.concatenate([f.descriptors for f in feats_a if f.descriptors.shape[0]])
     voc = Vocabulary(n_words=n_words, method=vocab_method, random_state=seed).fit(desc)
     voc.training_files_ = [f.path for f in feats_a]
@@ -239,17 +244,17 @@ def evaluate_recognition(
     del feats_a, desc
 
     t0 = time.perf_counter()
-    feats_b, labels_b = _load_set(dataset, features_dir, split.train, n_jobs)
+    feats_b, labels_b = load_set(dataset, features_dir, split.train, n_jobs)
     classes = dataset.classes or sorted({c for t in labels_b for c in t.labels})
     rec = ActionRecognizer(vocabulary=voc, **params).fit(feats_b, [t.labels for t in labels_b], classes=classes)
     t_train = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    feats_t, labels_t = _load_set(score_ds, score_dir, score_ids, n_jobs)
+    feats_t, labels_t = load_set(score_ds, score_dir, score_ids, n_jobs)
     unknown = sorted({c for t in labels_t for c in t.labels} - set(rec.classes_))
     if unknown:
         raise InputError(f"test labels: classes not seen in training: {unknown[:5]}")
-    Hs = rec._histograms_many(feats_t)
+    Hs = rec.histograms_many(feats_t)
     outputs = [rec.predict_histograms(H) for H in Hs]
     t_pred = time.perf_counter() - t0
 
@@ -318,7 +323,7 @@ def score_labels_dir(
     Every test video needs a labels file; a model whose training files include a test video
     is refused (its scores would not be of unseen data)."""
     from ..formats import FormatError
-    from .recognizer import read_header
+    from ..recognition.recognizer import read_header
 
     labels_dir = Path(labels_dir)
     if not labels_dir.is_dir():
@@ -394,3 +399,83 @@ def score_labels_dir(
         "decoding": [{"smoothing": a, "emission_weight": b, "smoothing_window": c} for a, b, c in sorted(decoding, key=str)],
         **metrics,
     }
+
+
+@dataclass
+class RecognitionRun:
+    """A recognition evaluation: its metrics document, and the ablation and words it ran with."""
+
+    metrics: dict[str, Any]
+    ablation: str
+    words: int | str
+
+
+def run_evaluation(
+    dataset: str | Path,
+    *,
+    features_dir: str | Path | None = None,
+    labels_dir: str | Path | None = None,
+    model: str | Path | None = None,
+    split: str = D.SPLIT,
+    test_view: str | None = None,
+    ablation: str = "none",
+    words: int = D.N_WORDS,
+    vocab_method: str = D.VOCAB_METHOD,
+    classifier: str = D.CLASSIFIER,
+    baseline: bool = True,
+    grouping_threshold: float = D.GROUPING_THRESHOLD,
+    n_components: int = D.N_COMPONENTS,
+    coarse_context: int = D.COARSE_CONTEXT,
+    max_frames_per_class: int | None = D.MAX_FRAMES_PER_CLASS,
+    smoothing_window: int = D.SMOOTHING_WINDOW,
+    smoothing: str = D.SMOOTHING,
+    C: float = D.C,
+    emission_weight: float = D.EMISSION_WEIGHT,
+    mirror: bool = D.MIRROR,
+    test_dataset: str | Path | None = None,
+    test_features_dir: str | Path | None = None,
+    seed: int = D.SEED,
+    n_jobs: int | None = -1,
+) -> "RecognitionRun":
+    """What ``vidstyle evaluate recognition`` computes, with the recognizer's validated defaults: with
+    ``features_dir``, train a vocabulary (set A) and recognizer (set B) on ``split`` of ``dataset`` and score
+    the held-out videos (:func:`evaluate_recognition`; ``unseen-camera`` tests on ``test_dataset`` /
+    ``test_features_dir``); with ``labels_dir``, score the label files ``vidstyle recognize`` wrote
+    (:func:`score_labels_dir`; the test videos are those of ``model``'s split, else of ``split``/``seed``).
+    Returns the metrics document with the ablation and vocabulary size it ran with."""
+    from ..formats.dataset import read_dataset
+
+    ds = read_dataset(dataset)
+    if labels_dir is not None:
+        if features_dir is not None:
+            raise InputError("--labels-dir: scores existing labels; --features-dir is not used with it")
+        tds = read_dataset(test_dataset) if test_dataset is not None else None
+        if (split == "unseen-camera") != (tds is not None):
+            raise InputError("--test-dataset: required with, and only used with, --split unseen-camera")
+        m = score_labels_dir(ds, labels_dir, model=model, split_kind=split, seed=seed, test_view=test_view,
+                             test_dataset=tds)
+        return RecognitionRun(m, "none" if model is None else "from model",
+                              (m.get("model_header") or {}).get("vocabulary", {}).get("n_words", "?"))
+    if features_dir is None:
+        raise InputError("evaluate recognition: give --features-dir (train and test) or --labels-dir (score)")
+    if model is not None:
+        raise InputError("--model: only used with --labels-dir")
+    params = {
+        "classifier": classifier, "grouping_threshold": grouping_threshold, "n_components": n_components,
+        "coarse_context": coarse_context,
+        "max_frames_per_class": max_frames_per_class or None, "smoothing_window": smoothing_window,
+        "smoothing": smoothing, "C": C, "emission_weight": emission_weight, "mirror": mirror,
+    }
+    tds = None
+    if split == "unseen-camera":
+        if test_dataset is None or test_features_dir is None:
+            raise InputError("--split unseen-camera: give --test-dataset and --test-features-dir")
+        tds = read_dataset(test_dataset)
+    elif test_dataset is not None or test_features_dir is not None:
+        raise InputError("--test-dataset/--test-features-dir: only used with --split unseen-camera")
+    m = evaluate_recognition(
+        ds, features_dir, split_kind=split, seed=seed, ablation=ablation, n_words=words, vocab_method=vocab_method,
+        recognizer_params=params, baseline=baseline, test_view=test_view, n_jobs=n_jobs,
+        test_dataset=tds, test_features_dir=test_features_dir,
+    )
+    return RecognitionRun(m, ablation, words)

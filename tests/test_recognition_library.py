@@ -1,0 +1,140 @@
+"""The recognition stage as library calls (vidstyle.recognition.train_vocabulary / train / recognize_file):
+with defaults they give the CLI's numbers; the recognizer's public frame_scores / smooth are what
+predict_video computes; parameter checks live in the estimator and reach the CLI as flags."""
+
+from __future__ import annotations
+
+import inspect
+import json
+
+import numpy as np
+import pytest
+
+from tests.conftest import SEED
+from vidstyle.cli import main
+from vidstyle.errors import ParameterError
+from vidstyle.recognition import (ActionRecognizer, Vocabulary, defaults, load_features, load_model, recognize_file,
+                                  smooth_labels, train, train_vocabulary)
+from vidstyle.recognition.synthetic import make_dataset
+
+WORDS, COMPONENTS = "60", "24"  # the tiny dataset cannot make 1000 words; both sides get the same values
+
+
+@pytest.fixture(scope="module")
+def ds(tmp_path_factory):
+    root = tmp_path_factory.mktemp("lib")
+    make_dataset(root, n_performers=4, views=("front", "left"), seed=SEED, dim=24, reps=(2, 3), n_actions=5)
+    return root
+
+
+@pytest.fixture(scope="module")
+def cli_run(ds, tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli_out")
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features")]
+    assert main(["vocabulary", *common, "--words", WORDS, "--out", str(out / "v.npz")]) == 0
+    assert main(["train-recognizer", *common, "--vocab", str(out / "v.npz"), "--components", COMPONENTS,
+                 "--out", str(out / "m.joblib")]) == 0
+    vid = json.loads((ds / "dataset.json").read_text())["videos"][0]["id"]
+    feats = ds / "features" / f"{vid}.npz"
+    assert main(["recognize", str(feats), "--model", str(out / "m.joblib"), "--out", str(out / "lab.json")]) == 0
+    return {"dir": out, "features": feats, "labels": json.loads((out / "lab.json").read_text())}
+
+
+def test_library_with_defaults_gives_the_cli_numbers(ds, cli_run, tmp_path):
+    vrun = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS))
+    cli_voc = Vocabulary.load(cli_run["dir"] / "v.npz")
+    np.testing.assert_array_equal(vrun.vocabulary.cluster_centers_, cli_voc.cluster_centers_)
+    vrun.vocabulary.save(tmp_path / "v.npz", training_files=vrun.training_files, extra=vrun.extra)
+    run = train(tmp_path / "v.npz", dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS))
+    cli_rec, cli_header = load_model(cli_run["dir"] / "m.joblib")
+    assert run.model.get_params(deep=False).keys() == cli_rec.get_params(deep=False).keys()
+    assert run.model.public_params() == cli_header["params"]
+    assert run.training_files == cli_header["training_files"] and run.extra["split"] == cli_header["split"]
+    track = recognize_file(run.model, {}, cli_run["features"])
+    lab = cli_run["labels"]
+    assert track.labels == lab["labels"] and track.raw == lab["raw"]
+    np.testing.assert_array_equal(track.confidence, lab["confidence"])
+    np.testing.assert_array_equal(track.raw_confidence, lab["raw_confidence"])
+    assert (track.smoothing, track.smoothing_window) == (lab["smoothing"], lab["smoothing_window"])
+
+
+def test_defaults_module_is_the_library_and_cli_default():
+    import typer.main
+
+    from vidstyle.cli import app
+
+    rec = ActionRecognizer().get_params()
+    sig = inspect.signature(train).parameters
+    cmd = {p.name: p.default for p in typer.main.get_command(app).commands["train-recognizer"].params}
+    for name, value in defaults.RECOGNIZER_PARAMS.items():
+        assert rec[name] == value, name
+        assert sig[name].default == value, name
+    cli_names = {"n_components": "components", "C": "c", "smoothing_window": "window"}
+    for name, value in defaults.RECOGNIZER_PARAMS.items():
+        assert cmd[cli_names.get(name, name)] == value, name
+    vsig = inspect.signature(train_vocabulary).parameters
+    vcmd = {p.name: p.default for p in typer.main.get_command(app).commands["vocabulary"].params}
+    assert vsig["words"].default == vcmd["words"] == defaults.N_WORDS == Vocabulary().n_words
+    assert vsig["method"].default == vcmd["method"] == defaults.VOCAB_METHOD == Vocabulary().method
+
+
+@pytest.fixture(scope="module")
+def model(cli_run):
+    return load_model(cli_run["dir"] / "m.joblib")[0]
+
+
+def test_frame_scores_and_smooth_are_predict_video(model, cli_run):
+    f = load_features(cli_run["features"])
+    H = model.histograms(f)
+    raw, scores, conf = model.frame_scores(H)
+    # independent: the classifier on the PCA features, its classes mapped into classes_ by hand
+    pred, s, c = model.clf_.predict_with_scores(model.pca_.transform(model._grouped(H)))
+    present = model.clf_.classes_.astype(np.int64)
+    np.testing.assert_array_equal(raw, present[pred])
+    np.testing.assert_array_equal(scores[:, present], s)
+    assert np.all(np.delete(scores, present, axis=1) == 0)
+    np.testing.assert_array_equal(conf, c)
+    out = model.smooth(raw, scores, conf)
+    ref = model.predict_video(f)
+    for k in ("raw", "scores", "confidence", "smoothed", "smoothed_confidence"):
+        np.testing.assert_array_equal(out[k], ref[k])
+    # smooth follows the recognizer's smoother settings, as smooth_labels does with the learned chain
+    model.smoothing, model.smoothing_window = "vote", 4
+    try:
+        sm, sc = smooth_labels(raw, len(model.classes_), 4, conf, scores, "vote")
+        out = model.smooth(raw, scores, conf)
+        np.testing.assert_array_equal(out["smoothed"], sm)
+        np.testing.assert_array_equal(out["smoothed_confidence"], sc)
+    finally:
+        model.smoothing, model.smoothing_window = defaults.SMOOTHING, defaults.SMOOTHING_WINDOW
+    Hs = model.histograms_many([f, f])
+    assert all((h != H).nnz == 0 for h in Hs)
+    np.testing.assert_array_equal(model.embed(H), model.transform(f))
+
+
+def test_empty_video_scores_and_smooths_to_nothing(model):
+    import scipy.sparse as sp
+
+    raw, scores, conf = model.frame_scores(sp.csr_matrix((0, model.vocabulary.n_words_)))
+    assert raw.shape == (0,) and scores.shape == (0, len(model.classes_)) and conf.shape == (0,)
+    assert model.smooth(raw, scores, conf)["smoothed"].shape == (0,)
+
+
+@pytest.mark.parametrize("param,value,flag", [("smoothing_window", 0, "window"), ("smoothing", "median", "smoothing"),
+                                              ("emission_weight", 0.0, "emission_weight"), ("C", -1.0, "C"),
+                                              ("max_frames_per_class", 0, "max_frames_per_class")])
+def test_the_estimator_checks_its_parameters_in_fit(model, cli_run, param, value, flag):
+    rec = ActionRecognizer(vocabulary=model.vocabulary, **{param: value})
+    f = load_features(cli_run["features"])
+    with pytest.raises(ParameterError) as e:
+        rec.fit([f], [["x"] * f.n_frames])
+    assert e.value.param == flag
+
+
+def test_bad_window_is_one_flag_line_and_no_output(cli_run, tmp_path, capsys):
+    out = tmp_path / "lab.json"
+    assert main(["recognize", str(cli_run["features"]), "--model", str(cli_run["dir"] / "m.joblib"),
+                 "--window", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == "vidstyle: error: --window: must be >= 1, got 0"
+    assert not out.exists()

@@ -1,0 +1,51 @@
+"""Validated defaults of the recognition stage, in one place.
+
+The library (:class:`~vidstyle.recognition.recognizer.ActionRecognizer`,
+:class:`~vidstyle.recognition.vocabulary.Vocabulary`, :func:`vidstyle.recognition.train`,
+:func:`vidstyle.recognition.train_vocabulary`, :func:`vidstyle.recognition.recognize_file`) and the CLI
+(``vidstyle vocabulary``, ``train-recognizer``, ``recognize``, ``evaluate recognition``) take their
+defaults from here, so a Python user calling the library with defaults gets the CLI's numbers.
+
+C, the per-class frame cap, the grouping threshold, the coarse context, the smoother and its emission
+weight were chosen by ``scripts/validate_recognition.py``, which scores candidates on the demo's
+validation performers (never the test performers); ``pipelines/kickboxing/validation/recognition.json``
+records every candidate, the value chosen and the validation score it won with. The rest are the
+thesis' values (4.2-4.3).
+"""
+
+from __future__ import annotations
+
+# ------------------------------------------------------------------ vocabulary (set A)
+N_WORDS = 1000                 # thesis: 1000 of 500/1000/1500
+VOCAB_METHOD = "minibatch"     # minibatch | hierarchical | kmeans
+BRANCHING = 10                 # children per node of the hierarchical tree
+MAX_DESCRIPTORS = 100_000      # fit on at most this many (sampled)
+
+# ------------------------------------------------------------------ recognizer (set B)
+CONTEXT = 2                    # frames each side in a frame's histogram (thesis 2)
+COARSE_CONTEXT = 0             # multi-scale context off (the thesis; validated)
+GROUPING = True                # word grouping (Scovanner)
+GROUPING_THRESHOLD = 0.8       # validated
+NORMALIZE = "sqrt"             # Hellinger
+N_COMPONENTS = 128             # PCA dimensions
+CLASSIFIER = "ova-ovo"         # thesis
+C = 100.0                      # validated
+MAX_FRAMES_PER_CLASS = 1500    # validated (0 / None = all)
+SMOOTHING_WINDOW = 6           # thesis
+SMOOTHING = "duration"         # validated: explicit-duration HMM over frame scores
+EMISSION_WEIGHT = 1.0          # validated
+MIRROR = True                  # also train on mirror images (scovanner2007 descriptors only)
+
+# ------------------------------------------------------------------ runs
+SPLIT = "unseen-performer"     # unseen-performer | unseen-view | unseen-camera
+SEED = 0
+FPS = 20.0                     # frame rate recorded when neither the caller nor the features give one
+
+RECOGNIZER_PARAMS = {
+    "context": CONTEXT, "coarse_context": COARSE_CONTEXT, "grouping": GROUPING,
+    "grouping_threshold": GROUPING_THRESHOLD, "normalize": NORMALIZE, "n_components": N_COMPONENTS,
+    "classifier": CLASSIFIER, "C": C, "max_frames_per_class": MAX_FRAMES_PER_CLASS,
+    "smoothing_window": SMOOTHING_WINDOW, "smoothing": SMOOTHING, "emission_weight": EMISSION_WEIGHT,
+    "mirror": MIRROR,
+}
+"""The recognizer's validated parameters by :class:`ActionRecognizer` argument name."""
