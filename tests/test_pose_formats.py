@@ -24,7 +24,7 @@ def test_round_trip(tmp_path, rng):
     path = tmp_path / "poses.json"
     write_poses(path, p)
     doc = json.loads(path.read_text())
-    assert doc["kind"] == "vidstyle.poses" and doc["schema_version"] == 1
+    assert doc["kind"] == "vidstyle.poses" and doc["schema_version"] == 2
     assert doc["keypoints"] == list(KEYPOINTS) and doc["backend"] == "ps" and doc["video"] == "clip.mp4"
     assert set(doc["frames"][0]) == {"frame", "viewpoint", "viewpoint_scores", "points"}
     q = read_poses(path)
@@ -67,3 +67,56 @@ def test_nan_is_refused_before_writing(tmp_path, rng):
     path.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 1}).replace("}", ', "video": NaN}'))
     with pytest.raises(FormatError):
         read_poses(path)
+
+
+def test_frames_without_a_pose_are_null_with_a_reason_and_azimuth_round_trips(tmp_path, rng):
+    p = _poses(rng)
+    p.frames[0].azimuth = -35.25
+    p.frames.append(PoseFrame.none(41, "performer not found"))
+    path = tmp_path / "poses.json"
+    write_poses(path, p)
+    doc = json.loads(path.read_text())
+    assert doc["frames"][-1] == {"frame": 41, "points": None, "missing": "performer not found"}
+    assert doc["frames"][0]["azimuth"] == -35.25 and "azimuth" not in doc["frames"][1]
+    q = read_poses(path)
+    assert not q.frame(41).found and q.frame(41).missing == "performer not found"
+    assert np.isnan(q.frame(41).points).all() and q.frame(41).viewpoint == "unknown"
+    assert q.frame(3).azimuth == -35.25 and q.frame(12).azimuth is None and q.frame(3).found
+    doc["frames"][-1]["missing"] = ""
+    path.write_text(json.dumps(doc))
+    with pytest.raises(FormatError) as e:
+        read_poses(path)
+    assert e.value.field == "frames[3].missing"
+    doc["frames"][-1]["missing"] = "x"
+    doc["frames"][0]["azimuth"] = "left"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(FormatError) as e:
+        read_poses(path)
+    assert e.value.field == "frames[0].azimuth"
+
+
+def test_version_1_files_still_load_and_their_centre_stand_ins_are_missing(tmp_path):
+    centre = [[79.5, 59.5, 0.0]] * 15
+    found = [[10.0 + i, 20.0 + i, 0.8] for i in range(15)]
+    doc = {"kind": "vidstyle.poses", "schema_version": 1, "video": "v.mp4", "backend": "blazepose",
+           "keypoints": list(KEYPOINTS),
+           "frames": [{"frame": 0, "viewpoint": "front", "viewpoint_scores": {"front": 1.0}, "points": found},
+                      {"frame": 1, "viewpoint": "unknown", "viewpoint_scores": {}, "points": centre}]}
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(doc))
+    q = read_poses(path)
+    assert q.frame(0).found and np.allclose(q.frame(0).points, found)
+    assert not q.frame(1).found and q.frame(1).missing == "nobody found"
+
+
+def test_match_pose_reader_skips_missing_frames_with_a_warning(tmp_path, rng, caplog):
+    from vidstyle.augmg.poses_io import read_frame_poses
+
+    p = _poses(rng)
+    p.frames[2] = PoseFrame(40, "unknown", p.frames[2].points, {}, azimuth=120.0)
+    p.frames.append(PoseFrame.none(50, "nobody found"))
+    write_poses(tmp_path / "p.json", p)
+    video, frames = read_frame_poses(tmp_path / "p.json")
+    assert [f.frame for f in frames] == [3, 12, 40]
+    assert frames[2].viewpoint == "120"  # unknown view but a known azimuth: matched at that azimuth
+    assert "1 of 4 frames have no pose" in caplog.text and "frame 50: nobody found" in caplog.text

@@ -91,6 +91,8 @@ def read_poses_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
         if fr.frame >= v.frames:
             raise FormatError(path, f"frames[{i}].frame", f"frame {fr.frame} is past the end of {v.path.name} "
                                                           f"({v.frames} frames)")
+        if not fr.found:  # no pose there: nothing to draw (never fake points)
+            continue
         frames[str(fr.frame)] = {"viewpoint": fr.viewpoint, "points": np.round(fr.points, 2).tolist()}
     edges = [[names.index(a), names.index(b)] for a, b in EDGES if a in names and b in names]
     return v.id, {"keypoints": names, "edges": edges, "frames": frames, "file": Path(path).name}

@@ -511,6 +511,7 @@ def read_poses_dir(d: str | os.PathLike) -> tuple[str, dict]:
     poses.json files (``<video id>.poses.json``), as :func:`evaluate_augmg`'s ``poses`` takes them; the
     source is named by the backend (``model`` for pictorial structures)."""
     from ..augmg.match import view_spread
+    from ..augmg.poses_io import viewpoint_of
     from ..formats.poses import read_poses
     from ..render.camera import parse_view
 
@@ -524,8 +525,8 @@ def read_poses_dir(d: str | os.PathLike) -> tuple[str, dict]:
         doc = read_poses(f)
         backends.add(str(doc.backend))
         vid = f.name[: -len(".poses.json")]
-        out[vid] = {int(fp.frame): (fp.xy.copy(), parse_view(fp.viewpoint), view_spread(fp.viewpoint),
-                                    fp.scores.copy()) for fp in doc.frames}
+        out[vid] = {int(fp.frame): (fp.xy.copy(), parse_view(viewpoint_of(fp)), view_spread(viewpoint_of(fp)),
+                                    fp.scores.copy()) for fp in doc.frames if fp.found}
     if len(backends) != 1:
         raise ParameterError("poses_dir", f"{d} mixes pose backends {sorted(backends)}")
     backend = backends.pop()

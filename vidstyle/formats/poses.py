@@ -1,6 +1,6 @@
 """``poses.json``: 2D poses of chosen frames of a video (written by ``vidstyle pose``).
 
-Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 1)::
+Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 2; version 1 files still load)::
 
     {"kind": "vidstyle.poses", "schema_version": 1,
      "video": "clip.mp4",                       # the input video, as given
@@ -9,13 +9,19 @@ Schema (``kind`` = ``"vidstyle.poses"``, ``schema_version`` = 1)::
      "params": {"scales": [1.0, 1.2, 1.4]},     # optional: the backend's inference settings
      "frames": [{"frame": 12,                   # decoded frame index (vidstyle.video.VideoReader)
                  "viewpoint": "front",          # front | left | right | back | unknown (nobody found)
+                 "azimuth": -35.0,              # optional: degrees of the camera about the performer
+                                                # (0 = facing the camera, +90 = their left side)
                  "viewpoint_scores": {"front": 0.9, "left": 0.05, ...},   # finite numbers, per viewpoint
                  "points": [[x, y, score], ...]},                          # 15 rows, keypoints order
+                {"frame": 13, "points": null, "missing": "performer not found"},   # no pose: a reason
                 ...]}
 
 ``x`` is the column and ``y`` the row, in pixels of the input video (integer values at pixel centres);
-``score`` in [0, 1] is the backend's confidence in that keypoint (0: not found; x and y are then the
-image centre and carry no information). Frames are unique and in increasing order.
+``score`` in [0, 1] is the backend's confidence in that keypoint. A frame without the performer has
+``"points": null`` and a ``"missing"`` reason, never made-up points (in memory: NaN points, viewpoint
+``"unknown"``, :attr:`PoseFrame.found` false). Version 1 wrote such frames as the image centre with
+score 0 and viewpoint ``"unknown"``; they are read as missing ("nobody found"). Frames are unique and
+in increasing order.
 """
 
 from __future__ import annotations
@@ -37,7 +43,8 @@ from ._base import (
 from .keypoints import KEYPOINTS
 
 KIND = "vidstyle.poses"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+VERSIONS = (1, 2)
 BACKENDS = ("ps", "blazepose")
 VIEWPOINTS = ("front", "left", "right", "back")
 UNKNOWN = "unknown"
@@ -51,9 +58,22 @@ class PoseFrame:
     viewpoint: str
     points: np.ndarray
     viewpoint_scores: dict[str, float] = field(default_factory=dict)
+    azimuth: float | None = None
+    """degrees of the camera about the performer (0 = facing it, +90 = their left side), if known"""
+    missing: str | None = None
+    """why there is no pose (points are then NaN and the viewpoint ``"unknown"``)"""
 
     def __post_init__(self) -> None:
         self.points = np.asarray(self.points, dtype=np.float64)
+
+    @classmethod
+    def none(cls, frame: int, reason: str) -> PoseFrame:
+        """A frame without the performer."""
+        return cls(int(frame), UNKNOWN, np.full((len(KEYPOINTS), 3), np.nan), {}, None, reason)
+
+    @property
+    def found(self) -> bool:
+        return self.missing is None
 
     @property
     def xy(self) -> np.ndarray:
@@ -86,12 +106,19 @@ class Poses:
             "backend": self.backend,
             "keypoints": list(self.keypoints),
             **({"params": dict(self.params)} if self.params else {}),
-            "frames": [{"frame": int(f.frame), "viewpoint": f.viewpoint,
-                        "viewpoint_scores": {k: float(v) for k, v in f.viewpoint_scores.items()},
-                        "points": [[round(float(x), 3), round(float(y), 3), round(float(s), 4)]
-                                   for x, y, s in f.points]}
-                       for f in self.frames],
+            "frames": [_frame_document(f) for f in self.frames],
         }
+
+
+def _frame_document(f: PoseFrame) -> dict:
+    if not f.found:
+        return {"frame": int(f.frame), "points": None, "missing": f.missing}
+    doc = {"frame": int(f.frame), "viewpoint": f.viewpoint}
+    if f.azimuth is not None:
+        doc["azimuth"] = round(float(f.azimuth), 2)
+    doc["viewpoint_scores"] = {k: float(v) for k, v in f.viewpoint_scores.items()}
+    doc["points"] = [[round(float(x), 3), round(float(y), 3), round(float(s), 4)] for x, y, s in f.points]
+    return doc
 
 
 def validate_poses(p: Poses, path: str | os.PathLike | None) -> None:
@@ -112,6 +139,13 @@ def validate_poses(p: Poses, path: str | os.PathLike | None) -> None:
         if f.frame <= last:
             raise FormatError(path, f"{where}.frame", f"frame {f.frame} is not after frame {last} (unique, increasing)")
         last = int(f.frame)
+        if f.missing is not None:
+            if not isinstance(f.missing, str) or not f.missing.strip() or len(f.missing) > 200:
+                raise FormatError(path, f"{where}.missing", "must be a short non-empty reason")
+            continue
+        if f.azimuth is not None and not (isinstance(f.azimuth, (int, float, np.floating)) and np.isfinite(f.azimuth)
+                                          and -360.0 <= f.azimuth <= 360.0):
+            raise FormatError(path, f"{where}.azimuth", f"must be finite degrees in [-360, 360], got {f.azimuth!r}")
         if f.viewpoint not in VIEWPOINTS + (UNKNOWN,):
             raise FormatError(path, f"{where}.viewpoint", f"{f.viewpoint!r} is not one of "
                               f"{', '.join(VIEWPOINTS + (UNKNOWN,))}")
@@ -127,7 +161,7 @@ def validate_poses(p: Poses, path: str | os.PathLike | None) -> None:
 
 def read_poses(path: str | os.PathLike) -> Poses:
     doc = read_json_document(path)
-    check_header(doc, path, KIND, (SCHEMA_VERSION,))
+    version = check_header(doc, path, KIND, VERSIONS)
     top = Fields(doc, path)
     video = top.str("video", nonempty=True)
     backend = top.str("backend", choices=BACKENDS)
@@ -137,10 +171,19 @@ def read_poses(path: str | os.PathLike) -> Poses:
     frames = []
     for i, item in enumerate(top.list("frames")):
         f = Fields(item, path, f"frames[{i}]")
+        index = f.int("frame", min=0)
+        if version >= 2 and f.has("points") and f.obj["points"] is None:
+            frames.append(PoseFrame.none(index, f.str("missing", nonempty=True)))
+            continue
         scores_f = f.sub("viewpoint_scores")
         scores = {k: scores_f.number(k) for k in scores_f.obj}
-        frames.append(PoseFrame(f.int("frame", min=0), f.str("viewpoint"), f.array("points", (len(KEYPOINTS), 3)),
-                                scores))
+        viewpoint = f.str("viewpoint")
+        points = f.array("points", (len(KEYPOINTS), 3))
+        azimuth = f.number("azimuth") if version >= 2 and f.has("azimuth") else None
+        if version == 1 and viewpoint == UNKNOWN and not np.any(np.asarray(points)[:, 2] > 0):
+            frames.append(PoseFrame.none(index, "nobody found"))  # version 1's stand-in for no pose
+            continue
+        frames.append(PoseFrame(index, viewpoint, points, scores, azimuth))
     params = top.sub("params").obj if "params" in doc else {}
     p = Poses(video, backend, frames, tuple(kps), dict(params))
     validate_poses(p, path)
