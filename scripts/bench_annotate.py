@@ -135,7 +135,7 @@ def bench_decode_parts(video: Path, requests: int, rng) -> dict:
         idx = [int(i) for i in rng.integers(0, n, requests)]
         dec = []
         for i in idx:
-            r._cache.clear()
+            r.clear_cache()
             t0 = time.perf_counter()
             img = r.frame(i)
             dec.append(time.perf_counter() - t0)

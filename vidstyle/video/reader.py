@@ -267,6 +267,10 @@ class VideoReader:
         self._reformatter = None
         self._cache.clear()
 
+    def clear_cache(self) -> None:
+        """Drop the decoded frames kept for random access (the next ``frame(i)`` decodes again)."""
+        self._cache.clear()
+
     def __iter__(self) -> Iterator[np.ndarray]:
         for _, frame in self.iter_frames():
             yield frame
