@@ -89,12 +89,12 @@ def main() -> int:
 
     from vidstyle.pose.blazepose import BlazePoseEstimator
     from vidstyle.pose.dt import brute_dt2d, dt2d
-    from vidstyle.pose.estimator import load_pose_model
+    from vidstyle.pose.estimator import load_model
 
     rows = []
     with threadpool_limits(1):
         if args.model:
-            m = load_pose_model(args.model)[0]
+            m = load_model(args.model)[0]
             models = {getattr(m, "detector", "hog"): m}
         else:
             models = _small_models()

@@ -9,8 +9,8 @@ import pytest
 
 from vidstyle.mocap.keypoints import KEYPOINTS
 from vidstyle.pose.data import Spec, acceptable_views, render_samples, view_of
-from vidstyle.pose.estimator import PoseModel, load_pose_model, save_pose_model
-from vidstyle.pose.evaluate import confusion, pck, strict_pcp, viewpoint_scores
+from vidstyle.pose.estimator import PoseModel, load_model, save_model
+from vidstyle.evaluation.pose import confusion, pck, strict_pcp, viewpoint_scores
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +20,7 @@ def trained(tmp_path_factory):
     samples = render_samples(specs, jobs=1)
     model = PoseModel(n_orient=8, hard_rounds=0, neg_per_pos=6, seed=3).fit(samples, jobs=1)
     path = tmp_path_factory.mktemp("pose") / "pose.joblib"
-    save_pose_model(path, model)
+    save_model(path, model)
     return model, path, samples
 
 
@@ -57,7 +57,7 @@ def test_viewpoint_scores_by_hand():
 @pytest.mark.slow
 def test_model_round_trip_and_fit_on_training_frames(trained):
     model, path, samples = trained
-    loaded, header = load_pose_model(path)
+    loaded, header = load_model(path)
     assert header["params"] == model.get_params() and header["seed"] == 3
     assert loaded.get_params() == {"n_orient": 8, "cell": 4, "C": 0.05, "neg_per_pos": 6, "hard_rounds": 0,
                                    "viewpoint": "hog", "dt": "envelope", "unary_weight": 2.0,
@@ -150,7 +150,7 @@ def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, train
     model = copy.deepcopy(model)
     model.fg_weight = 0.0  # single-image estimates: no person prior from the clips' backgrounds
     path = tmp_path / "pose_noprior.joblib"
-    save_pose_model(path, model)
+    save_model(path, model)
     out = tmp_path / "pose_metrics.json"
     args = ["evaluate", "pose", "--model", str(path), "--out", str(out), "--demo-performers", "1", "--cmu-clips", "0",
             "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none", "--seed", "5", "-j", "1"]

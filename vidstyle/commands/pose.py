@@ -95,7 +95,7 @@ def train_pose(
     """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
     detectors, viewpoint classifier) on frames rendered from the demo performers and CMU clips."""
     from ..pose.data import MAX_PERFORMERS, make_specs
-    from ..pose.estimator import PoseModel, save_pose_model
+    from ..pose.estimator import PoseModel, save_model
 
     if detector not in ("hog", "cnn"):
         raise InputError(f"--detector: {detector!r} is not hog or cnn")
@@ -136,7 +136,7 @@ def train_pose(
         model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
                           fg_weight=fg_weight, seed=seed)
     model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
-    save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
+    save_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
                                               "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,
                                               "cmu_dir": None if cmu is None else str(cmu), "n_specs": len(specs)}})
     log.info("wrote %s (%d training frames)", out, model.n_train_frames_)
@@ -216,10 +216,10 @@ def evaluate_pose(
     held-out renders for both backends; backend agreement and overlays on real footage."""
     from ..formats.metrics import POSE, write_metrics
     from ..pose.data import make_specs, render_samples
-    from ..pose.estimator import load_pose_model
-    from ..pose.evaluate import evaluate_real, evaluate_renders, format_tables
+    from ..pose.estimator import load_model
+    from ..evaluation.pose import evaluate_real, evaluate_renders, format_tables
 
-    pm, header = load_pose_model(model)
+    pm, header = load_model(model)
     cmu = _cmu(cmu_dir)
     specs = make_specs("test", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
     samples = render_samples(specs, jobs=jobs, keep_bgr=True)

@@ -7,5 +7,5 @@
 - :mod:`.estimator`: viewpoint-specific + generic models and the viewpoint SVMs (``train-pose``).
 - :mod:`.blazepose`: MediaPipe BlazePose backend mapped onto the same 15 keypoints.
 - :mod:`.data`: labelled frames rendered from mocap; :mod:`.run`: poses of a video;
-  :mod:`.evaluate`: strict PCP, PCK, viewpoint confusion, backend agreement on real footage.
+  its evaluation harness (strict PCP, PCK, viewpoint confusion) is :mod:`vidstyle.evaluation.pose`.
 """

@@ -302,7 +302,7 @@ def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
     """(10, K, Hc, Wc) unary scores of the parts of pictorial structures ``m`` from keypoint
     log-probability maps (15, Hc, Wc): part j at (k, y, x) scores the log-probabilities of its
     proximal and distal keypoints at ``(x, y) + R(theta_k) offset`` (offsets rounded to cells)."""
-    from .model import N_PARTS, _shift
+    from .model import N_PARTS, shift_maps
 
     K = m.n_orient
     out = np.empty((N_PARTS, K) + logheat.shape[1:], dtype=np.float32)
@@ -310,8 +310,8 @@ def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
         a, b = int(PART_KEYPOINTS[j, 0]), int(PART_KEYPOINTS[j, 1])
         da, db = m._rounded(m.proximal_[j]), m._rounded(m.distal_[j])
         for k in range(K):
-            out[j, k] = (_shift(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
-                         + _shift(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))
+            out[j, k] = (shift_maps(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
+                         + shift_maps(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))
     return out
 
 

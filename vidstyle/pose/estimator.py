@@ -10,7 +10,6 @@ detections) and collect the torso scores the viewpoint SVMs learn from.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from dataclasses import dataclass
@@ -32,8 +31,6 @@ from .features import RotatedFeatures, orientation_bin
 from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
 log = logging.getLogger(__name__)
-MODEL_KIND = "vidstyle.pose-model"
-MODEL_VERSION = 1
 GENERIC = "generic"
 WORK_HEIGHT = 120
 
@@ -596,32 +593,21 @@ class PoseModel:
 
 
 # ---------------------------------------------------------------- files
-def save_pose_model(path: str | Path, model: PoseModel, extra: dict | None = None) -> None:
-    import joblib
-
-    from ..fileio import atomic_path
-
-    header = {"kind": MODEL_KIND, "schema_version": MODEL_VERSION, "params": model.get_params(),
-              "seed": model.seed, "n_train_frames": int(getattr(model, "n_train_frames_", 0)),
-              "parts": list(PART_NAMES), **(extra or {})}
-    with atomic_path(Path(path)) as tmp:
-        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
+def model_header(model: PoseModel, extra: dict | None = None) -> dict:
+    """What a pose model file records about ``model`` (:mod:`vidstyle.formats.pose_model`)."""
+    return {"params": model.get_params(), "seed": model.seed, "n_train_frames": int(getattr(model, "n_train_frames_", 0)),
+            "parts": list(PART_NAMES), **(extra or {})}
 
 
-def load_pose_model(path: str | Path) -> tuple[PoseModel, dict]:
-    import joblib
+def save_model(path: str | Path, model: PoseModel, extra: dict | None = None) -> dict:
+    """Write a fitted pose model file (``vidstyle train-pose``); ``extra``: more header fields. Returns the header."""
+    from ..formats.pose_model import write_pose_model
 
-    path = Path(path)
-    try:
-        obj = joblib.load(path)
-    except FileNotFoundError:
-        raise InputError(f"{path}: pose model not found") from None
-    except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad model file
-        raise InputError(f"{path}: not a pose model file ({type(exc).__name__}: {exc})"[:300]) from None
-    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), PoseModel):
-        raise InputError(f"{path}: not a pose model file (written by vidstyle train-pose)")
-    header = json.loads(obj["header"])
-    if header.get("kind") != MODEL_KIND or header.get("schema_version") != MODEL_VERSION:
-        raise InputError(f"{path}: kind/schema_version {header.get('kind')}/{header.get('schema_version')} "
-                         f"is not {MODEL_KIND}/{MODEL_VERSION}")
-    return obj["model"], header
+    return write_pose_model(path, model, model_header(model, extra))
+
+
+def load_model(path: str | Path) -> tuple[PoseModel, dict]:
+    """``(model, header)`` of a pose model file (:class:`PoseModel` or :class:`~vidstyle.pose.cnn.CnnPoseModel`)."""
+    from ..formats.pose_model import read_pose_model
+
+    return read_pose_model(path, PoseModel)

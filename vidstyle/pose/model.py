@@ -58,7 +58,7 @@ def _from_frame(v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
 
 
-def _shift(maps: np.ndarray, dy: int, dx: int, fill: float = BIG) -> np.ndarray:
+def shift_maps(maps: np.ndarray, dy: int, dx: int, fill: float = BIG) -> np.ndarray:
     """out[..., y, x] = maps[..., y + dy, x + dx] (``fill`` outside)."""
     H, W = maps.shape[-2:]
     out = np.full_like(maps, fill)
@@ -309,7 +309,7 @@ class PictorialStructures:
             shifted = []
             for j in js:
                 a = self._rounded(self.child_offsets_[j])
-                shifted.append(np.stack([_shift(total[j, k], -a[k, 1], -a[k, 0]) for k in range(K)]))
+                shifted.append(np.stack([shift_maps(total[j, k], -a[k, 1], -a[k, 0]) for k in range(K)]))
             Jm = np.stack(shifted)  # (n, K, H, W)
             wrow = np.repeat(np.array([self.wxy_[j] for j in js]), K).reshape(len(js), K)
             D, ay, ax = _dt_rows(dtf, Jm, wrow)
@@ -320,7 +320,7 @@ class PictorialStructures:
                 pen = self.wt_[j] * dev ** 2
                 E, kbest = min_plus(D[n], pen)  # (ki, H, W)
                 b = self._rounded(self.offsets_[j])
-                msg = np.stack([_shift(E[k], b[k, 1], b[k, 0]) for k in range(K)])
+                msg = np.stack([shift_maps(E[k], b[k, 1], b[k, 0]) for k in range(K)])
                 total[i] += msg
                 back[j] = (kbest, ay[n], ax[n])
         root = total[0] + self.root_prior_[:, None, None]
@@ -391,7 +391,7 @@ class PictorialStructures:
 _GRID_CACHE: dict = {}
 
 
-def _canvas_maps(f: RotatedFeatures, cell: int):
+def canvas_maps(f: RotatedFeatures, cell: int):
     """Per orientation k: float32 (col, row) canvas cell coordinates under every frame cell centre
     (for ``cv2.remap``)."""
     key = (f.H, f.W, f.S, f.n_orient, cell, getattr(f, "rotate", True))
@@ -416,7 +416,7 @@ def score_models(models: dict, f: RotatedFeatures, parts: list[int] | None = Non
 
     parts = list(range(N_PARTS)) if parts is None else parts
     cell = next(iter(models.values())).cell
-    Hc, Wc, maps = _canvas_maps(f, cell)
+    Hc, Wc, maps = canvas_maps(f, cell)
     K = f.n_orient
     out = {}
     for name, m in models.items():

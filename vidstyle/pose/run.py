@@ -45,9 +45,9 @@ def _make_estimator(backend: str, model_path: str | None):
         from .blazepose import BlazePoseEstimator
 
         return BlazePoseEstimator()
-    from .estimator import load_pose_model
+    from .estimator import load_model
 
-    return load_pose_model(model_path)[0]
+    return load_model(model_path)[0]
 
 
 def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
-from .data import BOUNDARY_TOL, VIEW_NAMES, acceptable_views
+from ..pose.data import BOUNDARY_TOL, VIEW_NAMES, acceptable_views
 
 log = logging.getLogger(__name__)
 
@@ -101,24 +101,25 @@ def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
     return rows
 
 
-def _frame_of(s):
+def frame_of(s):
+    """The frame a model reads of a rendered sample: its colour frame when kept, else the gray one."""
     return s.bgr if s.bgr is not None else s.image
 
 
 def clip_backgrounds(samples) -> dict:
     """Clip id -> median background of that clip's frames (clips of at least 3 frames): the person
     prior of a static-camera video, as ``vidstyle pose`` computes it over a whole video."""
-    from .foreground import background_model
+    from ..pose.foreground import background_model
 
     groups: dict = {}
     for s in samples:
-        groups.setdefault(s.clip, []).append(_frame_of(s))
+        groups.setdefault(s.clip, []).append(frame_of(s))
     return {c: background_model(fr) for c, fr in groups.items() if len(fr) >= 3 and c != -1}
 
 
 def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     """Run every method on the same held-out frames; return the metrics dict."""
-    from .blazepose import BlazePoseEstimator
+    from ..pose.blazepose import BlazePoseEstimator
 
     gt = np.stack([s.keypoints for s in samples])
     views = [s.view for s in samples]
@@ -130,12 +131,12 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     methods_v = model.VIEWPOINTS
     vpred = {w: [] for w in methods_v}
     for s in samples:
-        f, scale = model.prepare(_frame_of(s))
+        f, scale = model.prepare(frame_of(s))
         feats, maps = model.view_features(f, full=True)
         for w in methods_v:
             vpred[w].append(model.classify_view(feats, w)[0])
         chosen = vpred[model.viewpoint][-1]
-        fg = model.foreground_map(_frame_of(s), backgrounds.get(s.clip), f)
+        fg = model.foreground_map(frame_of(s), backgrounds.get(s.clip), f)
         for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
             methods[name].append(model.solve(mname, maps[mname], scale, fg, f))
         if prior:
@@ -143,7 +144,7 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     times = []
     for s in samples[:: max(1, len(samples) // 20)]:  # the pose command's path (only the chosen classifier)
         t0 = time.process_time()
-        model.estimate(_frame_of(s), background=backgrounds.get(s.clip))
+        model.estimate(frame_of(s), background=backgrounds.get(s.clip))
         times.append(time.process_time() - t0)
     if blazepose:
         est = BlazePoseEstimator()
@@ -239,8 +240,8 @@ def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames
                   jobs: int = 1) -> dict:
     import cv2
 
+    from ..pose.run import estimate_video
     from ..video import VideoReader
-    from .run import estimate_video
 
     overlay_dir.mkdir(parents=True, exist_ok=True)
     out = {}
