@@ -62,6 +62,7 @@ def _frame(size):
 
 def _small_models() -> dict:
     """One small model per detector (hog, cnn): speed does not depend on how well they are trained."""
+    import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
     from vidstyle.pose.cnn import CnnPoseModel
     from vidstyle.pose.data import Spec, render_samples
     from vidstyle.pose.defaults import CNN_DEFAULTS

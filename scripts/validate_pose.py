@@ -60,9 +60,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
+from vidstyle.evaluation.pose import confusion, strict_pcp  # noqa: E402
 from vidstyle.pose.data import make_specs, render_samples  # noqa: E402
 from vidstyle.pose.estimator import GENERIC, VIEWPOINT_METHODS, PoseModel  # noqa: E402
-from vidstyle.evaluation.pose import confusion, strict_pcp  # noqa: E402
 from vidstyle.pose.features import RotatedFeatures  # noqa: E402
 from vidstyle.pose.model import PictorialStructures  # noqa: E402
 

@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("torch")
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from vidstyle.pose.cnn import (
     CELL,

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.mocap.keypoints import KEYPOINTS
 from vidstyle.pose.data import Spec, acceptable_views, render_samples, view_of
 from vidstyle.pose.estimator import PoseModel, load_model, save_model
@@ -157,9 +158,8 @@ def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, train
     assert main(args) == 0
     m = read_metrics(out, POSE)
     assert m.seed == 5 and m.doc["params"]["seed"] == 5
-    from vidstyle.commands.pose import _cmu  # the CMU folder the command defaults to (it seeds the specs)
-
-    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    # no --cmu-dir (nor VIDSTYLE_CMU_DIR): the command renders the demo performers only
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, None, fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
     assert m.doc["n_frames"] == len(samples) > 0
     pred = np.stack([model.estimate(s.image, view=s.view).points for s in samples])  # gray = the colour render read as gray
     hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))

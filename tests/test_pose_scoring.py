@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.pose.data import MAX_PERFORMERS, TRAIN_CMU_SUBJECTS, VAL_CMU_SUBJECTS, make_specs
 from vidstyle.pose.dt import min_plus
 from vidstyle.pose.estimator import HOG_DROP, HOG_WIN, ViewpointHOG, person_crop, person_hog

@@ -23,4 +23,4 @@ __all__ = [
     "performance_plan", "single_action_plan",
 ]
 
-from . import pose_sources  # noqa: E402,F401  - registers the demo performers as a pose training source
+from . import pose_sources  # noqa: F401  - registers the demo performers as a pose training source

@@ -265,3 +265,37 @@ def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames
                              "ps_viewpoints": [f.viewpoint for f in ps.frames],
                              "blazepose_viewpoints": [f.viewpoint for f in bp.frames]}
     return out
+
+
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov")
+
+
+def evaluate(model_path: str | Path, cmu_dir: str | Path | None = None, demo_performers: int = 3, cmu_clips: int = 6,
+             views_per_clip: int = 4, seconds: float = 2.0, fps: float = 4.0, real_dir: str | Path | None = None,
+             overlay_dir: str | Path = "pose_overlays", real_frames: int = 6, seed: int = 0, jobs: int = -1) -> dict:
+    """``vidstyle evaluate pose``: the metrics of a pose model file on held-out renders (test split: demo
+    performers, and CMU clips of ``cmu_dir`` when given) for every method (:func:`evaluate_renders`), and,
+    with ``real_dir`` (a directory of videos), the backends' agreement and overlays on that real footage
+    (:func:`evaluate_real`). Returns the metrics document (without ``seed``, which the caller adds)."""
+    from ..errors import InputError
+    from ..pose.data import make_specs, render_samples
+    from ..pose.estimator import load_model
+    from ..pose.training import resolve_cmu_dir
+
+    pm, header = load_model(model_path)
+    cmu = resolve_cmu_dir(cmu_dir, cmu_clips)
+    specs = make_specs("test", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    samples = render_samples(specs, jobs=jobs, keep_bgr=True)
+    metrics = evaluate_renders(pm, samples)
+    metrics["params"] = {"model": str(model_path), "model_params": header.get("params"), "seed": seed,
+                         "demo_performers": demo_performers, "cmu_clips": cmu_clips, "views_per_clip": views_per_clip,
+                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu)}
+    if real_dir is None or str(real_dir) in ("", "none"):
+        log.info("no real footage directory given (--real-dir): backend agreement on real footage skipped")
+    else:
+        rd = Path(real_dir)
+        if not rd.is_dir():
+            raise InputError(f"{rd}: real footage directory not found")
+        videos = sorted(p for p in rd.iterdir() if p.suffix.lower() in VIDEO_SUFFIXES)
+        metrics["real"] = evaluate_real(str(model_path), videos, Path(overlay_dir), real_frames, jobs=1)
+    return metrics

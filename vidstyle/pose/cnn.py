@@ -39,7 +39,7 @@ import numpy as np
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from .data import VIEW_NAMES
 from .defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS
-from .estimator import PoseModel, check_scales
+from .estimator import PoseModel, check_common_params, check_scales
 
 log = logging.getLogger(__name__)
 
@@ -472,9 +472,28 @@ class CnnPoseModel(PoseModel):
                 m.unary_weight = float(unary_weight)
         return self
 
+    def check_params(self) -> CnnPoseModel:
+        """:class:`ParameterError` naming the first parameter this model cannot train with (run by
+        :meth:`fit` and :meth:`fit_specs` before any work)."""
+        from ..errors import ParameterError
+
+        check_common_params(self)
+        if not self.refine >= 0:
+            raise ParameterError("refine", f"must be at least 0, got {self.refine}")
+        if not self.epochs >= 1:
+            raise ParameterError("epochs", "must be at least 1")
+        if not 8 <= self.channels <= 256:
+            raise ParameterError("channels", f"{self.channels} is not between 8 and 256")
+        if self.stride not in (2, CELL):
+            raise ParameterError("stride", f"{self.stride} is not 2 or {CELL}")
+        if self.augment not in AUGMENTS:
+            raise ParameterError("augment", f"{self.augment!r} is not one of {', '.join(AUGMENTS)}")
+        return self
+
     def fit_specs(self, specs, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
         from .data import render_samples
 
+        self.check_params()
         return self.fit(render_samples(specs, jobs=jobs, scheduler=scheduler, keep_bgr=True))
 
     def fit(self, samples, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
@@ -482,6 +501,7 @@ class CnnPoseModel(PoseModel):
         from .estimator import GENERIC
         from .model import PictorialStructures
 
+        self.check_params()
         views = {s.view for s in samples}
         missing = [v for v in VIEW_NAMES if v not in views]
         if missing:

@@ -22,12 +22,13 @@ from sklearn.multiclass import OneVsRestClassifier
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame
 from ..mocap.keypoints import PART_NAMES
 from .data import VIEW_NAMES, Sample, Spec, render_samples
 from .defaults import DEFAULTS, VIEWPOINT_METHODS
 from .features import RotatedFeatures, orientation_bin
+from .interfaces import ViewpointClassifier
 from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
 log = logging.getLogger(__name__)
@@ -41,10 +42,17 @@ class ViewpointSVM:
     (and disagreements) broken by the one-vs-all decision values; ``scores`` are the one-vs-all
     decision values turned into a softmax."""
 
+    #: the viewpoint features it reads (:meth:`PoseModel.view_features`): the torso columns of "parts"
+    NEEDS: tuple[str, ...] = ("torso",)
+
     def __init__(self, C: float = 3.0, gamma: str | float = "scale", seed: int = 0) -> None:
         self.C = C
         self.gamma = gamma
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        """This classifier's input (a batch of one) from one frame's :meth:`PoseModel.view_features`."""
+        return feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]][None]
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> ViewpointSVM:
         self.scaler_ = StandardScaler().fit(X)
@@ -86,9 +94,14 @@ class ViewpointLogistic(ViewpointSVM):
     """Alternative viewpoint classifier: multinomial logistic regression on the best score of every
     part detector of every viewpoint (40 features)."""
 
+    NEEDS = ("parts",)
+
     def __init__(self, C: float = 1.0, seed: int = 0) -> None:
         self.C = C
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        return feats["parts"][None]
 
     def fit(self, X, y):
         self.scaler_ = StandardScaler().fit(X)
@@ -141,9 +154,14 @@ class ViewpointHOG(ViewpointLogistic):
     as rendered and mirrored (left and right swap, front and back stay). ``scores`` are the
     decision values turned into a softmax."""
 
+    NEEDS = ("hog",)
+
     def __init__(self, C: float = 0.01, seed: int = 0) -> None:
         self.C = C
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        return feats["hog"][None]
 
     def fit(self, X, y, X_mirror=None):
         from sklearn.svm import LinearSVC
@@ -169,9 +187,14 @@ class ViewpointProduct:
     """Product of the all-parts logistic's probabilities and the whole-person HOG SVM's softmax
     (both trained as above; nothing else is learned). Input: (parts row, hog) of one frame."""
 
+    NEEDS = ("parts", "hog")
+
     def __init__(self, logistic: ViewpointLogistic, hog: ViewpointHOG) -> None:
         self.logistic = logistic
         self.hog = hog
+
+    def input_of(self, feats: dict):
+        return (feats["parts"], feats["hog"])
 
     def _proba(self, x):
         p = self.logistic._proba(x[0][None]) * self.hog._proba(x[1][None])
@@ -182,6 +205,16 @@ class ViewpointProduct:
 
     def scores(self, x):
         return [{v: float(round(p, 4)) for v, p in zip(VIEW_NAMES, row)} for row in self._proba(x)]
+
+
+#: the viewpoint classifiers a hog :class:`PoseModel` trains, by name (``viewpoint``): model -> classifier
+VIEWPOINT_CLASSIFIERS = {
+    "svm": lambda m: m.viewpoint_svm_,
+    "logistic": lambda m: m.viewpoint_logistic_,
+    "hog": lambda m: m.viewpoint_hog_,
+    "combined": lambda m: ViewpointProduct(m.viewpoint_logistic_, m.viewpoint_hog_),
+}
+assert tuple(VIEWPOINT_CLASSIFIERS) == VIEWPOINT_METHODS
 
 
 # ---------------------------------------------------------------- parallel training jobs
@@ -326,6 +359,14 @@ def zoom_about(centre: np.ndarray, z: float, size: tuple[int, int]) -> np.ndarra
                      [0.0, z, (H - 1) / 2.0 - z * float(centre[1])]])
 
 
+def check_common_params(model) -> None:
+    """The parameter checks every pose model shares (``n_orient``, ``unary_weight``)."""
+    if not 4 <= model.n_orient <= 36:
+        raise ParameterError("n_orient", "must be between 4 and 36")
+    if not model.unary_weight > 0:
+        raise ParameterError("unary_weight", "must be positive")
+
+
 class PoseModel:
     """Viewpoint-specific + generic pictorial structures and a viewpoint classifier.
 
@@ -364,6 +405,18 @@ class PoseModel:
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
 
+    def check_params(self) -> PoseModel:
+        """:class:`ParameterError` naming the first parameter this model cannot train with (run by
+        :meth:`fit` and :meth:`fit_specs` before any work, as scikit-learn estimators check in ``fit``)."""
+        check_common_params(self)
+        if self.viewpoint not in VIEWPOINT_METHODS:
+            raise ParameterError("viewpoint", f"{self.viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
+        if not self.fg_weight >= 0:
+            raise ParameterError("fg_weight", "must be 0 or positive")
+        if self.hard_rounds not in (0, 1):
+            raise ParameterError("hard_rounds", "must be 0 or 1")
+        return self
+
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
                       fg_weight: float | None = None, scales=None) -> PoseModel:
         """Change what needs no retraining: the viewpoint classifier used, the unary weight, the
@@ -385,14 +438,14 @@ class PoseModel:
 
     # ---------------------------------------------------------- training
     def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
+        self.check_params()
         samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
         return self.fit(samples, jobs=jobs, scheduler=scheduler)
 
     def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         from ..parallel import parallel_map
 
-        if self.viewpoint not in VIEWPOINT_METHODS:
-            raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {self.viewpoint!r}")
+        self.check_params()
         views = {s.view for s in samples}
         missing = [v for v in VIEW_NAMES if v not in views]
         if missing:
@@ -452,11 +505,11 @@ class PoseModel:
         self.viewpoint_hog_ = ViewpointHOG(C=self.hog_C, seed=self.seed).fit(hog, y, hog_mirror)
         self.viewpoint_ = self._classifier(self.viewpoint)
 
-    def _classifier(self, which: str):
-        if which == "combined":
-            return ViewpointProduct(self.viewpoint_logistic_, self.viewpoint_hog_)
-        return {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_,
-                "hog": self.viewpoint_hog_}[which]
+    def _classifier(self, which: str) -> ViewpointClassifier:
+        """The trained viewpoint classifier called ``which`` (:data:`VIEWPOINT_CLASSIFIERS`)."""
+        if which not in VIEWPOINT_CLASSIFIERS:
+            raise ParameterError("viewpoint", f"{which!r} is not one of {', '.join(VIEWPOINT_CLASSIFIERS)}")
+        return VIEWPOINT_CLASSIFIERS[which](self)
 
     # ---------------------------------------------------------- inference
     def work_scale(self, frame_shape) -> float:
@@ -482,12 +535,12 @@ class PoseModel:
         ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
         viewpoint (default: only what ``which``, default the model's classifier, needs). Also
         returns the score maps computed (model name -> maps; only complete maps)."""
-        which = which or self.viewpoint
-        views_full = bool(full) or which in ("logistic", "combined")
+        needs = self._classifier(which or self.viewpoint).NEEDS
+        views_full = bool(full) or "parts" in needs
         row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
         out = {"parts": row, "hog": None}
         maps: dict = {}
-        if views_full or which == "svm":
+        if views_full or "torso" in needs:
             views = {v: self.models_[v] for v in VIEW_NAMES}
             got = score_models(views, f, None if views_full else [0])
             for n, name in enumerate(VIEW_NAMES):
@@ -495,7 +548,7 @@ class PoseModel:
                 row[n * N_PARTS: n * N_PARTS + len(best)] = best
             if views_full:
                 maps.update(got)
-        if full or which in ("hog", "combined"):
+        if full or "hog" in needs:
             g = score_models({GENERIC: self.models_[GENERIC]}, f, None if full else [0])[GENERIC]
             if full:
                 maps[GENERIC] = g
@@ -503,19 +556,9 @@ class PoseModel:
         return out, maps
 
     def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
-        which = which or self.viewpoint
-        clf = self._classifier(which)
-        if which == "hog":
-            x = feats["hog"]
-        elif which == "combined":
-            x = (feats["parts"], feats["hog"])
-        elif which == "logistic":
-            x = feats["parts"]
-        else:
-            x = feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
-        if which == "combined":
-            return str(clf.predict(x)[0]), clf.scores(x)[0]
-        return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
+        clf = self._classifier(which or self.viewpoint)
+        x = clf.input_of(feats)
+        return str(clf.predict(x)[0]), clf.scores(x)[0]
 
     #: zoom factors tried about the person (``set_inference(scales=...)``; (1.0,): the frame as given)
     scales: tuple[float, ...] = (1.0,)
@@ -565,6 +608,14 @@ class PoseModel:
         pts = self.solve(model_name, S, s, fg, f)
         return PoseFrame(index, vname, pts, vscores)
 
+    @property
+    def uses_background(self) -> bool:
+        """Whether :meth:`estimate` reads a video's background (the person prior is on)."""
+        return bool(getattr(self, "fg_weight", 0.0))
+
+    def close(self) -> None:
+        """Nothing to release (the :class:`~vidstyle.pose.interfaces.PoseBackend` interface)."""
+
     def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
         """The frame's foreground at the working size (None without a background or a prior)."""
         if background is None or not getattr(self, "fg_weight", 0.0):
@@ -604,6 +655,11 @@ def save_model(path: str | Path, model: PoseModel, extra: dict | None = None) ->
     from ..formats.pose_model import write_pose_model
 
     return write_pose_model(path, model, model_header(model, extra))
+
+
+def load_backend(model_path: str | Path) -> PoseModel:
+    """The ``ps`` pose backend: the pose model of a file (:data:`vidstyle.pose.interfaces.BACKENDS`)."""
+    return load_model(model_path)[0]
 
 
 def load_model(path: str | Path) -> tuple[PoseModel, dict]:
