@@ -282,7 +282,6 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
     """train-pose --detector cnn writes a model whose evaluate-pose true-viewpoint PCP is recomputed
     here frame by frame through its public estimate(); the viewpoint row is the network's head."""
     from vidstyle.cli import main
-    from vidstyle.commands.pose import _cmu
     from vidstyle.formats.metrics import POSE, read_metrics
     from vidstyle.pose.data import make_specs
     from vidstyle.pose.estimator import load_model
@@ -301,7 +300,7 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
                  "--cmu-clips", "0", "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none",
                  "--seed", "5", "-j", "1"]) == 0
     m = read_metrics(out, POSE)
-    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, None, fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
     pred = np.stack([model.estimate(s.bgr, view=s.view).points for s in samples])
     hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))
     assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))
