@@ -14,6 +14,7 @@ import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -28,7 +29,7 @@ from ..mocap.keypoints import PART_NAMES
 from .data import VIEW_NAMES, Sample, Spec, render_samples
 from .defaults import DEFAULTS, VIEWPOINT_METHODS
 from .features import RotatedFeatures, orientation_bin
-from .interfaces import ViewpointClassifier
+from .interfaces import PartDetector, ViewpointClassifier, part_detector
 from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
 log = logging.getLogger(__name__)
@@ -359,6 +360,139 @@ def zoom_about(centre: np.ndarray, z: float, size: tuple[int, int]) -> np.ndarra
                      [0.0, z, (H - 1) / 2.0 - z * float(centre[1])]])
 
 
+class HogParts:
+    """Part detector strategy of :class:`PoseModel` (``detector="hog"``): HOG cells of rotated copies of the
+    gray frame scored by each tree's linear part templates (the learned templates live in the trees,
+    ``model.models_``), the person prior from a video's background, and the viewpoint features the hog
+    model's classifiers read. Stateless: every method takes the model it serves."""
+
+    #: trains on colour renders (``render_samples(keep_bgr=...)``)
+    needs_colour = False
+    #: adds the person prior of a video's background (``fg_weight``)
+    uses_foreground = True
+
+    def fit(self, model, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
+        from ..parallel import parallel_map
+
+        views = {s.view for s in samples}
+        missing = [v for v in VIEW_NAMES if v not in views]
+        if missing:
+            raise InputError(f"training frames have no {', '.join(missing)} view")
+        kp = {name: np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
+              for name in VIEW_NAMES + (GENERIC,)}
+        model.models_ = {}
+        for name in VIEW_NAMES + (GENERIC,):
+            m = PictorialStructures(model.n_orient, model.cell, model.C, model.neg_per_pos, model.hard_rounds, model.seed,
+                                    model.dt, model.unary_weight)
+            model.models_[name] = m.fit_geometry(kp[name])
+        for m in model.models_.values():  # one template size per part: window gathers are shared
+            m.sizes_ = list(model.models_[GENERIC].sizes_)
+        sizes = {n: m.sizes_ for n, m in model.models_.items()}
+        triples = [(s.image, s.keypoints, s.view) for s in samples]
+        n_chunks = max(2, min(32, len(triples) // 20))
+        bgs = _chunks(_background_frames(max(10, len(triples) // 20), model.seed + 1), n_chunks)
+        chunks = _chunks(triples, n_chunks)
+        jobs_ = [_WindowJob(c, sizes, model.n_orient, model.cell, model.neg_per_pos, model.seed * 1000 + i,
+                            bgs[i] if i < len(bgs) else []) for i, c in enumerate(chunks)]
+        res = parallel_map(_windows, jobs_, jobs=jobs, scheduler=scheduler, description="part windows")
+        data = {name: [(np.vstack([r[name][j][0] for r in res if len(r[name][j][0])]),
+                        np.vstack([r[name][j][1] for r in res if len(r[name][j][1])]))
+                       for j in range(N_PARTS)] for name in model.models_}
+        for name, m in model.models_.items():
+            self._fit_templates(model, m, data[name])
+        if model.hard_rounds:
+            mined = parallel_map(_mine, [_MineJob(c, model.models_, 3) for c in chunks], jobs=jobs,
+                                 scheduler=scheduler, description="hard negatives")
+            for name, m in model.models_.items():
+                extra = [[r["hard"][name][j] for r in mined if r["hard"][name][j] is not None] for j in range(N_PARTS)]
+                data[name] = [(P, np.vstack([Nn] + e)) for (P, Nn), e in zip(data[name], extra)]
+                self._fit_templates(model, m, data[name])
+        # viewpoint features with the final detectors
+        vf = parallel_map(_mine, [_MineJob(c, model.models_, 0) for c in chunks], jobs=jobs, scheduler=scheduler,
+                          description="viewpoint features")
+        X = np.vstack([r["vfeat"] for r in vf])
+        y = np.array([t[2] for t in triples])
+        self._fit_viewpoint(model, X, y, np.vstack([r["hog"] for r in vf]), np.vstack([r["hog_mirror"] for r in vf]))
+        model.n_train_frames_ = len(samples)
+        return model
+
+    def _fit_templates(self, model, m: PictorialStructures, data) -> None:
+        m.templates_, m.bias_ = [], np.zeros(N_PARTS)
+        for j, (P, Nn) in enumerate(data):
+            X = np.vstack([P, Nn])
+            y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            clf = LogisticRegression(C=model.C, max_iter=300, class_weight="balanced").fit(X, y)
+            h, w = m.sizes_[j]
+            m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
+            m.bias_[j] = float(clf.intercept_[0])
+
+    def _fit_viewpoint(self, model, X: np.ndarray, y: np.ndarray, hog: np.ndarray, hog_mirror: np.ndarray) -> None:
+        torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        model.viewpoint_svm_ = ViewpointSVM(seed=model.seed).fit(torso, y)
+        model.viewpoint_logistic_ = ViewpointLogistic(seed=model.seed).fit(X, y)
+        model.viewpoint_hog_ = ViewpointHOG(C=model.hog_C, seed=model.seed).fit(hog, y, hog_mirror)
+        model.viewpoint_ = model._classifier(model.viewpoint)
+
+    def prepare(self, model, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
+        g, s = model.to_work_size(frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
+        f = RotatedFeatures(g, model.n_orient, model.cell)
+        f.gray = g
+        return f, s
+
+    def view_features(self, model, f: RotatedFeatures, full: bool | None = None,
+                      which: str | None = None) -> tuple[dict, dict]:
+        """Viewpoint features of a frame (``f`` from :meth:`prepare`): ``"parts"``, the best score of
+        every part detector of every viewpoint (40 values, view-major; NaN where not run), and
+        ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
+        viewpoint (default: only what ``which``, default the model's classifier, needs). Also
+        returns the score maps computed (model name -> maps; only complete maps)."""
+        needs = model._classifier(which or model.viewpoint).NEEDS
+        views_full = bool(full) or "parts" in needs
+        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
+        out = {"parts": row, "hog": None}
+        maps: dict = {}
+        if views_full or "torso" in needs:
+            views = {v: model.models_[v] for v in VIEW_NAMES}
+            got = score_models(views, f, None if views_full else [0])
+            for n, name in enumerate(VIEW_NAMES):
+                best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
+                row[n * N_PARTS: n * N_PARTS + len(best)] = best
+            if views_full:
+                maps.update(got)
+        if full or "hog" in needs:
+            g = score_models({GENERIC: model.models_[GENERIC]}, f, None if full else [0])[GENERIC]
+            if full:
+                maps[GENERIC] = g
+            out["hog"] = person_hog(person_crop(f.gray, torso_centre(model.models_[GENERIC], g[0])))
+        return out, maps
+
+    def foreground_map(self, model, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
+        """The frame's foreground at the working size (None without a background or a prior)."""
+        if background is None or not getattr(model, "fg_weight", 0.0):
+            return None
+        from .foreground import foreground
+
+        if background.shape != frame.shape:
+            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
+        fg = foreground(frame, background)
+        if fg.shape != (f.H, f.W):
+            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
+        return fg
+
+    def solve(self, model, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
+              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
+        with the person prior when ``fg`` is given."""
+        m = model.models_[model_name]
+        w = getattr(model, "fg_weight", 0.0) if fg_weight is None else fg_weight
+        if fg is not None and w:
+            from .foreground import part_coverage
+
+            S = S + np.float32(w) * part_coverage(m, f, fg)
+        r = m.infer(S)
+        return m.keypoints(r["states"], r["unary"], scale=scale)
+
+
 def check_common_params(model) -> None:
     """The parameter checks every pose model shares (``n_orient``, ``unary_weight``)."""
     if not 4 <= model.n_orient <= 36:
@@ -401,6 +535,16 @@ class PoseModel:
               "fg_weight", "seed")
     #: the viewpoint classifiers this model trains (``set_inference(viewpoint=...)``, ``evaluate pose``)
     VIEWPOINTS = VIEWPOINT_METHODS
+    #: name -> (fitted model -> its viewpoint classifier, a :class:`~vidstyle.pose.interfaces.ViewpointClassifier`)
+    VIEWPOINT_CLASSIFIERS = VIEWPOINT_CLASSIFIERS
+    #: the part detectors (:data:`vidstyle.pose.interfaces.PART_DETECTORS`): a name, so that the strategy is
+    #: not pickled and model files stay loadable whatever the strategy classes become
+    detector = "hog"
+
+    @property
+    def parts_(self) -> PartDetector:
+        """The part detector strategy (:class:`HogParts`, :class:`~vidstyle.pose.cnn.CnnParts`) of :attr:`detector`."""
+        return part_detector(self.detector)
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
@@ -423,11 +567,11 @@ class PoseModel:
         person prior's weight, the zoom factors of multi-scale inference (:meth:`estimate`)."""
         if scales is not None:
             self.scales = check_scales(scales)
-        if fg_weight is not None:
+        if fg_weight is not None and self.parts_.uses_foreground:
             self.fg_weight = float(fg_weight)
         if viewpoint is not None:
-            if viewpoint not in VIEWPOINT_METHODS:
-                raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {viewpoint!r}")
+            if viewpoint not in self.VIEWPOINT_CLASSIFIERS:
+                raise ValueError(f"viewpoint must be one of {tuple(self.VIEWPOINT_CLASSIFIERS)}, got {viewpoint!r}")
             self.viewpoint = viewpoint
             self.viewpoint_ = self._classifier(viewpoint)
         if unary_weight is not None:
@@ -439,77 +583,21 @@ class PoseModel:
     # ---------------------------------------------------------- training
     def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
         self.check_params()
-        samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
+        samples = render_samples(specs, jobs=jobs, scheduler=scheduler, keep_bgr=self.parts_.needs_colour)
         return self.fit(samples, jobs=jobs, scheduler=scheduler)
 
     def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
-        from ..parallel import parallel_map
-
+        """Fit the trees, the part detectors and the viewpoint classifier(s) on labelled frames."""
         self.check_params()
-        views = {s.view for s in samples}
-        missing = [v for v in VIEW_NAMES if v not in views]
-        if missing:
-            raise InputError(f"training frames have no {', '.join(missing)} view")
-        kp = {name: np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
-              for name in VIEW_NAMES + (GENERIC,)}
-        self.models_ = {}
-        for name in VIEW_NAMES + (GENERIC,):
-            m = PictorialStructures(self.n_orient, self.cell, self.C, self.neg_per_pos, self.hard_rounds, self.seed,
-                                    self.dt, self.unary_weight)
-            self.models_[name] = m.fit_geometry(kp[name])
-        for m in self.models_.values():  # one template size per part: window gathers are shared
-            m.sizes_ = list(self.models_[GENERIC].sizes_)
-        sizes = {n: m.sizes_ for n, m in self.models_.items()}
-        triples = [(s.image, s.keypoints, s.view) for s in samples]
-        n_chunks = max(2, min(32, len(triples) // 20))
-        bgs = _chunks(_background_frames(max(10, len(triples) // 20), self.seed + 1), n_chunks)
-        chunks = _chunks(triples, n_chunks)
-        jobs_ = [_WindowJob(c, sizes, self.n_orient, self.cell, self.neg_per_pos, self.seed * 1000 + i,
-                            bgs[i] if i < len(bgs) else []) for i, c in enumerate(chunks)]
-        res = parallel_map(_windows, jobs_, jobs=jobs, scheduler=scheduler, description="part windows")
-        data = {name: [(np.vstack([r[name][j][0] for r in res if len(r[name][j][0])]),
-                        np.vstack([r[name][j][1] for r in res if len(r[name][j][1])]))
-                       for j in range(N_PARTS)] for name in self.models_}
-        for name, m in self.models_.items():
-            self._fit_templates(m, data[name])
-        if self.hard_rounds:
-            mined = parallel_map(_mine, [_MineJob(c, self.models_, 3) for c in chunks], jobs=jobs,
-                                 scheduler=scheduler, description="hard negatives")
-            for name, m in self.models_.items():
-                extra = [[r["hard"][name][j] for r in mined if r["hard"][name][j] is not None] for j in range(N_PARTS)]
-                data[name] = [(P, np.vstack([Nn] + e)) for (P, Nn), e in zip(data[name], extra)]
-                self._fit_templates(m, data[name])
-        # viewpoint features with the final detectors
-        vf = parallel_map(_mine, [_MineJob(c, self.models_, 0) for c in chunks], jobs=jobs, scheduler=scheduler,
-                          description="viewpoint features")
-        X = np.vstack([r["vfeat"] for r in vf])
-        y = np.array([t[2] for t in triples])
-        self._fit_viewpoint(X, y, np.vstack([r["hog"] for r in vf]), np.vstack([r["hog_mirror"] for r in vf]))
-        self.n_train_frames_ = len(samples)
+        self.parts_.fit(self, samples, jobs=jobs, scheduler=scheduler)
         return self
 
-    def _fit_templates(self, m: PictorialStructures, data) -> None:
-        m.templates_, m.bias_ = [], np.zeros(N_PARTS)
-        for j, (P, Nn) in enumerate(data):
-            X = np.vstack([P, Nn])
-            y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
-            clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced").fit(X, y)
-            h, w = m.sizes_[j]
-            m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
-            m.bias_[j] = float(clf.intercept_[0])
-
-    def _fit_viewpoint(self, X: np.ndarray, y: np.ndarray, hog: np.ndarray, hog_mirror: np.ndarray) -> None:
-        torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
-        self.viewpoint_svm_ = ViewpointSVM(seed=self.seed).fit(torso, y)
-        self.viewpoint_logistic_ = ViewpointLogistic(seed=self.seed).fit(X, y)
-        self.viewpoint_hog_ = ViewpointHOG(C=self.hog_C, seed=self.seed).fit(hog, y, hog_mirror)
-        self.viewpoint_ = self._classifier(self.viewpoint)
 
     def _classifier(self, which: str) -> ViewpointClassifier:
-        """The trained viewpoint classifier called ``which`` (:data:`VIEWPOINT_CLASSIFIERS`)."""
-        if which not in VIEWPOINT_CLASSIFIERS:
-            raise ParameterError("viewpoint", f"{which!r} is not one of {', '.join(VIEWPOINT_CLASSIFIERS)}")
-        return VIEWPOINT_CLASSIFIERS[which](self)
+        """The trained viewpoint classifier called ``which`` (:attr:`VIEWPOINT_CLASSIFIERS`)."""
+        if which not in self.VIEWPOINT_CLASSIFIERS:
+            raise ParameterError("viewpoint", f"{which!r} is not one of {', '.join(self.VIEWPOINT_CLASSIFIERS)}")
+        return self.VIEWPOINT_CLASSIFIERS[which](self)
 
     # ---------------------------------------------------------- inference
     def work_scale(self, frame_shape) -> float:
@@ -522,38 +610,14 @@ class PoseModel:
             img = cv2.resize(img, (max(8, round(img.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
         return img, s
 
-    def prepare(self, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
-        g, s = self.to_work_size(frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
-        f = RotatedFeatures(g, self.n_orient, self.cell)
-        f.gray = g
-        return f, s
+    def prepare(self, frame: np.ndarray):
+        """The frame prepared for the part detectors (:attr:`parts_`) and its working scale."""
+        return self.parts_.prepare(self, frame)
 
-    def view_features(self, f: RotatedFeatures, full: bool | None = None,
-                      which: str | None = None) -> tuple[dict, dict]:
-        """Viewpoint features of a frame (``f`` from :meth:`prepare`): ``"parts"``, the best score of
-        every part detector of every viewpoint (40 values, view-major; NaN where not run), and
-        ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
-        viewpoint (default: only what ``which``, default the model's classifier, needs). Also
-        returns the score maps computed (model name -> maps; only complete maps)."""
-        needs = self._classifier(which or self.viewpoint).NEEDS
-        views_full = bool(full) or "parts" in needs
-        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
-        out = {"parts": row, "hog": None}
-        maps: dict = {}
-        if views_full or "torso" in needs:
-            views = {v: self.models_[v] for v in VIEW_NAMES}
-            got = score_models(views, f, None if views_full else [0])
-            for n, name in enumerate(VIEW_NAMES):
-                best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
-                row[n * N_PARTS: n * N_PARTS + len(best)] = best
-            if views_full:
-                maps.update(got)
-        if full or "hog" in needs:
-            g = score_models({GENERIC: self.models_[GENERIC]}, f, None if full else [0])[GENERIC]
-            if full:
-                maps[GENERIC] = g
-            out["hog"] = person_hog(person_crop(f.gray, torso_centre(self.models_[GENERIC], g[0])))
-        return out, maps
+    def view_features(self, f, full: bool | None = None, which: str | None = None) -> tuple[dict, Any]:
+        """Viewpoint features of a prepared frame and the score maps computed (:attr:`parts_`)."""
+        return self.parts_.view_features(self, f, full, which)
+
 
     def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
         clf = self._classifier(which or self.viewpoint)
@@ -616,31 +680,16 @@ class PoseModel:
     def close(self) -> None:
         """Nothing to release (the :class:`~vidstyle.pose.interfaces.PoseBackend` interface)."""
 
-    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
-        """The frame's foreground at the working size (None without a background or a prior)."""
-        if background is None or not getattr(self, "fg_weight", 0.0):
-            return None
-        from .foreground import foreground
-
-        if background.shape != frame.shape:
-            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
-        fg = foreground(frame, background)
-        if fg.shape != (f.H, f.W):
-            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
-        return fg
+    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f):
+        """The frame's foreground at the working size (None without a background, a prior, or for
+        detectors that use none)."""
+        return self.parts_.foreground_map(self, frame, background, f)
 
     def solve(self, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
-              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
-        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
-        with the person prior when ``fg`` is given."""
-        m = self.models_[model_name]
-        w = getattr(self, "fg_weight", 0.0) if fg_weight is None else fg_weight
-        if fg is not None and w:
-            from .foreground import part_coverage
+              f=None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one tree given its score maps (:attr:`parts_`)."""
+        return self.parts_.solve(self, model_name, S, scale, fg, f, fg_weight)
 
-            S = S + np.float32(w) * part_coverage(m, f, fg)
-        r = m.infer(S)
-        return m.keypoints(r["states"], r["unary"], scale=scale)
 
 
 # ---------------------------------------------------------------- files

@@ -42,19 +42,35 @@ class PoseBackend(Protocol):
 
 @runtime_checkable
 class PartDetector(Protocol):
-    """The learned unary terms of the pictorial structures and the frame preparation they need."""
+    """The unary terms of the pictorial structures: a strategy a pose model is composed with
+    (``model.parts_``). Stateless: the learned parts live in the model (trees, network), every method takes
+    the model it serves, so model files pickle no strategy object."""
 
-    def prepare(self, frame: np.ndarray) -> tuple[Any, float]: ...
+    #: trains on colour renders; adds the person prior of a video's background (``fg_weight``)
+    needs_colour: bool
+    uses_foreground: bool
 
-    def view_features(self, f: Any, full: bool | None = None, which: str | None = None) -> tuple[dict, Any]: ...
+    def fit(self, model: Any, samples: list, jobs: int = -1, scheduler: str | None = None) -> Any: ...
 
-    def solve(self, model_name: str, S: np.ndarray, scale: float, fg=None, f=None,
+    def prepare(self, model: Any, frame: np.ndarray) -> tuple[Any, float]: ...
+
+    def view_features(self, model: Any, f: Any, full: bool | None = None,
+                      which: str | None = None) -> tuple[dict, Any]: ...
+
+    def foreground_map(self, model: Any, frame: np.ndarray, background: np.ndarray | None, f: Any): ...
+
+    def solve(self, model: Any, model_name: str, S: np.ndarray, scale: float, fg=None, f=None,
               fg_weight: float | None = None) -> np.ndarray: ...
 
 
 @runtime_checkable
 class ViewpointClassifier(Protocol):
     """Viewpoint features of frames -> view names and per-view scores (softmax-like, summing to 1)."""
+
+    #: the viewpoint features it reads ("torso", "parts", "hog", "cnn")
+    NEEDS: tuple[str, ...]
+
+    def input_of(self, feats: dict) -> Any: ...
 
     def predict(self, X) -> np.ndarray: ...
 
@@ -65,6 +81,9 @@ class ViewpointClassifier(Protocol):
 BACKENDS = {"ps": "vidstyle.pose.estimator:load_backend", "blazepose": "vidstyle.pose.blazepose:BlazePoseEstimator"}
 #: ``vidstyle train-pose --detector``: name -> the pose model class that trains with those part detectors
 DETECTORS = {"hog": "vidstyle.pose.estimator:PoseModel", "cnn": "vidstyle.pose.cnn:CnnPoseModel"}
+#: the part detector strategies (:class:`PartDetector`) a pose model's ``detector`` names
+PART_DETECTORS = {"hog": "vidstyle.pose.estimator:HogParts", "cnn": "vidstyle.pose.cnn:CnnParts"}
+_PART_INSTANCES: dict = {}
 #: backends that read a trained pose model file
 MODEL_BACKENDS = ("ps",)
 
@@ -89,6 +108,13 @@ def backend_factory(name: str):
     if name in MODEL_BACKENDS:
         return target
     return lambda _model_path=None: target()
+
+
+def part_detector(name: str) -> PartDetector:
+    """The (stateless, shared) part detector strategy called ``name``."""
+    if name not in _PART_INSTANCES:
+        _PART_INSTANCES[name] = _resolve(PART_DETECTORS, name, "detector", "part detectors")()
+    return _PART_INSTANCES[name]
 
 
 def detector_class(name: str) -> type:
