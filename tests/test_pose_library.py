@@ -62,6 +62,35 @@ def test_library_with_defaults_gives_the_cli_poses(tmp_path, tiny):
     assert lib.frames[3].viewpoint == pf.viewpoint
 
 
+@pytest.mark.slow
+def test_estimate_marks_gives_the_cli_poses_of_the_marks(tmp_path, tiny):
+    """pose --annotations: the marks' frames and their context, inside the video, as the library's."""
+    from vidstyle.formats.annotations import (
+        Annotations,
+        Transition,
+        VideoAnnotations,
+        file_sha256,
+        stored_path,
+        write_annotations,
+    )
+    from vidstyle.formats.poses import read_poses, write_poses
+    from vidstyle.pose import estimate_marks, mark_frames
+
+    _model, path, video = tiny
+    ann = tmp_path / "ann.json"
+    entry = VideoAnnotations(stored_path(ann, video), file_sha256(video), 6, 10.0,
+                             [Transition(0, "Jab", "Hook"), Transition(4, "Hook", "Jab")])
+    write_annotations(ann, Annotations(["Jab", "Hook"], [entry]))
+    assert mark_frames(video, ann) == [0, 4] and mark_frames(video, ann, context=1) == [0, 1, 3, 4, 5]
+    out = tmp_path / "marks.json"
+    assert main(["pose", str(video), "--model", str(path), "--annotations", str(ann), "--context", "1",
+                 "--out", str(out), "-j", "1"]) == 0
+    lib = estimate_marks(video, ann, model_path=path, context=1, jobs=1)
+    write_poses(tmp_path / "lib.json", lib)
+    assert (tmp_path / "lib.json").read_bytes() == out.read_bytes()
+    assert [f.frame for f in read_poses(out).frames] == [0, 1, 3, 4, 5]
+
+
 # (library parameter, bad value, CLI flag): the twelve checks train-pose did itself, now the models' own
 TRAIN_CHECKS = [
     ({"detector": "sift"}, "detector", "--detector", "sift"),

@@ -163,6 +163,8 @@ class BlazePoseEstimator:
     backend = "blazepose"
     #: no person prior: every frame is detected on its own (:class:`vidstyle.pose.interfaces.PoseBackend`)
     uses_background = False
+    #: the largest height frames are read at (taller videos are scaled down)
+    MAX_HEIGHT = 720
 
     def __init__(self, model_complexity: int = 1, min_detection_confidence: float = 0.5) -> None:
         if model_complexity != 1:
@@ -195,6 +197,10 @@ class BlazePoseEstimator:
         img = np.array([[lm.x * w - 0.5, lm.y * h - 0.5, lm.visibility] for lm in res.pose_landmarks.landmark])
         world = np.array([[lm.x, lm.y, lm.z] for lm in res.pose_world_landmarks.landmark])
         return img, world
+
+    def working_height(self, native_height: int) -> int:
+        """Frames are read at their own height, at most ``MAX_HEIGHT`` rows."""
+        return min(native_height, self.MAX_HEIGHT)
 
     def set_inference(self, scales=None) -> BlazePoseEstimator:
         """Multi-scale inference is a ps backend setting: any zoom other than 1 is a :class:`ParameterError`."""

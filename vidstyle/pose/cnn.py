@@ -309,7 +309,7 @@ def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
     out = np.empty((N_PARTS, K) + logheat.shape[1:], dtype=np.float32)
     for j in range(N_PARTS):
         a, b = int(PART_KEYPOINTS[j, 0]), int(PART_KEYPOINTS[j, 1])
-        da, db = m._rounded(m.proximal_[j]), m._rounded(m.distal_[j])
+        da, db = m.rounded_offsets(m.proximal_[j]), m.rounded_offsets(m.distal_[j])
         for k in range(K):
             out[j, k] = (shift_maps(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
                          + shift_maps(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))

@@ -677,6 +677,10 @@ class PoseModel:
         """Whether :meth:`estimate` reads a video's background (the person prior is on)."""
         return bool(getattr(self, "fg_weight", 0.0))
 
+    def working_height(self, native_height: int) -> int:
+        """Videos are read at :data:`WORK_HEIGHT` rows (the training renders' figure scale)."""
+        return WORK_HEIGHT
+
     def close(self) -> None:
         """Nothing to release (the :class:`~vidstyle.pose.interfaces.PoseBackend` interface)."""
 

@@ -11,10 +11,7 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame, Poses
-from .estimator import WORK_HEIGHT
 from .interfaces import MODEL_BACKENDS, PoseBackend, backend_factory, check_backend
-
-BLAZEPOSE_MAX_HEIGHT = 720
 
 
 @dataclass
@@ -26,10 +23,9 @@ class _Chunk:
     scales: tuple[float, ...] = (1.0,)
 
 
-def working_height(backend: str, native_height: int) -> int:
-    if backend == "ps":
-        return WORK_HEIGHT
-    return min(native_height, BLAZEPOSE_MAX_HEIGHT)
+def working_height(backend: PoseBackend, native_height: int) -> int:
+    """The height a backend reads a video at (:meth:`PoseBackend.working_height`)."""
+    return int(backend.working_height(native_height))
 
 
 def to_input_pixels(pts: np.ndarray, work_size: tuple[int, int], in_size: tuple[int, int]) -> np.ndarray:
@@ -53,7 +49,7 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
         est.set_inference(scales=chunk.scales)
     with VideoReader(chunk.video) as probe:
         in_size = (probe.info.width, probe.info.height)
-    h = working_height(chunk.backend, in_size[1])
+    h = working_height(est, in_size[1])
     out = []
     with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
         bg = video_background(reader) if est.uses_background else None
