@@ -216,3 +216,37 @@ def test_one_interface_per_varying_thing(tiny):
         feats, _maps = model.view_features(f, full=True)
         view, scores = model.classify_view(feats, name)
         assert view == str(clf.predict(clf.input_of(feats))[0]) and abs(sum(scores.values()) - 1.0) < 1e-3
+
+
+def test_cli_defaults_are_the_library_defaults():
+    """Every option of train-pose and pose defaults to what the library function (or the model it builds)
+    defaults to, so a Python user calling the library with defaults trains and estimates as the CLI does."""
+    import inspect
+
+    from vidstyle.commands.pose import pose, train_pose
+    from vidstyle.pose.cnn import CnnPoseModel
+    from vidstyle.pose.run import estimate_marks, estimate_video
+    from vidstyle.pose.training import train
+
+    def defaults(fn):
+        return {k: p.default for k, p in inspect.signature(fn).parameters.items()
+                if p.default is not inspect.Parameter.empty}
+
+    def cli_defaults(fn):
+        return {k: getattr(v, "default", v) for k, v in defaults(fn).items()}
+
+    lib = {**defaults(CnnPoseModel.__init__), **defaults(PoseModel.__init__), **defaults(train)}
+    lib["unary_weight"] = None  # each detector's own validated default (the models' constructors)
+    cli = cli_defaults(train_pose)
+    cli.pop("out")
+    assert cli.pop("cmu_dir") is None and defaults(train)["cmu_dir"] is None  # no silent CMU folder
+    assert cli.pop("scheduler") is None
+    for k, v in cli.items():
+        assert lib[k] == v, k
+    assert cli["detector"] == "cnn" and defaults(CnnPoseModel.__init__)["unary_weight"] != defaults(PoseModel.__init__)[
+        "unary_weight"]
+    got = cli_defaults(pose)
+    lib_pose = {**defaults(estimate_video), **defaults(estimate_marks)}
+    for k in ("backend", "context", "jobs", "scheduler"):
+        assert got[k] == lib_pose[k], k
+    assert got["scales"] is None and lib_pose["scales"] is None and got["model"] is None

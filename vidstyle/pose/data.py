@@ -65,7 +65,7 @@ def acceptable_views(azimuth_deg: float, tol: float = BOUNDARY_TOL) -> tuple[str
 
 @dataclass(frozen=True)
 class Spec:
-    source: str  # "demo:<performer index>" or a BVH path
+    source: str  # "<registered source>:<index>" (e.g. "demo:3", register_source) or a BVH path
     start_s: float  # excerpt start (seconds into the source motion)
     seconds: float
     azimuth: float
