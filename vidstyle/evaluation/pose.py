@@ -124,7 +124,7 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     gt = np.stack([s.keypoints for s in samples])
     views = [s.view for s in samples]
     methods = {"ps": [], "ps_generic": [], "ps_oracle_view": []}
-    prior = bool(getattr(model, "fg_weight", 0.0))
+    prior = model.uses_background
     if prior:
         methods["ps_single_image"] = []
     backgrounds = clip_backgrounds(samples) if prior else {}
