@@ -62,6 +62,7 @@ def _frame(size):
 
 def _small_models() -> dict:
     """One small model per detector (hog, cnn): speed does not depend on how well they are trained."""
+    import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
     from vidstyle.pose.cnn import CnnPoseModel
     from vidstyle.pose.data import Spec, render_samples
     from vidstyle.pose.defaults import CNN_DEFAULTS
@@ -89,12 +90,12 @@ def main() -> int:
 
     from vidstyle.pose.blazepose import BlazePoseEstimator
     from vidstyle.pose.dt import brute_dt2d, dt2d
-    from vidstyle.pose.estimator import load_pose_model
+    from vidstyle.pose.estimator import load_model
 
     rows = []
     with threadpool_limits(1):
         if args.model:
-            m = load_pose_model(args.model)[0]
+            m = load_model(args.model)[0]
             models = {getattr(m, "detector", "hog"): m}
         else:
             models = _small_models()

@@ -274,7 +274,7 @@ def pose_table(items, root: Path) -> list[str]:
         for key, c in sorted((d.get("viewpoint") or {}).items()):
             u = (c or {}).get("unambiguous")
             if u:
-                from vidstyle.pose.evaluate import wilson_interval
+                from vidstyle.evaluation.pose import wilson_interval
 
                 per = ", ".join(f"{v} {_pct(a)} (n {sum(row)}; 95 % interval "
                                 + " to ".join(_pct(x) for x in wilson_interval(row[i], sum(row))) + ")"

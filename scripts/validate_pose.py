@@ -60,9 +60,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
+from vidstyle.evaluation.pose import confusion, strict_pcp  # noqa: E402
 from vidstyle.pose.data import make_specs, render_samples  # noqa: E402
 from vidstyle.pose.estimator import GENERIC, VIEWPOINT_METHODS, PoseModel  # noqa: E402
-from vidstyle.pose.evaluate import confusion, strict_pcp  # noqa: E402
 from vidstyle.pose.features import RotatedFeatures  # noqa: E402
 from vidstyle.pose.model import PictorialStructures  # noqa: E402
 
@@ -159,7 +160,7 @@ def second_stage(args, train, doc: dict) -> dict:
     """Retrain the stage-one choice; score every viewpoint classifier (with ``combined``, the product
     of logistic and hog) at its alpha, then the person prior's weight (median background of each
     validation clip) with the best classifier."""
-    from vidstyle.pose.evaluate import _frame_of, clip_backgrounds
+    from vidstyle.evaluation.pose import clip_backgrounds, frame_of
 
     ch = stage_one_choice(doc["table"])
     model = PoseModel(n_orient=ch["n_orient"], hard_rounds=ch["hard_rounds"], viewpoint=ch["viewpoint"],
@@ -175,7 +176,7 @@ def second_stage(args, train, doc: dict) -> dict:
         f, scale = model.prepare(s.image)
         feats, maps = model.view_features(f, full=True)
         pred = {w: model.classify_view(feats, w)[0] for w in VIEWPOINT_METHODS}
-        cache.append((f, scale, maps, pred, model.foreground_map(_frame_of(s), bgs.get(s.clip), f)))
+        cache.append((f, scale, maps, pred, model.foreground_map(frame_of(s), bgs.get(s.clip), f)))
     model.set_inference(fg_weight=0.0)
     vrows = []
     for w in VIEWPOINT_METHODS:
@@ -222,14 +223,14 @@ CNN_REFINE = [0, 1, 2, 3]
 def score_frames(model, val, view_method: str | None = None) -> dict:
     """PCP (chosen / true viewpoint / generic), per part, PCK, viewpoint accuracy, CPU ms/frame of one
     model on the validation frames (colour frames; hog models read them as gray)."""
-    from vidstyle.pose.evaluate import _frame_of, pck
+    from vidstyle.evaluation.pose import frame_of, pck
 
     gt = np.stack([s.keypoints for s in val])
     views = [s.view for s in val]
     pts = {"ps": [], "oracle": [], "generic": []}
     pred = []
     for s in val:
-        f, scale = model.prepare(_frame_of(s))
+        f, scale = model.prepare(frame_of(s))
         feats, maps = model.view_features(f, full=True)
         v = model.classify_view(feats, view_method)[0]
         pred.append(v)
@@ -240,7 +241,7 @@ def score_frames(model, val, view_method: str | None = None) -> dict:
     ts = []
     for s in val[:: max(1, len(val) // 12)]:
         t = time.process_time()
-        model.estimate(_frame_of(s))
+        model.estimate(frame_of(s))
         ts.append(time.process_time() - t)
     return {"pcp_mean": float(hits["ps"].mean()), "pcp_per_part": hits["ps"].mean(axis=0).round(4).tolist(),
             "pcp_min_part": float(hits["ps"].mean(axis=0).min()), "pcp_oracle_view": float(hits["oracle"].mean()),
@@ -316,13 +317,13 @@ def cnn_stage(args, doc: dict) -> dict:
     weight x refinement x test-time flip; with the detector stage's cnn rows (10 epochs, stride 4, no
     flip) the best PCP (then viewpoint accuracy) within the speed budget gives the cnn defaults."""
     from vidstyle.pose.defaults import CNN_DEFAULTS, TRAIN_SET
-    from vidstyle.pose.estimator import load_pose_model
+    from vidstyle.pose.estimator import load_model
 
     val = render_samples(make_specs("val", args.val_demo, args.val_cmu, args.views_per_clip, args.seed,
                                     args.cmu_dir), jobs=args.jobs, keep_bgr=True)
     rows = []
     for path in args.cnn_models:
-        model, header = load_pose_model(path)
+        model, header = load_model(path)
         if getattr(model, "detector", "hog") != "cnn":
             raise SystemExit(f"{path}: not a cnn pose model")
         tr = header.get("training") or {}

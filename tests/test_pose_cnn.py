@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("torch")
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from vidstyle.pose.cnn import (
     CELL,
@@ -242,15 +243,15 @@ def test_bad_training_input_is_refused(rng):
 
 @pytest.mark.slow
 def test_cnn_pose_model_round_trip_and_pose_frames(tmp_path):
-    from vidstyle.pose.estimator import load_pose_model, save_pose_model
+    from vidstyle.pose.estimator import load_model, save_model
 
     specs = [Spec("demo:0", 1.0 + i, 2.0, az + 4 * i, 10.0, 200 + i, fps=4.0)
              for i, az in enumerate((0.0, 90.0, -90.0, 180.0, 0.0, 90.0, -90.0, 180.0))]
     samples = render_samples(specs, jobs=1, keep_bgr=True)
     model = CnnPoseModel(epochs=1, channels=8, batch_size=16, threads=1, seed=2).fit(samples)
     path = tmp_path / "pose.joblib"
-    save_pose_model(path, model)
-    loaded, header = load_pose_model(path)
+    save_model(path, model)
+    loaded, header = load_model(path)
     assert header["params"]["detector"] == "cnn" and header["params"]["epochs"] == 1
     assert loaded.VIEWPOINTS == ("cnn",)
     frame = samples[3].bgr
@@ -258,8 +259,8 @@ def test_cnn_pose_model_round_trip_and_pose_frames(tmp_path):
     np.testing.assert_array_equal(a.points, b.points)
     # the stride-2 head and the test-time flip through the same interface and file
     m2 = CnnPoseModel(epochs=1, channels=8, batch_size=16, threads=1, seed=2, stride=2, flip_test=True).fit(samples)
-    save_pose_model(path, m2)
-    loaded2, header2 = load_pose_model(path)
+    save_model(path, m2)
+    loaded2, header2 = load_model(path)
     assert header2["params"]["stride"] == 2 and header2["params"]["flip_test"] is True
     p2 = loaded2.estimate(frame, 7)
     np.testing.assert_array_equal(p2.points, m2.estimate(frame, 7).points)
@@ -281,17 +282,16 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
     """train-pose --detector cnn writes a model whose evaluate-pose true-viewpoint PCP is recomputed
     here frame by frame through its public estimate(); the viewpoint row is the network's head."""
     from vidstyle.cli import main
-    from vidstyle.commands.pose import _cmu
     from vidstyle.formats.metrics import POSE, read_metrics
     from vidstyle.pose.data import make_specs
-    from vidstyle.pose.estimator import load_pose_model
-    from vidstyle.pose.evaluate import strict_pcp
+    from vidstyle.pose.estimator import load_model
+    from vidstyle.evaluation.pose import strict_pcp
 
     path = tmp_path / "cnn.joblib"
     assert main(["train-pose", "--detector", "cnn", "--epochs", "1", "--out", str(path), "--demo-performers", "4",
                  "--cmu-clips", "0", "--views-per-clip", "4", "--seconds", "1", "--fps", "4", "--seed", "0",
                  "--channels", "16", "-j", "1"]) == 0
-    model, header = load_pose_model(path)
+    model, header = load_model(path)
     assert header["params"]["detector"] == "cnn" and header["training"]["demo_performers"] == 4
     assert header["params"]["channels"] == 16 and model.cnn_.weights_["kp.weight"].shape[1] == 32  # stride-2 head
     assert model.cnn_.weights_["view.weight"].shape == (4, 16)
@@ -300,7 +300,7 @@ def test_train_pose_cnn_and_evaluate_pose_cli(tmp_path, capsys):
                  "--cmu-clips", "0", "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none",
                  "--seed", "5", "-j", "1"]) == 0
     m = read_metrics(out, POSE)
-    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, None, fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
     pred = np.stack([model.estimate(s.bgr, view=s.view).points for s in samples])
     hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))
     assert m.doc["pcp"]["ps_oracle_view"]["all"]["mean"] == pytest.approx(float(hits.mean()))

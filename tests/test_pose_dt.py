@@ -77,11 +77,11 @@ def test_inference_is_the_exact_minimum(rng):
     for j in order:
         i = int(PART_PARENT_INDEX[j])
         for si in states:
-            b = m._rounded(m.offsets_[j])[si[0]]
+            b = m.rounded_offsets(m.offsets_[j])[si[0]]
             qi = np.array([si[2] + b[0], si[1] + b[1]])
             vals = []
             for sj in states:
-                a = m._rounded(m.child_offsets_[j])[sj[0]]
+                a = m.rounded_offsets(m.child_offsets_[j])[sj[0]]
                 qj = np.array([sj[2] + a[0], sj[1] + a[1]])
                 if not (0 <= qj[0] < W and 0 <= qj[1] < H and 0 <= qi[0] < W and 0 <= qi[1] < H):
                     continue

@@ -7,10 +7,11 @@ import json
 import numpy as np
 import pytest
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.mocap.keypoints import KEYPOINTS
 from vidstyle.pose.data import Spec, acceptable_views, render_samples, view_of
-from vidstyle.pose.estimator import PoseModel, load_pose_model, save_pose_model
-from vidstyle.pose.evaluate import confusion, pck, strict_pcp, viewpoint_scores
+from vidstyle.pose.estimator import PoseModel, load_model, save_model
+from vidstyle.evaluation.pose import confusion, pck, strict_pcp, viewpoint_scores
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +21,7 @@ def trained(tmp_path_factory):
     samples = render_samples(specs, jobs=1)
     model = PoseModel(n_orient=8, hard_rounds=0, neg_per_pos=6, seed=3).fit(samples, jobs=1)
     path = tmp_path_factory.mktemp("pose") / "pose.joblib"
-    save_pose_model(path, model)
+    save_model(path, model)
     return model, path, samples
 
 
@@ -57,7 +58,7 @@ def test_viewpoint_scores_by_hand():
 @pytest.mark.slow
 def test_model_round_trip_and_fit_on_training_frames(trained):
     model, path, samples = trained
-    loaded, header = load_pose_model(path)
+    loaded, header = load_model(path)
     assert header["params"] == model.get_params() and header["seed"] == 3
     assert loaded.get_params() == {"n_orient": 8, "cell": 4, "C": 0.05, "neg_per_pos": 6, "hard_rounds": 0,
                                    "viewpoint": "hog", "dt": "envelope", "unary_weight": 2.0,
@@ -150,16 +151,15 @@ def test_evaluate_pose_writes_metrics_that_match_its_own_renders(tmp_path, train
     model = copy.deepcopy(model)
     model.fg_weight = 0.0  # single-image estimates: no person prior from the clips' backgrounds
     path = tmp_path / "pose_noprior.joblib"
-    save_pose_model(path, model)
+    save_model(path, model)
     out = tmp_path / "pose_metrics.json"
     args = ["evaluate", "pose", "--model", str(path), "--out", str(out), "--demo-performers", "1", "--cmu-clips", "0",
             "--views-per-clip", "2", "--seconds", "1", "--fps", "3", "--real-dir", "none", "--seed", "5", "-j", "1"]
     assert main(args) == 0
     m = read_metrics(out, POSE)
     assert m.seed == 5 and m.doc["params"]["seed"] == 5
-    from vidstyle.commands.pose import _cmu  # the CMU folder the command defaults to (it seeds the specs)
-
-    samples = render_samples(make_specs("test", 1, 0, 2, 5, _cmu(None), fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
+    # no --cmu-dir (nor VIDSTYLE_CMU_DIR): the command renders the demo performers only
+    samples = render_samples(make_specs("test", 1, 0, 2, 5, None, fps=3.0, seconds=1.0), jobs=1, keep_bgr=True)
     assert m.doc["n_frames"] == len(samples) > 0
     pred = np.stack([model.estimate(s.image, view=s.view).points for s in samples])  # gray = the colour render read as gray
     hits = strict_pcp(pred, np.stack([s.keypoints for s in samples]))

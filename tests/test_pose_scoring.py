@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.pose.data import MAX_PERFORMERS, TRAIN_CMU_SUBJECTS, VAL_CMU_SUBJECTS, make_specs
 from vidstyle.pose.dt import min_plus
 from vidstyle.pose.estimator import HOG_DROP, HOG_WIN, ViewpointHOG, person_crop, person_hog
@@ -216,7 +217,7 @@ def test_video_background_marks_the_performer(tmp_path, rng):
 def test_wilson_interval_matches_newcombes_published_values():
     """Newcombe (1998), Statistics in Medicine 17:857, Table I, method 3 (score interval without
     continuity correction)."""
-    from vidstyle.pose.evaluate import wilson_interval
+    from vidstyle.evaluation.pose import wilson_interval
 
     for (hits, n), want in [((81, 263), (0.2553, 0.3662)), ((15, 148), (0.0624, 0.1605)), ((0, 20), (0.0, 0.1611)),
                             ((1, 29), (0.0061, 0.1718))]:

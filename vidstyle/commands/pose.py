@@ -9,26 +9,15 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..pose.defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS, DETECTOR, VIEWPOINT_METHODS
+from ..pose.defaults import CMU_ENV, CNN_DEFAULTS, DEFAULTS, DETECTOR, REAL_ENV
 from ._evaluate import evaluate_app
 
 log = logging.getLogger(__name__)
-
-DEFAULT_CMU = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "mocap" / "cmu"
-DEFAULT_REAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "video" / "real"
 
 
 def register(app: typer.Typer) -> None:
     app.command("train-pose")(train_pose)
     app.command("pose")(pose)
-
-
-def _cmu(cmu_dir: Path | None) -> Path | None:
-    if cmu_dir is not None and not cmu_dir.is_dir():
-        raise InputError(f"{cmu_dir}: CMU BVH directory not found")
-    if cmu_dir is None and DEFAULT_CMU.is_dir():
-        return DEFAULT_CMU
-    return cmu_dir
 
 
 def parse_scales(text: str | None, option: str) -> list[float] | None:
@@ -49,12 +38,14 @@ def parse_scales(text: str | None, option: str) -> list[float] | None:
 
 def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
-    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips to render as well as the demo "
-                                           "performers (default: ../shared/data/mocap/cmu when present)."),
-    n_demo: int = typer.Option(CNN_DEFAULTS["demo_performers"], "--demo-performers",
-                               help="Demo performers rendered for training (at most 30: the training performers)."),
-    n_cmu: int = typer.Option(CNN_DEFAULTS["cmu_clips"], "--cmu-clips",
-                              help="CMU clips (of the training subjects) rendered."),
+    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", envvar=CMU_ENV, help="CMU BVH clips to render as well as "
+                                        "the demo performers (none given: the demo performers only, as the log "
+                                        "says; e.g. ../shared/data/mocap/cmu)."),
+    demo_performers: int = typer.Option(CNN_DEFAULTS["demo_performers"], "--demo-performers",
+                                        help="Demo performers rendered for training (at most 30: the training "
+                                        "performers)."),
+    cmu_clips: int = typer.Option(CNN_DEFAULTS["cmu_clips"], "--cmu-clips",
+                                  help="CMU clips (of the training subjects) rendered."),
     views_per_clip: int = typer.Option(CNN_DEFAULTS["views_per_clip"], "--views-per-clip",
                                        help="Camera azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
@@ -77,9 +68,9 @@ def train_pose(
     epochs: int = typer.Option(CNN_DEFAULTS["epochs"], "--epochs", help="Training epochs of the cnn detector."),
     channels: int = typer.Option(CNN_DEFAULTS["channels"], "--channels", help="Width (feature channels) of the cnn "
                                  "detector's deeper layers; the network's time grows about with its square."),
-    heatmap_stride: int = typer.Option(CNN_DEFAULTS["stride"], "--heatmap-stride", help="Pixels per heatmap cell of "
-                                       "the cnn detector: 4 (the tree's grid) or 2 (an upsampling head; the tree "
-                                       "works on the maps pooled to 4 px, the refinement on the 2-px maps)."),
+    stride: int = typer.Option(CNN_DEFAULTS["stride"], "--heatmap-stride", help="Pixels per heatmap cell of "
+                               "the cnn detector: 4 (the tree's grid) or 2 (an upsampling head; the tree "
+                               "works on the maps pooled to 4 px, the refinement on the 2-px maps)."),
     flip_test: bool = typer.Option(CNN_DEFAULTS["flip_test"], "--flip-test/--no-flip-test", help="cnn detector: "
                                    "average the heatmaps and viewpoint of each frame and its mirror image (twice "
                                    "the network's time)."),
@@ -94,51 +85,16 @@ def train_pose(
 ) -> None:
     """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
     detectors, viewpoint classifier) on frames rendered from the demo performers and CMU clips."""
-    from ..pose.data import MAX_PERFORMERS, make_specs
-    from ..pose.estimator import PoseModel, save_pose_model
+    from ..demo import pose_sources  # noqa: F401 - registers the demo performers as a training source
+    from ..pose.estimator import save_model
+    from ..pose.training import train
 
-    if detector not in ("hog", "cnn"):
-        raise InputError(f"--detector: {detector!r} is not hog or cnn")
-    if epochs < 1:
-        raise InputError("--epochs: must be at least 1")
-    if not 8 <= channels <= 256:
-        raise InputError(f"--channels: {channels} is not between 8 and 256")
-    if heatmap_stride not in (2, 4):
-        raise InputError(f"--heatmap-stride: {heatmap_stride} is not 2 or 4")
-    if augment not in AUGMENTS:
-        raise InputError(f"--augment: {augment!r} is not one of {', '.join(AUGMENTS)}")
-    if unary_weight is None:
-        unary_weight = (CNN_DEFAULTS if detector == "cnn" else DEFAULTS)["unary_weight"]
-    if viewpoint not in VIEWPOINT_METHODS:
-        raise InputError(f"--viewpoint: {viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
-    if not unary_weight > 0:
-        raise InputError("--unary-weight: must be positive")
-    if refine < 0:
-        raise InputError(f"--refine: must be at least 0, got {refine}")
-    if not fg_weight >= 0:
-        raise InputError("--fg-weight: must be 0 or positive")
-    if hard_rounds not in (0, 1):
-        raise InputError("--hard-rounds: must be 0 or 1")
-    if n_orient < 4 or n_orient > 36:
-        raise InputError("--orientations: must be between 4 and 36")
-    if not 0 <= n_demo <= MAX_PERFORMERS["train"]:
-        raise InputError(f"--demo-performers: must be between 0 and {MAX_PERFORMERS['train']} (the training "
-                         "performers; the next ones are validation performers)")
-    cmu = _cmu(cmu_dir)
-    specs = make_specs("train", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
-    if detector == "cnn":
-        from ..pose.cnn import CnnPoseModel
-
-        model = CnnPoseModel(n_orient=n_orient, unary_weight=unary_weight, epochs=epochs,
-                             channels=channels, refine=refine, seed=seed,
-                             stride=heatmap_stride, flip_test=flip_test, augment=augment)
-    else:
-        model = PoseModel(n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint, unary_weight=unary_weight,
-                          fg_weight=fg_weight, seed=seed)
-    model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
-    save_pose_model(out, model, {"training": {"demo_performers": n_demo, "cmu_clips": n_cmu,
-                                              "views_per_clip": views_per_clip, "seconds": seconds, "fps": fps,
-                                              "cmu_dir": None if cmu is None else str(cmu), "n_specs": len(specs)}})
+    model, training = train(cmu_dir, detector=detector, demo_performers=demo_performers, cmu_clips=cmu_clips,
+                            views_per_clip=views_per_clip, seconds=seconds, fps=fps, seed=seed, jobs=jobs,
+                            scheduler=scheduler, n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint,
+                            unary_weight=unary_weight, fg_weight=fg_weight, epochs=epochs, channels=channels,
+                            stride=stride, flip_test=flip_test, refine=refine, augment=augment)
+    save_model(out, model, {"training": training})
     log.info("wrote %s (%d training frames)", out, model.n_train_frames_)
 
 
@@ -163,34 +119,20 @@ def pose(
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
     y = row in the input video's pixels)."""
     from ..formats.poses import write_poses
-    from ..pose.run import estimate_video, parse_frames
+    from ..pose.run import check_estimate_params, estimate_marks, estimate_video, parse_frames
     from ..video import VideoReader
 
-    if backend not in ("ps", "blazepose"):
-        raise InputError(f"--backend: {backend!r} is not ps or blazepose")
-    if backend == "ps" and model is None:
-        raise InputError("--model: the ps backend needs a pose model (vidstyle train-pose)")
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
-    if scales is not None and backend != "ps":
-        raise InputError("--scales: multi-scale inference is a ps backend setting")
     zooms = parse_scales(scales, "--scales")
-    with VideoReader(video) as r:
-        if annotations is not None:
-            from ..formats.annotations import check_video, read_annotations
-
-            ann = read_annotations(annotations)
-            entry = ann.video_for(video, annotations)
-            check_video(entry, video, r.info.frames, annotations)
-            if context < 0:
-                raise InputError(f"--context: must be at least 0, got {context}")
-            idx = sorted({t.frame + d for t in entry.transitions for d in range(-context, context + 1)
-                          if 0 <= t.frame + d < r.info.frames})
-            if not idx:
-                raise InputError(f"{annotations}: no transition marks for {video}")
-        else:
+    check_estimate_params(backend, model, zooms)
+    if annotations is not None:
+        poses = estimate_marks(video, annotations, backend, model, context, jobs=jobs, scheduler=scheduler,
+                               scales=zooms)
+    else:
+        with VideoReader(video) as r:
             idx = parse_frames(frames, len(r))
-    poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms)
+        poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms)
     write_poses(out, poses)
     log.info("wrote %s (%d frames, backend %s)", out, len(poses.frames), backend)
 
@@ -199,14 +141,16 @@ def pose(
 def evaluate_pose(
     model: Path = typer.Option(..., "--model", "-m", help="Pose model (train-pose)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
-    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", help="CMU BVH clips (held-out subjects are rendered)."),
-    n_demo: int = typer.Option(3, "--demo-performers", help="Held-out demo performers rendered."),
-    n_cmu: int = typer.Option(6, "--cmu-clips", help="Held-out CMU clips rendered."),
+    cmu_dir: Path | None = typer.Option(None, "--cmu-dir", envvar=CMU_ENV,
+                                        help="CMU BVH clips (held-out subjects are rendered; none: demo only)."),
+    demo_performers: int = typer.Option(3, "--demo-performers", help="Held-out demo performers rendered."),
+    cmu_clips: int = typer.Option(6, "--cmu-clips", help="Held-out CMU clips rendered."),
     views_per_clip: int = typer.Option(4, "--views-per-clip", help="Held-out azimuths per clip."),
     seconds: float = typer.Option(2.0, "--seconds", help="Seconds of each clip rendered."),
     fps: float = typer.Option(4.0, "--fps", help="Rendered frames per second of clip."),
-    real_dir: Path | None = typer.Option(None, "--real-dir", help="Real footage to compare the backends on "
-                                            "(default: ../shared/data/video/real when present; 'none' to skip)."),
+    real_dir: Path | None = typer.Option(None, "--real-dir", envvar=REAL_ENV, help="Real footage to compare the "
+                                         "backends on (e.g. ../shared/data/video/real; none given or 'none': skipped, "
+                                         "as the log says)."),
     overlay_dir: Path = typer.Option(Path("pose_overlays"), "--overlay-dir", help="Where overlay PNGs go."),
     real_frames: int = typer.Option(6, "--real-frames", help="Frames per real video."),
     seed: int = typer.Option(0, "--seed", help="Seed of the held-out renders."),
@@ -214,25 +158,12 @@ def evaluate_pose(
 ) -> None:
     """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
     held-out renders for both backends; backend agreement and overlays on real footage."""
+    from ..demo import pose_sources  # noqa: F401 - registers the demo performers as a training source
+    from ..evaluation.pose import evaluate, format_tables
     from ..formats.metrics import POSE, write_metrics
-    from ..pose.data import make_specs, render_samples
-    from ..pose.estimator import load_pose_model
-    from ..pose.evaluate import evaluate_real, evaluate_renders, format_tables
 
-    pm, header = load_pose_model(model)
-    cmu = _cmu(cmu_dir)
-    specs = make_specs("test", n_demo, n_cmu, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
-    samples = render_samples(specs, jobs=jobs, keep_bgr=True)
-    metrics = evaluate_renders(pm, samples)
-    metrics["params"] = {"model": str(model), "model_params": header.get("params"), "seed": seed,
-                         "demo_performers": n_demo, "cmu_clips": n_cmu, "views_per_clip": views_per_clip,
-                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu)}
-    rd = real_dir if real_dir is not None else (DEFAULT_REAL if DEFAULT_REAL.is_dir() else None)
-    if rd is not None and str(rd) != "none":
-        if not rd.is_dir():
-            raise InputError(f"{rd}: real footage directory not found")
-        videos = sorted(p for p in rd.iterdir() if p.suffix.lower() in (".mp4", ".mkv", ".avi", ".mov"))
-        metrics["real"] = evaluate_real(str(model), videos, overlay_dir, real_frames, jobs=1)
+    metrics = evaluate(model, cmu_dir, demo_performers, cmu_clips, views_per_clip, seconds, fps, real_dir, overlay_dir,
+                       real_frames, seed, jobs)
     if out is not None:
         write_metrics(out, {"seed": seed, **metrics}, kind=POSE)
     sys.stdout.write(format_tables(metrics) + "\n")

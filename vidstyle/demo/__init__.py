@@ -22,3 +22,5 @@ __all__ = [
     "build_skeleton", "build_take", "label_document", "make_dataset", "make_performer", "make_take",
     "performance_plan", "single_action_plan",
 ]
+
+from . import pose_sources  # noqa: F401  - registers the demo performers as a pose training source

@@ -161,6 +161,10 @@ class BlazePoseEstimator:
     """
 
     backend = "blazepose"
+    #: no person prior: every frame is detected on its own (:class:`vidstyle.pose.interfaces.PoseBackend`)
+    uses_background = False
+    #: the largest height frames are read at (taller videos are scaled down)
+    MAX_HEIGHT = 720
 
     def __init__(self, model_complexity: int = 1, min_detection_confidence: float = 0.5) -> None:
         if model_complexity != 1:
@@ -194,7 +198,20 @@ class BlazePoseEstimator:
         world = np.array([[lm.x, lm.y, lm.z] for lm in res.pose_world_landmarks.landmark])
         return img, world
 
-    def estimate(self, frame_bgr: np.ndarray, index: int = 0) -> PoseFrame:
+    def working_height(self, native_height: int) -> int:
+        """Frames are read at their own height, at most ``MAX_HEIGHT`` rows."""
+        return min(native_height, self.MAX_HEIGHT)
+
+    def set_inference(self, scales=None) -> BlazePoseEstimator:
+        """Multi-scale inference is a ps backend setting: any zoom other than 1 is a :class:`ParameterError`."""
+        if scales is not None and tuple(float(z) for z in scales) != (1.0,):
+            from ..errors import ParameterError
+
+            raise ParameterError("scales", "multi-scale inference is a ps backend setting")
+        return self
+
+    def estimate(self, frame_bgr: np.ndarray, index: int = 0, background: np.ndarray | None = None) -> PoseFrame:
+        """Pose of one frame (``background`` is not used: :attr:`uses_background` is False)."""
         h, w = frame_bgr.shape[:2]
         out = self.landmarks(frame_bgr)
         if out is None:

@@ -33,13 +33,14 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS
 from .data import VIEW_NAMES
 from .defaults import AUGMENTS, CNN_DEFAULTS, DEFAULTS
-from .estimator import PoseModel, check_scales
+from .estimator import PoseModel, check_common_params
 
 log = logging.getLogger(__name__)
 
@@ -302,16 +303,16 @@ def part_unaries(logheat: np.ndarray, m) -> np.ndarray:
     """(10, K, Hc, Wc) unary scores of the parts of pictorial structures ``m`` from keypoint
     log-probability maps (15, Hc, Wc): part j at (k, y, x) scores the log-probabilities of its
     proximal and distal keypoints at ``(x, y) + R(theta_k) offset`` (offsets rounded to cells)."""
-    from .model import N_PARTS, _shift
+    from .model import N_PARTS, shift_maps
 
     K = m.n_orient
     out = np.empty((N_PARTS, K) + logheat.shape[1:], dtype=np.float32)
     for j in range(N_PARTS):
         a, b = int(PART_KEYPOINTS[j, 0]), int(PART_KEYPOINTS[j, 1])
-        da, db = m._rounded(m.proximal_[j]), m._rounded(m.distal_[j])
+        da, db = m.rounded_offsets(m.proximal_[j]), m.rounded_offsets(m.distal_[j])
         for k in range(K):
-            out[j, k] = (_shift(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
-                         + _shift(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))
+            out[j, k] = (shift_maps(logheat[a], int(da[k, 1]), int(da[k, 0]), LOG_FLOOR)
+                         + shift_maps(logheat[b], int(db[k, 1]), int(db[k, 0]), LOG_FLOOR))
     return out
 
 
@@ -412,11 +413,99 @@ def _pad4(img: np.ndarray) -> np.ndarray:
     return img
 
 
+class CnnParts:
+    """Part detector strategy of :class:`CnnPoseModel` (``detector="cnn"``): the unary terms are
+    :class:`HeatmapCNN`'s keypoint log-probabilities (:func:`part_unaries`), the viewpoint features its
+    viewpoint head's, the solution's keypoints refined on the full-resolution heatmaps (``refine``); no
+    person prior (the network sees colour). Stateless: the network is the model's ``cnn_``."""
+
+    needs_colour = True
+    uses_foreground = False
+
+    def fit(self, model, samples, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
+        from ..errors import InputError
+        from .estimator import GENERIC
+        from .model import PictorialStructures
+
+        views = {s.view for s in samples}
+        missing = [v for v in VIEW_NAMES if v not in views]
+        if missing:
+            raise InputError(f"training frames have no {', '.join(missing)} view")
+        if any(s.bgr is None for s in samples):
+            raise ValueError("the cnn detector trains on colour frames (render_samples(..., keep_bgr=True))")
+        model.models_ = {}
+        for name in VIEW_NAMES + (GENERIC,):
+            kp = np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
+            m = PictorialStructures(model.n_orient, CELL, seed=model.seed, dt=model.dt, unary_weight=model.unary_weight)
+            model.models_[name] = m.fit_geometry(kp)
+        frames, kps = [], []
+        for s in samples:
+            f, sc = self._resize(model, s.bgr)
+            frames.append(f)
+            kps.append(np.asarray(s.keypoints, dtype=np.float64) * sc)
+        shapes = {f.shape for f in frames}
+        if len(shapes) != 1:
+            raise ValueError(f"training frames must share one size, got {sorted(shapes)}")
+        model.cnn_ = HeatmapCNN(model.channels, model.epochs, model.batch_size, model.lr, model.sigma, seed=model.seed,
+                               threads=model.threads, stride=model.stride, augment=model.augment).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
+        model.n_train_frames_ = len(samples)
+        return model
+
+    def _resize(self, model, frame: np.ndarray) -> tuple[np.ndarray, float]:
+        import cv2
+
+        bgr, s = model.to_work_size(frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
+        return _pad4(bgr), s
+
+    def prepare(self, model, frame: np.ndarray) -> tuple[CnnFrame, float]:
+        bgr, s = self._resize(model, frame)
+        heat, views = model.cnn_.predict(bgr[None], flip=bool(model.flip_test))
+        st = int(getattr(model.cnn_, "stride", CELL))
+        return CnnFrame(bgr, coarse_logheat(heat[0], st), views[0], heat[0], st), s
+
+    def view_features(self, model, f: CnnFrame, full: bool | None = None, which: str | None = None) -> tuple[dict, dict]:
+        return {"cnn": f.view_logp}, _PartMaps(f.logheat, model.models_)
+
+    def foreground_map(self, model, frame, background, f):
+        return None
+
+    def solve(self, model, model_name: str, S: np.ndarray, scale: float, fg=None, f: CnnFrame | None = None,
+              fg_weight: float | None = None) -> np.ndarray:
+        m = model.models_[model_name]
+        r = m.infer(S)
+        pts = m.keypoints(r["states"], r["unary"], scale=scale)
+        if f is not None:
+            pts = refine_keypoints(pts, f.fine, scale, radius=int(model.refine) * CELL // f.stride, cell=f.stride)
+        return pts
+
+
+class CnnViewpoint:
+    """The viewpoint classifier of :class:`CnnPoseModel`: the network's viewpoint head (its log-probabilities,
+    ``view_features(...)["cnn"]``), renormalised; nothing else is learned."""
+
+    NEEDS = ("cnn",)
+
+    def input_of(self, feats: dict):
+        return np.asarray(feats["cnn"], dtype=np.float64)[None]
+
+    def _proba(self, X) -> np.ndarray:
+        p = np.exp(np.atleast_2d(np.asarray(X, dtype=np.float64)))
+        return p / p.sum(axis=1, keepdims=True)
+
+    def predict(self, X) -> np.ndarray:
+        return np.array(VIEW_NAMES)[self._proba(X).argmax(axis=1)]
+
+    def scores(self, X) -> list[dict[str, float]]:
+        return [{v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, row)} for row in self._proba(X)]
+
+
 class CnnPoseModel(PoseModel):
     """Pictorial structures whose unary terms come from :class:`HeatmapCNN` (module docstring), with
     its viewpoint head as the viewpoint classifier (``viewpoint="cnn"``). The same interface as
     :class:`~vidstyle.pose.estimator.PoseModel` (``estimate``, ``prepare``, ``view_features``,
-    ``classify_view``, ``solve``), so ``vidstyle pose`` and ``evaluate pose`` run it unchanged.
+    ``classify_view``, ``solve``), so ``vidstyle pose`` and ``evaluate pose`` run it unchanged: it is a
+    :class:`PoseModel` composed with the :class:`CnnParts` part detectors and the :class:`CnnViewpoint`
+    classifier, and adds only its parameters (constructor, checks).
 
     Parameters: ``n_orient`` (part orientation bins of the tree), ``unary_weight`` (detectors vs tree
     prior), ``refine`` (cells of the tree's grid of the final keypoint refinement, 0 = none),
@@ -429,6 +518,7 @@ class CnnPoseModel(PoseModel):
     PARAMS = ("detector", "n_orient", "unary_weight", "refine", "flip_test", "dt", "channels", "epochs", "batch_size",
               "lr", "sigma", "threads", "stride", "augment", "seed")
     VIEWPOINTS = ("cnn",)
+    VIEWPOINT_CLASSIFIERS: ClassVar[dict] = {"cnn": lambda m: CnnViewpoint()}
 
     def __init__(self, n_orient: int = DEFAULTS["n_orient"], unary_weight: float = CNN_DEFAULTS["unary_weight"],
                  refine: int = CNN_DEFAULTS["refine"], dt: str = "envelope", channels: int = CNN_DEFAULTS["channels"],
@@ -460,86 +550,25 @@ class CnnPoseModel(PoseModel):
         state.setdefault("augment", "flip")
         self.__dict__.update(state)
 
-    def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
-                      fg_weight: float | None = None, scales=None) -> CnnPoseModel:
-        if scales is not None:
-            self.scales = check_scales(scales)
-        if viewpoint is not None and viewpoint != "cnn":
-            raise ValueError(f"the cnn detector's viewpoint classifier is 'cnn', got {viewpoint!r}")
-        if unary_weight is not None:
-            self.unary_weight = float(unary_weight)
-            for m in self.models_.values():
-                m.unary_weight = float(unary_weight)
+    def check_params(self) -> CnnPoseModel:
+        """:class:`ParameterError` naming the first parameter this model cannot train with (run by
+        :meth:`fit` and :meth:`fit_specs` before any work)."""
+        from ..errors import ParameterError
+
+        check_common_params(self)
+        if not self.refine >= 0:
+            raise ParameterError("refine", f"must be at least 0, got {self.refine}")
+        if not self.epochs >= 1:
+            raise ParameterError("epochs", "must be at least 1")
+        if not 8 <= self.channels <= 256:
+            raise ParameterError("channels", f"{self.channels} is not between 8 and 256")
+        if self.stride not in (2, CELL):
+            raise ParameterError("stride", f"{self.stride} is not 2 or {CELL}")
+        if self.augment not in AUGMENTS:
+            raise ParameterError("augment", f"{self.augment!r} is not one of {', '.join(AUGMENTS)}")
         return self
 
-    def fit_specs(self, specs, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
-        from .data import render_samples
 
-        return self.fit(render_samples(specs, jobs=jobs, scheduler=scheduler, keep_bgr=True))
-
-    def fit(self, samples, jobs: int = -1, scheduler: str | None = None) -> CnnPoseModel:
-        from ..errors import InputError
-        from .estimator import GENERIC
-        from .model import PictorialStructures
-
-        views = {s.view for s in samples}
-        missing = [v for v in VIEW_NAMES if v not in views]
-        if missing:
-            raise InputError(f"training frames have no {', '.join(missing)} view")
-        if any(s.bgr is None for s in samples):
-            raise ValueError("the cnn detector trains on colour frames (render_samples(..., keep_bgr=True))")
-        self.models_ = {}
-        for name in VIEW_NAMES + (GENERIC,):
-            kp = np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
-            m = PictorialStructures(self.n_orient, CELL, seed=self.seed, dt=self.dt, unary_weight=self.unary_weight)
-            self.models_[name] = m.fit_geometry(kp)
-        frames, kps = [], []
-        for s in samples:
-            f, sc = self._resize(s.bgr)
-            frames.append(f)
-            kps.append(np.asarray(s.keypoints, dtype=np.float64) * sc)
-        shapes = {f.shape for f in frames}
-        if len(shapes) != 1:
-            raise ValueError(f"training frames must share one size, got {sorted(shapes)}")
-        self.cnn_ = HeatmapCNN(self.channels, self.epochs, self.batch_size, self.lr, self.sigma, seed=self.seed,
-                               threads=self.threads, stride=self.stride, augment=self.augment).fit(np.stack(frames), np.stack(kps), [s.view for s in samples])
-        self.n_train_frames_ = len(samples)
-        return self
-
-    def _resize(self, frame: np.ndarray) -> tuple[np.ndarray, float]:
-        import cv2
-
-        bgr, s = self.to_work_size(frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
-        return _pad4(bgr), s
-
-    def prepare(self, frame: np.ndarray) -> tuple[CnnFrame, float]:
-        bgr, s = self._resize(frame)
-        heat, views = self.cnn_.predict(bgr[None], flip=bool(self.flip_test))
-        st = int(getattr(self.cnn_, "stride", CELL))
-        return CnnFrame(bgr, coarse_logheat(heat[0], st), views[0], heat[0], st), s
-
-    def view_features(self, f: CnnFrame, full: bool | None = None, which: str | None = None) -> tuple[dict, dict]:
-        return {"cnn": f.view_logp}, _PartMaps(f.logheat, self.models_)
-
-    def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
-        if which not in (None, "cnn"):
-            raise ValueError(f"the cnn detector's viewpoint classifier is 'cnn', got {which!r}")
-        p = np.exp(np.asarray(feats["cnn"], dtype=np.float64))
-        p /= p.sum()
-        return VIEW_NAMES[int(np.argmax(p))], {v: float(round(x, 4)) for v, x in zip(VIEW_NAMES, p)}
-
-    def foreground_map(self, frame, background, f):
-        return None
-
-    def solve(self, model_name: str, S: np.ndarray, scale: float, fg=None, f: CnnFrame | None = None,
-              fg_weight: float | None = None) -> np.ndarray:
-        m = self.models_[model_name]
-        r = m.infer(S)
-        pts = m.keypoints(r["states"], r["unary"], scale=scale)
-        if f is not None:
-            pts = refine_keypoints(pts, f.fine, scale, radius=int(self.refine) * CELL // f.stride, cell=f.stride)
-        return pts
-
-
-__all__ = ["AUGMENTS", "FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnPoseModel", "HeatmapCNN", "argmax_keypoints",
-           "coarse_logheat", "gaussian_targets", "part_unaries", "random_affine", "refine_keypoints"]
+__all__ = ["AUGMENTS", "FLIP_KEYPOINTS", "FLIP_VIEWS", "CnnFrame", "CnnParts", "CnnPoseModel", "CnnViewpoint",
+           "HeatmapCNN", "argmax_keypoints", "coarse_logheat", "gaussian_targets", "part_unaries", "random_affine",
+           "refine_keypoints"]

@@ -22,16 +22,18 @@ azimuth on a boundary between two views (45 degrees from both centres, within ``
 single true view: the held-out grid 15 + 30 k puts a third of its frames there (+-45, +-135), and the
 nearest-view label of those frames is a tie broken by the order of ``VIEW_NAMES``.
 :func:`acceptable_views` gives both neighbours for such an azimuth, which the viewpoint evaluation
-uses (:func:`vidstyle.pose.evaluate.viewpoint_scores`).
+uses (:func:`vidstyle.evaluation.pose.viewpoint_scores`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..mocap.keypoints import keypoint_positions
 
 VIEW_NAMES = ("front", "left", "right", "back")
@@ -63,7 +65,7 @@ def acceptable_views(azimuth_deg: float, tol: float = BOUNDARY_TOL) -> tuple[str
 
 @dataclass(frozen=True)
 class Spec:
-    source: str  # "demo:<performer index>" or a BVH path
+    source: str  # "<registered source>:<index>" (e.g. "demo:3", register_source) or a BVH path
     start_s: float  # excerpt start (seconds into the source motion)
     seconds: float
     azimuth: float
@@ -88,31 +90,57 @@ class Sample:
     clip: int = -1  # the spec's seed: frames of one rendered clip (one camera, look and background)
 
 
-def _demo_motion(index: int, seconds: float, seed: int):
-    from ..demo import Performer, build_take, performance_plan
-
-    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
-    p = Performer.random(f"p{index:02d}", rng, video_fps=20)
-    take = build_take(p, performance_plan(p, round(seconds * 20) + 4, rng), rng, video_fps=20)
-    return take.motion
+#: training sources by name (:func:`register_source`): a spec's ``source`` "<name>:<index>" is rendered
+#: from ``fn(index, seconds, seed)``; any other source is a BVH path
+_SOURCES: dict[str, Callable] = {}
 
 
-def load_source(source: str, seed: int = 0, seconds: float = 30.0):
+def register_source(name: str, fn: Callable) -> None:
+    """Make ``"<name>:<index>"`` a training source: ``fn(index, seconds, seed)`` returns its
+    :class:`vidstyle.mocap.Motion` (at least ``seconds`` long). The demo performers (``"demo:<i>"``,
+    :func:`make_specs`' ``n_demo``) are registered by :mod:`vidstyle.demo.pose_sources` when
+    :mod:`vidstyle.demo` is imported; ``fn`` must be a module-level function (parallel workers get it
+    pickled by reference)."""
+    if not name or ":" in name or not callable(fn):
+        raise ValueError(f"a training source needs a name without ':' and a function, got {name!r}, {fn!r}")
+    _SOURCES[name] = fn
+
+
+def registered_sources() -> tuple[str, ...]:
+    return tuple(_SOURCES)
+
+
+def source_loader(source: str) -> Callable | None:
+    """The registered function of ``source`` ("<name>:<index>"), None for a BVH path; an unregistered
+    name with an integer index is an :class:`InputError` naming it."""
+    name, sep, rest = source.partition(":")
+    if sep and name in _SOURCES:
+        return _SOURCES[name]
+    if sep and rest.isdigit() and not Path(source).exists():
+        raise InputError(f"training source {source!r}: no source {name!r} is registered "
+                         f"(registered: {', '.join(_SOURCES) or 'none'}; the demo performers: import vidstyle.demo)")
+    return None
+
+
+def load_source(source: str, seed: int = 0, seconds: float = 30.0, loader: Callable | None = None):
+    """Motion of a training source: a registered one (``loader``, default looked up by name) or a BVH file."""
     from ..mocap import read_bvh
 
-    if source.startswith("demo:"):
-        return _demo_motion(int(source[5:]), seconds, seed)
+    loader = loader or source_loader(source)
+    if loader is not None:
+        return loader(int(source.partition(":")[2]), seconds, seed)
     m = read_bvh(source)
     return m[1:]  # frame 0 of the CMU files is a T-pose
 
 
-def render_spec(spec: Spec, keep_bgr: bool = False) -> list[Sample]:
-    """Render one spec into samples (one per rendered frame)."""
+def render_spec(spec: Spec, keep_bgr: bool = False, loader: Callable | None = None) -> list[Sample]:
+    """Render one spec into samples (one per rendered frame); ``loader``: its source's function
+    (default: looked up in the registry of this process)."""
     from ..render import Appearance, Camera, render_motion
     from ..render.body import skeleton_height
 
     rng = np.random.default_rng(spec.seed)
-    motion = load_source(spec.source, seed=0, seconds=max(30.0, spec.start_s + spec.seconds + 1))
+    motion = load_source(spec.source, seed=0, seconds=max(30.0, spec.start_s + spec.seconds + 1), loader=loader)
     a = int(spec.start_s * motion.fps)
     b = min(motion.n_frames, a + max(2, int(spec.seconds * motion.fps)))
     if b - a < 2:
@@ -191,20 +219,23 @@ def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: i
     return specs
 
 
-def _render_job(spec: Spec) -> list[Sample]:
-    return render_spec(spec)
+@dataclass
+class _RenderJob:
+    spec: Spec
+    keep_bgr: bool
+    loader: Callable | None  # resolved in the calling process: workers need no registry of their own
 
 
-def _render_job_bgr(spec: Spec) -> list[Sample]:
-    return render_spec(spec, keep_bgr=True)
+def _render_job(job: _RenderJob) -> list[Sample]:
+    return render_spec(job.spec, keep_bgr=job.keep_bgr, loader=job.loader)
 
 
 def render_samples(specs: list[Spec], jobs: int = -1, scheduler: str | None = None,
                    keep_bgr: bool = False) -> list[Sample]:
     from ..parallel import parallel_map
 
-    parts = parallel_map(_render_job_bgr if keep_bgr else _render_job, specs, jobs=jobs, scheduler=scheduler,
-                         description="rendering pose frames")
+    work = [_RenderJob(spec, keep_bgr, source_loader(spec.source)) for spec in specs]
+    parts = parallel_map(_render_job, work, jobs=jobs, scheduler=scheduler, description="rendering pose frames")
     return [s for p in parts for s in p]
 
 

@@ -14,3 +14,6 @@ CNN_DEFAULTS = {"unary_weight": 16.0, "epochs": 20, "channels": 48, "refine": 3,
                 "augment": "flip", "demo_performers": 30, "cmu_clips": 71, "views_per_clip": 16}
 #: the training set of ``vidstyle train-pose`` (demo performers, CMU clips, azimuths per clip)
 TRAIN_SET = ("demo_performers", "cmu_clips", "views_per_clip")
+#: environment variables the CLI reads for ``--cmu-dir`` (CMU BVH clips) and ``evaluate pose --real-dir``
+CMU_ENV = "VIDSTYLE_CMU_DIR"
+REAL_ENV = "VIDSTYLE_REAL_DIR"

@@ -10,11 +10,11 @@ detections) and collect the torso scores the viewpoint SVMs learn from.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -23,17 +23,16 @@ from sklearn.multiclass import OneVsRestClassifier
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame
 from ..mocap.keypoints import PART_NAMES
 from .data import VIEW_NAMES, Sample, Spec, render_samples
 from .defaults import DEFAULTS, VIEWPOINT_METHODS
 from .features import RotatedFeatures, orientation_bin
+from .interfaces import PartDetector, ViewpointClassifier, part_detector
 from .model import N_PARTS, PictorialStructures, part_geometry, score_models
 
 log = logging.getLogger(__name__)
-MODEL_KIND = "vidstyle.pose-model"
-MODEL_VERSION = 1
 GENERIC = "generic"
 WORK_HEIGHT = 120
 
@@ -44,10 +43,17 @@ class ViewpointSVM:
     (and disagreements) broken by the one-vs-all decision values; ``scores`` are the one-vs-all
     decision values turned into a softmax."""
 
+    #: the viewpoint features it reads (:meth:`PoseModel.view_features`): the torso columns of "parts"
+    NEEDS: tuple[str, ...] = ("torso",)
+
     def __init__(self, C: float = 3.0, gamma: str | float = "scale", seed: int = 0) -> None:
         self.C = C
         self.gamma = gamma
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        """This classifier's input (a batch of one) from one frame's :meth:`PoseModel.view_features`."""
+        return feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]][None]
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> ViewpointSVM:
         self.scaler_ = StandardScaler().fit(X)
@@ -89,9 +95,14 @@ class ViewpointLogistic(ViewpointSVM):
     """Alternative viewpoint classifier: multinomial logistic regression on the best score of every
     part detector of every viewpoint (40 features)."""
 
+    NEEDS = ("parts",)
+
     def __init__(self, C: float = 1.0, seed: int = 0) -> None:
         self.C = C
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        return feats["parts"][None]
 
     def fit(self, X, y):
         self.scaler_ = StandardScaler().fit(X)
@@ -144,9 +155,14 @@ class ViewpointHOG(ViewpointLogistic):
     as rendered and mirrored (left and right swap, front and back stay). ``scores`` are the
     decision values turned into a softmax."""
 
+    NEEDS = ("hog",)
+
     def __init__(self, C: float = 0.01, seed: int = 0) -> None:
         self.C = C
         self.seed = seed
+
+    def input_of(self, feats: dict):
+        return feats["hog"][None]
 
     def fit(self, X, y, X_mirror=None):
         from sklearn.svm import LinearSVC
@@ -172,9 +188,14 @@ class ViewpointProduct:
     """Product of the all-parts logistic's probabilities and the whole-person HOG SVM's softmax
     (both trained as above; nothing else is learned). Input: (parts row, hog) of one frame."""
 
+    NEEDS = ("parts", "hog")
+
     def __init__(self, logistic: ViewpointLogistic, hog: ViewpointHOG) -> None:
         self.logistic = logistic
         self.hog = hog
+
+    def input_of(self, feats: dict):
+        return (feats["parts"], feats["hog"])
 
     def _proba(self, x):
         p = self.logistic._proba(x[0][None]) * self.hog._proba(x[1][None])
@@ -185,6 +206,16 @@ class ViewpointProduct:
 
     def scores(self, x):
         return [{v: float(round(p, 4)) for v, p in zip(VIEW_NAMES, row)} for row in self._proba(x)]
+
+
+#: the viewpoint classifiers a hog :class:`PoseModel` trains, by name (``viewpoint``): model -> classifier
+VIEWPOINT_CLASSIFIERS = {
+    "svm": lambda m: m.viewpoint_svm_,
+    "logistic": lambda m: m.viewpoint_logistic_,
+    "hog": lambda m: m.viewpoint_hog_,
+    "combined": lambda m: ViewpointProduct(m.viewpoint_logistic_, m.viewpoint_hog_),
+}
+assert tuple(VIEWPOINT_CLASSIFIERS) == VIEWPOINT_METHODS
 
 
 # ---------------------------------------------------------------- parallel training jobs
@@ -329,6 +360,147 @@ def zoom_about(centre: np.ndarray, z: float, size: tuple[int, int]) -> np.ndarra
                      [0.0, z, (H - 1) / 2.0 - z * float(centre[1])]])
 
 
+class HogParts:
+    """Part detector strategy of :class:`PoseModel` (``detector="hog"``): HOG cells of rotated copies of the
+    gray frame scored by each tree's linear part templates (the learned templates live in the trees,
+    ``model.models_``), the person prior from a video's background, and the viewpoint features the hog
+    model's classifiers read. Stateless: every method takes the model it serves."""
+
+    #: trains on colour renders (``render_samples(keep_bgr=...)``)
+    needs_colour = False
+    #: adds the person prior of a video's background (``fg_weight``)
+    uses_foreground = True
+
+    def fit(self, model, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
+        from ..parallel import parallel_map
+
+        views = {s.view for s in samples}
+        missing = [v for v in VIEW_NAMES if v not in views]
+        if missing:
+            raise InputError(f"training frames have no {', '.join(missing)} view")
+        kp = {name: np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
+              for name in VIEW_NAMES + (GENERIC,)}
+        model.models_ = {}
+        for name in VIEW_NAMES + (GENERIC,):
+            m = PictorialStructures(model.n_orient, model.cell, model.C, model.neg_per_pos, model.hard_rounds, model.seed,
+                                    model.dt, model.unary_weight)
+            model.models_[name] = m.fit_geometry(kp[name])
+        for m in model.models_.values():  # one template size per part: window gathers are shared
+            m.sizes_ = list(model.models_[GENERIC].sizes_)
+        sizes = {n: m.sizes_ for n, m in model.models_.items()}
+        triples = [(s.image, s.keypoints, s.view) for s in samples]
+        n_chunks = max(2, min(32, len(triples) // 20))
+        bgs = _chunks(_background_frames(max(10, len(triples) // 20), model.seed + 1), n_chunks)
+        chunks = _chunks(triples, n_chunks)
+        jobs_ = [_WindowJob(c, sizes, model.n_orient, model.cell, model.neg_per_pos, model.seed * 1000 + i,
+                            bgs[i] if i < len(bgs) else []) for i, c in enumerate(chunks)]
+        res = parallel_map(_windows, jobs_, jobs=jobs, scheduler=scheduler, description="part windows")
+        data = {name: [(np.vstack([r[name][j][0] for r in res if len(r[name][j][0])]),
+                        np.vstack([r[name][j][1] for r in res if len(r[name][j][1])]))
+                       for j in range(N_PARTS)] for name in model.models_}
+        for name, m in model.models_.items():
+            self._fit_templates(model, m, data[name])
+        if model.hard_rounds:
+            mined = parallel_map(_mine, [_MineJob(c, model.models_, 3) for c in chunks], jobs=jobs,
+                                 scheduler=scheduler, description="hard negatives")
+            for name, m in model.models_.items():
+                extra = [[r["hard"][name][j] for r in mined if r["hard"][name][j] is not None] for j in range(N_PARTS)]
+                data[name] = [(P, np.vstack([Nn] + e)) for (P, Nn), e in zip(data[name], extra)]
+                self._fit_templates(model, m, data[name])
+        # viewpoint features with the final detectors
+        vf = parallel_map(_mine, [_MineJob(c, model.models_, 0) for c in chunks], jobs=jobs, scheduler=scheduler,
+                          description="viewpoint features")
+        X = np.vstack([r["vfeat"] for r in vf])
+        y = np.array([t[2] for t in triples])
+        self._fit_viewpoint(model, X, y, np.vstack([r["hog"] for r in vf]), np.vstack([r["hog_mirror"] for r in vf]))
+        model.n_train_frames_ = len(samples)
+        return model
+
+    def _fit_templates(self, model, m: PictorialStructures, data) -> None:
+        m.templates_, m.bias_ = [], np.zeros(N_PARTS)
+        for j, (P, Nn) in enumerate(data):
+            X = np.vstack([P, Nn])
+            y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            clf = LogisticRegression(C=model.C, max_iter=300, class_weight="balanced").fit(X, y)
+            h, w = m.sizes_[j]
+            m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
+            m.bias_[j] = float(clf.intercept_[0])
+
+    def _fit_viewpoint(self, model, X: np.ndarray, y: np.ndarray, hog: np.ndarray, hog_mirror: np.ndarray) -> None:
+        torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
+        model.viewpoint_svm_ = ViewpointSVM(seed=model.seed).fit(torso, y)
+        model.viewpoint_logistic_ = ViewpointLogistic(seed=model.seed).fit(X, y)
+        model.viewpoint_hog_ = ViewpointHOG(C=model.hog_C, seed=model.seed).fit(hog, y, hog_mirror)
+        model.viewpoint_ = model._classifier(model.viewpoint)
+
+    def prepare(self, model, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
+        g, s = model.to_work_size(frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
+        f = RotatedFeatures(g, model.n_orient, model.cell)
+        f.gray = g
+        return f, s
+
+    def view_features(self, model, f: RotatedFeatures, full: bool | None = None,
+                      which: str | None = None) -> tuple[dict, dict]:
+        """Viewpoint features of a frame (``f`` from :meth:`prepare`): ``"parts"``, the best score of
+        every part detector of every viewpoint (40 values, view-major; NaN where not run), and
+        ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
+        viewpoint (default: only what ``which``, default the model's classifier, needs). Also
+        returns the score maps computed (model name -> maps; only complete maps)."""
+        needs = model._classifier(which or model.viewpoint).NEEDS
+        views_full = bool(full) or "parts" in needs
+        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
+        out = {"parts": row, "hog": None}
+        maps: dict = {}
+        if views_full or "torso" in needs:
+            views = {v: model.models_[v] for v in VIEW_NAMES}
+            got = score_models(views, f, None if views_full else [0])
+            for n, name in enumerate(VIEW_NAMES):
+                best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
+                row[n * N_PARTS: n * N_PARTS + len(best)] = best
+            if views_full:
+                maps.update(got)
+        if full or "hog" in needs:
+            g = score_models({GENERIC: model.models_[GENERIC]}, f, None if full else [0])[GENERIC]
+            if full:
+                maps[GENERIC] = g
+            out["hog"] = person_hog(person_crop(f.gray, torso_centre(model.models_[GENERIC], g[0])))
+        return out, maps
+
+    def foreground_map(self, model, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
+        """The frame's foreground at the working size (None without a background or a prior)."""
+        if background is None or not getattr(model, "fg_weight", 0.0):
+            return None
+        from .foreground import foreground
+
+        if background.shape != frame.shape:
+            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
+        fg = foreground(frame, background)
+        if fg.shape != (f.H, f.W):
+            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
+        return fg
+
+    def solve(self, model, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
+              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
+        with the person prior when ``fg`` is given."""
+        m = model.models_[model_name]
+        w = getattr(model, "fg_weight", 0.0) if fg_weight is None else fg_weight
+        if fg is not None and w:
+            from .foreground import part_coverage
+
+            S = S + np.float32(w) * part_coverage(m, f, fg)
+        r = m.infer(S)
+        return m.keypoints(r["states"], r["unary"], scale=scale)
+
+
+def check_common_params(model) -> None:
+    """The parameter checks every pose model shares (``n_orient``, ``unary_weight``)."""
+    if not 4 <= model.n_orient <= 36:
+        raise ParameterError("n_orient", "must be between 4 and 36")
+    if not model.unary_weight > 0:
+        raise ParameterError("unary_weight", "must be positive")
+
+
 class PoseModel:
     """Viewpoint-specific + generic pictorial structures and a viewpoint classifier.
 
@@ -363,9 +535,31 @@ class PoseModel:
               "fg_weight", "seed")
     #: the viewpoint classifiers this model trains (``set_inference(viewpoint=...)``, ``evaluate pose``)
     VIEWPOINTS = VIEWPOINT_METHODS
+    #: name -> (fitted model -> its viewpoint classifier, a :class:`~vidstyle.pose.interfaces.ViewpointClassifier`)
+    VIEWPOINT_CLASSIFIERS = VIEWPOINT_CLASSIFIERS
+    #: the part detectors (:data:`vidstyle.pose.interfaces.PART_DETECTORS`): a name, so that the strategy is
+    #: not pickled and model files stay loadable whatever the strategy classes become
+    detector = "hog"
+
+    @property
+    def parts_(self) -> PartDetector:
+        """The part detector strategy (:class:`HogParts`, :class:`~vidstyle.pose.cnn.CnnParts`) of :attr:`detector`."""
+        return part_detector(self.detector)
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
+
+    def check_params(self) -> PoseModel:
+        """:class:`ParameterError` naming the first parameter this model cannot train with (run by
+        :meth:`fit` and :meth:`fit_specs` before any work, as scikit-learn estimators check in ``fit``)."""
+        check_common_params(self)
+        if self.viewpoint not in VIEWPOINT_METHODS:
+            raise ParameterError("viewpoint", f"{self.viewpoint!r} is not one of {', '.join(VIEWPOINT_METHODS)}")
+        if not self.fg_weight >= 0:
+            raise ParameterError("fg_weight", "must be 0 or positive")
+        if self.hard_rounds not in (0, 1):
+            raise ParameterError("hard_rounds", "must be 0 or 1")
+        return self
 
     def set_inference(self, viewpoint: str | None = None, unary_weight: float | None = None,
                       fg_weight: float | None = None, scales=None) -> PoseModel:
@@ -373,11 +567,11 @@ class PoseModel:
         person prior's weight, the zoom factors of multi-scale inference (:meth:`estimate`)."""
         if scales is not None:
             self.scales = check_scales(scales)
-        if fg_weight is not None:
+        if fg_weight is not None and self.parts_.uses_foreground:
             self.fg_weight = float(fg_weight)
         if viewpoint is not None:
-            if viewpoint not in VIEWPOINT_METHODS:
-                raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {viewpoint!r}")
+            if viewpoint not in self.VIEWPOINT_CLASSIFIERS:
+                raise ValueError(f"viewpoint must be one of {tuple(self.VIEWPOINT_CLASSIFIERS)}, got {viewpoint!r}")
             self.viewpoint = viewpoint
             self.viewpoint_ = self._classifier(viewpoint)
         if unary_weight is not None:
@@ -388,78 +582,22 @@ class PoseModel:
 
     # ---------------------------------------------------------- training
     def fit_specs(self, specs: list[Spec], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
-        samples = render_samples(specs, jobs=jobs, scheduler=scheduler)
+        self.check_params()
+        samples = render_samples(specs, jobs=jobs, scheduler=scheduler, keep_bgr=self.parts_.needs_colour)
         return self.fit(samples, jobs=jobs, scheduler=scheduler)
 
     def fit(self, samples: list[Sample], jobs: int = -1, scheduler: str | None = None) -> PoseModel:
-        from ..parallel import parallel_map
-
-        if self.viewpoint not in VIEWPOINT_METHODS:
-            raise ValueError(f"viewpoint must be one of {VIEWPOINT_METHODS}, got {self.viewpoint!r}")
-        views = {s.view for s in samples}
-        missing = [v for v in VIEW_NAMES if v not in views]
-        if missing:
-            raise InputError(f"training frames have no {', '.join(missing)} view")
-        kp = {name: np.stack([s.keypoints for s in samples if name in (s.view, GENERIC)])
-              for name in VIEW_NAMES + (GENERIC,)}
-        self.models_ = {}
-        for name in VIEW_NAMES + (GENERIC,):
-            m = PictorialStructures(self.n_orient, self.cell, self.C, self.neg_per_pos, self.hard_rounds, self.seed,
-                                    self.dt, self.unary_weight)
-            self.models_[name] = m.fit_geometry(kp[name])
-        for m in self.models_.values():  # one template size per part: window gathers are shared
-            m.sizes_ = list(self.models_[GENERIC].sizes_)
-        sizes = {n: m.sizes_ for n, m in self.models_.items()}
-        triples = [(s.image, s.keypoints, s.view) for s in samples]
-        n_chunks = max(2, min(32, len(triples) // 20))
-        bgs = _chunks(_background_frames(max(10, len(triples) // 20), self.seed + 1), n_chunks)
-        chunks = _chunks(triples, n_chunks)
-        jobs_ = [_WindowJob(c, sizes, self.n_orient, self.cell, self.neg_per_pos, self.seed * 1000 + i,
-                            bgs[i] if i < len(bgs) else []) for i, c in enumerate(chunks)]
-        res = parallel_map(_windows, jobs_, jobs=jobs, scheduler=scheduler, description="part windows")
-        data = {name: [(np.vstack([r[name][j][0] for r in res if len(r[name][j][0])]),
-                        np.vstack([r[name][j][1] for r in res if len(r[name][j][1])]))
-                       for j in range(N_PARTS)] for name in self.models_}
-        for name, m in self.models_.items():
-            self._fit_templates(m, data[name])
-        if self.hard_rounds:
-            mined = parallel_map(_mine, [_MineJob(c, self.models_, 3) for c in chunks], jobs=jobs,
-                                 scheduler=scheduler, description="hard negatives")
-            for name, m in self.models_.items():
-                extra = [[r["hard"][name][j] for r in mined if r["hard"][name][j] is not None] for j in range(N_PARTS)]
-                data[name] = [(P, np.vstack([Nn] + e)) for (P, Nn), e in zip(data[name], extra)]
-                self._fit_templates(m, data[name])
-        # viewpoint features with the final detectors
-        vf = parallel_map(_mine, [_MineJob(c, self.models_, 0) for c in chunks], jobs=jobs, scheduler=scheduler,
-                          description="viewpoint features")
-        X = np.vstack([r["vfeat"] for r in vf])
-        y = np.array([t[2] for t in triples])
-        self._fit_viewpoint(X, y, np.vstack([r["hog"] for r in vf]), np.vstack([r["hog_mirror"] for r in vf]))
-        self.n_train_frames_ = len(samples)
+        """Fit the trees, the part detectors and the viewpoint classifier(s) on labelled frames."""
+        self.check_params()
+        self.parts_.fit(self, samples, jobs=jobs, scheduler=scheduler)
         return self
 
-    def _fit_templates(self, m: PictorialStructures, data) -> None:
-        m.templates_, m.bias_ = [], np.zeros(N_PARTS)
-        for j, (P, Nn) in enumerate(data):
-            X = np.vstack([P, Nn])
-            y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
-            clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced").fit(X, y)
-            h, w = m.sizes_[j]
-            m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
-            m.bias_[j] = float(clf.intercept_[0])
 
-    def _fit_viewpoint(self, X: np.ndarray, y: np.ndarray, hog: np.ndarray, hog_mirror: np.ndarray) -> None:
-        torso = X[:, [VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
-        self.viewpoint_svm_ = ViewpointSVM(seed=self.seed).fit(torso, y)
-        self.viewpoint_logistic_ = ViewpointLogistic(seed=self.seed).fit(X, y)
-        self.viewpoint_hog_ = ViewpointHOG(C=self.hog_C, seed=self.seed).fit(hog, y, hog_mirror)
-        self.viewpoint_ = self._classifier(self.viewpoint)
-
-    def _classifier(self, which: str):
-        if which == "combined":
-            return ViewpointProduct(self.viewpoint_logistic_, self.viewpoint_hog_)
-        return {"svm": self.viewpoint_svm_, "logistic": self.viewpoint_logistic_,
-                "hog": self.viewpoint_hog_}[which]
+    def _classifier(self, which: str) -> ViewpointClassifier:
+        """The trained viewpoint classifier called ``which`` (:attr:`VIEWPOINT_CLASSIFIERS`)."""
+        if which not in self.VIEWPOINT_CLASSIFIERS:
+            raise ParameterError("viewpoint", f"{which!r} is not one of {', '.join(self.VIEWPOINT_CLASSIFIERS)}")
+        return self.VIEWPOINT_CLASSIFIERS[which](self)
 
     # ---------------------------------------------------------- inference
     def work_scale(self, frame_shape) -> float:
@@ -472,53 +610,19 @@ class PoseModel:
             img = cv2.resize(img, (max(8, round(img.shape[1] * s)), WORK_HEIGHT), interpolation=cv2.INTER_AREA)
         return img, s
 
-    def prepare(self, frame: np.ndarray) -> tuple[RotatedFeatures, float]:
-        g, s = self.to_work_size(frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
-        f = RotatedFeatures(g, self.n_orient, self.cell)
-        f.gray = g
-        return f, s
+    def prepare(self, frame: np.ndarray):
+        """The frame prepared for the part detectors (:attr:`parts_`) and its working scale."""
+        return self.parts_.prepare(self, frame)
 
-    def view_features(self, f: RotatedFeatures, full: bool | None = None,
-                      which: str | None = None) -> tuple[dict, dict]:
-        """Viewpoint features of a frame (``f`` from :meth:`prepare`): ``"parts"``, the best score of
-        every part detector of every viewpoint (40 values, view-major; NaN where not run), and
-        ``"hog"``, the whole-person HOG (None when not needed). ``full`` runs every detector of every
-        viewpoint (default: only what ``which``, default the model's classifier, needs). Also
-        returns the score maps computed (model name -> maps; only complete maps)."""
-        which = which or self.viewpoint
-        views_full = bool(full) or which in ("logistic", "combined")
-        row = np.full(len(VIEW_NAMES) * N_PARTS, np.nan)
-        out = {"parts": row, "hog": None}
-        maps: dict = {}
-        if views_full or which == "svm":
-            views = {v: self.models_[v] for v in VIEW_NAMES}
-            got = score_models(views, f, None if views_full else [0])
-            for n, name in enumerate(VIEW_NAMES):
-                best = got[name].reshape(got[name].shape[0], -1).max(axis=1)
-                row[n * N_PARTS: n * N_PARTS + len(best)] = best
-            if views_full:
-                maps.update(got)
-        if full or which in ("hog", "combined"):
-            g = score_models({GENERIC: self.models_[GENERIC]}, f, None if full else [0])[GENERIC]
-            if full:
-                maps[GENERIC] = g
-            out["hog"] = person_hog(person_crop(f.gray, torso_centre(self.models_[GENERIC], g[0])))
-        return out, maps
+    def view_features(self, f, full: bool | None = None, which: str | None = None) -> tuple[dict, Any]:
+        """Viewpoint features of a prepared frame and the score maps computed (:attr:`parts_`)."""
+        return self.parts_.view_features(self, f, full, which)
+
 
     def classify_view(self, feats: dict, which: str | None = None) -> tuple[str, dict]:
-        which = which or self.viewpoint
-        clf = self._classifier(which)
-        if which == "hog":
-            x = feats["hog"]
-        elif which == "combined":
-            x = (feats["parts"], feats["hog"])
-        elif which == "logistic":
-            x = feats["parts"]
-        else:
-            x = feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]]
-        if which == "combined":
-            return str(clf.predict(x)[0]), clf.scores(x)[0]
-        return str(clf.predict(x[None])[0]), clf.scores(x[None])[0]
+        clf = self._classifier(which or self.viewpoint)
+        x = clf.input_of(feats)
+        return str(clf.predict(x)[0]), clf.scores(x)[0]
 
     #: zoom factors tried about the person (``set_inference(scales=...)``; (1.0,): the frame as given)
     scales: tuple[float, ...] = (1.0,)
@@ -568,60 +672,51 @@ class PoseModel:
         pts = self.solve(model_name, S, s, fg, f)
         return PoseFrame(index, vname, pts, vscores)
 
-    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f: RotatedFeatures):
-        """The frame's foreground at the working size (None without a background or a prior)."""
-        if background is None or not getattr(self, "fg_weight", 0.0):
-            return None
-        from .foreground import foreground
+    @property
+    def uses_background(self) -> bool:
+        """Whether :meth:`estimate` reads a video's background (the person prior is on)."""
+        return bool(getattr(self, "fg_weight", 0.0))
 
-        if background.shape != frame.shape:
-            raise ValueError(f"background shape {background.shape} is not the frame's {frame.shape}")
-        fg = foreground(frame, background)
-        if fg.shape != (f.H, f.W):
-            fg = cv2.resize(fg, (f.W, f.H), interpolation=cv2.INTER_AREA)
-        return fg
+    def working_height(self, native_height: int) -> int:
+        """Videos are read at :data:`WORK_HEIGHT` rows (the training renders' figure scale)."""
+        return WORK_HEIGHT
+
+    def close(self) -> None:
+        """Nothing to release (the :class:`~vidstyle.pose.interfaces.PoseBackend` interface)."""
+
+    def foreground_map(self, frame: np.ndarray, background: np.ndarray | None, f):
+        """The frame's foreground at the working size (None without a background, a prior, or for
+        detectors that use none)."""
+        return self.parts_.foreground_map(self, frame, background, f)
 
     def solve(self, model_name: str, S: np.ndarray, scale: float, fg: np.ndarray | None = None,
-              f: RotatedFeatures | None = None, fg_weight: float | None = None) -> np.ndarray:
-        """(15, 3) keypoints of the best configuration of one detector set given its score maps,
-        with the person prior when ``fg`` is given."""
-        m = self.models_[model_name]
-        w = getattr(self, "fg_weight", 0.0) if fg_weight is None else fg_weight
-        if fg is not None and w:
-            from .foreground import part_coverage
+              f=None, fg_weight: float | None = None) -> np.ndarray:
+        """(15, 3) keypoints of the best configuration of one tree given its score maps (:attr:`parts_`)."""
+        return self.parts_.solve(self, model_name, S, scale, fg, f, fg_weight)
 
-            S = S + np.float32(w) * part_coverage(m, f, fg)
-        r = m.infer(S)
-        return m.keypoints(r["states"], r["unary"], scale=scale)
 
 
 # ---------------------------------------------------------------- files
-def save_pose_model(path: str | Path, model: PoseModel, extra: dict | None = None) -> None:
-    import joblib
-
-    from ..fileio import atomic_path
-
-    header = {"kind": MODEL_KIND, "schema_version": MODEL_VERSION, "params": model.get_params(),
-              "seed": model.seed, "n_train_frames": int(getattr(model, "n_train_frames_", 0)),
-              "parts": list(PART_NAMES), **(extra or {})}
-    with atomic_path(Path(path)) as tmp:
-        joblib.dump({"header": json.dumps(header, default=str), "model": model}, tmp, compress=3)
+def model_header(model: PoseModel, extra: dict | None = None) -> dict:
+    """What a pose model file records about ``model`` (:mod:`vidstyle.formats.pose_model`)."""
+    return {"params": model.get_params(), "seed": model.seed, "n_train_frames": int(getattr(model, "n_train_frames_", 0)),
+            "parts": list(PART_NAMES), **(extra or {})}
 
 
-def load_pose_model(path: str | Path) -> tuple[PoseModel, dict]:
-    import joblib
+def save_model(path: str | Path, model: PoseModel, extra: dict | None = None) -> dict:
+    """Write a fitted pose model file (``vidstyle train-pose``); ``extra``: more header fields. Returns the header."""
+    from ..formats.pose_model import write_pose_model
 
-    path = Path(path)
-    try:
-        obj = joblib.load(path)
-    except FileNotFoundError:
-        raise InputError(f"{path}: pose model not found") from None
-    except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad model file
-        raise InputError(f"{path}: not a pose model file ({type(exc).__name__}: {exc})"[:300]) from None
-    if not isinstance(obj, dict) or "header" not in obj or not isinstance(obj.get("model"), PoseModel):
-        raise InputError(f"{path}: not a pose model file (written by vidstyle train-pose)")
-    header = json.loads(obj["header"])
-    if header.get("kind") != MODEL_KIND or header.get("schema_version") != MODEL_VERSION:
-        raise InputError(f"{path}: kind/schema_version {header.get('kind')}/{header.get('schema_version')} "
-                         f"is not {MODEL_KIND}/{MODEL_VERSION}")
-    return obj["model"], header
+    return write_pose_model(path, model, model_header(model, extra))
+
+
+def load_backend(model_path: str | Path) -> PoseModel:
+    """The ``ps`` pose backend: the pose model of a file (:data:`vidstyle.pose.interfaces.BACKENDS`)."""
+    return load_model(model_path)[0]
+
+
+def load_model(path: str | Path) -> tuple[PoseModel, dict]:
+    """``(model, header)`` of a pose model file (:class:`PoseModel` or :class:`~vidstyle.pose.cnn.CnnPoseModel`)."""
+    from ..formats.pose_model import read_pose_model
+
+    return read_pose_model(path, PoseModel)

@@ -37,10 +37,10 @@ def part_coverage(model, f, fg: np.ndarray) -> np.ndarray:
     """(10, K, Hc, Wc) mean foreground of each part's window at every state (``model`` a
     :class:`~vidstyle.pose.model.PictorialStructures`, ``f`` the frame's RotatedFeatures, ``fg`` the
     frame's foreground at the working size)."""
-    from .model import N_PARTS, _canvas_maps
+    from .model import N_PARTS, canvas_maps
 
     cell = model.cell
-    Hc, Wc, maps = _canvas_maps(f, cell)
+    Hc, Wc, maps = canvas_maps(f, cell)
     K = f.n_orient
     Sc = f.S // cell
     copies = {}

@@ -58,7 +58,7 @@ def _from_frame(v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
 
 
-def _shift(maps: np.ndarray, dy: int, dx: int, fill: float = BIG) -> np.ndarray:
+def shift_maps(maps: np.ndarray, dy: int, dx: int, fill: float = BIG) -> np.ndarray:
     """out[..., y, x] = maps[..., y + dy, x + dx] (``fill`` outside)."""
     H, W = maps.shape[-2:]
     out = np.full_like(maps, fill)
@@ -281,7 +281,7 @@ class PictorialStructures:
         return score_models({"m": self}, f)["m"]
 
     # ------------------------------------------------------------------ inference
-    def _rounded(self, off: np.ndarray) -> np.ndarray:
+    def rounded_offsets(self, off: np.ndarray) -> np.ndarray:
         """(K, 2) integer (dx, dy) cell offsets of a part-frame offset at each orientation."""
         key = (self.n_orient, float(off[0]), float(off[1]))
         cache = self.__dict__.setdefault("_offset_cache", {})
@@ -308,8 +308,8 @@ class PictorialStructures:
             # child's cost by its joint position: J(k, q) = total(k, q - R_k a)
             shifted = []
             for j in js:
-                a = self._rounded(self.child_offsets_[j])
-                shifted.append(np.stack([_shift(total[j, k], -a[k, 1], -a[k, 0]) for k in range(K)]))
+                a = self.rounded_offsets(self.child_offsets_[j])
+                shifted.append(np.stack([shift_maps(total[j, k], -a[k, 1], -a[k, 0]) for k in range(K)]))
             Jm = np.stack(shifted)  # (n, K, H, W)
             wrow = np.repeat(np.array([self.wxy_[j] for j in js]), K).reshape(len(js), K)
             D, ay, ax = _dt_rows(dtf, Jm, wrow)
@@ -319,8 +319,8 @@ class PictorialStructures:
                 dev = (kk[None, :] - kk[:, None] - self.mu_[j] + K / 2) % K - K / 2  # [ki, kj]
                 pen = self.wt_[j] * dev ** 2
                 E, kbest = min_plus(D[n], pen)  # (ki, H, W)
-                b = self._rounded(self.offsets_[j])
-                msg = np.stack([_shift(E[k], b[k, 1], b[k, 0]) for k in range(K)])
+                b = self.rounded_offsets(self.offsets_[j])
+                msg = np.stack([shift_maps(E[k], b[k, 1], b[k, 0]) for k in range(K)])
                 total[i] += msg
                 back[j] = (kbest, ay[n], ax[n])
         root = total[0] + self.root_prior_[:, None, None]
@@ -331,13 +331,13 @@ class PictorialStructures:
         for j in range(1, N_PARTS):  # parents come before children in PART_NAMES order
             i = int(PART_PARENT_INDEX[j])
             ki, yi, xi = states[i]
-            b = self._rounded(self.offsets_[j])[ki]
+            b = self.rounded_offsets(self.offsets_[j])[ki]
             qy, qx = yi + b[1], xi + b[0]
             kbest, ay, ax = back[j]
             qy_c, qx_c = int(np.clip(qy, 0, H - 1)), int(np.clip(qx, 0, W - 1))
             kj = int(kbest[ki, qy_c, qx_c])
             py, px = int(ay[kj, qy_c, qx_c]), int(ax[kj, qy_c, qx_c])
-            a = self._rounded(self.child_offsets_[j])[kj]
+            a = self.rounded_offsets(self.child_offsets_[j])[kj]
             states[j] = (kj, py - a[1], px - a[0])
         unary = np.array([scores[j, states[j, 0], int(np.clip(states[j, 1], 0, H - 1)),
                                  int(np.clip(states[j, 2], 0, W - 1))] for j in range(N_PARTS)])
@@ -358,8 +358,8 @@ class PictorialStructures:
             i = int(PART_PARENT_INDEX[j])
             ki, yi, xi = states[i]
             kj, yj, xj = states[j]
-            b = self._rounded(self.offsets_[j])[ki]
-            a = self._rounded(self.child_offsets_[j])[kj]
+            b = self.rounded_offsets(self.offsets_[j])[ki]
+            a = self.rounded_offsets(self.child_offsets_[j])[kj]
             qi = np.array([xi + b[0], yi + b[1]])
             qj = np.array([xj + a[0], yj + a[1]])
             if not (0 <= qj[1] < H and 0 <= qj[0] < W and 0 <= qi[1] < H and 0 <= qi[0] < W):
@@ -391,7 +391,7 @@ class PictorialStructures:
 _GRID_CACHE: dict = {}
 
 
-def _canvas_maps(f: RotatedFeatures, cell: int):
+def canvas_maps(f: RotatedFeatures, cell: int):
     """Per orientation k: float32 (col, row) canvas cell coordinates under every frame cell centre
     (for ``cv2.remap``)."""
     key = (f.H, f.W, f.S, f.n_orient, cell, getattr(f, "rotate", True))
@@ -416,7 +416,7 @@ def score_models(models: dict, f: RotatedFeatures, parts: list[int] | None = Non
 
     parts = list(range(N_PARTS)) if parts is None else parts
     cell = next(iter(models.values())).cell
-    Hc, Wc, maps = _canvas_maps(f, cell)
+    Hc, Wc, maps = canvas_maps(f, cell)
     K = f.n_orient
     out = {}
     for name, m in models.items():

@@ -9,11 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame, Poses
-from .estimator import WORK_HEIGHT
-
-BLAZEPOSE_MAX_HEIGHT = 720
+from .interfaces import MODEL_BACKENDS, PoseBackend, backend_factory, check_backend
 
 
 @dataclass
@@ -25,10 +23,9 @@ class _Chunk:
     scales: tuple[float, ...] = (1.0,)
 
 
-def working_height(backend: str, native_height: int) -> int:
-    if backend == "ps":
-        return WORK_HEIGHT
-    return min(native_height, BLAZEPOSE_MAX_HEIGHT)
+def working_height(backend: PoseBackend, native_height: int) -> int:
+    """The height a backend reads a video at (:meth:`PoseBackend.working_height`)."""
+    return int(backend.working_height(native_height))
 
 
 def to_input_pixels(pts: np.ndarray, work_size: tuple[int, int], in_size: tuple[int, int]) -> np.ndarray:
@@ -40,14 +37,8 @@ def to_input_pixels(pts: np.ndarray, work_size: tuple[int, int], in_size: tuple[
     return out
 
 
-def _make_estimator(backend: str, model_path: str | None):
-    if backend == "blazepose":
-        from .blazepose import BlazePoseEstimator
-
-        return BlazePoseEstimator()
-    from .estimator import load_pose_model
-
-    return load_pose_model(model_path)[0]
+def _make_estimator(backend: str, model_path: str | None) -> PoseBackend:
+    return backend_factory(backend)(model_path)
 
 
 def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
@@ -58,18 +49,17 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
         est.set_inference(scales=chunk.scales)
     with VideoReader(chunk.video) as probe:
         in_size = (probe.info.width, probe.info.height)
-    h = working_height(chunk.backend, in_size[1])
+    h = working_height(est, in_size[1])
     out = []
     with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
-        bg = video_background(reader) if chunk.backend == "ps" and getattr(est, "fg_weight", 0.0) else None
+        bg = video_background(reader) if est.uses_background else None
         for i in chunk.frames:
             frame = np.asarray(reader.frame(i))
-            pf = est.estimate(frame, i, background=bg) if bg is not None else est.estimate(frame, i)
+            pf = est.estimate(frame, i, background=bg)
             pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
             pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
             out.append(pf)
-    if hasattr(est, "close"):
-        est.close()
+    est.close()
     return out
 
 
@@ -100,38 +90,46 @@ def parse_frames(text: str | None, n_frames: int) -> list[int]:
         try:
             i = int(tok)
         except ValueError:
-            raise InputError(f"frames: {tok!r} is not a frame index") from None
+            raise ParameterError("frames", f"{tok!r} is not a frame index") from None
         if not 0 <= i < n_frames:
-            raise InputError(f"frames: {i} is outside the video's 0..{n_frames - 1}")
+            raise ParameterError("frames", f"{i} is outside the video's 0..{n_frames - 1}")
         out.add(i)
     if not out:
-        raise InputError("frames: no frame index given")
+        raise ParameterError("frames", "no frame index given")
     return sorted(out)
+
+
+def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]:
+    """The checks of :func:`estimate_video`'s settings (:class:`ParameterError` naming the parameter:
+    ``backend``, ``model``, ``scales``); returns the zoom factors."""
+    from .estimator import check_scales
+
+    check_backend(backend)
+    if backend in MODEL_BACKENDS and model_path is None:
+        raise ParameterError("model", f"the {backend} backend needs a pose model (vidstyle train-pose)")
+    if scales is not None and backend != "ps":
+        raise ParameterError("scales", "multi-scale inference is a ps backend setting")
+    try:
+        return (1.0,) if scales is None else check_scales(scales)
+    except ValueError as exc:
+        raise ParameterError("scales", str(exc)) from None
 
 
 def estimate_video(video: str | Path, backend: str = "ps", model_path: str | Path | None = None,
                    frames: list[int] | None = None, jobs: int = -1, scheduler: str | None = None,
                    chunk_frames: int = 16, scales=None) -> Poses:
-    """Poses of ``frames`` (default: all) of ``video``; ``scales``: zoom factors of the ps backend's
-    multi-scale inference (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only)."""
+    """Poses of ``frames`` (default: all) of ``video`` (``vidstyle pose``); ``backend``: a name of
+    :data:`vidstyle.pose.interfaces.BACKENDS` (``model_path``: the ``ps`` backend's pose model file);
+    ``scales``: zoom factors of the ps backend's multi-scale inference
+    (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only)."""
     from ..parallel import parallel_map
     from ..video import VideoReader
-    from .estimator import check_scales
 
-    if backend not in ("ps", "blazepose"):
-        raise InputError(f"backend: {backend!r} is not ps or blazepose")
-    if backend == "ps" and model_path is None:
-        raise InputError("model: the ps backend needs a pose model (vidstyle train-pose)")
-    if scales is not None and backend != "ps":
-        raise InputError("scales: multi-scale inference is a ps backend setting")
-    try:
-        scales = (1.0,) if scales is None else check_scales(scales)
-    except ValueError as exc:
-        raise InputError(f"scales: {exc}") from None
+    scales = check_estimate_params(backend, model_path, scales)
     with VideoReader(video) as r:
         n = len(r)
     frames = list(range(n)) if frames is None else frames
-    if backend == "ps":  # fail early on a bad model file, before any worker starts
+    if backend in MODEL_BACKENDS:  # fail early on a bad model file, before any worker starts
         _make_estimator(backend, str(model_path))
     size = max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
     chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path),
@@ -139,3 +137,33 @@ def estimate_video(video: str | Path, backend: str = "ps", model_path: str | Pat
     res = parallel_map(_run_chunk, chunks, jobs=jobs, scheduler=scheduler, description=f"pose ({backend})")
     params = {"scales": list(scales)} if scales != (1.0,) else {}
     return Poses(str(video), backend, [pf for part in res for pf in part], params=params)
+
+
+def mark_frames(video: str | Path, annotations: str | Path, context: int = 0) -> list[int]:
+    """The frames of ``video``'s transition marks in an annotations file (``vidstyle annotate``; the video
+    must be the annotated one: same sha256), with ``context`` frames either side of each (inside the
+    video); :class:`InputError` when there are none."""
+    from ..formats.annotations import check_video, read_annotations
+    from ..video import VideoReader
+
+    if not context >= 0:
+        raise ParameterError("context", f"must be at least 0, got {context}")
+    with VideoReader(video) as r:
+        n = r.info.frames
+    ann = read_annotations(annotations)
+    entry = ann.video_for(video, annotations)
+    check_video(entry, video, n, annotations)
+    idx = sorted({t.frame + d for t in entry.transitions for d in range(-context, context + 1) if 0 <= t.frame + d < n})
+    if not idx:
+        raise InputError(f"{annotations}: no transition marks for {video}")
+    return idx
+
+
+def estimate_marks(video: str | Path, annotations: str | Path, backend: str = "ps",
+                   model_path: str | Path | None = None, context: int = 0, jobs: int = -1,
+                   scheduler: str | None = None, scales=None) -> Poses:
+    """Poses of the frames of ``video``'s transition marks (:func:`mark_frames`; ``vidstyle pose
+    --annotations``), the frames AugMG matches; the other parameters as :func:`estimate_video`."""
+    check_estimate_params(backend, model_path, scales)
+    idx = mark_frames(video, annotations, context)
+    return estimate_video(video, backend, model_path, idx, jobs=jobs, scheduler=scheduler, scales=scales)

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, PART_KEYPOINTS, PART_NAMES
-from .data import BOUNDARY_TOL, VIEW_NAMES, acceptable_views
+from ..pose.data import BOUNDARY_TOL, VIEW_NAMES, acceptable_views
 
 log = logging.getLogger(__name__)
 
@@ -101,41 +101,42 @@ def pcp_table(hits: np.ndarray, views: list[str]) -> dict:
     return rows
 
 
-def _frame_of(s):
+def frame_of(s):
+    """The frame a model reads of a rendered sample: its colour frame when kept, else the gray one."""
     return s.bgr if s.bgr is not None else s.image
 
 
 def clip_backgrounds(samples) -> dict:
     """Clip id -> median background of that clip's frames (clips of at least 3 frames): the person
     prior of a static-camera video, as ``vidstyle pose`` computes it over a whole video."""
-    from .foreground import background_model
+    from ..pose.foreground import background_model
 
     groups: dict = {}
     for s in samples:
-        groups.setdefault(s.clip, []).append(_frame_of(s))
+        groups.setdefault(s.clip, []).append(frame_of(s))
     return {c: background_model(fr) for c, fr in groups.items() if len(fr) >= 3 and c != -1}
 
 
 def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     """Run every method on the same held-out frames; return the metrics dict."""
-    from .blazepose import BlazePoseEstimator
+    from ..pose.blazepose import BlazePoseEstimator
 
     gt = np.stack([s.keypoints for s in samples])
     views = [s.view for s in samples]
     methods = {"ps": [], "ps_generic": [], "ps_oracle_view": []}
-    prior = bool(getattr(model, "fg_weight", 0.0))
+    prior = model.uses_background
     if prior:
         methods["ps_single_image"] = []
     backgrounds = clip_backgrounds(samples) if prior else {}
     methods_v = model.VIEWPOINTS
     vpred = {w: [] for w in methods_v}
     for s in samples:
-        f, scale = model.prepare(_frame_of(s))
+        f, scale = model.prepare(frame_of(s))
         feats, maps = model.view_features(f, full=True)
         for w in methods_v:
             vpred[w].append(model.classify_view(feats, w)[0])
         chosen = vpred[model.viewpoint][-1]
-        fg = model.foreground_map(_frame_of(s), backgrounds.get(s.clip), f)
+        fg = model.foreground_map(frame_of(s), backgrounds.get(s.clip), f)
         for name, mname in (("ps", chosen), ("ps_oracle_view", s.view), ("ps_generic", "generic")):
             methods[name].append(model.solve(mname, maps[mname], scale, fg, f))
         if prior:
@@ -143,7 +144,7 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
     times = []
     for s in samples[:: max(1, len(samples) // 20)]:  # the pose command's path (only the chosen classifier)
         t0 = time.process_time()
-        model.estimate(_frame_of(s), background=backgrounds.get(s.clip))
+        model.estimate(frame_of(s), background=backgrounds.get(s.clip))
         times.append(time.process_time() - t0)
     if blazepose:
         est = BlazePoseEstimator()
@@ -239,8 +240,8 @@ def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames
                   jobs: int = 1) -> dict:
     import cv2
 
+    from ..pose.run import estimate_video
     from ..video import VideoReader
-    from .run import estimate_video
 
     overlay_dir.mkdir(parents=True, exist_ok=True)
     out = {}
@@ -264,3 +265,37 @@ def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames
                              "ps_viewpoints": [f.viewpoint for f in ps.frames],
                              "blazepose_viewpoints": [f.viewpoint for f in bp.frames]}
     return out
+
+
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov")
+
+
+def evaluate(model_path: str | Path, cmu_dir: str | Path | None = None, demo_performers: int = 3, cmu_clips: int = 6,
+             views_per_clip: int = 4, seconds: float = 2.0, fps: float = 4.0, real_dir: str | Path | None = None,
+             overlay_dir: str | Path = "pose_overlays", real_frames: int = 6, seed: int = 0, jobs: int = -1) -> dict:
+    """``vidstyle evaluate pose``: the metrics of a pose model file on held-out renders (test split: demo
+    performers, and CMU clips of ``cmu_dir`` when given) for every method (:func:`evaluate_renders`), and,
+    with ``real_dir`` (a directory of videos), the backends' agreement and overlays on that real footage
+    (:func:`evaluate_real`). Returns the metrics document (without ``seed``, which the caller adds)."""
+    from ..errors import InputError
+    from ..pose.data import make_specs, render_samples
+    from ..pose.estimator import load_model
+    from ..pose.training import resolve_cmu_dir
+
+    pm, header = load_model(model_path)
+    cmu = resolve_cmu_dir(cmu_dir, cmu_clips)
+    specs = make_specs("test", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    samples = render_samples(specs, jobs=jobs, keep_bgr=True)
+    metrics = evaluate_renders(pm, samples)
+    metrics["params"] = {"model": str(model_path), "model_params": header.get("params"), "seed": seed,
+                         "demo_performers": demo_performers, "cmu_clips": cmu_clips, "views_per_clip": views_per_clip,
+                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu)}
+    if real_dir is None or str(real_dir) in ("", "none"):
+        log.info("no real footage directory given (--real-dir): backend agreement on real footage skipped")
+    else:
+        rd = Path(real_dir)
+        if not rd.is_dir():
+            raise InputError(f"{rd}: real footage directory not found")
+        videos = sorted(p for p in rd.iterdir() if p.suffix.lower() in VIDEO_SUFFIXES)
+        metrics["real"] = evaluate_real(str(model_path), videos, Path(overlay_dir), real_frames, jobs=1)
+    return metrics
