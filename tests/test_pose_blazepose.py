@@ -44,14 +44,17 @@ def test_rendered_frame_keypoints_and_view(take, estimator, view, azimuth):
         err = np.linalg.norm(pf.points[BODY, :2] - truth[f, BODY], axis=1)
         assert np.median(err) < 0.2 * torso, err
         assert pf.viewpoint == view and pf.viewpoint_scores[view] == max(pf.viewpoint_scores.values())
+        # the azimuth of the camera about the performer, from the world landmarks (render: cam azimuth)
+        assert abs((pf.azimuth - azimuth + 180) % 360 - 180) < 35
         assert np.all((pf.points[:, 2] >= 0) & (pf.points[:, 2] <= 1))
         # head_top (extrapolated from the face) near the true crown
         assert np.linalg.norm(pf.points[0, :2] - truth[f, 0]) < 0.5 * torso
 
 
-def test_nobody_is_unknown(estimator):
+def test_nobody_is_a_missing_frame_not_fake_points(estimator):
     pf = estimator.estimate(np.full((120, 160, 3), 90, np.uint8), 7)
-    assert pf.viewpoint == "unknown" and pf.frame == 7 and np.all(pf.points[:, 2] == 0)
+    assert pf.viewpoint == "unknown" and pf.frame == 7 and not pf.found and pf.missing == "nobody found"
+    assert np.isnan(pf.points).all() and pf.azimuth is None
 
 
 def test_mapping_and_facing_geometry():
@@ -84,11 +87,12 @@ def test_pose_command_blazepose_in_input_pixels(tmp_path, take):
     render_to_file(take, video, view="front", size=(640, 480), fps=take.fps, background="texture")
     truth = load_truth(video)
     out = tmp_path / "poses.json"
-    res = CliRunner().invoke(app, ["pose", str(video), "--backend", "blazepose", "--frames", "1", "--out", str(out),
-                                   "-j", "1"])
+    # no --backend and no --model: BlazePose, the default for real footage, following the performer
+    res = CliRunner().invoke(app, ["pose", str(video), "--frames", "1", "--out", str(out), "-j", "1"])
     assert res.exit_code == 0, res.output
     doc = json.loads(out.read_text())
     assert doc["backend"] == "blazepose" and doc["keypoints"] == list(KEYPOINTS) and len(doc["frames"]) == 1
+    assert doc["params"]["tracked"] is True
     fr = doc["frames"][0]
     assert fr["frame"] == 1
     m = keypoint_joints(take.skeleton)
@@ -110,3 +114,40 @@ def test_real_footage_finds_the_person(estimator):
     assert np.mean(body[:, 2]) > 0.5
     torso = abs(pf.points[KEYPOINT_INDEX["pelvis"], 1] - pf.points[KEYPOINT_INDEX["neck"], 1])
     assert torso > 0.05 * frame.shape[0]  # the standing person is not a speck
+
+
+def test_rotated_phone_video_gives_the_upright_videos_poses(tmp_path, take):
+    """A video stored sideways with a display matrix (as phones do) gives the same poses, in the displayed
+    frame's pixels, as the upright video (lossless copies of one rendered clip, so the pixels agree)."""
+    import av
+
+    from vidstyle.pose.run import estimate_video
+    from vidstyle.render import render_to_file
+    from vidstyle.video import VideoReader
+
+    video = tmp_path / "clip.mp4"
+    render_to_file(take, video, view="front", size=(320, 240), fps=take.fps, background="texture")
+    with VideoReader(video) as r:
+        frames = [np.asarray(f) for f in r]
+
+    def write(path, images, deg=0):
+        c = av.open(str(path), "w")
+        st = c.add_stream("png", rate=20)
+        st.height, st.width = images[0].shape[:2]
+        st.pix_fmt = "rgb24"
+        if deg:
+            st.set_display_rotation(deg)
+        for im in images:
+            for p in st.encode(av.VideoFrame.from_ndarray(np.ascontiguousarray(im), format="bgr24")):
+                c.mux(p)
+        for p in st.encode():
+            c.mux(p)
+        c.close()
+
+    write(tmp_path / "up.mov", frames)
+    write(tmp_path / "side.mov", [np.ascontiguousarray(np.rot90(f, 1)) for f in frames], -90)  # stored sideways
+    up = estimate_video(tmp_path / "up.mov", "blazepose", frames=[0, 1], jobs=1)
+    side = estimate_video(tmp_path / "side.mov", "blazepose", frames=[0, 1], jobs=1)
+    for a, b in zip(up.frames, side.frames):
+        assert a.found and b.found and a.viewpoint == b.viewpoint
+        np.testing.assert_array_equal(a.points, b.points)

@@ -18,7 +18,11 @@ def stderr_console():
 def configure(verbosity: int = 0) -> None:
     from rich.logging import RichHandler
 
+    import os
+
     level = logging.WARNING if verbosity < 0 else logging.INFO if verbosity == 0 else logging.DEBUG
+    # -vv: native libraries' own log lines (MediaPipe's C++ layer) too; inherited by worker processes
+    os.environ["VIDSTYLE_NATIVE_LOGS"] = "1" if verbosity >= 2 else "0"
     logging.basicConfig(
         level=level,
         format="%(message)s",

@@ -102,7 +102,8 @@ def pose(
     video: Path = typer.Argument(..., help="Input video."),
     out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
     model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
-    backend: str = typer.Option("ps", "--backend", help="ps (pictorial structures) or blazepose (MediaPipe)."),
+    backend: str | None = typer.Option(None, "--backend", help="ps (pictorial structures) or blazepose (MediaPipe) "
+                                       "[default: ps with --model, else blazepose]."),
     frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
     annotations: Path | None = typer.Option(
         None, "--annotations", "-a", help="Annotations file (vidstyle annotate): the frames are this video's "
@@ -113,28 +114,52 @@ def pose(
                                       "multi-scale inference, e.g. 1,1.2,1.4 (each frame is also zoomed about the "
                                       "person by each factor and the most confident pose kept; for people smaller "
                                       "or larger than the training figures; time grows with their number)."),
+    track: bool | None = typer.Option(None, "--track/--no-track", help="Follow one performer through the video "
+                                      "(other people are ignored; frames without the performer get no pose) "
+                                      "[default: on for blazepose without --annotations]."),
+    person: str | None = typer.Option(None, "--person", help="X,Y: follow the person at this pixel of the first "
+                                      "frame with people (default: the most prominent, i.e. largest and clearest)."),
+    smooth: bool = typer.Option(False, "--smooth", help="One-Euro filter the keypoint tracks (jitter)."),
+    overlay: Path | None = typer.Option(None, "--overlay", help="Also write every frame with its keypoints drawn "
+                                        "(DIR/<frame>.jpg), to check the poses by eye."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
-    y = row in the input video's pixels)."""
+    y = row in the input video's pixels, as a player shows the video)."""
     from ..formats.poses import write_poses
-    from ..pose.run import check_estimate_params, estimate_marks, estimate_video, parse_frames
+    from ..pose.run import (
+        check_estimate_params,
+        default_backend,
+        estimate_marks,
+        estimate_video,
+        parse_frames,
+        parse_person,
+    )
     from ..video import VideoReader
 
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
+    backend = default_backend(model) if backend is None else backend
     zooms = parse_scales(scales, "--scales")
     check_estimate_params(backend, model, zooms)
+    who = parse_person(person)
     if annotations is not None:
         poses = estimate_marks(video, annotations, backend, model, context, jobs=jobs, scheduler=scheduler,
-                               scales=zooms)
+                               scales=zooms, track=bool(track) or who is not None, person=who)
     else:
         with VideoReader(video) as r:
             idx = parse_frames(frames, len(r))
-        poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms)
+        poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms,
+                               track=track if who is None else True, person=who, smooth=smooth)
     write_poses(out, poses)
-    log.info("wrote %s (%d frames, backend %s)", out, len(poses.frames), backend)
+    missing = sum(not f.found for f in poses.frames)
+    log.info("wrote %s (%d frames, backend %s%s)", out, len(poses.frames), backend,
+             f"; {missing} without the performer" if missing else "")
+    if overlay is not None:
+        from ..pose.overlay import write_overlays
+
+        log.info("wrote %d overlay frames to %s", write_overlays(video, poses, overlay), overlay)
 
 
 @evaluate_app.command("pose")

@@ -30,7 +30,10 @@ onnx needs): ``FieldDescriptor.label`` and ``MessageFactory.GetPrototype``. This
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
+import sys
 import threading
 from collections.abc import Iterable
 
@@ -54,6 +57,37 @@ VIEW_AZIMUTH = {"front": 0.0, "left": 90.0, "right": -90.0, "back": 180.0}
 
 _patched = False
 _lock = threading.Lock()
+
+
+#: set (to "1") when the CLI runs with -vv: MediaPipe's native (C++ absl / TFLite) log lines then reach stderr
+NATIVE_LOGS_ENV = "VIDSTYLE_NATIVE_LOGS"
+
+
+@contextlib.contextmanager
+def quiet_native_stderr():
+    """Silence MediaPipe's C++ log lines (absl warnings, TFLite's delegate notice), which its native code
+    writes straight to file descriptor 2 before any Python logging: the descriptor points at /dev/null
+    for the duration (Python's own sys.stderr is flushed first). Off with ``-vv``
+    (:data:`NATIVE_LOGS_ENV`)."""
+    if os.environ.get(NATIVE_LOGS_ENV) == "1":
+        yield
+        return
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield
+        return
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, 2)
+        finally:
+            os.close(devnull)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 class BackendUnavailable(VidstyleError):
@@ -176,9 +210,10 @@ class BlazePoseEstimator:
     def _solution(self):
         if self._pose is None:
             mp_pose = _import_pose()
-            self._pose = mp_pose.Pose(static_image_mode=True, model_complexity=self.model_complexity,
-                                      enable_segmentation=False,
-                                      min_detection_confidence=self.min_detection_confidence)
+            with quiet_native_stderr():
+                self._pose = mp_pose.Pose(static_image_mode=True, model_complexity=self.model_complexity,
+                                          enable_segmentation=False,
+                                          min_detection_confidence=self.min_detection_confidence)
         return self._pose
 
     def close(self) -> None:
@@ -191,7 +226,9 @@ class BlazePoseEstimator:
         (metres), or ``None`` when nobody is found."""
         h, w = frame_bgr.shape[:2]
         rgb = np.ascontiguousarray(frame_bgr[..., ::-1])
-        res = self._solution().process(rgb)
+        solution = self._solution()
+        with quiet_native_stderr():
+            res = solution.process(rgb)
         if res.pose_landmarks is None:
             return None
         img = np.array([[lm.x * w - 0.5, lm.y * h - 0.5, lm.visibility] for lm in res.pose_landmarks.landmark])
@@ -212,17 +249,14 @@ class BlazePoseEstimator:
 
     def estimate(self, frame_bgr: np.ndarray, index: int = 0, background: np.ndarray | None = None) -> PoseFrame:
         """Pose of one frame (``background`` is not used: :attr:`uses_background` is False)."""
-        h, w = frame_bgr.shape[:2]
         out = self.landmarks(frame_bgr)
         if out is None:
-            pts = np.zeros((len(KEYPOINTS), 3))
-            pts[:, 0], pts[:, 1] = (w - 1) / 2.0, (h - 1) / 2.0
-            return PoseFrame(index, "unknown", pts, {})
+            return PoseFrame.none(index, "nobody found")
         img, world = out
         pts = to_keypoints(img)
         scores = viewpoint_scores(world)
         view = max(scores, key=scores.get)
-        return PoseFrame(index, view, pts, scores)
+        return PoseFrame(index, view, pts, scores, azimuth=round(facing_azimuth(world), 2))
 
     def estimate_many(self, frames: Iterable[tuple[int, np.ndarray]]) -> list[PoseFrame]:
         return [self.estimate(f, i) for i, f in frames]

@@ -4,8 +4,10 @@ Single-person estimators (BlazePose, the pictorial structures) return *a* person
 people in view they jump between them. :class:`PerformerTracker` turns such a backend into a tracker:
 
 1. **People in a frame** (:func:`find_people`): run the backend, take the person it finds, paint over
-   their box with the frame's median colour, run again, up to ``max_people``. Every person found is a
-   :class:`Person` (keypoints in frame pixels, box, mean keypoint confidence, appearance histogram).
+   their box with the frame's median colour, run again, up to ``max_people``; then the same on a grid of
+   overlapping tiles (``tiles``), which finds people too small for the detector in the whole frame.
+   Every person found is a :class:`Person` (keypoints in frame pixels, box, mean keypoint confidence,
+   appearance histogram). Only choosing and re-acquiring the performer search the whole frame.
 2. **The performer** is chosen in the first frame where anyone is found: by default the most prominent
    person, i.e. the largest box area times mean keypoint confidence (the person nearest the camera and
    clearly seen); ``person=(x, y)`` picks the person whose box contains that pixel (the nearest box
@@ -139,8 +141,36 @@ def _paint(frame: np.ndarray, box: np.ndarray) -> np.ndarray:
 
 
 def find_people(backend, frame: np.ndarray, index: int = 0, max_people: int = 4,
-                offset: tuple[float, float] = (0.0, 0.0), full_shape: tuple[int, int] | None = None) -> list[Person]:
-    """Everyone the backend finds in ``frame``, by repeatedly painting over the person just found."""
+                offset: tuple[float, float] = (0.0, 0.0), full_shape: tuple[int, int] | None = None,
+                tiles: int = 1) -> list[Person]:
+    """Everyone the backend finds in ``frame``, by repeatedly painting over the person just found.
+
+    ``tiles`` > 1: then also search a ``tiles`` x ``tiles`` grid of overlapping tiles (half a tile of
+    overlap) with the people found so far painted over: a single-person detector working on a shrunk
+    whole frame (BlazePose's is 224 px wide) misses people who are small in a large frame."""
+    people = _find(backend, frame, index, max_people, offset, full_shape)
+    if tiles > 1 and len(people) < max_people:
+        h, w = frame.shape[:2]
+        work = frame
+        for p in people:
+            work = _paint(work, p.box - np.array([*offset, *offset]))
+        th, tw = int(np.ceil(2 * h / (tiles + 1))), int(np.ceil(2 * w / (tiles + 1)))
+        for ty in range(tiles):
+            for tx in range(tiles):
+                y0, x0 = min(h - th, ty * th // 2), min(w - tw, tx * tw // 2)
+                found = _find(backend, work[y0:y0 + th, x0:x0 + tw], index, max_people - len(people),
+                              (offset[0] + x0, offset[1] + y0), full_shape or frame.shape[:2])
+                for p in found:
+                    if all(iou(p.box, q.box) < 0.3 for q in people):
+                        people.append(p)
+                        work = _paint(work, p.box - np.array([*offset, *offset]))
+                if len(people) >= max_people:
+                    return people
+    return people
+
+
+def _find(backend, frame: np.ndarray, index: int, max_people: int, offset: tuple[float, float],
+          full_shape: tuple[int, int] | None) -> list[Person]:
     people: list[Person] = []
     work = frame
     shape = full_shape or frame.shape[:2]
@@ -169,7 +199,7 @@ class PerformerTracker:
 
     def __init__(self, backend, person: tuple[float, float] | None = None, max_people: int = 4,
                  search: float = 1.6, min_iou: float = 0.2, max_appearance: float = 0.45,
-                 max_tries: int = 2) -> None:
+                 max_tries: int = 2, tiles: int = 2) -> None:
         if person is not None and (len(person) != 2 or not all(np.isfinite(person))):
             raise ParameterError("person", f"expected a finite pixel x,y, got {person!r}")
         if not (isinstance(max_people, int) and 1 <= max_people <= 16):
@@ -187,6 +217,9 @@ class PerformerTracker:
         self.min_iou = min_iou
         self.max_appearance = max_appearance
         self.max_tries = max_tries
+        if not (isinstance(tiles, int) and 1 <= tiles <= 4):
+            raise ParameterError("tiles", f"must be an integer in 1..4, got {tiles!r}")
+        self.tiles = tiles
         self.box: np.ndarray | None = None
         self.look: np.ndarray | None = None
 
@@ -231,7 +264,7 @@ class PerformerTracker:
             if p is not None:
                 self._remember(p)
                 return TrackedFrame(index, p.pose, None, 0, p.box)
-        people = find_people(self.backend, frame, index, self.max_people)
+        people = find_people(self.backend, frame, index, self.max_people, tiles=self.tiles)
         if not people:
             return TrackedFrame(index, None, "nobody found", 0)
         if self.box is None and self.look is None:

@@ -21,6 +21,12 @@ class _Chunk:
     backend: str
     model_path: str | None
     scales: tuple[float, ...] = (1.0,)
+    track: bool = False
+    person: tuple[float, float] | None = None
+
+#: backends followed through the video by default (single-person estimators run on real footage, where
+#: other people may be in view); the pictorial structures run on the whole frame unless asked
+TRACKED_BACKENDS = ("blazepose",)
 
 
 def working_height(backend: PoseBackend, native_height: int) -> int:
@@ -51,16 +57,64 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
         in_size = (probe.info.width, probe.info.height)
     h = working_height(est, in_size[1])
     out = []
+    tracker = None
+    if chunk.track:
+        from .people import PerformerTracker
+
+        person = None
+        if chunk.person is not None:  # the pixel is given in the input video's frame
+            scale = h / in_size[1]
+            person = ((chunk.person[0] + 0.5) * scale - 0.5, (chunk.person[1] + 0.5) * scale - 0.5)
+        tracker = PerformerTracker(est, person=person)
     with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
         bg = video_background(reader) if est.uses_background else None
         for i in chunk.frames:
             frame = np.asarray(reader.frame(i))
-            pf = est.estimate(frame, i, background=bg)
-            pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
-            pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
+            if tracker is not None:
+                t = tracker.step(frame, i)
+                pf = t.pose if t.pose is not None else PoseFrame.none(i, t.missing or "performer not found")
+            else:
+                pf = est.estimate(frame, i, background=bg)
+            if pf.found:
+                pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
+                pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
             out.append(pf)
     est.close()
     return out
+
+
+def parse_person(text: str | None) -> tuple[float, float] | None:
+    """``"X,Y"`` (pixels of the input video) -> (x, y); :class:`ParameterError` naming ``person``."""
+    if text is None:
+        return None
+    try:
+        x, y = (float(v) for v in str(text).split(","))
+    except ValueError:
+        raise ParameterError("person", f"{text!r} is not X,Y in pixels") from None
+    if not (math.isfinite(x) and math.isfinite(y) and x >= 0 and y >= 0):
+        raise ParameterError("person", f"{text!r} is not a pixel of the video")
+    return x, y
+
+
+def smooth_poses(poses: Poses, fps: float, min_cutoff: float | None = None, beta: float | None = None) -> Poses:
+    """The poses with every keypoint track One-Euro filtered (:mod:`vidstyle.pose.smoothing`) over the
+    frames that have a pose; frames are timed by their index at ``fps``."""
+    from . import smoothing
+
+    found = [pf for pf in poses.frames if pf.found]
+    if len(found) < 2:
+        return poses
+    xy = np.stack([pf.points[:, :2] for pf in found])
+    times = np.array([pf.frame for pf in found], dtype=np.float64) / fps
+    # a frame whose keypoint is unsure is a gap for that keypoint
+    sure = np.stack([pf.points[:, 2] for pf in found]) > 0
+    xy = np.where(sure[..., None], xy, np.nan)
+    filt = smoothing.one_euro(xy, times, smoothing.MIN_CUTOFF if min_cutoff is None else min_cutoff,
+                              smoothing.BETA if beta is None else beta)
+    for pf, f in zip(found, filt):
+        ok = np.all(np.isfinite(f), axis=1)
+        pf.points[ok, :2] = f[ok]
+    return poses
 
 
 BACKGROUND_FRAMES = 25
@@ -115,28 +169,55 @@ def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]
         raise ParameterError("scales", str(exc)) from None
 
 
-def estimate_video(video: str | Path, backend: str = "ps", model_path: str | Path | None = None,
+def default_backend(model_path) -> str:
+    """``vidstyle pose``'s backend when none is named: the pictorial structures when a pose model is
+    given, else BlazePose (it needs no training and works on real people: multi-view PCK@0.2 on the
+    calibrated real views, see the README)."""
+    return "ps" if model_path is not None else "blazepose"
+
+
+def estimate_video(video: str | Path, backend: str | None = None, model_path: str | Path | None = None,
                    frames: list[int] | None = None, jobs: int = -1, scheduler: str | None = None,
-                   chunk_frames: int = 16, scales=None) -> Poses:
+                   chunk_frames: int = 16, scales=None, track: bool | None = None,
+                   person: tuple[float, float] | None = None, smooth: bool = False) -> Poses:
     """Poses of ``frames`` (default: all) of ``video`` (``vidstyle pose``); ``backend``: a name of
-    :data:`vidstyle.pose.interfaces.BACKENDS` (``model_path``: the ``ps`` backend's pose model file);
-    ``scales``: zoom factors of the ps backend's multi-scale inference
-    (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only)."""
+    :data:`vidstyle.pose.interfaces.BACKENDS` (default :func:`default_backend`; ``model_path``: the ``ps``
+    backend's pose model file); ``scales``: zoom factors of the ps backend's multi-scale inference
+    (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only). ``track`` (default: on for
+    :data:`TRACKED_BACKENDS`): follow one performer through the frames
+    (:class:`vidstyle.pose.people.PerformerTracker`; ``person``: the one at that pixel of the first frame
+    with people, else the most prominent), in one worker since each frame continues from the last;
+    frames without the performer have no pose (a reason instead). ``smooth``: One-Euro filter the
+    keypoint tracks (:func:`smooth_poses`)."""
     from ..parallel import parallel_map
     from ..video import VideoReader
 
+    backend = default_backend(model_path) if backend is None else backend
     scales = check_estimate_params(backend, model_path, scales)
+    track = backend in TRACKED_BACKENDS if track is None else bool(track)
+    if person is not None and not track:
+        raise ParameterError("person", "choosing a person needs tracking (track=True)")
     with VideoReader(video) as r:
         n = len(r)
+        fps = r.fps
     frames = list(range(n)) if frames is None else frames
     if backend in MODEL_BACKENDS:  # fail early on a bad model file, before any worker starts
         _make_estimator(backend, str(model_path))
-    size = max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
+    size = len(frames) if track else max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
     chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path),
-                     scales) for i in range(0, len(frames), size)]
-    res = parallel_map(_run_chunk, chunks, jobs=jobs, scheduler=scheduler, description=f"pose ({backend})")
-    params = {"scales": list(scales)} if scales != (1.0,) else {}
-    return Poses(str(video), backend, [pf for part in res for pf in part], params=params)
+                     scales, track, person) for i in range(0, len(frames), max(size, 1))]
+    res = parallel_map(_run_chunk, chunks, jobs=1 if track else jobs, scheduler=None if track else scheduler,
+                       description=f"pose ({backend})")
+    params: dict = {"scales": list(scales)} if scales != (1.0,) else {}
+    if track:
+        params["tracked"] = True
+        if person is not None:
+            params["person"] = [float(person[0]), float(person[1])]
+    poses = Poses(str(video), backend, [pf for part in res for pf in part], params=params)
+    if smooth:
+        poses = smooth_poses(poses, fps if fps > 0 else 1.0)
+        poses.params["smoothed"] = "one-euro"
+    return poses
 
 
 def mark_frames(video: str | Path, annotations: str | Path, context: int = 0) -> list[int]:
@@ -159,11 +240,16 @@ def mark_frames(video: str | Path, annotations: str | Path, context: int = 0) ->
     return idx
 
 
-def estimate_marks(video: str | Path, annotations: str | Path, backend: str = "ps",
+def estimate_marks(video: str | Path, annotations: str | Path, backend: str | None = None,
                    model_path: str | Path | None = None, context: int = 0, jobs: int = -1,
-                   scheduler: str | None = None, scales=None) -> Poses:
+                   scheduler: str | None = None, scales=None, track: bool = False,
+                   person: tuple[float, float] | None = None) -> Poses:
     """Poses of the frames of ``video``'s transition marks (:func:`mark_frames`; ``vidstyle pose
-    --annotations``), the frames AugMG matches; the other parameters as :func:`estimate_video`."""
+    --annotations``), the frames AugMG matches; the other parameters as :func:`estimate_video`. The marks
+    are scattered frames, not a continuous video, so they are not followed by default (``track``): AugMG's
+    validated thresholds were chosen on whole-frame poses."""
+    backend = default_backend(model_path) if backend is None else backend
     check_estimate_params(backend, model_path, scales)
     idx = mark_frames(video, annotations, context)
-    return estimate_video(video, backend, model_path, idx, jobs=jobs, scheduler=scheduler, scales=scales)
+    return estimate_video(video, backend, model_path, idx, jobs=jobs, scheduler=scheduler, scales=scales,
+                          track=track, person=person)
