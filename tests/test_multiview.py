@@ -182,3 +182,48 @@ def test_robust_reference_is_not_pulled_by_another_views_left_right_swap():
     assert np.allclose(robust[2], expect, atol=1e-6)
     with pytest.raises(ValueError):
         leave_one_view_out(cams, pts, torso=(1, 2), reference="robust")
+
+
+def test_evaluate_pose_calibration_cli_scores_poses_files(tmp_path):
+    """`vidstyle evaluate pose --calibration C P1 P2 P3 P4` on poses files made from known cameras, one
+    view's poses shifted down by half a torso (across the epipolar lines of these level cameras, so the
+    other views cannot absorb it in depth): that view scores 0, the robust reference keeps the others
+    at 1, the metrics file is valid."""
+    from typer.testing import CliRunner
+
+    from vidstyle.cli import app
+    from vidstyle.formats.metrics import MULTIVIEW_POSE, read_metrics
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+
+    cams = _cameras()
+    calib = Calibration(cams)
+    write_calibration(tmp_path / "calib.toml", calib)
+    X = _skeleton(np.random.default_rng(5), frames=4)
+    files = []
+    for v, c in enumerate(cams):
+        uv = project(X.reshape(-1, 3), c).reshape(4, 15, 2)
+        if v == 2:
+            torso = np.linalg.norm(uv[:, 1] - uv[:, 2], axis=-1)
+            uv = uv + np.stack([np.zeros(4), 0.5 * torso], axis=-1)[:, None]
+        frames = [PoseFrame(f, "front", np.column_stack([uv[f], np.ones(15)]), {"front": 1.0}) for f in range(4)]
+        frames.append(PoseFrame.none(4, "nobody found"))
+        # files named after their cameras, given out of order: matched by name
+        path = tmp_path / f"{c.name}.poses.json"
+        write_poses(path, Poses(f"{c.name}.mp4", "blazepose", frames))
+        files.append(path)
+    out = tmp_path / "m.json"
+    res = CliRunner().invoke(app, ["evaluate", "pose", "--calibration", str(tmp_path / "calib.toml"),
+                                   *map(str, reversed(files)), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    m = read_metrics(out, MULTIVIEW_POSE).doc
+    assert m["views"] == ["cam01", "cam02", "cam03", "cam04"]
+    dlt = m["references"]["dlt"]["per_view"]
+    assert dlt["cam03"]["pck@0.2"] == 0.0 and dlt["cam03"]["median_error"] > 0.4
+    robust = m["references"]["robust"]["per_view"]
+    assert robust["cam03"]["pck@0.2"] == 0.0
+    for v in ("cam01", "cam02", "cam04"):  # the shifted view drags the plain reference, not the robust one
+        assert robust[v]["pck@0.2"] >= max(0.95, dlt[v]["pck@0.2"])
+    assert m["references"]["dlt"]["overall"]["n"] == 4 * 4 * 15  # frame 4 has no pose anywhere: unscored
+    assert "cam03" in res.output
+    res = CliRunner().invoke(app, ["evaluate", "pose", "--calibration", str(tmp_path / "calib.toml"), str(files[0])])
+    assert res.exit_code == 2 and "at least two views" in res.output

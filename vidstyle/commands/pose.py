@@ -164,7 +164,14 @@ def pose(
 
 @evaluate_app.command("pose")
 def evaluate_pose(
-    model: Path = typer.Option(..., "--model", "-m", help="Pose model (train-pose)."),
+    views: list[Path] | None = typer.Argument(None, help="With --calibration: poses.json of each synchronised "
+                                              "view (matched to cameras by name in the file name, else in the "
+                                              "calibration's order)."),
+    calibration: Path | None = typer.Option(None, "--calibration", help="Score VIEWS without labels by "
+                                            "leave-one-view-out consistency: a Qualisys .qca.txt or "
+                                            "OpenCV/Pose2Sim .toml calibration of the views."),
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose): score it on held-out "
+                                      "renders (without --calibration)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", envvar=CMU_ENV,
                                         help="CMU BVH clips (held-out subjects are rendered; none: demo only)."),
@@ -182,7 +189,24 @@ def evaluate_pose(
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers for rendering (-1: all cores)."),
 ) -> None:
     """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
-    held-out renders for both backends; backend agreement and overlays on real footage."""
+    held-out renders for both backends; backend agreement and overlays on real footage. With
+    --calibration: real accuracy without labels, from synchronised calibrated views (median error and
+    PCK@0.1/0.2 of each view against the others' triangulation, per view and keypoint)."""
+    if calibration is not None:
+        from ..evaluation.multiview import evaluate_views, format_table
+        from ..formats.metrics import MULTIVIEW_POSE, write_metrics
+
+        if model is not None:
+            raise InputError("--model: not used with --calibration (give the views' poses files)")
+        metrics = evaluate_views(calibration, views or [])
+        if out is not None:
+            write_metrics(out, {"seed": seed, **metrics}, kind=MULTIVIEW_POSE)
+        sys.stdout.write(format_table(metrics) + "\n")
+        return
+    if model is None:
+        raise InputError("--model: give a pose model (train-pose), or --calibration with the views' poses files")
+    if views:
+        raise InputError("VIEWS: poses files are scored with --calibration")
     from ..demo import pose_sources  # noqa: F401 - registers the demo performers as a training source
     from ..evaluation.pose import evaluate, format_tables
     from ..formats.metrics import POSE, write_metrics

@@ -13,8 +13,9 @@ estimator swapped left and right limbs pulls every other view's reference toward
 pose2sim take, 26 frames of one view do, and every view's score falls in those frames). ``reference=
 "robust"`` therefore chooses, per frame, the left/right labelling of each *reference* view that makes
 the reference views agree best (of the labellings that agree equally, the one that swaps the fewest
-views; Pose2Sim handles swaps the same way), and, with three or more reference views, drops a view whose reprojection error is over a
-fifth of the torso when the rest agree. The held-out view's estimate is never changed, so its own swaps
+views; Pose2Sim handles swaps the same way), and, with three or more reference views, triangulates each
+keypoint from the largest set of views that agree within a fifth of their torso (every pair of views
+tried as the seed, RANSAC-style), so one view that is far off does not drag the reference. The held-out view's estimate is never changed, so its own swaps
 still count as errors. Both are reported; the issue's figures are the plain DLT.
 """
 
@@ -103,16 +104,30 @@ def _robust_frame(und: np.ndarray, P: Sequence[np.ndarray], mirror: np.ndarray, 
             best, best_key = (cand, X), key
     cand, X = best
     if R >= 3:
+        tl = np.array([np.linalg.norm(cand[r, torso[0]] - cand[r, torso[1]]) for r in range(R)])
+        tl = np.where(tl > 0, tl, np.nan)
+
         for k in range(K):
-            if not np.all(np.isfinite(X[k])):
+            seen = [r for r in range(R) if np.all(np.isfinite(cand[r, k]))]
+            if len(seen) < 3:
                 continue
-            errs = np.array([_reproj_error(X[k:k + 1], cand[r, k:k + 1], P[r])[0] for r in range(R)])
-            tl = np.array([np.linalg.norm(cand[r, torso[0]] - cand[r, torso[1]]) for r in range(R)])
-            rel = errs / np.where(tl > 0, tl, np.nan)
-            worst = int(np.nanargmax(rel)) if np.any(np.isfinite(rel)) else -1
-            if worst >= 0 and rel[worst] > outlier and np.sum(np.isfinite(cand[:, k, 0])) >= 3:
-                keep = [r for r in range(R) if r != worst]
-                X[k] = triangulate(cand[keep, k], [P[r] for r in keep])
+            # consensus over view pairs (RANSAC with every minimal sample): the largest set of views that
+            # agree with a pair's point within ``outlier`` torso lengths, then the least error
+            best_key, best_views = None, None
+            for i, a in enumerate(seen):
+                for b in seen[i + 1:]:
+                    Xp = triangulate(cand[[a, b], k], [P[a], P[b]])
+                    if not np.all(np.isfinite(Xp)):
+                        continue
+                    errs = {r: _reproj_error(Xp[None], cand[r, k:k + 1], P[r])[0] / tl[r] for r in seen}
+                    inl = [r for r in seen if errs[r] <= outlier]
+                    if len(inl) < 2:
+                        continue
+                    key = (-len(inl), float(np.mean([errs[r] for r in inl])))
+                    if best_key is None or key < best_key:
+                        best_key, best_views = key, inl
+            if best_views is not None and len(best_views) < len(seen):
+                X[k] = triangulate(cand[best_views, k], [P[r] for r in best_views])
     return X
 
 
@@ -184,3 +199,78 @@ def summarise(errors: np.ndarray, view_names: Sequence[str], keypoint_names: Seq
         "per_keypoint": {name: block(errors[:, :, k]) for k, name in enumerate(keypoint_names)},
         "thresholds": list(thresholds),
     }
+
+
+def load_views(calib_cameras: Sequence[CameraCalibration], poses_files: Sequence) -> tuple[list[str], np.ndarray]:
+    """Match ``poses_files`` (``poses.json`` of synchronised views) to the calibration's cameras and stack
+    their frames: a file whose name contains a camera's name goes to that camera, otherwise files are taken
+    in the calibration's order. Returns (camera names, (V, F, 15, 3) points with NaN where a view has no
+    pose); frames are those every file has."""
+    from pathlib import Path
+
+    from ..errors import InputError
+    from ..formats.poses import read_poses
+
+    names = [c.name for c in calib_cameras]
+    files = [Path(p) for p in poses_files]
+    if len(files) < 2:
+        raise InputError("evaluate pose --calibration: give at least two views' poses files")
+    by_name = {}
+    for f in files:
+        hits = [n for n in names if n.lower() in f.name.lower()]
+        if len(hits) == 1:
+            by_name[hits[0]] = f
+    if len(by_name) == len(files):
+        order = [n for n in names if n in by_name]
+        files = [by_name[n] for n in order]
+    elif len(files) <= len(names):
+        order = names[:len(files)]
+    else:
+        raise InputError(f"{len(files)} poses files but the calibration has {len(names)} cameras")
+    docs = [read_poses(f) for f in files]
+    common = sorted(set.intersection(*[{fr.frame for fr in d.frames} for d in docs]))
+    if not common:
+        raise InputError(f"{files[0]}: the views' poses files share no frame")
+    pts = np.full((len(docs), len(common), 15, 3), np.nan)
+    for v, d in enumerate(docs):
+        index = {fr.frame: fr for fr in d.frames}
+        for i, fr in enumerate(common):
+            pf = index[fr]
+            if pf.found:
+                pts[v, i] = pf.points
+    return order, pts
+
+
+def evaluate_views(calibration, poses_files: Sequence, references: Sequence[str] = ("dlt", "robust"),
+                   min_score: float = 0.0) -> dict:
+    """The multi-view metrics document (``vidstyle.metrics.multiview_pose``) of poses files of
+    calibrated, synchronised views: leave-one-view-out scores with each reference."""
+    from ..formats.calibration import read_calibration
+    from ..formats.keypoints import KEYPOINTS
+    from ..mocap.keypoints import MIRROR
+
+    calib = read_calibration(calibration) if not hasattr(calibration, "cameras") else calibration
+    names, pts = load_views(calib.cameras, poses_files)
+    cams = [calib.camera(n) for n in names]
+    torso = (KEYPOINTS.index("neck"), KEYPOINTS.index("pelvis"))
+    out = {"views": names, "frames": int(pts.shape[1]), "references": {},
+           "params": {"calibration": str(getattr(calib, "source", "")), "poses": [str(p) for p in poses_files],
+                      "min_score": min_score}}
+    for ref in references:
+        errors, _ = leave_one_view_out(cams, pts, torso, min_score=min_score, reference=ref, mirror=np.asarray(MIRROR))
+        out["references"][ref] = summarise(errors, names, KEYPOINTS)
+    return out
+
+
+def format_table(metrics: dict) -> str:
+    """The printed table: PCK@0.2 / PCK@0.1 / median error per view, per reference."""
+    lines = []
+    for ref, r in metrics["references"].items():
+        lines.append(f"reference {ref}: {metrics['frames']} frames x {len(metrics['views'])} views")
+        lines.append(f"  {'view':<12} {'PCK@0.2':>8} {'PCK@0.1':>8} {'median':>8} {'n':>6}")
+        rows = [*r["per_view"].items(), ("all", r["overall"])]
+        for name, b in rows:
+            def f(x):
+                return "-" if x is None else f"{x:.3f}"
+            lines.append(f"  {name:<12} {f(b['pck@0.2']):>8} {f(b['pck@0.1']):>8} {f(b['median_error']):>8} {b['n']:>6}")
+    return "\n".join(lines)

@@ -29,6 +29,10 @@ computed, e.g. video accuracy without single-action test videos):
   ``viewpoint``: per classifier ``accuracy`` in [0, 1] or null (and, when present, ``tolerant_accuracy``,
   ``unambiguous.accuracy``, ``boundary.accuracy_either_neighbour`` and every
   ``tolerant_per_view_accuracy`` in [0, 1] or null, ``boundary.n`` >= 0); ``params`` an object.
+* ``vidstyle.metrics.multiview_pose`` (``vidstyle evaluate pose --calibration``): ``references`` an object
+  per reference (``dlt``, ``robust``), each with ``overall``, ``per_view`` and ``per_keypoint`` blocks
+  holding ``n`` >= 0, ``median_error`` >= 0 or null and ``pck@0.1`` / ``pck@0.2`` in [0, 1] or null;
+  ``views`` a list of camera names; ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """
@@ -56,7 +60,8 @@ HEADLINE = "vidstyle.metrics.headline"
 AUGMG = "vidstyle.metrics.augmg"
 STRIKES = "vidstyle.metrics.strikes"
 POSE = "vidstyle.metrics.pose"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE)
+MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE)
 SCHEMA_VERSION = 1
 
 
@@ -219,8 +224,33 @@ def _pose(f: Fields) -> None:
     f.sub("params")
 
 
+def _pck_block(b: Fields) -> None:
+    b.int("n", min=0)
+    if b.has("median_error") and b.obj["median_error"] is not None:
+        b.number("median_error", min=0)
+    for key in ("pck@0.1", "pck@0.2"):
+        _opt_number(b, key, 0, 1)
+
+
+def _multiview_pose(f: Fields) -> None:
+    views = f.str_list("views")
+    refs = f.sub("references")
+    if not refs.obj:
+        raise refs.fail(None, "no reference")
+    for name in refs.obj:
+        r = refs.sub(name)
+        _pck_block(r.sub("overall"))
+        for group in ("per_view", "per_keypoint"):
+            g = r.sub(group)
+            for key in g.obj:
+                _pck_block(g.sub(key))
+        if set(r.sub("per_view").obj) != set(views):
+            raise r.fail("per_view", "must have one block per view")
+    f.sub("params")
+
+
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
-           STRIKES: _strikes, POSE: _pose}
+           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -259,6 +289,7 @@ __all__ = [
     "HEADLINE",
     "KINDS",
     "MOTION",
+    "MULTIVIEW_POSE",
     "POSE",
     "RECOGNITION",
     "STRIKES",
