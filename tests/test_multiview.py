@@ -186,9 +186,10 @@ def test_robust_reference_is_not_pulled_by_another_views_left_right_swap():
 
 def test_evaluate_pose_calibration_cli_scores_poses_files(tmp_path):
     """`vidstyle evaluate pose --calibration C P1 P2 P3 P4` on poses files made from known cameras, one
-    view's poses shifted down by half a torso (across the epipolar lines of these level cameras, so the
-    other views cannot absorb it in depth): that view scores 0, the robust reference keeps the others
-    at 1, the metrics file is valid."""
+    view's left and right swapped: the plain reference scores every view below 1, the robust one keeps
+    the correct views at exactly 1 and the swapped view below; the metrics file is valid."""
+    from vidstyle.mocap.keypoints import MIRROR
+
     from typer.testing import CliRunner
 
     from vidstyle.cli import app
@@ -203,8 +204,7 @@ def test_evaluate_pose_calibration_cli_scores_poses_files(tmp_path):
     for v, c in enumerate(cams):
         uv = project(X.reshape(-1, 3), c).reshape(4, 15, 2)
         if v == 2:
-            torso = np.linalg.norm(uv[:, 1] - uv[:, 2], axis=-1)
-            uv = uv + np.stack([np.zeros(4), 0.5 * torso], axis=-1)[:, None]
+            uv = uv[:, MIRROR]
         frames = [PoseFrame(f, "front", np.column_stack([uv[f], np.ones(15)]), {"front": 1.0}) for f in range(4)]
         frames.append(PoseFrame.none(4, "nobody found"))
         # files named after their cameras, given out of order: matched by name
@@ -218,12 +218,12 @@ def test_evaluate_pose_calibration_cli_scores_poses_files(tmp_path):
     m = read_metrics(out, MULTIVIEW_POSE).doc
     assert m["views"] == ["cam01", "cam02", "cam03", "cam04"]
     dlt = m["references"]["dlt"]["per_view"]
-    assert dlt["cam03"]["pck@0.2"] == 0.0 and dlt["cam03"]["median_error"] > 0.4
     robust = m["references"]["robust"]["per_view"]
-    assert robust["cam03"]["pck@0.2"] == 0.0
-    for v in ("cam01", "cam02", "cam04"):  # the shifted view drags the plain reference, not the robust one
-        assert robust[v]["pck@0.2"] >= max(0.95, dlt[v]["pck@0.2"])
+    assert robust["cam03"]["pck@0.2"] < 0.8 and dlt["cam03"]["pck@0.2"] < 0.8
+    for v in ("cam01", "cam02", "cam04"):  # the swapped view drags the plain reference, not the robust one
+        assert robust[v]["pck@0.2"] == 1.0 and dlt[v]["pck@0.2"] < 1.0
     assert m["references"]["dlt"]["overall"]["n"] == 4 * 4 * 15  # frame 4 has no pose anywhere: unscored
     assert "cam03" in res.output
-    res = CliRunner().invoke(app, ["evaluate", "pose", "--calibration", str(tmp_path / "calib.toml"), str(files[0])])
-    assert res.exit_code == 2 and "at least two views" in res.output
+    from vidstyle.cli import main
+
+    assert main(["evaluate", "pose", "--calibration", str(tmp_path / "calib.toml"), str(files[0])]) == 2
