@@ -15,6 +15,10 @@ Reads every JSON document under ``--metrics DIR`` (recursively) and recognises t
   accuracy per backend / pictorial-structures variant;
 - ``vidstyle.metrics.augmg`` (``vidstyle evaluate augmg --out``): retrieval and transition error per 2D
   source;
+- ``vidstyle.metrics.multiview_pose`` (``vidstyle evaluate pose --calibration --out``): PCK on calibrated
+  real views, plain and robust references;
+- ``vidstyle.metrics.people`` (``vidstyle evaluate people --out``): identity switches and PCK with and
+  without following the performer;
 - ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes --out``): the share of a real mocap clip's
   action frames recognised as punches, per camera;
 - ``vidstyle.strikes_diagnostics`` (``scripts/strikes_diagnostics.py``): the same share for each variant
@@ -350,6 +354,37 @@ def strikes_diagnostics_table(items, root: Path) -> list[str]:
     return lines
 
 
+def multiview_table(items, root: Path) -> list[str]:
+    """One row per poses set scored on calibrated real views (``vidstyle evaluate pose --calibration``):
+    PCK@0.2 / PCK@0.1 / median error with the plain DLT reference and the robust one."""
+    lines = ["| poses | views x frames | PCK@0.2 (plain DLT) | PCK@0.1 | median error | PCK@0.2 (robust reference) | file |",
+             "|---|---|---|---|---|---|---|"]
+    for p, d in sorted(items, key=lambda t: str(t[0])):
+        refs = d.get("references") or {}
+        dlt, rob = (refs.get("dlt") or {}).get("overall") or {}, (refs.get("robust") or {}).get("overall") or {}
+        poses = (d.get("params") or {}).get("poses") or []
+        where = str(Path(poses[0]).parent) if poses else "?"
+
+        def f(x):
+            return "" if x is None else f"{x:.3f}"
+
+        lines.append(f"| `{where}` | {len(d.get('views') or [])} x {d.get('frames')} | {f(dlt.get('pck@0.2'))} | "
+                     f"{f(dlt.get('pck@0.1'))} | {f(dlt.get('median_error'))} | {f(rob.get('pck@0.2'))} | `{_rel(p, root)}` |")
+    return lines
+
+
+def people_table(items, root: Path) -> list[str]:
+    """Following one performer among several people (``vidstyle evaluate people``)."""
+    lines = ["| take | backend | mode | identity switches / 100 frames | PCK@0.2 | file |", "|---|---|---|---|---|---|"]
+    for p, d in sorted(items, key=lambda t: str(t[0])):
+        q = d.get("params") or {}
+        take = f"{d.get('people')} people, {len(d.get('views') or [])} views x {d.get('frames')} frames"
+        for mode, m in (d.get("modes") or {}).items():
+            lines.append(f"| {take} | {q.get('backend')} | {mode} | {m['identity_switches_per_100_frames']:.2f} | "
+                         f"{m['pck@0.2']:.3f} | `{_rel(p, root)}` |")
+    return lines
+
+
 def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
     docs = load_documents(root)
     EXTRA_ROOTS[:] = list(extra)
@@ -369,6 +404,10 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
                  "clip and on demo punches (`scripts/strikes_diagnostics.py`, diagnostics only)",
                  strikes_diagnostics_table),
                 ("vidstyle.metrics.pose", "2D pose (`vidstyle evaluate pose`)", pose_table),
+                ("vidstyle.metrics.multiview_pose", "2D pose on real calibrated views, without labels "
+                 "(`vidstyle evaluate pose --calibration`, leave-one-view-out)", multiview_table),
+                ("vidstyle.metrics.people", "Following one performer among several people (`vidstyle evaluate people`)",
+                 people_table),
                 ("vidstyle.metrics.augmg", "AugMG (`vidstyle evaluate augmg`, held-out performers' marks)", augmg_table)]
     for kind, title, fn in sections:
         if docs.get(kind):

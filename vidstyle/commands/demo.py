@@ -154,3 +154,30 @@ def make_cmu_dataset_cmd(
     t0 = time.perf_counter()
     manifest = make_cmu_dataset(cmu, out, params, overwrite=overwrite, jobs=jobs, scheduler=scheduler)
     log.info("dataset %s ready in %.1f s", manifest, time.perf_counter() - t0)
+
+
+@demo_app.command("make-crowd")
+def make_crowd_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="Directory to write (replaced whole when complete)."),
+    people: int = typer.Option(2, "--people", help="Performers in the scene (sparring partners for 2)."),
+    views: int = typer.Option(4, "--views", help="Calibrated cameras around them."),
+    seconds: float = typer.Option(6.0, "--seconds", help="Length of the take."),
+    width: int = typer.Option(320, "--width", help="Video width in pixels."),
+    height: int = typer.Option(240, "--height", help="Video height in pixels."),
+    seed: int = typer.Option(0, "--seed", help="Performers, motion and rendering are drawn from this seed."),
+) -> None:
+    """Several demo performers in one scene filmed by calibrated cameras, with everyone's true 2D pose:
+    camNN.mp4, calibration.toml (OpenCV/Pose2Sim) and truth.npz (see vidstyle.demo.crowd)."""
+    from ..demo.crowd import make_crowd
+    from ..errors import ParameterError
+
+    if not 1 <= people <= 6:
+        raise ParameterError("people", f"must be in 1..6, got {people}")
+    if not 2 <= views <= 16:
+        raise ParameterError("views", f"must be in 2..16, got {views}")
+    if not 0.5 <= seconds <= 600:
+        raise ParameterError("seconds", f"must be in [0.5, 600], got {seconds}")
+    if not (64 <= width <= 4096 and 64 <= height <= 4096):
+        raise ParameterError("width", f"the video must be 64..4096 pixels a side, got {width} x {height}")
+    path = make_crowd(out, people, views, seconds, size=(width, height), seed=seed)
+    log.info("wrote %s (%d people, %d views)", path, people, views)

@@ -216,3 +216,26 @@ def evaluate_pose(
     if out is not None:
         write_metrics(out, {"seed": seed, **metrics}, kind=POSE)
     sys.stdout.write(format_tables(metrics) + "\n")
+
+
+@evaluate_app.command("people")
+def evaluate_people(
+    crowd: Path = typer.Argument(..., help="A take of several people (vidstyle demo make-crowd)."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
+    backend: str = typer.Option("blazepose", "--backend", help="Pose backend (blazepose, or ps with --model)."),
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) for --backend ps."),
+) -> None:
+    """Following one performer among several people: identity switches per 100 frames and PCK@0.2 against
+    the person chosen first, per view, with the backend alone (naive) and followed (tracked)."""
+    from ..evaluation.people import evaluate_crowd, format_table
+    from ..formats.metrics import PEOPLE, write_metrics
+    from ..pose.interfaces import backend_factory
+    from ..pose.run import check_estimate_params
+
+    check_estimate_params(backend, model, None)
+    factory = backend_factory(backend)
+    metrics = evaluate_crowd(crowd, lambda: factory(None if model is None else str(model)))
+    metrics["params"] = {"crowd": str(crowd), "backend": backend, "model": None if model is None else str(model)}
+    if out is not None:
+        write_metrics(out, {"seed": 0, **metrics}, kind=PEOPLE)
+    sys.stdout.write(format_table(metrics) + "\n")

@@ -109,3 +109,15 @@ def evaluate_crowd(crowd_dir: str | Path, backend_factory, modes=("naive", "trac
             "multiview_pck@0.2": mv["pck@0.2"],
         }
     return result
+
+
+def format_table(metrics: dict) -> str:
+    lines = [f"{metrics['people']} people, {metrics['frames']} frames x {len(metrics['views'])} views",
+             f"  {'mode':<8} {'switches/100 frames':>20} {'PCK@0.2':>8} {'multi-view PCK@0.2':>19} {'same person':>12}"]
+    def f(x):
+        return "-" if x is None else f"{x:.3f}"
+
+    for mode, m in metrics["modes"].items():
+        lines.append(f"  {mode:<8} {m['identity_switches_per_100_frames']:>20.2f} {f(m['pck@0.2']):>8} "
+                     f"{f(m['multiview_pck@0.2']):>19} {str(m['same_person_in_every_view']):>12}")
+    return "\n".join(lines)

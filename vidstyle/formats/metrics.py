@@ -33,6 +33,9 @@ computed, e.g. video accuracy without single-action test videos):
   per reference (``dlt``, ``robust``), each with ``overall``, ``per_view`` and ``per_keypoint`` blocks
   holding ``n`` >= 0, ``median_error`` >= 0 or null and ``pck@0.1`` / ``pck@0.2`` in [0, 1] or null;
   ``views`` a list of camera names; ``params`` an object.
+* ``vidstyle.metrics.people`` (``vidstyle evaluate people``): ``views`` a list; ``modes`` an object per
+  mode (``naive``, ``tracked``) with ``identity_switches_per_100_frames`` >= 0, ``pck@0.2`` and
+  ``multiview_pck@0.2`` in [0, 1] or null and ``per_view`` an object; ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
 """
@@ -61,7 +64,8 @@ AUGMG = "vidstyle.metrics.augmg"
 STRIKES = "vidstyle.metrics.strikes"
 POSE = "vidstyle.metrics.pose"
 MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE)
+PEOPLE = "vidstyle.metrics.people"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE)
 SCHEMA_VERSION = 1
 
 
@@ -249,8 +253,22 @@ def _multiview_pose(f: Fields) -> None:
     f.sub("params")
 
 
+def _people(f: Fields) -> None:
+    f.str_list("views")
+    modes = f.sub("modes")
+    if not modes.obj:
+        raise modes.fail(None, "no mode")
+    for name in modes.obj:
+        m = modes.sub(name)
+        m.number("identity_switches_per_100_frames", min=0)
+        _opt_number(m, "pck@0.2", 0, 1)
+        _opt_number(m, "multiview_pck@0.2", 0, 1)
+        m.sub("per_view")
+    f.sub("params")
+
+
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
-           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose}
+           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -290,6 +308,7 @@ __all__ = [
     "KINDS",
     "MOTION",
     "MULTIVIEW_POSE",
+    "PEOPLE",
     "POSE",
     "RECOGNITION",
     "STRIKES",

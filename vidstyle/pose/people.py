@@ -12,10 +12,12 @@ people in view they jump between them. :class:`PerformerTracker` turns such a ba
    person, i.e. the largest box area times mean keypoint confidence (the person nearest the camera and
    clearly seen); ``person=(x, y)`` picks the person whose box contains that pixel (the nearest box
    centre if none does).
-3. **Following**: each frame, the backend runs on a crop around the performer's last box (enlarged by
-   ``search``), so other people outside it are not seen at all; a person found there is accepted when
-   their box overlaps the last box (IoU >= ``min_iou``) or their appearance matches; otherwise they are
-   painted over and the crop searched again. When the crop has no accepted person, the whole frame is
+3. **Following**: each frame, the backend first runs on the whole frame; when the person it returns
+   overlaps the performer's last box (IoU >= ``min_iou``) with a matching appearance, that is the pose
+   (so with one person in view the poses are exactly the untracked ones). Otherwise the backend runs on
+   a crop around the last box (enlarged by ``search``), where other people outside it are not seen at
+   all; a person found there is accepted by overlap or appearance, else painted over and the crop
+   searched again. When the crop has no accepted person, the whole frame is
    searched and the performer re-acquired by appearance (HSV histogram of the torso, Bhattacharyya
    distance <= ``max_appearance``) after an occlusion of any length.
 4. Frames without the performer are ``None`` with a reason (``missing``), never fake points.
@@ -260,6 +262,12 @@ class PerformerTracker:
 
     def step(self, frame: np.ndarray, index: int) -> TrackedFrame:
         if self.box is not None:
+            # the backend's own choice on the whole frame first: when it is the performer (the usual case,
+            # and always with one person in view) the pose is exactly the untracked one
+            p = next(iter(_find(self.backend, frame, index, 1, (0.0, 0.0), None)), None)
+            if p is not None and self.box is not None and iou(p.box, self.box) >= self.min_iou and self._accept(p):
+                self._remember(p)
+                return TrackedFrame(index, p.pose, None, 0, p.box)
             p = self._search_crop(frame, index)
             if p is not None:
                 self._remember(p)
