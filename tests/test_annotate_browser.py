@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from annotate_util import numbered_video, session
 
+from playwright import sync_api
+
 from vidstyle.annotate.overlays import load_overlays
 from vidstyle.annotate.server import Running
 from vidstyle.formats.annotations import read_annotations
@@ -21,7 +23,6 @@ from vidstyle.formats.matches import Candidate, FrameMatches, Matches, write_mat
 from vidstyle.formats.poses import PoseFrame, Poses, write_poses
 from vidstyle.video.numbered import read_number
 
-sync_api = pytest.importorskip("playwright.sync_api")
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
         "--disable-sync", "--no-first-run"]
@@ -31,7 +32,7 @@ N = 120
 @pytest.fixture(scope="module")
 def browser():
     if not Path(CHROMIUM).exists():
-        pytest.skip("chromium is not installed (apt-get install chromium)")
+        pytest.fail(f"chromium is not installed at {CHROMIUM} (make test installs it: apt-get install chromium)")
     with sync_api.sync_playwright() as p:
         b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         yield b
