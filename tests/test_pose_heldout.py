@@ -13,11 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+# the evaluation metrics through one import (the module moves to vidstyle.evaluation.pose: one line to change)
+from vidstyle.pose import evaluate as pose_eval
 from vidstyle.pose.data import Spec, render_samples
 from vidstyle.pose.estimator import PoseModel
-
-# one import of the evaluation metrics (the module moves to vidstyle.evaluation.pose: one line to change)
-from vidstyle.pose import evaluate as pose_eval
 
 TRAIN = [Spec("demo:0", 1.0 + i, 2.0, az + 4 * i, 10.0, 100 + i, fps=3.0)
          for i, az in enumerate((0.0, 90.0, -90.0, 180.0, 0.0, 90.0, -90.0, 180.0))]

@@ -63,7 +63,7 @@ def rendered():
 
 
 def test_background_far_from_the_projected_bones_and_figure_near_them(rendered):
-    m, frames, truth, masks, pos, ends_idx, ends = rendered
+    m, frames, _, masks, pos, ends_idx, ends = rendered
     parents = m.skeleton.parents
     rows, cols = np.mgrid[0:H, 0:W]
     pix = np.stack([cols.ravel(), rows.ravel()], axis=1).astype(float)
@@ -115,7 +115,7 @@ def test_background_far_from_the_projected_bones_and_figure_near_them(rendered):
 
 
 def test_truth_joints_are_the_pinhole_projection(rendered):
-    m, frames, truth, masks, pos, *_ = rendered
+    _, _, truth, _, pos, *_ = rendered
     uv, z = _project(pos)
     assert np.allclose(truth["joints2d"], uv, atol=1e-3)
     assert np.allclose(truth["depth"], z, atol=1e-4)
