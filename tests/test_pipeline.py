@@ -221,7 +221,7 @@ def test_interrupted_stage_leaves_no_corrupt_artifact(run, tmp_path):
     assert len(before) >= 4
     sentinel = tmp_path / "fault_reached"
     env = _env()
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).parent / "faults"), env.get("PYTHONPATH", "")])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in [str(Path(__file__).parent / "faults"), env.get("PYTHONPATH")] if p)
     env.update(VIDSTYLE_FAULT_DIR=str(features), VIDSTYLE_FAULT_AFTER="2", VIDSTYLE_FAULT_SENTINEL=str(sentinel))
     proc = subprocess.Popen([str(BIN / "dvc"), "repro", "--force", "-s", "features"], cwd=run, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
