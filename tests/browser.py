@@ -1,7 +1,8 @@
 """Headless Chromium for tests: load a local HTML file, dump its DOM after load, take a screenshot.
 
 Uses Debian's chromium (installed by `make test`); the flags keep it off the network (this machine has
-none) and out of any profile. Tests using it skip when no chromium binary is found.
+none) and out of any profile. Tests using it fail when no chromium binary is found (a required system
+dependency, not an optional one).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ def chromium() -> str:
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("chromium is not installed (make test installs Debian's chromium)")
+    pytest.fail("chromium is not installed (make test installs Debian's chromium: apt-get install chromium)")
 
 
 def _run(args: list[str], timeout: float = 90) -> subprocess.CompletedProcess:

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from annotate_util import numbered_video, session
 
+from playwright import sync_api
+
 from vidstyle.annotate.overlays import load_overlays
 from vidstyle.annotate.server import Running
 from vidstyle.formats.annotations import read_annotations
@@ -21,7 +23,6 @@ from vidstyle.formats.matches import Candidate, FrameMatches, Matches, write_mat
 from vidstyle.formats.poses import PoseFrame, Poses, write_poses
 from vidstyle.video.numbered import read_number
 
-sync_api = pytest.importorskip("playwright.sync_api")
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
         "--disable-sync", "--no-first-run"]
@@ -31,7 +32,7 @@ N = 120
 @pytest.fixture(scope="module")
 def browser():
     if not Path(CHROMIUM).exists():
-        pytest.skip("chromium is not installed (apt-get install chromium)")
+        pytest.fail(f"chromium is not installed at {CHROMIUM} (make test installs it: apt-get install chromium)")
     with sync_api.sync_playwright() as p:
         b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         yield b
@@ -228,3 +229,112 @@ def test_stale_tab_gets_a_conflict(browser, app):
     assert "conflict" in b.inner_text("#status")
     assert [t.frame for t in read_annotations(ann).videos[0].transitions] == [0]
     a.close(), b.close()
+
+
+def _segments(page):
+    return [(s["start"], s["end"], s["action"]) for s in state(page)["segments"]]
+
+
+def _import(page, fmt, path: Path):
+    page.select_option("#import-format", fmt)
+    page.set_input_files("#import-file", str(path))
+
+
+@pytest.mark.slow
+def test_page_splits_segments_toggles_transitions_and_imports(browser, app):
+    """The controls the end-to-end test does not drive: a segment marked inside another splits it, a
+    transition's status toggles by key and by button and its actions change through the selects, and the
+    import control reads CVAT and VIA files (and reports a broken one without changing the marks)."""
+    from vidstyle.annotate import exchange
+    from vidstyle.formats.annotations import Segment, Transition, VideoAnnotations, file_sha256
+    from vidstyle.video import VideoReader
+
+    url, ann, tmp = app
+    page = browser.new_page(viewport={"width": 1280, "height": 800})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url + "/")
+    assert shown_number(page) == 0
+    # one Jab segment 10..49, then a Hook segment 20..29 marked inside it: the Jab is split around it
+    goto(page, 10)
+    page.keyboard.press("1")
+    page.keyboard.press("[")
+    goto(page, 49)
+    page.keyboard.press("]")
+    assert _segments(page) == [(10, 50, "Jab")]
+    goto(page, 29)
+    page.keyboard.press("2")
+    page.keyboard.press("[")
+    goto(page, 20)  # marked backwards: the segment is still 20..29
+    page.keyboard.press("]")
+    assert _segments(page) == [(10, 20, "Jab"), (20, 30, "Hook"), (30, 50, "Jab")]
+    assert page.locator("#segments li").all_inner_texts() == ["10–19 Jab", "20–29 Hook", "30–49 Jab"]  # inner text collapses spaces
+    page.keyboard.press("Control+z")
+    assert _segments(page) == [(10, 50, "Jab")]
+    page.keyboard.press("Control+Shift+z")
+    assert _segments(page) == [(10, 20, "Jab"), (20, 30, "Hook"), (30, 50, "Jab")]
+
+    # a transition at the split point: Jab -> Hook from the neighbouring segments; T toggles its status,
+    # and so does the status button; the selects change its actions
+    goto(page, 20)
+    page.keyboard.press("t")
+    assert state(page)["transitions"] == [{"frame": 20, "from_action": "Jab", "to_action": "Hook", "status": "accepted"}]
+    assert page.locator("#transition-edit").is_visible() and not page.locator("#transition-none").is_visible()
+    page.keyboard.press("t")
+    assert state(page)["transitions"][0]["status"] == "discarded"
+    assert "discarded" in page.inner_text("#t-status")
+    assert "discarded" in page.locator("#transitions li").first.get_attribute("class")
+    page.click("#t-status")
+    assert state(page)["transitions"][0]["status"] == "accepted"
+    assert page.inner_text("#t-status").startswith("accepted")
+    page.select_option("#t-to", "Guard")
+    assert state(page)["transitions"][0]["to_action"] == "Guard"
+    page.select_option("#t-from", "Hook")
+    assert state(page)["transitions"][0]["from_action"] == "Hook"
+    page.keyboard.press("Control+z")
+    assert state(page)["transitions"][0]["from_action"] == "Jab"
+    assert len(state(page)["transitions"]) == 1 and state(page)["transitions"][0]["to_action"] == "Guard"
+    page.keyboard.press("Control+s")
+    wait_saved(page)
+    v = read_annotations(ann).videos[0]
+    assert [(s.start, s.end, s.action) for s in v.segments] == [(10, 20, "Jab"), (20, 30, "Hook"), (30, 50, "Jab")]
+    assert [(t.frame, t.from_action, t.to_action, t.status) for t in v.transitions] == [(20, "Jab", "Guard", "accepted")]
+
+    # the import control: a CVAT file and a VIA file made for this video by another tool
+    video = tmp / "clip.mp4"
+    with VideoReader(video) as r:
+        info = r.info
+    target = exchange.Target(VideoAnnotations(video.name, file_sha256(video), info.frames, info.fps),
+                             info.timestamps, info.duration, info.width, info.height)
+    target.video.segments = [Segment(0, 5, "Guard"), Segment(60, 70, "Hook")]
+    target.video.transitions = [Transition(65, "Hook", "Guard", "discarded")]
+    cvat = tmp / "other.cvat.xml"
+    cvat.write_bytes(exchange.export("cvat", ["Jab", "Hook", "Guard"], target))
+    _import(page, "cvat", cvat)
+    page.wait_for_function("() => window.vidstyle.marks['0'].segments.length === 2")
+    assert _segments(page) == [(0, 5, "Guard"), (60, 70, "Hook")]
+    assert [(t["frame"], t["status"]) for t in state(page)["transitions"]] == [(65, "discarded")]
+    target.video.segments = [Segment(100, N, "Kick")]  # a class the page does not know yet: added
+    target.video.transitions = [Transition(99, "Guard", "Kick", "accepted")]
+    via = tmp / "other.via.json"
+    via.write_bytes(exchange.export("via", ["Jab", "Hook", "Guard", "Kick"], target))
+    _import(page, "via", via)
+    page.wait_for_function("() => window.vidstyle.marks['0'].segments.length === 1")
+    assert _segments(page) == [(100, N, "Kick")]
+    assert "Kick" in page.evaluate("window.vidstyle.classes")
+    assert "Kick" in page.inner_text("#classes")
+    wait_saved(page)
+    assert [(s.start, s.end, s.action) for s in read_annotations(ann).videos[0].segments] == [(100, N, "Kick")]
+    # a broken file: one error line in the status, the marks unchanged
+    broken = tmp / "broken.cvat.xml"
+    broken.write_bytes(cvat.read_bytes()[:200])
+    _import(page, "cvat", broken)
+    page.wait_for_function("() => document.getElementById('status').className === 'error'")
+    status = page.inner_text("#status")
+    assert "\n" not in status.strip() and "cvat" in status.lower()
+    assert _segments(page) == [(100, N, "Kick")]
+    # one undo step per import
+    page.keyboard.press("Control+z")
+    assert _segments(page) == [(0, 5, "Guard"), (60, 70, "Hook")]
+    assert errors == []
+    page.close()

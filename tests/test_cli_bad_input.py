@@ -28,7 +28,7 @@ def _console_script() -> list[str]:
     exe = Path(sys.executable).parent / "vidstyle"
     found = str(exe) if exe.is_file() else shutil.which("vidstyle")
     if not found:
-        pytest.skip("the vidstyle console script is not installed")
+        pytest.fail("the vidstyle console script is not installed (pip install -e .)")
     return [found]
 
 

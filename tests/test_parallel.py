@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from dask import distributed
 
 from vidstyle.errors import InputError
 from vidstyle.parallel import parallel_map
@@ -22,7 +23,6 @@ def test_local_matches_serial():
 
 
 def test_dask_cluster_matches_local():
-    distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         got = parallel_map(_work, list(range(6)), scheduler=cluster.scheduler_address)
     assert got == [_work(i) for i in range(6)]

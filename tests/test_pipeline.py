@@ -116,6 +116,72 @@ def test_pipeline_outputs(run):
 
 
 @pytest.mark.slow
+def test_pipeline_augmg_outputs_against_the_plain_graph(run):
+    """The AugMG stages' outputs: the augmented graph is the plain graph plus enhancement edges built from
+    the accepted marked transitions, it routes a marked transition (from-action -> through the stored
+    segment -> to-action) where the plain graph has no such edge, and the measured transition error is
+    finite and lower with AugMG than without."""
+    import json
+
+    from vidstyle.formats.motiongraph import read_graph
+
+    out = run / "out"
+    plain, aug = read_graph(out / "graph/graph.npz"), read_graph(out / "graph/graph_augmg.npz")
+    ENH = 2  # edge_kind: 0 PLAYBACK, 1 BLEND, 2 ENHANCEMENT
+    # same frames; every plain edge kept as it was; what is added is enhancement edges only
+    assert np.array_equal(plain.rotations_, aug.rotations_) and plain.label_names_ == aug.label_names_
+    assert not np.any(plain.edge_kind_ == ENH) and not plain.segments_
+    edges = lambda g, m: set(zip(g.edge_src_[m].tolist(), g.edge_dst_[m].tolist(), g.edge_kind_[m].tolist()))
+    assert edges(aug, aug.edge_kind_ != ENH) == edges(plain, np.ones(len(plain.edge_kind_), bool))
+    enh = np.nonzero(aug.edge_kind_ == ENH)[0]
+    assert len(enh) > 0 and aug.segments_
+    assert np.all(np.isfinite(aug.edge_cost_[enh])) and np.all(aug.edge_cost_[enh] >= 0)
+    # the stored segments are accepted marked transitions of the AugMG videos
+    ann = json.loads((run / "annotations.json").read_text())
+    videos = set(TINY["augmg"]["videos"].split())
+    marked = {f"{t['from_action']}->{t['to_action']}" for v in ann["videos"] if Path(v["path"]).stem in videos
+              for t in v["transitions"] if t["status"] == "accepted"}
+    assert {s.label for s in aug.segments_} <= marked
+    # routing: some marked transition a->b is a path of the augmented graph: an `a` frame, playback through
+    # frames of no other action, an enhancement edge of that segment, a `b` frame; the plain graph has
+    # none of those edges
+    names = aug.label_names_
+    plain_pairs = {(s, d) for s, d, _ in edges(plain, np.ones(len(plain.edge_kind_), bool))}
+    routed = []
+    for e in enh:
+        a_name, b_name = aug.segments_[aug.edge_segment_[e]].label.split("->")
+        src, dst = int(aug.edge_src_[e]), int(aug.edge_dst_[e])
+        assert (src, dst) not in plain_pairs
+        if names[aug.labels_[dst]] != b_name:
+            continue
+        f = src
+        while f > 0 and aug.frame_clip_[f - 1] == aug.frame_clip_[src] and names[aug.labels_[f]] not in (a_name, b_name) \
+                and src - f < 60:
+            f -= 1
+        if names[aug.labels_[f]] == a_name:
+            routed.append((a_name, f, src, dst, b_name))
+    assert routed, "no marked transition is routed through an enhancement edge"
+    # the walk synthesised on the augmented graph
+    walk = json.loads((out / "motion_augmg" / f"{TINY['augmg']['synthesize']}.labels.json").read_text())
+    assert len(walk["transition_kinds"]) == len(walk["transitions_used"]) and walk["labels"]
+    assert (out / "motion_augmg" / f"{TINY['augmg']['synthesize']}.bvh").is_file()
+    # the metrics: finite, and the AugMG transition error below the plain graph's where poses are exact
+    # (gt) and with the backend that built the graph (blazepose); never above it
+    m = json.loads((out / "metrics/augmg.json").read_text())
+    for source, r in m["by_source"].items():
+        for key in ("transition_plain_mm", "transition_augmg_mm", "retrieval_mpjpe_mm", "transition_reduction"):
+            assert np.isfinite(r[key]), (source, key)
+        assert r["queries"] > 0 and r["transition_augmg_mm"] <= r["transition_plain_mm"] + 1e-9, source
+    graph_poses = yaml.safe_load((run / "params.yaml").read_text())["augmg"]["graph_poses"]
+    graph_source = "blazepose" if graph_poses.rstrip("/").endswith("poses_blazepose") else "model"
+    for source in ("gt", graph_source):
+        r = m["by_source"][source]
+        assert r["transition_augmg_mm"] < r["transition_plain_mm"] and r["transition_reduction"] > 0, (source, r)
+    head = json.loads((out / "metrics/headline.json").read_text())["augmg"]
+    assert head["transition_error_augmg"] == m["by_source"]["model"]["transition_augmg_mm"]
+
+
+@pytest.mark.slow
 def test_report_renders_in_chromium(run, tmp_path):
     report = run / "out" / "report.html"
     dom = dump_dom(report)
@@ -145,29 +211,38 @@ def test_repro_reruns_only_what_changed(run):
 
 
 @pytest.mark.slow
-def test_interrupted_stage_leaves_no_corrupt_artifact(run):
+def test_interrupted_stage_leaves_no_corrupt_artifact(run, tmp_path):
+    """The features stage is interrupted at a fixed point - exactly 2 outputs published, the third written
+    to its temporary file but not renamed (tests/faults/sitecustomize.py holds it there) - and killed
+    (SIGKILL, the whole process group); the published files are complete, nothing else carries a final
+    name, and `dvc repro` recovers the same bytes."""
     features = run / "out" / "features"
     before = _digest(features)
-    proc = subprocess.Popen([str(BIN / "dvc"), "repro", "--force", "-s", "features"], cwd=run, env=_env(),
+    assert len(before) >= 4
+    sentinel = tmp_path / "fault_reached"
+    env = _env()
+    env["PYTHONPATH"] = os.pathsep.join(p for p in [str(Path(__file__).parent / "faults"), env.get("PYTHONPATH")] if p)
+    env.update(VIDSTYLE_FAULT_DIR=str(features), VIDSTYLE_FAULT_AFTER="2", VIDSTYLE_FAULT_SENTINEL=str(sentinel))
+    proc = subprocess.Popen([str(BIN / "dvc"), "repro", "--force", "-s", "features"], cwd=run, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    # kill the whole process group as soon as the rerun has written some, not all, of its outputs
-    deadline = time.time() + 120
-    while time.time() < deadline and proc.poll() is None:
-        done = [f for f in features.glob("*.npz") if not f.name.startswith(".")] if features.exists() else []
-        if 0 < len(done) < len(before):
-            break
-        time.sleep(0.02)
-    os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
-    if features.exists():
-        # whatever carries a final name is complete; a SIGKILL can only leave a hidden temporary file
-        # (never under a final name), and the rerun below clears it
-        for f in features.iterdir():
-            if f.name.startswith("."):
-                assert ".tmp" in f.name, f
-                continue
-            with np.load(f) as z:
-                assert len(z["descriptors"]) == len(z["points"])
+    try:
+        deadline = time.time() + 600
+        while not sentinel.exists() and proc.poll() is None and time.time() < deadline:
+            time.sleep(0.05)
+        # the run reached the fault point and is still running (blocked there): it did not finish
+        assert sentinel.exists(), f"the fault point was not reached (dvc exit code {proc.poll()})"
+        assert proc.poll() is None
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    final = sorted(f.name for f in features.iterdir() if not f.name.startswith("."))
+    hidden = [f for f in features.iterdir() if f.name.startswith(".")]
+    assert len(final) == 2, final  # exactly the two published outputs ...
+    for name in final:  # ... complete, byte for byte what the uninterrupted run wrote
+        assert hashlib.sha256((features / name).read_bytes()).hexdigest() == before[name], name
+    blocked = sentinel.read_text().split()[1]
+    assert Path(blocked).exists() and Path(blocked) in hidden  # the third: only under a temporary name
+    assert all(".tmp" in f.name for f in hidden), hidden
     _dvc(run, "repro")
     assert _digest(features) == before  # same files, same bytes, no leftovers
 

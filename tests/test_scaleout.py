@@ -10,13 +10,12 @@ import json
 
 import numpy as np
 import pytest
+from dask import distributed
 
 from tests.conftest import SEED
 from tests.test_features_cli import write_video
 from vidstyle.cli import main
 from vidstyle.recognition.synthetic import make_dataset
-
-distributed = pytest.importorskip("dask.distributed")
 
 
 @pytest.fixture(scope="module")
