@@ -11,11 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-# one import per evaluation module (they move to vidstyle.evaluation.*: one line to change)
-from vidstyle.augmg import evaluate as augmg_eval
+from vidstyle.evaluation import augmg as augmg_eval
+from vidstyle.evaluation import motion as motion_eval
 from vidstyle.mocap import Motion
 from vidstyle.mocap.skeleton import Skeleton
-from vidstyle.motiongraph import evaluate as motion_eval
 
 FPS = 30.0
 T = 60

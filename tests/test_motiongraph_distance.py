@@ -123,7 +123,7 @@ def test_parallel_joblib_and_dask_give_identical_candidates(rng):
     par = all_pair_candidates(ws, thr, 2 * K, tile=20, n_jobs=2, progress=False)
     for name in ("a", "b", "D", "theta", "x0", "z0"):
         assert np.array_equal(getattr(serial, name), getattr(par, name))
-    distributed = pytest.importorskip("dask.distributed")
+    import dask.distributed as distributed
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
         dask_res = all_pair_candidates(ws, thr, 2 * K, tile=20, scheduler=cluster.scheduler_address, progress=False)
     for name in ("a", "b", "D", "theta", "x0", "z0"):

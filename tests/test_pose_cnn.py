@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pytest.importorskip("torch")
+import torch  # noqa: F401 - a declared dependency: missing is a failure, not a skip
 
 import vidstyle.demo  # noqa: F401 - registers the "demo" training source (demo:<i> specs)
 from vidstyle.mocap.keypoints import KEYPOINTS, PART_KEYPOINTS

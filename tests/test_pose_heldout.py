@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 # the evaluation metrics through one import (the module moves to vidstyle.evaluation.pose: one line to change)
-from vidstyle.pose import evaluate as pose_eval
+from vidstyle.evaluation import pose as pose_eval
 from vidstyle.pose.data import Spec, render_samples
 from vidstyle.pose.estimator import PoseModel
 

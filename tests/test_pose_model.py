@@ -56,7 +56,7 @@ def test_viewpoint_scores_by_hand():
 
 
 @pytest.mark.slow
-def test_model_round_trip_and_fit_on_training_frames(trained):
+def test_model_round_trip_and_its_own_training_frames(trained):
     model, path, samples = trained
     loaded, header = load_model(path)
     assert header["params"] == model.get_params() and header["seed"] == 3
@@ -64,10 +64,8 @@ def test_model_round_trip_and_fit_on_training_frames(trained):
                                    "viewpoint": "hog", "dt": "envelope", "unary_weight": 2.0,
                                    "hog_C": 0.01, "fg_weight": 2.0, "seed": 3}
     preds = np.stack([loaded.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples)])
-    gt = np.stack([s.keypoints for s in samples])
-    hits = strict_pcp(preds, gt)
-    # on its own training frames the torso and head are found nearly always
-    assert hits[:, 0].mean() >= 0.8 and hits[:, 1].mean() >= 0.7
+    # accuracy is asserted on held-out renders against a mean-pose baseline (test_pose_heldout.py), never
+    # on training frames; here: the loaded model is the fitted one
     same = np.stack([model.estimate(s.image, i, view=s.view).points for i, s in enumerate(samples[:3])])
     np.testing.assert_allclose(same, preds[:3], rtol=1e-5, atol=1e-5)  # float32 score noise only
 

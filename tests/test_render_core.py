@@ -111,8 +111,7 @@ def test_visible_joints_lie_on_the_figure(motion, view):
     cols, rows = uv[f_idx, j_idx, 0], uv[f_idx, j_idx, 1]
     assert np.all((cols >= 0) & (cols < 160) & (rows >= 0) & (rows < 120))
     assert np.all(masks[f_idx, rows, cols] >= 0)
-    # and the figure's pixels look different from the background there (something was drawn)
-    assert F == len(masks)
+    assert F == len(masks)  # (the pixels themselves are checked against a projection in test_render_pixels.py)
 
 
 def test_side_view_hides_the_far_leg():
