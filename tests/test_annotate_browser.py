@@ -246,7 +246,7 @@ def test_page_splits_segments_toggles_transitions_and_imports(browser, app):
     transition's status toggles by key and by button and its actions change through the selects, and the
     import control reads CVAT and VIA files (and reports a broken one without changing the marks)."""
     from vidstyle.annotate import exchange
-    from vidstyle.formats.annotations import Segment, Transition, VideoAnnotations, file_sha256
+    from vidstyle.formats.annotations import ActionSpan, Transition, VideoAnnotations, file_sha256
     from vidstyle.video import VideoReader
 
     url, ann, tmp = app
@@ -306,7 +306,7 @@ def test_page_splits_segments_toggles_transitions_and_imports(browser, app):
         info = r.info
     target = exchange.Target(VideoAnnotations(video.name, file_sha256(video), info.frames, info.fps),
                              info.timestamps, info.duration, info.width, info.height)
-    target.video.segments = [Segment(0, 5, "Guard"), Segment(60, 70, "Hook")]
+    target.video.segments = [ActionSpan(0, 5, "Guard"), ActionSpan(60, 70, "Hook")]
     target.video.transitions = [Transition(65, "Hook", "Guard", "discarded")]
     cvat = tmp / "other.cvat.xml"
     cvat.write_bytes(exchange.export("cvat", ["Jab", "Hook", "Guard"], target))
@@ -314,7 +314,7 @@ def test_page_splits_segments_toggles_transitions_and_imports(browser, app):
     page.wait_for_function("() => window.vidstyle.marks['0'].segments.length === 2")
     assert _segments(page) == [(0, 5, "Guard"), (60, 70, "Hook")]
     assert [(t["frame"], t["status"]) for t in state(page)["transitions"]] == [(65, "discarded")]
-    target.video.segments = [Segment(100, N, "Kick")]  # a class the page does not know yet: added
+    target.video.segments = [ActionSpan(100, N, "Kick")]  # a class the page does not know yet: added
     target.video.transitions = [Transition(99, "Guard", "Kick", "accepted")]
     via = tmp / "other.via.json"
     via.write_bytes(exchange.export("via", ["Jab", "Hook", "Guard", "Kick"], target))

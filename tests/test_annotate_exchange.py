@@ -13,7 +13,7 @@ from annotate_util import CLASSES, numbered_video, running
 
 from vidstyle.annotate import exchange
 from vidstyle.formats import FormatError
-from vidstyle.formats.annotations import Candidate, Segment, Transition, VideoAnnotations, file_sha256
+from vidstyle.formats.annotations import CandidateDecision, ActionSpan, Transition, VideoAnnotations, file_sha256
 from vidstyle.video import VideoReader
 
 
@@ -28,13 +28,13 @@ def target(request, tmp_path_factory):
 
 def random_marks(rng, n, classes):
     cuts = np.sort(rng.choice(np.arange(0, n + 1), size=8, replace=False))
-    segs = [Segment(int(a), int(b), str(rng.choice(classes))) for a, b in zip(cuts[::2], cuts[1::2])]
+    segs = [ActionSpan(int(a), int(b), str(rng.choice(classes))) for a, b in zip(cuts[::2], cuts[1::2])]
     if cuts[-1] < n:  # a segment running to the last frame (CVAT: no closing "outside" box)
-        segs.append(Segment(int(cuts[-1]), n, classes[0]))
+        segs.append(ActionSpan(int(cuts[-1]), n, classes[0]))
     frames = np.sort(rng.choice(n, size=5, replace=False))
     trans = [Transition(int(f), str(rng.choice(classes)), str(rng.choice(classes)),
                         str(rng.choice(["accepted", "discarded"])),
-                        [Candidate(f"lib/{k}.bvh", float(np.round(rng.random() * 3, 4)), "accepted" if k % 2 else "discarded")
+                        [CandidateDecision(f"lib/{k}.bvh", float(np.round(rng.random() * 3, 4)), "accepted" if k % 2 else "discarded")
                          for k in range(int(rng.integers(0, 3)))])
              for f in frames]
     # edge frames: first and last
@@ -59,7 +59,7 @@ def test_export_import_identity(fmt, target, rng):
 def test_conventions(target):
     n = target.video.frames
     ts = target.timestamps
-    target.video.segments = [Segment(0, 10, "Jab"), Segment(20, n, "Hook")]
+    target.video.segments = [ActionSpan(0, 10, "Jab"), ActionSpan(20, n, "Hook")]
     target.video.transitions = [Transition(15, "Jab", "Hook", "accepted")]
     # Label Studio: 1-based inclusive frame ranges
     ls = json.loads(exchange.export("labelstudio", CLASSES, target))
@@ -101,7 +101,7 @@ def test_vfr_via_uses_timestamps_not_fps(tmp_path):
 
 
 def test_import_refuses_other_video_and_bad_files(target):
-    target.video.segments, target.video.transitions = [Segment(0, 5, "Jab")], []
+    target.video.segments, target.video.transitions = [ActionSpan(0, 5, "Jab")], []
     native = json.loads(exchange.export("native", CLASSES, target))
     native["videos"][0]["sha256"] = "0" * 64
     with pytest.raises(FormatError, match="sha256"):

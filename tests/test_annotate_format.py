@@ -16,8 +16,8 @@ from vidstyle.formats import FormatError
 from vidstyle.formats.annotations import (
     JSON_SCHEMA,
     Annotations,
-    Candidate,
-    Segment,
+    CandidateDecision,
+    ActionSpan,
     Transition,
     VideoAnnotations,
     file_sha256,
@@ -41,9 +41,9 @@ def sample() -> Annotations:
         videos=[VideoAnnotations(
             "clips/a.mp4", SHA, 100, 30.0,
             transitions=[Transition(40, "jab", "kick", "accepted",
-                                    [Candidate("lib/x.bvh", 1.5, "accepted"), Candidate("lib/y.bvh", 0.0, "discarded")]),
+                                    [CandidateDecision("lib/x.bvh", 1.5, "accepted"), CandidateDecision("lib/y.bvh", 0.0, "discarded")]),
                          Transition(70, "kick", "cross", "discarded")],
-            segments=[Segment(0, 38, "jab"), Segment(42, 68, "kick"), Segment(72, 100, "cross")])],
+            segments=[ActionSpan(0, 38, "jab"), ActionSpan(42, 68, "kick"), ActionSpan(72, 100, "cross")])],
     )
 
 
@@ -57,13 +57,13 @@ def annotations(draw):
         marks = draw(st.lists(st.integers(0, frames - 1), unique=True, max_size=6))
         trans = [Transition(m, draw(st.sampled_from(classes)), draw(st.sampled_from(classes)),
                             draw(st.sampled_from(["accepted", "discarded"])),
-                            [Candidate(draw(st.text(min_size=1, max_size=10)),
+                            [CandidateDecision(draw(st.text(min_size=1, max_size=10)),
                                        draw(st.floats(0, 1e4, allow_nan=False)),
                                        draw(st.sampled_from(["accepted", "discarded"])))
                              for _ in range(draw(st.integers(0, 3)))])
                  for m in sorted(marks)]
         cuts = sorted(draw(st.lists(st.integers(0, frames), unique=True, max_size=8)))
-        segs = [Segment(a, b, draw(st.sampled_from(classes))) for a, b in zip(cuts[::2], cuts[1::2]) if b > a]
+        segs = [ActionSpan(a, b, draw(st.sampled_from(classes))) for a, b in zip(cuts[::2], cuts[1::2]) if b > a]
         videos.append(VideoAnnotations(draw(st.text(min_size=1, max_size=20)), sha, frames,
                                        draw(st.floats(0, 240, allow_nan=False)), trans, segs))
     return Annotations(classes, videos, draw(st.integers(0, 10**6)))
@@ -171,7 +171,7 @@ def test_writer_refuses_invalid_object_and_leaves_file(tmp_path):
     write_annotations(p, sample())
     before = p.read_bytes()
     bad = sample()
-    bad.videos[0].segments.append(Segment(10, 20, "jab"))  # overlaps 0..38
+    bad.videos[0].segments.append(ActionSpan(10, 20, "jab"))  # overlaps 0..38
     with pytest.raises(FormatError, match="overlaps"):
         write_annotations(p, bad)
     assert p.read_bytes() == before

@@ -13,7 +13,7 @@ from tests.conftest import SEED
 from vidstyle.cli import main
 from vidstyle.formats.annotations import (
     Annotations,
-    Segment,
+    ActionSpan,
     VideoAnnotations,
     frame_labels,
     labelled_runs,
@@ -30,7 +30,7 @@ def ds(tmp_path_factory):
     return root
 
 
-def segments_of(labels: list[str], gap_every: int = 0) -> list[Segment]:
+def segments_of(labels: list[str], gap_every: int = 0) -> list[ActionSpan]:
     """Runs of equal labels as segments; ``gap_every``: leave two frames unlabelled at each change and
     every ``gap_every`` frames (what a person marking only the clear frames would do)."""
     segs, start = [], 0
@@ -40,13 +40,13 @@ def segments_of(labels: list[str], gap_every: int = 0) -> list[Segment]:
             if gap_every:
                 a, b = a + (a > 0), b - (b < len(labels))
             if b > a:
-                segs.append(Segment(a, b, labels[start]))
+                segs.append(ActionSpan(a, b, labels[start]))
             start = i
     if gap_every:
         out = []
         for s in segs:
             cut = list(range(s.start, s.end, gap_every)) + [s.end]
-            out += [Segment(x, y - 1, s.action) for x, y in zip(cut, cut[1:]) if y - 1 > x]
+            out += [ActionSpan(x, y - 1, s.action) for x, y in zip(cut, cut[1:]) if y - 1 > x]
         segs = out
     return segs
 
@@ -129,7 +129,7 @@ def test_bad_annotation_inputs_exit_2(ds, tmp_path):
 
 
 def test_labelled_runs_and_crop(ds):
-    v = VideoAnnotations("x.mp4", "0" * 64, 20, 20.0, [], [Segment(0, 4, "a"), Segment(4, 6, "b"), Segment(9, 12, "a")])
+    v = VideoAnnotations("x.mp4", "0" * 64, 20, 20.0, [], [ActionSpan(0, 4, "a"), ActionSpan(4, 6, "b"), ActionSpan(9, 12, "a")])
     assert labelled_runs(v) == [(0, 6), (9, 12)]
     y = frame_labels(v, ["a", "b"])
     assert y.tolist() == [0] * 4 + [1] * 2 + [-1] * 3 + [0] * 3 + [-1] * 8

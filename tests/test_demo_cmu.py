@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from vidstyle.cli import main
-from vidstyle.demo.cmu import CMUParams, Clip, clip_windows, make_cmu_dataset, parse_actions, plan_segments, video_frames
+from vidstyle.demo.cmu import CMUParams, CmuClip, clip_windows, make_cmu_dataset, parse_actions, plan_segments, video_frames
 from vidstyle.errors import InputError
 from vidstyle.mocap import read_bvh
 from vidstyle.video import VideoReader
@@ -46,15 +46,15 @@ def test_clip_windows_against_hand_computed_cases():
 
 def test_video_frames_matches_resample():
     # 174 BVH frames at 120 fps, T-pose dropped -> 173 frames = 172/120 s -> 29 frames at 20 fps
-    clip = Clip("x.bvh", "02", "03", "run/jog", 174, 120.0, "run")
+    clip = CmuClip("x.bvh", "02", "03", "run/jog", 174, 120.0, "run")
     assert video_frames(clip, 20) == 1 + int(np.floor(172 / 120 * 20))
 
 
 def test_cap_is_independent_of_class_grouping():
     """The per-subject cap draws by subject and source action, so merging classes keeps the same windows
     (features of one grouping then serve the other)."""
-    clips = [Clip(f"05_{t:02d}.bvh", "05", f"{t:02d}", "dance", 1000, 120.0, "dance") for t in range(1, 6)]
-    clips += [Clip("05_09.bvh", "05", "09", "walk", 600, 120.0, "walk")]
+    clips = [CmuClip(f"05_{t:02d}.bvh", "05", f"{t:02d}", "dance", 1000, 120.0, "dance") for t in range(1, 6)]
+    clips += [CmuClip("05_09.bvh", "05", "09", "walk", 600, 120.0, "walk")]
     a, _ = plan_segments(clips, CMUParams(classes=parse_actions("walk,dance"), max_per_subject=4, seed=3))
     b, _ = plan_segments(clips, CMUParams(classes=parse_actions("walk,other=dance+jump"), max_per_subject=4, seed=3))
     assert [s.stem for s in a] == [s.stem for s in b]

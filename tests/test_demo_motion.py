@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vidstyle.demo import ACTIONS, Body, Performer, Segment, Style, build_skeleton, build_take
+from vidstyle.demo import ACTIONS, Body, Performer, PlanStep, MovementTraits, build_skeleton, build_take
 from vidstyle.demo.performer import Chain
 from vidstyle.mocap import format_bvh, global_positions, parse_bvh, read_bvh
 
@@ -15,13 +15,13 @@ MOCAP_FPS = 60
 def _performer(seed: int, lead: str | None = None) -> Performer:
     p = Performer.random(f"p{seed:02d}", np.random.default_rng(seed))
     if lead is not None:
-        p = Performer(p.id, p.body, Style.from_dict({**p.style.to_dict(), "lead": lead}), p.chain)
+        p = Performer(p.id, p.body, MovementTraits.from_dict({**p.style.to_dict(), "lead": lead}), p.chain)
     return p
 
 
 def _isolated(p: Performer, action: str, rng: np.random.Generator, pad: int = 6):
     d = p.chain.sample_duration(action, rng) if action in ACTIONS else 12
-    return build_take(p, [Segment("Guard", pad), Segment(action, d, 1), Segment("Guard", pad)], rng), pad * 3, (pad + d) * 3
+    return build_take(p, [PlanStep("Guard", pad), PlanStep(action, d, 1), PlanStep("Guard", pad)], rng), pad * 3, (pad + d) * 3
 
 
 @pytest.fixture(scope="module", params=["orthodox", "southpaw"])
@@ -44,8 +44,8 @@ def test_skeleton_has_the_cmu_layout(cmu_dir):
 def test_skeleton_scale_is_cmu_units_and_symmetric():
     body = Body(height_m=1.80)
     sk = build_skeleton(body)
-    motion = build_take(Performer("x", body, Style(bounce=0.0), Chain.random(np.random.default_rng(0), Style())),
-                        [Segment("Guard", 4)], np.random.default_rng(0)).motion
+    motion = build_take(Performer("x", body, MovementTraits(bounce=0.0), Chain.random(np.random.default_rng(0), MovementTraits())),
+                        [PlanStep("Guard", 4)], np.random.default_rng(0)).motion
     pos = global_positions(motion)
     # standing in guard (knees bent, head tilted) the head top is a little under the stature
     from vidstyle.mocap import end_site_positions
@@ -162,7 +162,7 @@ def test_bvh_export_round_trips(takes, tmp_path):
 
 def test_southpaw_is_the_mirror_image():
     ortho, south = _performer(3, "orthodox"), _performer(3, "southpaw")
-    plan = [Segment("Guard", 4), Segment("Jab", 10), Segment("Guard", 4)]
+    plan = [PlanStep("Guard", 4), PlanStep("Jab", 10), PlanStep("Guard", 4)]
     a = build_take(ortho, plan, np.random.default_rng(5)).motion
     b = build_take(south, plan, np.random.default_rng(5)).motion
     pa, pb = global_positions(a), global_positions(b)

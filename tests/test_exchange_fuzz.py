@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from vidstyle.annotate import exchange
 from vidstyle.errors import InputError
-from vidstyle.formats.annotations import STATUSES, Candidate, Segment, Transition, VideoAnnotations
+from vidstyle.formats.annotations import STATUSES, CandidateDecision, ActionSpan, Transition, VideoAnnotations
 
 CLASSES = ["Jab", "Hook", "Kick"]
 N = 40
@@ -29,8 +29,8 @@ N = 40
 def _target() -> exchange.Target:
     ts = np.arange(N) / 25.0 + np.r_[0, np.linspace(0.0, 0.012, N - 1)]  # slightly variable rate
     v = VideoAnnotations("clip.mp4", "ab" * 32, N, 25.0)
-    v.segments = [Segment(0, 10, "Jab"), Segment(12, 30, "Hook"), Segment(33, N, "Kick")]
-    v.transitions = [Transition(0, "Jab", "Hook", "accepted", [Candidate("lib/a.bvh", 1.25, "accepted")]),
+    v.segments = [ActionSpan(0, 10, "Jab"), ActionSpan(12, 30, "Hook"), ActionSpan(33, N, "Kick")]
+    v.transitions = [Transition(0, "Jab", "Hook", "accepted", [CandidateDecision("lib/a.bvh", 1.25, "accepted")]),
                      Transition(11, "Jab", "Hook", "discarded"), Transition(N - 1, "Hook", "Kick", "accepted")]
     return exchange.Target(v, ts, N / 25.0, 64, 48)
 

@@ -49,8 +49,8 @@ from ..formats import FormatError
 from ..formats.annotations import (
     STATUSES,
     Annotations,
-    Candidate,
-    Segment,
+    CandidateDecision,
+    ActionSpan,
     Transition,
     VideoAnnotations,
     from_document,
@@ -82,7 +82,7 @@ class Target:
 class Marks:
     classes: list[str]
     transitions: list[Transition]
-    segments: list[Segment]
+    segments: list[ActionSpan]
 
 
 def export(fmt: str, classes: list[str], target: Target) -> bytes:
@@ -130,7 +130,7 @@ def _extra(t: Transition) -> dict:
 
 
 def _transition(frame: int, extra: dict) -> Transition:
-    cands = [Candidate(str(c["clip"]), float(c["time"]), str(c["status"])) for c in extra.get("candidates", [])]
+    cands = [CandidateDecision(str(c["clip"]), float(c["time"]), str(c["status"])) for c in extra.get("candidates", [])]
     status = str(extra.get("status", "accepted"))
     if status not in STATUSES:
         raise ValueError(f"transition status {status!r}")
@@ -221,7 +221,7 @@ def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
                 _add_class(classes, t.to_action)
                 trans.append(t)
             else:
-                segs.append(Segment(start - 1, end, _add_class(classes, str(label))))
+                segs.append(ActionSpan(start - 1, end, _add_class(classes, str(label))))
     return Marks(classes, trans, segs)
 
 
@@ -299,10 +299,10 @@ def _cvat_in(data: bytes, classes, target: Target, name) -> Marks:
             if not outside and run_start is None:
                 run_start = f
             elif outside and run_start is not None:
-                segs.append(Segment(run_start, f, label))
+                segs.append(ActionSpan(run_start, f, label))
                 run_start = None
         if run_start is not None:
-            segs.append(Segment(run_start, n, label))
+            segs.append(ActionSpan(run_start, n, label))
     trans = []
     for tag in root.findall("tag"):
         if tag.get("label") != TRANSITION:
@@ -393,7 +393,7 @@ def _via_in(data: bytes, classes, target: Target, name) -> Marks:
             action = action_opts.get(opt, opt)
             start = _nearest(b, z[0], 0, n - 1)
             end = _nearest(b, z[1], start + 1, n)
-            segs.append(Segment(start, end, _add_class(classes, action)))
+            segs.append(ActionSpan(start, end, _add_class(classes, action)))
         elif len(z) == 1:
             frame = _nearest(b, z[0], 0, n - 1)
             status = status_opts.get(av.get("status", "0"), av.get("status", "accepted"))

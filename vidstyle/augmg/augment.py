@@ -78,7 +78,7 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     ``anchor="nodes"``: the stored segment also reaches the library clip's enhancement nodes around
     ``w_z`` (:func:`.enhance.enhancement_nodes` against the best departure and arrival windows, within
     ``max_span_s`` seconds, as ``vidstyle evaluate augmg``'s 60 frames at 60 fps), and the enhancement
-    edges align those instead of the windows beside ``w_z`` (:class:`~vidstyle.motiongraph.graph.Segment`
+    edges align those instead of the windows beside ``w_z`` (:class:`~vidstyle.motiongraph.graph.EnhancementSegment`
     ``anchors``); ``hold``: the segment's hold (the same options as ``vidstyle evaluate augmg
     --anchor/--hold``). The graph places the segment from the departure only, and the arrival follows
     it (a walk goes wherever the segment leads), like ``evaluate augmg --place first``.

@@ -13,12 +13,12 @@ rotations by IK), :mod:`.actions` (keyframes), :mod:`.performer` (style + Markov
 
 from .actions import ACTIONS, CLASSES
 from .dataset import DatasetParams, label_document, make_dataset, make_performer, make_take
-from .performer import Chain, Performer, Style
+from .performer import Chain, Performer, MovementTraits
 from .skeleton import UNIT_M, Body, build_skeleton
-from .timeline import Segment, Take, build_take, performance_plan, single_action_plan
+from .timeline import PlanStep, Take, build_take, performance_plan, single_action_plan
 
 __all__ = [
-    "ACTIONS", "CLASSES", "UNIT_M", "Body", "Chain", "DatasetParams", "Performer", "Segment", "Style", "Take",
+    "ACTIONS", "CLASSES", "UNIT_M", "Body", "Chain", "DatasetParams", "Performer", "PlanStep", "MovementTraits", "Take",
     "build_skeleton", "build_take", "label_document", "make_dataset", "make_performer", "make_take",
     "performance_plan", "single_action_plan",
 ]

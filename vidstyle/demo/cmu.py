@@ -137,7 +137,7 @@ def parse_actions(spec: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
 
 # --------------------------------------------------------------------------- planning
 @dataclass(frozen=True)
-class Clip:
+class CmuClip:
     file: str
     subject: str
     trial: str
@@ -148,10 +148,10 @@ class Clip:
 
 
 @dataclass(frozen=True)
-class Segment:
+class ClipWindow:
     """One window of one clip, in video frames of the clip resampled to ``fps`` after dropping frame 0."""
 
-    clip: Clip
+    clip: CmuClip
     window: int
     start: int  # video frame (inclusive)
     end: int  # video frame (exclusive)
@@ -166,7 +166,7 @@ class Segment:
         return f"{self.performer}_{self.clip.trial}_w{self.window}"
 
 
-def read_clips(cmu_dir: Path) -> list[Clip]:
+def read_clips(cmu_dir: Path) -> list[CmuClip]:
     """The clips of ``clips.csv`` in ``cmu_dir`` (with their CMU action), checked against the files."""
     from ..motiongraph.labels import cmu_action
 
@@ -188,12 +188,12 @@ def read_clips(cmu_dir: Path) -> list[Clip]:
                 raise InputError(f"{index}: line {line}: frames/fps are not numbers") from None
             if not (cmu_dir / row["file"]).is_file():
                 raise InputError(f"{index}: line {line}: {row['file']} not found in {cmu_dir}")
-            clips.append(Clip(row["file"], row["subject"].zfill(2), row["trial"].zfill(2), row["description"],
+            clips.append(CmuClip(row["file"], row["subject"].zfill(2), row["trial"].zfill(2), row["description"],
                               frames, fps, cmu_action(row["description"])))
     return sorted(clips, key=lambda c: c.file)
 
 
-def video_frames(clip: Clip, fps: float) -> int:
+def video_frames(clip: CmuClip, fps: float) -> int:
     """Frames of the clip without its T-pose, resampled to ``fps`` (as :meth:`Motion.resample` counts)."""
     duration = (clip.frames - 2) / clip.fps
     return int(np.floor(duration * fps + 1e-9)) + 1 if clip.frames > 2 else max(clip.frames - 1, 0)
@@ -211,12 +211,12 @@ def clip_windows(n: int, window: int, min_frames: int) -> list[tuple[int, int]]:
     return [(off + i * window, off + (i + 1) * window) for i in range(k)]
 
 
-def plan_segments(clips: list[Clip], params: CMUParams) -> tuple[list[Segment], dict]:
+def plan_segments(clips: list[CmuClip], params: CMUParams) -> tuple[list[ClipWindow], dict]:
     """Windows of the chosen actions (capped per subject and source action) and statistics of the plan."""
     to_class = params.source_to_class()
     window = int(round(params.segment_seconds * params.fps))
     min_frames = int(round(params.min_seconds * params.fps))
-    pools: dict[tuple[str, str], list[Segment]] = defaultdict(list)
+    pools: dict[tuple[str, str], list[ClipWindow]] = defaultdict(list)
     dropped_short = []
     for clip in clips:
         if clip.source_action not in to_class:
@@ -225,8 +225,8 @@ def plan_segments(clips: list[Clip], params: CMUParams) -> tuple[list[Segment], 
         if not wins:
             dropped_short.append(clip.file)
         for w, (s, e) in enumerate(wins):
-            pools[(clip.subject, clip.source_action)].append(Segment(clip, w, s, e, to_class[clip.source_action]))
-    chosen: list[Segment] = []
+            pools[(clip.subject, clip.source_action)].append(ClipWindow(clip, w, s, e, to_class[clip.source_action]))
+    chosen: list[ClipWindow] = []
     for (subject, source), pool in sorted(pools.items()):
         if params.max_per_subject and len(pool) > params.max_per_subject:
             # keyed by subject and source action only, so the draw is the same under any class grouping
@@ -240,7 +240,7 @@ def plan_segments(clips: list[Clip], params: CMUParams) -> tuple[list[Segment], 
     return chosen, stats
 
 
-def plan_stats(clips: list[Clip], segments: list[Segment], params: CMUParams) -> dict:
+def plan_stats(clips: list[CmuClip], segments: list[ClipWindow], params: CMUParams) -> dict:
     """Per class: subjects, clips and windows per subject (before/after the cap), and seconds."""
     to_class = params.source_to_class()
     out: dict[str, dict] = {}
@@ -271,7 +271,7 @@ def _key(text: str) -> int:
     return int.from_bytes(text.encode("utf-8")[:8].ljust(8, b"\0"), "little")
 
 
-def _render_seed(seed: int, seg: Segment, view_index: int) -> int:
+def _render_seed(seed: int, seg: ClipWindow, view_index: int) -> int:
     ss = np.random.SeedSequence([seed, int(seg.clip.subject), int(seg.clip.trial), seg.window, view_index, 2])
     return int(ss.generate_state(1)[0])
 
@@ -301,7 +301,7 @@ def follow_offset(root: np.ndarray, fps: float, seconds: float = 1.0) -> np.ndar
 @dataclass
 class _Job:
     params: CMUParams
-    seg: Segment
+    seg: ClipWindow
     cmu_dir: str
     root: str
     classes: list[str] = field(default_factory=list)

@@ -88,7 +88,7 @@ def scaled_pose(pose: dict, factor: float, extra: dict | None = None) -> dict:
 def _context_plan(kind: str, p, rng: np.random.Generator):
     """Plan of one context clip (segments with their own keys) of library performer ``p``."""
     from .actions import ANKLE, BASE_SECONDS
-    from .timeline import Segment
+    from .timeline import PlanStep
     from .transitions import CROUCH_POSE, HOP_POSE, STEP_BACK_POSE
 
     fps = p.chain.video_fps
@@ -96,30 +96,30 @@ def _context_plan(kind: str, p, rng: np.random.Generator):
     def frames(seconds: float) -> int:
         return max(6, int(round(seconds * fps / p.style.speed)))
 
-    plan = [Segment("Guard", frames(0.5))]
+    plan = [PlanStep("Guard", frames(0.5))]
     if kind == "dodge":
         for rep in range(4):
             side = 1.0 if rep % 2 == 0 else -1.0
             f = float(rng.uniform(0.75, 1.15))
             slip = scaled_pose(CROUCH_POSE, f, {"px": 0.035 * side, "roll": 7.0 * side, "croll": 5.0 * side})
-            plan += [Segment("Dodge", frames(0.7), keys=[(0.0, {}), (0.45, slip), (0.55, slip), (1.0, {})]),
-                     Segment("Guard", frames(float(rng.uniform(0.3, 0.6))))]
+            plan += [PlanStep("Dodge", frames(0.7), keys=[(0.0, {}), (0.45, slip), (0.55, slip), (1.0, {})]),
+                     PlanStep("Guard", frames(float(rng.uniform(0.3, 0.6))))]
     elif kind == "switch":
         switched = {"lf": (0.07, ANKLE, -0.15), "rf": (-0.09, ANKLE, 0.15), "yaw": 22.0, "lfyaw": 40.0,
                     "rfyaw": 12.0, "lh": (-0.36, 0.17, 0.32), "rh": (0.30, 0.20, 0.42)}
         for _ in range(3):
             air = scaled_pose(HOP_POSE, float(rng.uniform(0.8, 1.1)))
-            plan += [Segment("Switch", frames(1.6), keys=[(0.0, {}), (0.17, air), (0.34, switched), (0.66, switched),
+            plan += [PlanStep("Switch", frames(1.6), keys=[(0.0, {}), (0.17, air), (0.34, switched), (0.66, switched),
                                                           (0.83, air), (1.0, {})]),
-                     Segment("Guard", frames(float(rng.uniform(0.3, 0.6))))]
+                     PlanStep("Guard", frames(float(rng.uniform(0.3, 0.6))))]
     elif kind == "stop":
         step = int(round(BASE_SECONDS["Step"] / p.style.speed * fps))
         for _ in range(3):
             stop = scaled_pose(STEP_BACK_POSE, float(rng.uniform(0.8, 1.15)))
-            plan += [Segment("Step", step, 1), Segment("Guard", 3), Segment("Step", step, 1),
-                     Segment("Stop", frames(1.2), keys=[(0.0, {}), (0.3, stop), (0.7, stop), (1.0, {})]),
-                     Segment("Guard", frames(float(rng.uniform(0.3, 0.6)))), Segment("Step", step, -1),
-                     Segment("Guard", 3), Segment("Step", step, -1), Segment("Guard", frames(0.3))]
+            plan += [PlanStep("Step", step, 1), PlanStep("Guard", 3), PlanStep("Step", step, 1),
+                     PlanStep("Stop", frames(1.2), keys=[(0.0, {}), (0.3, stop), (0.7, stop), (1.0, {})]),
+                     PlanStep("Guard", frames(float(rng.uniform(0.3, 0.6)))), PlanStep("Step", step, -1),
+                     PlanStep("Guard", 3), PlanStep("Step", step, -1), PlanStep("Guard", frames(0.3))]
     else:
         raise ValueError(f"unknown context kind {kind!r}")
     return plan

@@ -13,7 +13,7 @@ from .transitions import draw_transition_styles
 
 
 @dataclass(frozen=True)
-class Style:
+class MovementTraits:
     """How a performer moves. Durations are divided by ``speed``; differences from the reference
     guard are multiplied by ``amplitude``; ``variation`` is the spread of per-repetition noise."""
 
@@ -36,11 +36,11 @@ class Style:
                 for k, v in d.items()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> Style:
+    def from_dict(cls, d: dict) -> MovementTraits:
         return cls(**{**d, "tempo": tuple(d.get("tempo", (1.0,) * len(ACTIONS)))})
 
     @classmethod
-    def random(cls, rng: np.random.Generator) -> Style:
+    def random(cls, rng: np.random.Generator) -> MovementTraits:
         return cls(
             speed=float(rng.uniform(0.8, 1.25)),
             amplitude=float(rng.uniform(0.85, 1.1)),
@@ -69,7 +69,7 @@ class Chain:
     video_fps: float = 20.0
 
     @classmethod
-    def random(cls, rng: np.random.Generator, style: Style, video_fps: float = 20.0) -> Chain:
+    def random(cls, rng: np.random.Generator, style: MovementTraits, video_fps: float = 20.0) -> Chain:
         """Rows mix a sparse Dirichlet draw with two favourite follow-ups, so performers differ clearly."""
         A = len(ACTIONS)
         start = rng.dirichlet(np.full(A, 0.8))
@@ -109,14 +109,14 @@ class Chain:
 class Performer:
     id: str
     body: Body
-    style: Style
+    style: MovementTraits
     chain: Chain
     transitions: tuple[tuple[str, str, str], ...] = ()  # (from, to, kind): see :mod:`.transitions`
 
     @classmethod
     def random(cls, performer_id: str, rng: np.random.Generator, video_fps: float = 20.0) -> Performer:
         body = Body.random(rng)
-        style = Style.random(rng)
+        style = MovementTraits.random(rng)
         chain = Chain.random(rng, style, video_fps)
         # drawn last, so body, style and chain are those of a performer without transition styles
         return cls(performer_id, body, style, chain, draw_transition_styles(rng, chain.transition))

@@ -1,6 +1,6 @@
 """Takes: a plan of labelled segments (actions, guard pauses, steps) -> one continuous motion + labels.
 
-Segment lengths are whole *video* frames; the mocap runs at an integer multiple of the video rate
+PlanStep lengths are whole *video* frames; the mocap runs at an integer multiple of the video rate
 (``ratio``), so video frame ``k`` is mocap frame ``ratio * k`` and every label boundary falls exactly on
 a video frame. All keys of a take go into one shape-preserving cubic (PCHIP) per channel: C1 motion,
 no overshoot past a key (so a fist never flies beyond its target and planted feet never dip below the
@@ -41,7 +41,7 @@ for _c in ("lfx", "lfy", "lfz", "rfx", "rfy", "rfz"):
 
 
 @dataclass
-class Segment:
+class PlanStep:
     label: str
     frames: int  # video frames
     step: int = 0  # +1 forward, -1 backward (Step segments)
@@ -55,7 +55,7 @@ class Take:
 
     motion: Motion
     labels: list[str]
-    plan: list[Segment]
+    plan: list[PlanStep]
     ratio: int  # mocap frames per video frame
     chain: list[str] = field(default_factory=list)
     transitions: list[dict] = field(default_factory=list)
@@ -104,7 +104,7 @@ def _keys_of(p: Performer, guard: np.ndarray, keys: list[Key], t0: float, durati
     return times, values
 
 
-def build_take(p: Performer, plan: list[Segment], rng: np.random.Generator, video_fps: float = 20.0,
+def build_take(p: Performer, plan: list[PlanStep], rng: np.random.Generator, video_fps: float = 20.0,
                ratio: int = 3) -> Take:
     """Animate ``plan``; orthodox keys are mirrored for a southpaw."""
     mocap_fps = video_fps * ratio
@@ -167,35 +167,35 @@ def _gap(rng: np.random.Generator, lo: int, hi: int) -> int:
     return int(rng.integers(lo, hi + 1))
 
 
-def single_action_plan(p: Performer, action: str, n_frames: int, rng: np.random.Generator) -> list[Segment]:
+def single_action_plan(p: Performer, action: str, n_frames: int, rng: np.random.Generator) -> list[PlanStep]:
     """One action repeated with short guard pauses, filling ``n_frames`` video frames (the layout of
     the thesis' database: one action per video). Pauses stay short so the action is the majority."""
     fps = p.chain.video_fps
-    plan = [Segment("Guard", _gap(rng, int(0.2 * fps), int(0.5 * fps)))]
+    plan = [PlanStep("Guard", _gap(rng, int(0.2 * fps), int(0.5 * fps)))]
     used = plan[0].frames
     while True:
         d = p.chain.sample_duration(action, rng)
         g = _gap(rng, max(2, int(0.12 * fps)), max(3, int(0.3 * fps)))
         if used + d + 2 > n_frames:
             break
-        plan.append(Segment(action, d))
-        plan.append(Segment("Guard", min(g, n_frames - used - d)))
+        plan.append(PlanStep(action, d))
+        plan.append(PlanStep("Guard", min(g, n_frames - used - d)))
         used += d + plan[-1].frames
     if used < n_frames:
         if plan[-1].label == "Guard":
             plan[-1].frames += n_frames - used
         else:
-            plan.append(Segment("Guard", n_frames - used))
+            plan.append(PlanStep("Guard", n_frames - used))
     return plan
 
 
-def performance_plan(p: Performer, n_frames: int, rng: np.random.Generator) -> list[Segment]:
+def performance_plan(p: Performer, n_frames: int, rng: np.random.Generator) -> list[PlanStep]:
     """The performer following their own chain for ``n_frames`` video frames: actions separated by
     guard pauses of their habitual length, some pauses containing a step (forward or back, chosen to
     drift back towards the start so the performer stays in the camera's field)."""
     fps = p.chain.video_fps
     s = p.style
-    plan = [Segment("Guard", _gap(rng, int(0.3 * fps), int(0.8 * fps)))]
+    plan = [PlanStep("Guard", _gap(rng, int(0.3 * fps), int(0.8 * fps)))]
     used = plan[0].frames
     prev: int | None = None
     position = 0
@@ -209,29 +209,29 @@ def performance_plan(p: Performer, n_frames: int, rng: np.random.Generator) -> l
         extra = (step_frames + 3) if take_step else 0
         if used + d + gap + extra > n_frames:
             break
-        plan.append(Segment(ACTIONS[a], d))
+        plan.append(PlanStep(ACTIONS[a], d))
         if take_step:
             direction = -1 if position > 0 else 1 if position < 0 else (1 if rng.random() < 0.5 else -1)
             position += direction
             first = max(2, gap // 2)
-            plan += [Segment("Guard", first), Segment("Step", step_frames, direction),
-                     Segment("Guard", max(3, gap - first))]
+            plan += [PlanStep("Guard", first), PlanStep("Step", step_frames, direction),
+                     PlanStep("Guard", max(3, gap - first))]
             used += d + step_frames + first + max(3, gap - first)
         else:
-            plan.append(Segment("Guard", gap))
+            plan.append(PlanStep("Guard", gap))
             used += d + gap
         prev = a
     plan[-1].frames += n_frames - used  # the last segment is always a guard pause
     return apply_transition_styles(p, plan, n_frames)
 
 
-def apply_transition_styles(p: Performer, plan: list[Segment], n_frames: int) -> list[Segment]:
+def apply_transition_styles(p: Performer, plan: list[PlanStep], n_frames: int) -> list[PlanStep]:
     """Animate every guard pause between two actions the performer has a transition habit for as that
     transition (lengthened to :data:`MIN_FRAMES` where shorter). If lengthening overruns ``n_frames``,
     trailing segments are dropped and the final guard pause absorbs the rest. Plans without such a
     pair come back unchanged."""
     min_frames = int(round(MIN_FRAMES * p.chain.video_fps / 20.0))
-    out = [Segment(s.label, s.frames, s.step, s.keys, s.style) for s in plan]
+    out = [PlanStep(s.label, s.frames, s.step, s.keys, s.style) for s in plan]
     for i in range(1, len(out) - 1):
         a, g, b = out[i - 1], out[i], out[i + 1]
         kind = p.transition_kind(a.label, b.label) if g.label == "Guard" else None

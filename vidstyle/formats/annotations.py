@@ -50,7 +50,7 @@ _SHA = re.compile(r"^[0-9a-f]{64}$")
 
 
 @dataclass
-class Candidate:
+class CandidateDecision:
     """A person's decision on one matched library pose (an enhancement-node candidate) of a transition:
     ``clip`` (BVH path as ``match-pose`` wrote it) at ``time`` seconds, ``accepted`` or ``discarded``."""
 
@@ -67,7 +67,7 @@ class Transition:
     from_action: str
     to_action: str
     status: str = "accepted"
-    candidates: list[Candidate] = field(default_factory=list)
+    candidates: list[CandidateDecision] = field(default_factory=list)
 
     def decision(self, clip: str, time: float, tol: float = 1e-6) -> str | None:
         """The person's decision on the library pose ``clip`` at ``time`` s (``accepted``, ``discarded``) or
@@ -79,7 +79,7 @@ class Transition:
 
 
 @dataclass
-class Segment:
+class ActionSpan:
     """Frames ``start <= f < end`` (0-based decoded indices) perform ``action``."""
 
     start: int
@@ -94,7 +94,7 @@ class VideoAnnotations:
     frames: int
     fps: float
     transitions: list[Transition] = field(default_factory=list)
-    segments: list[Segment] = field(default_factory=list)
+    segments: list[ActionSpan] = field(default_factory=list)
 
 
 @dataclass
@@ -239,7 +239,7 @@ def from_document(doc: Any, path: str | os.PathLike | None = None) -> Annotation
             for k, c in enumerate(tf.list("candidates") if tf.has("candidates") else []):
                 cf = Fields(c, path, f"{tf.prefix}.candidates[{k}]")
                 _no_extra(cf, {"clip", "time", "status"})
-                cands.append(Candidate(cf.str("clip", nonempty=True), cf.number("time", min=0),
+                cands.append(CandidateDecision(cf.str("clip", nonempty=True), cf.number("time", min=0),
                                        cf.str("status", choices=STATUSES)))
             transitions.append(Transition(frame, a, b, status, cands))
         segments = []
@@ -248,7 +248,7 @@ def from_document(doc: Any, path: str | os.PathLike | None = None) -> Annotation
             _no_extra(sf, {"start", "end", "action"})
             start = sf.int("start", min=0, max=frames - 1)
             end = sf.int("end", min=start + 1, max=frames)
-            segments.append(Segment(start, end, _action(sf, "action", known)))
+            segments.append(ActionSpan(start, end, _action(sf, "action", known)))
         order = sorted(range(len(segments)), key=lambda j: segments[j].start)
         for a, b in zip(order, order[1:]):
             if segments[b].start < segments[a].end:

@@ -1,4 +1,4 @@
-"""What every per-frame labels kind shares: :class:`FrameLabels`, :class:`Segment` and the checks of their
+"""What every per-frame labels kind shares: :class:`FrameLabels`, :class:`LabelSegment` and the checks of their
 common fields. The owners of the two kinds, :mod:`vidstyle.formats.labels` (ground truth, which also reads
 recognised files) and :mod:`vidstyle.formats.recognised`, both build on this module.
 """
@@ -23,7 +23,7 @@ KNOWN_KEYS = ("kind", "schema_version", "video", "bvh", "fps", "classes", "label
 
 
 @dataclass
-class Segment:
+class LabelSegment:
     """A run of frames ``start`` (inclusive) to ``end`` (exclusive) with one ``label``."""
 
     label: str
@@ -47,8 +47,8 @@ class FrameLabels:
     view: str | None = None
     confidence: np.ndarray | None = None  # (frames,) in [0, 1]
     transitions: list[int] | None = None
-    events: list[Segment] | None = None
-    segments: list[Segment] | None = None
+    events: list[LabelSegment] | None = None
+    segments: list[LabelSegment] | None = None
     chain: list[str] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     path: str = ""  # where it was read from ("" when built in memory)
@@ -145,7 +145,7 @@ def check_frame(v: Any, path, name: str, n: int) -> int:
     return check_int(v, path, name, 0, max(n - 1, 0))
 
 
-def parse_segment(obj: Any, path, name: str, n: int, classes: set[str]) -> Segment:
+def parse_segment(obj: Any, path, name: str, n: int, classes: set[str]) -> LabelSegment:
     s = Fields(obj, path, name)
     label = s.str("label")
     if label not in classes:
@@ -154,7 +154,7 @@ def parse_segment(obj: Any, path, name: str, n: int, classes: set[str]) -> Segme
     end = s.int("end", min=0, max=n)
     if end <= start:
         raise FormatError(path, f"{name}.end", f"must be greater than start ({start}), got {end}")
-    return Segment(label, start, end)
+    return LabelSegment(label, start, end)
 
 
 def check_length(track: FrameLabels, n_frames: int, what: str = "the video") -> None:

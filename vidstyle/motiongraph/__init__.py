@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # pragma: no cover
     from .blend import blend_frames, blend_weight, slerp
     from .distance import WindowSet, align_windows, all_pair_candidates, compute_tile, joint_weights
-    from .graph import SCHEMA, Clip, EdgeKind, MotionGraph, Segment, has_tpose_first_frame, load_clips
+    from .graph import SCHEMA, Clip, EdgeKind, MotionGraph, EnhancementSegment, has_tpose_first_frame, load_clips
     from .labels import CMU_KEYWORDS, LabelBook, cmu_action
     from .pipeline import Synthesis, build_graph, labels_path, save_synthesis, synthesize
     from .synthesis import (
@@ -46,7 +46,7 @@ _WHERE = {
     "Clip": "graph",
     "EdgeKind": "graph",
     "MotionGraph": "graph",
-    "Segment": "graph",
+    "EnhancementSegment": "graph",
     "has_tpose_first_frame": "graph",
     "load_clips": "graph",
     "CMU_KEYWORDS": "labels",
@@ -83,7 +83,7 @@ __all__ = [
     "EdgeKind",
     "LabelBook",
     "MotionGraph",
-    "Segment",
+    "EnhancementSegment",
     "Step",
     "Synthesis",
     "Walk",

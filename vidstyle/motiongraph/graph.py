@@ -47,7 +47,7 @@ What an edge ``src -> dst`` puts into a walk (the walk has just shown frame ``sr
   segment with a *hold* shows ``w_z``'s neighbourhood with full weight over about that fraction of the
   ``2k`` frames (:func:`.blend.blend_frames` ``ramp``/``start``).
 
-A **segment** (:class:`Segment`, ``segments_``) is a short motion on the graph's skeleton:
+A **segment** (:class:`EnhancementSegment`, ``segments_``) is a short motion on the graph's skeleton:
 ``rotations`` (L, J, 4) local quaternions (x, y, z, w), ``root_positions`` (L, 3), ``centre`` (its ``w_z``,
 ``k-1 <= centre <= L-k``), a ``source`` string, a ``label``, optional ``anchors`` and a ``hold``.
 
@@ -93,7 +93,7 @@ class EdgeKind(IntEnum):
 
 
 @dataclass
-class Segment:
+class EnhancementSegment:
     """A short motion stored in the graph, on the graph's skeleton: ``rotations`` (L, J, 4),
     ``root_positions`` (L, 3), ``centre`` the index of its middle pose ``w_z``. ``anchors``: optional
     ``(a_in, a_out)``, the segment's enhancement nodes: enhancement edges align the departing window onto
@@ -299,7 +299,7 @@ class MotionGraph:
         self.labels_ = np.array([lookup[x] for x in labels], dtype=np.int64)
         self.clips_ = meta
         self.joint_weights_ = joint_weights(ref.parents)
-        self.segments_: list[Segment] = []
+        self.segments_: list[EnhancementSegment] = []
         min_gap = int(self.min_gap) if self.min_gap is not None else 2 * k
 
         positions = global_positions(self.motion())
@@ -381,7 +381,7 @@ class MotionGraph:
         (L, 3) in the graph's length unit, ``centre`` the index of the middle pose ``w_z`` (default
         ``L // 2``); an enhancement needs ``window - 1`` frames on each side of it
         (``w_{z-k+1}..w_{z+k-1}``). ``source`` (e.g. ``"clip.bvh@3.25s"``) and ``label`` are kept as metadata.
-        ``anchors`` ``(a_in, a_out)``: the enhancement nodes (see :class:`Segment`), with
+        ``anchors`` ``(a_in, a_out)``: the enhancement nodes (see :class:`EnhancementSegment`), with
         ``k - 1 <= a_in <= centre <= a_out <= L - k``; ``hold`` in [0, 1).
         """
         k = int(self.window)
@@ -410,7 +410,7 @@ class MotionGraph:
             anchors = (a_in, a_out)
         if not 0.0 <= float(hold) < 1.0:
             raise ValueError(f"hold: must be in [0, 1), got {hold}")
-        self.segments_.append(Segment(rot / norm, root, c, str(source), str(label), anchors, float(hold)))
+        self.segments_.append(EnhancementSegment(rot / norm, root, c, str(source), str(label), anchors, float(hold)))
         return len(self.segments_) - 1
 
     def add_segment_from(self, motion: Motion, time: float, source: str = "", label: str = "") -> int:
@@ -637,7 +637,7 @@ class MotionGraph:
         g.edge_kind_ = np.asarray(rec.edge_kind).astype(np.int8)
         g.edge_in_scc_ = g.scc_[g.edge_src_] & g.scc_[g.edge_dst_]
         g.segments_ = [
-            Segment(rec.segment_rotations[s : s + n], rec.segment_root_positions[s : s + n], int(z), str(src),
+            EnhancementSegment(rec.segment_rotations[s : s + n], rec.segment_root_positions[s : s + n], int(z), str(src),
                     str(lab), None if a[0] == -1 else (int(a[0]), int(a[1])), float(h))
             for s, n, z, src, lab, a, h in zip(rec.segment_start, rec.segment_frames, rec.segment_centre,
                                                rec.segment_source, rec.segment_label, rec.segment_anchor,
