@@ -13,11 +13,12 @@ people in view they jump between them. :class:`PerformerTracker` turns such a ba
    clearly seen); ``person=(x, y)`` picks the person whose box contains that pixel (the nearest box
    centre if none does).
 3. **Following**: each frame, the backend first runs on the whole frame; when the person it returns
-   overlaps the performer's last box (IoU >= ``min_iou``) with a matching appearance, that is the pose
-   (so with one person in view the poses are exactly the untracked ones). Otherwise the backend runs on
-   a crop around the last box (enlarged by ``search``), where other people outside it are not seen at
-   all; a person found there is accepted by overlap or appearance, else painted over and the crop
-   searched again. When the crop has no accepted person, the whole frame is
+   overlaps the performer's last box (IoU >= ``min_iou``) with a matching appearance (torso colour
+   within ``max_appearance``), that is the pose (so with one person in view the poses are exactly the
+   untracked ones). Otherwise the backend runs on a crop around the last box (enlarged by ``search``),
+   where other people outside it are not seen at all; a person found there is accepted by the same
+   test, else painted over and the crop searched again. A performer hidden behind someone else is
+   missing for those frames rather than swapped for the other person. When the crop has no accepted person, the whole frame is
    searched and the performer re-acquired by appearance (HSV histogram of the torso, Bhattacharyya
    distance <= ``max_appearance``) after an occlusion of any length.
 4. Frames without the performer are ``None`` with a reason (``missing``), never fake points.
@@ -236,8 +237,19 @@ class PerformerTracker:
         return min(people, key=lambda p: float(np.hypot(*(p.centre - (x, y)))))
 
     def _accept(self, p: Person) -> bool:
+        """A person found in the crop or the whole frame is the performer: near the last box and alike
+        (:meth:`_same_person`), or, once lost, alike by appearance alone."""
         if self.box is not None and iou(p.box, self.box) >= self.min_iou:
-            return appearance_distance(p.appearance, self.look) <= max(self.max_appearance, 0.7) or self.look is None
+            return self._same_person(p)
+        return appearance_distance(p.appearance, self.look) <= self.max_appearance
+
+    def _same_person(self, p: Person) -> bool:
+        """Strict test for the backend's whole-frame choice: it overlaps the last box and looks like the
+        performer (or, with no appearance to compare, overlaps it by half)."""
+        if self.box is None or iou(p.box, self.box) < self.min_iou:
+            return False
+        if p.appearance is None or self.look is None:
+            return iou(p.box, self.box) >= 0.5
         return appearance_distance(p.appearance, self.look) <= self.max_appearance
 
     def _remember(self, p: Person) -> None:
@@ -265,7 +277,7 @@ class PerformerTracker:
             # the backend's own choice on the whole frame first: when it is the performer (the usual case,
             # and always with one person in view) the pose is exactly the untracked one
             p = next(iter(_find(self.backend, frame, index, 1, (0.0, 0.0), None)), None)
-            if p is not None and self.box is not None and iou(p.box, self.box) >= self.min_iou and self._accept(p):
+            if p is not None and self._same_person(p):
                 self._remember(p)
                 return TrackedFrame(index, p.pose, None, 0, p.box)
             p = self._search_crop(frame, index)
