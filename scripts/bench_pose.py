@@ -1,6 +1,7 @@
 """Benchmark the 2D pose backends: ms/frame of pictorial structures (ps) and BlazePose at 160x120 and
 640x480 on one core (median of 5 runs after a warm-up; ps once per viewpoint classifier, the
-model's own first, and the default detector with multi-scale inference), plus the distance transform
+model's own first, and the default detector with multi-scale inference), BlazePose followed through a
+1080p sequence (``vidstyle pose``'s default) against BlazePose alone, plus the distance transform
 alone (Felzenszwalb-Huttenlocher lower envelope vs separable brute force, the baseline, same run). Wall
 and CPU ms are both printed: on a shared, loaded machine the CPU figure is the fairer one.
 
@@ -58,6 +59,50 @@ def _frame(size):
     cam = Camera.for_view(m, view=20.0, size=size)
     frames, _ = render_motion(m, cam, fps=20, appearance=Appearance.random(2), background="texture")
     return frames[0]
+
+
+def _sequence_1080p(n: int = 10) -> list:
+    """``n`` consecutive 1920x1080 frames of a demo performer, shrunk to BlazePose's working height (720 rows,
+    as ``vidstyle pose`` reads a 1080p video)."""
+    from vidstyle.demo import Performer, build_take, performance_plan
+    from vidstyle.pose.blazepose import BlazePoseEstimator
+    from vidstyle.render import Appearance, Camera, render_motion
+
+    rng = np.random.default_rng(5)
+    p = Performer.random("p05", rng, video_fps=20)
+    m = build_take(p, performance_plan(p, 40, rng), rng, video_fps=20).motion.resample(20)[5:5 + n]
+    cam = Camera.for_view(m, view=20.0, size=(1920, 1080))
+    frames, _ = render_motion(m, cam, fps=20, appearance=Appearance.random(2), background="texture")
+    h = BlazePoseEstimator.MAX_HEIGHT
+    return [cv2.resize(f, (round(f.shape[1] * h / f.shape[0]), h), interpolation=cv2.INTER_AREA) for f in frames]
+
+
+def _bench_tracked(runs: int) -> list[dict]:
+    """BlazePose followed through a 1080p sequence (vidstyle pose's default) against BlazePose alone on the
+    same frames (the baseline, same run): ms per frame, the tracker's state carried from frame to frame."""
+    from vidstyle.pose.blazepose import BlazePoseEstimator
+    from vidstyle.pose.people import PerformerTracker
+
+    seq = _sequence_1080p()
+    est = BlazePoseEstimator()
+
+    def alone():
+        for i, f in enumerate(seq):
+            est.estimate(f, i)
+
+    def tracked():
+        tr = PerformerTracker(est)
+        for i, f in enumerate(seq):
+            tr.step(f, i)
+
+    rows = []
+    for name, fn in (("blazepose alone, 1080p video (720-row working frames)", alone),
+                     ("blazepose followed (--track, the default), 1080p video", tracked)):
+        ms, r = _median_ms(fn, runs)
+        rows.append({"what": name, "size": "1920x1080", "ms_per_frame": ms / len(seq),
+                     "cpu_ms_per_frame": CPU_MS[id(fn)] / len(seq), "runs_ms": [x / len(seq) for x in r]})
+    est.close()
+    return rows
 
 
 def _small_models() -> dict:
@@ -139,6 +184,7 @@ def main() -> int:
             rows.append({"what": "blazepose (complexity 1)", "size": f"{size[0]}x{size[1]}", "ms_per_frame": bp_ms,
                          "cpu_ms_per_frame": CPU_MS[id(f_bp)], "runs_ms": bp_runs})
         bp.close()
+        rows += _bench_tracked(args.runs)
         rng = np.random.default_rng(0)
         maps = rng.normal(size=(5 * model.n_orient, 30, 40))
         f_env = lambda: dt2d(maps, 0.3, 0.3)  # noqa: E731
@@ -156,6 +202,8 @@ def main() -> int:
     ps160 = [r for r in rows if r["what"].startswith("ps") and r["size"] == "160x120"]
     bp160 = next(r for r in rows if r["what"].startswith("blazepose") and r["size"] == "160x120")
     print(f"ratio ps (default) / blazepose CPU ms at 160x120: {ps160[0]['cpu_ms_per_frame'] / bp160['cpu_ms_per_frame']:.2f}")
+    alone, tracked = (next(r for r in rows if r["what"].startswith(k)) for k in ("blazepose alone", "blazepose followed"))
+    print(f"ratio followed / alone BlazePose CPU ms at 1080p: {tracked['cpu_ms_per_frame'] / alone['cpu_ms_per_frame']:.2f}")
     doc = {"benchmark": "pose", "rows": rows, "dt_speedup_vs_brute": bru_ms / env_ms, "runs": args.runs,
            "one_core": True, "python": platform.python_version(), "machine": platform.machine(),
            "model": str(args.model) if args.model else "small models (hog, cnn) trained by the script", "load_avg": os.getloadavg()}
