@@ -29,7 +29,7 @@ sysdeps:
 	  { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq --no-install-recommends chromium; }
 
 test: $(STAMP) sysdeps
-	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
+	$(BIN)/python -m pytest -n 2 --dist loadfile -q
 
 bench: $(STAMP)
 	for s in scripts/bench_*.py; do $(BIN)/python $$s || exit 1; done

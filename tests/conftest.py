@@ -5,9 +5,10 @@ Hypothesis runs under one registered profile, "ci" (derandomized: the examples a
 test alone, so a CI failure replays locally; `print_blob` prints the reproduction blob); it is loaded
 unless HYPOTHESIS_PROFILE names another registered profile ("dev": random examples, for exploring).
 
-Under pytest-xdist the suite runs with `--dist loadgroup`: every test of a module that uses a module- or
-class-scoped fixture of its own (a DVC run, a trained pose model, ...) gets the module's `xdist_group`, so
-that fixture is built once, on one worker, instead of once per worker.
+Under pytest-xdist the suite runs with `--dist loadfile` (`make test`): all of a module's tests run on
+one worker, so a module-scoped fixture (a whole DVC run, a trained pose model, ...) is built once instead
+of once per worker. (`--dist loadgroup` with `xdist_group` marks does not group them with pytest 9.2 and
+xdist 3.8: checked on a two-worker run, where each worker built the module fixture.)
 """
 
 from __future__ import annotations
@@ -31,28 +32,6 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 def pytest_report_header(config):
     return (f"vidstyle test seed: VIDSTYLE_TEST_SEED={SEED}; hypothesis profile: {settings._current_profile}; "
             f"shared data: {'present' if SHARED.is_dir() else 'absent'}")
-
-
-def _module_scoped_fixtures(item) -> bool:
-    """True when the test uses a module/class-scoped fixture defined in its own test module."""
-    info = getattr(item, "_fixtureinfo", None)
-    if info is None:
-        return False
-    module = getattr(item, "module", None)
-    for defs in info.name2fixturedefs.values():
-        for fd in defs:
-            if fd.scope in ("module", "class") and module is not None \
-                    and getattr(fd.func, "__module__", None) == module.__name__:
-                return True
-    return False
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_collection_modifyitems(config, items):
-    # before xdist's own hook reads the marks (it appends the group to the node id under loadgroup)
-    for item in items:
-        if item.get_closest_marker("xdist_group") is None and _module_scoped_fixtures(item):
-            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
 
 
 @pytest.fixture

@@ -123,10 +123,10 @@ def test_pipeline_augmg_outputs_against_the_plain_graph(run):
     finite and lower with AugMG than without."""
     import json
 
-    from vidstyle.formats.motiongraph import read_graph
+    from vidstyle.motiongraph import MotionGraph
 
     out = run / "out"
-    plain, aug = read_graph(out / "graph/graph.npz"), read_graph(out / "graph/graph_augmg.npz")
+    plain, aug = MotionGraph.load(out / "graph/graph.npz"), MotionGraph.load(out / "graph/graph_augmg.npz")
     ENH = 2  # edge_kind: 0 PLAYBACK, 1 BLEND, 2 ENHANCEMENT
     # same frames; every plain edge kept as it was; what is added is enhancement edges only
     assert np.array_equal(plain.rotations_, aug.rotations_) and plain.label_names_ == aug.label_names_

@@ -115,8 +115,8 @@ def test_pose_command_ps_and_errors(tmp_path, trained, capsys):
     bad.write_bytes(b"not a model")
     assert main(["pose", str(video), "--model", str(bad), "--out", str(tmp_path / "x.json")]) == 2
     assert "bad.joblib" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
-    assert main(["pose", str(video), "--out", str(tmp_path / "x.json")]) == 2
-    assert "--model" in capsys.readouterr().err
+    assert main(["pose", str(video), "--backend", "ps", "--out", str(tmp_path / "x.json")]) == 2
+    assert "--model" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
     # multi-scale inference: recorded in the file; each pose is the model's own at scale 1 or a zoom
     ms = tmp_path / "ms.json"
     assert main(["pose", str(video), "--model", str(path), "--frames", "1,4", "--scales", "1.5,0.8", "--out", str(ms),
