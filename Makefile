@@ -35,4 +35,4 @@ bench: $(STAMP)
 	for s in scripts/bench_*.py; do $(BIN)/python $$s || exit 1; done
 
 clean:
-	rm -rf pipelines/kickboxing/out pipelines/kickboxing/dvc.lock .pytest_cache
+	rm -rf pipelines/kickboxing/out .pytest_cache
