@@ -105,15 +105,7 @@ def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any
     path = Path(path)
     if path.is_dir():
         raise FormatError(path, None, "is a directory, not a file")
-    try:
-        with open(path, "rb") as f:
-            raw = f.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise FormatError(path, None, "file not found") from None
-    except OSError as e:
-        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
-    if len(raw) > max_bytes:
-        raise FormatError(path, None, f"larger than {max_bytes} bytes")
+    raw = read_bytes(path, max_bytes)
     if raw.startswith(b"\xef\xbb\xbf"):
         raw = raw[3:]
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or (len(raw) > 1 and raw[1:2] == b"\x00"):
@@ -132,6 +124,21 @@ def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any
 
 def _reject_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a JSON number")
+
+
+def read_bytes(path: str | os.PathLike, max_bytes: int) -> bytes:
+    """The bytes of the file ``path``, at most ``max_bytes`` of them; :class:`FormatError` naming the file
+    when it is missing, unreadable or larger."""
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise FormatError(path, None, "file not found") from None
+    except OSError as e:
+        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
+    if len(raw) > max_bytes:
+        raise FormatError(path, None, f"larger than {max_bytes} bytes")
+    return raw
 
 
 def read_json(path: str | os.PathLike) -> Any:

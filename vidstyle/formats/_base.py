@@ -235,3 +235,71 @@ def check_array(v: Any, path, field: str, shape: tuple[int | None, ...] | None =
         bad = int(np.flatnonzero(~np.isfinite(a.ravel()))[0])
         raise FormatError(path, field, f"contains a non-finite value (NaN or inf) at flat index {bad}")
     return a
+
+
+def npz_scalar(z: dict, path, key: str, kind: str, required: bool = True):
+    """The scalar array ``z[key]`` of an ``.npz`` owner's file as ``kind`` ("int", "float": finite, "str");
+    :class:`FormatError` naming the key for a missing (``required``), non-scalar or mistyped one."""
+    if key not in z:
+        if required:
+            raise FormatError(path, key, "missing")
+        return None
+    a = z[key]
+    if a.ndim != 0 and a.shape != (1,):
+        raise FormatError(path, key, f"must be a scalar, got shape {a.shape}")
+    v = a.reshape(())[()]
+    if kind == "int":
+        if a.dtype.kind not in "iu":
+            raise FormatError(path, key, f"must be an integer, got dtype {a.dtype}")
+        return int(v)
+    if kind == "float":
+        if a.dtype.kind not in "iuf":
+            raise FormatError(path, key, f"must be a number, got dtype {a.dtype}")
+        v = float(v)
+        if not np.isfinite(v):
+            raise FormatError(path, key, f"must be finite, got {v}")
+        return v
+    if a.dtype.kind != "U":
+        raise FormatError(path, key, f"must be a string, got dtype {a.dtype}")
+    return str(v)
+
+
+def load_npz(path, what: str) -> dict:
+    """Every array of the ``.npz`` file ``path`` (``what``: the artifact, for messages), read without
+    pickles; any damaged, missing or non-archive file is a :class:`FormatError` naming it."""
+    import zipfile
+    from pathlib import Path
+
+    path = Path(path)
+    if path.is_dir():
+        raise FormatError(path, None, f"is a directory, not a {what} .npz")
+    if not path.is_file():
+        raise FormatError(path, None, f"{what} file not found")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if not hasattr(z, "files"):
+                raise FormatError(path, None, f"not a {what} .npz (a single array, not an archive)")
+            return {k: z[k] for k in z.files}
+    except FormatError:
+        raise
+    except MemoryError:
+        raise FormatError(path, None, "not a readable .npz (an array's declared size is too large)") from None
+    except (zipfile.BadZipFile, zipfile.LargeZipFile) as e:
+        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__})") from None
+    except Exception as e:  # noqa: BLE001 - np.load on damaged bytes (zip, zlib, .npy header): a bad file
+        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {' '.join(str(e).split())[:200]})") from None
+
+
+def npz_version(z: dict, path, kind: str, versions) -> int:
+    """The schema version of an ``.npz`` owner's file: 1 without a ``kind`` array (written before headers
+    existed), else ``schema_version`` after checking ``kind``."""
+    found = npz_scalar(z, path, "kind", "str", required=False)
+    if found is None:
+        return 1
+    if found != kind:
+        raise FormatError(path, "kind", f"expected {kind!r}, got {found!r}")
+    version = npz_scalar(z, path, "schema_version", "int")
+    if version not in versions:
+        raise FormatError(path, "schema_version", f"unsupported version {version} (this vidstyle reads "
+                          f"{', '.join(map(str, versions))})")
+    return version

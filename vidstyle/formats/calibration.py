@@ -29,7 +29,7 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..fileio import write_text
+from ..fileio import read_bytes, write_text
 from ._base import FormatError
 
 MAX_BYTES = 4 << 20
@@ -81,14 +81,7 @@ def read_calibration(path: str | os.PathLike) -> Calibration:
     path = Path(path)
     if path.is_dir():
         raise FormatError(path, None, "is a directory, not a calibration file")
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise FormatError(path, None, "file not found") from None
-    except OSError as e:
-        raise FormatError(path, None, f"cannot be read ({e.strerror or e})") from None
-    if len(raw) > MAX_BYTES:
-        raise FormatError(path, None, f"larger than {MAX_BYTES} bytes")
+    raw = read_bytes(path, MAX_BYTES)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:

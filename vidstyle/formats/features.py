@@ -41,14 +41,13 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._base import FormatError
+from ._base import FormatError, load_npz, npz_scalar, npz_version
 
 KIND = "vidstyle.features"
 SCHEMA_VERSION = 2
@@ -220,69 +219,14 @@ def write_features(path: str | os.PathLike, features: Features) -> Path:
     return Path(path)
 
 
-def _scalar(z: dict, path, key: str, kind: str, required: bool = True):
-    if key not in z:
-        if required:
-            raise FormatError(path, key, "missing")
-        return None
-    a = z[key]
-    if a.ndim != 0 and a.shape != (1,):
-        raise FormatError(path, key, f"must be a scalar, got shape {a.shape}")
-    v = a.reshape(())[()]
-    if kind == "int":
-        if a.dtype.kind not in "iu":
-            raise FormatError(path, key, f"must be an integer, got dtype {a.dtype}")
-        return int(v)
-    if kind == "float":
-        if a.dtype.kind not in "iuf":
-            raise FormatError(path, key, f"must be a number, got dtype {a.dtype}")
-        v = float(v)
-        if not np.isfinite(v):
-            raise FormatError(path, key, f"must be finite, got {v}")
-        return v
-    if a.dtype.kind != "U":
-        raise FormatError(path, key, f"must be a string, got dtype {a.dtype}")
-    return str(v)
-
-
 def read_features(path: str | os.PathLike) -> Features:
     """Read and validate a features ``.npz`` (schema 1 or 2); every problem is a :class:`FormatError`."""
     path = Path(path)
-    if path.is_dir():
-        raise FormatError(path, None, "is a directory, not a features .npz")
-    if not path.is_file():
-        raise FormatError(path, None, "features file not found")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if not hasattr(z, "files"):
-                raise FormatError(path, None, "not a features .npz (a single array, not an archive)")
-            z = {k: z[k] for k in z.files}
-    except FormatError:
-        raise
-    except MemoryError:
-        raise FormatError(path, None, "not a readable .npz (an array's declared size is too large)") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError, TypeError,
-            NotImplementedError, RuntimeError, UnicodeDecodeError, OverflowError, IndexError,
-            AttributeError, SyntaxError) as e:
-        # np.load on damaged bytes: zip structure (BadZipFile, EOFError, zlib's error is an Exception
-        # subclass raised as such, caught below), .npy header (ValueError, SyntaxError), pickled objects
-        # refused (ValueError)
-        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {' '.join(str(e).split())[:200]})") from None
-    except Exception as e:  # zlib.error and other decoder errors of damaged members
-        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {' '.join(str(e).split())[:200]})") from None
-    kind = _scalar(z, path, "kind", "str", required=False)
-    if kind is None:
-        version = 1
-    else:
-        if kind != KIND:
-            raise FormatError(path, "kind", f"expected {KIND!r}, got {kind!r}")
-        version = _scalar(z, path, "schema_version", "int")
-        if version not in VERSIONS:
-            raise FormatError(path, "schema_version", f"unsupported version {version} (this vidstyle reads "
-                              f"{', '.join(map(str, VERSIONS))})")
+    z = load_npz(path, "features")
+    version = npz_version(z, path, KIND, VERSIONS)
     if "descriptors" not in z:
         raise FormatError(path, "descriptors", "missing")
-    n_frames = _scalar(z, path, "n_frames", "int")
+    n_frames = npz_scalar(z, path, "n_frames", "int")
     points = z.get("points")
     if "frame_index" in z:
         fi = z["frame_index"]
@@ -294,7 +238,7 @@ def read_features(path: str | os.PathLike) -> Features:
         raise FormatError(path, "frame_index", "missing (and no points)")
     params: Any = {}
     if "params" in z:
-        text = _scalar(z, path, "params", "str")
+        text = npz_scalar(z, path, "params", "str")
         try:
             params = json.loads(text, parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
         except (ValueError, RecursionError) as e:
@@ -303,11 +247,11 @@ def read_features(path: str | os.PathLike) -> Features:
         raise FormatError(path, "params", "missing")
     req = version >= 2
     kw: dict[str, Any] = dict(
-        height=_scalar(z, path, "height", "int", req),
-        width=_scalar(z, path, "width", "int", req),
-        fps=_scalar(z, path, "fps", "float", req),
-        variant=_scalar(z, path, "variant", "str", req),
-        video=_scalar(z, path, "video", "str", req),
+        height=npz_scalar(z, path, "height", "int", req),
+        width=npz_scalar(z, path, "width", "int", req),
+        fps=npz_scalar(z, path, "fps", "float", req),
+        variant=npz_scalar(z, path, "variant", "str", req),
+        video=npz_scalar(z, path, "video", "str", req),
     )
     kw = {k: v for k, v in kw.items() if v is not None}
     src: dict[str, Any] = {}
@@ -316,10 +260,10 @@ def read_features(path: str | os.PathLike) -> Features:
             raise FormatError(path, "source_index", "missing")
         src = dict(
             source_index=z["source_index"],
-            source_frames=_scalar(z, path, "source_frames", "int"),
-            source_fps=_scalar(z, path, "source_fps", "float"),
-            source_width=_scalar(z, path, "source_width", "int"),
-            source_height=_scalar(z, path, "source_height", "int"),
+            source_frames=npz_scalar(z, path, "source_frames", "int"),
+            source_fps=npz_scalar(z, path, "source_fps", "float"),
+            source_width=npz_scalar(z, path, "source_width", "int"),
+            source_height=npz_scalar(z, path, "source_height", "int"),
         )
     return Features(
         descriptors=z["descriptors"], frame_index=fi, n_frames=n_frames, points=points, params=params,

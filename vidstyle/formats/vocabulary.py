@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import write_npz
-from ._base import FormatError
+from ._base import FormatError, load_npz, npz_scalar, npz_version
 
 KIND = "vidstyle.vocabulary"
 SCHEMA_VERSION = 1
@@ -78,46 +77,8 @@ def write_vocabulary(path: str | os.PathLike, record: VocabularyRecord) -> None:
     write_npz(path, **arrays)
 
 
-def _load_npz(path: Path) -> dict[str, np.ndarray]:
-    if path.is_dir():
-        raise FormatError(path, None, "is a directory, not a vocabulary .npz")
-    if not path.is_file():
-        raise FormatError(path, None, "vocabulary file not found")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if not hasattr(z, "files"):
-                raise FormatError(path, None, "not a vocabulary .npz (a single array, not an archive)")
-            return {k: z[k] for k in z.files}
-    except FormatError:
-        raise
-    except MemoryError:
-        raise FormatError(path, None, "not a readable .npz (an array's declared size is too large)") from None
-    except (zipfile.BadZipFile, zipfile.LargeZipFile) as e:
-        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__})") from None
-    except Exception as e:  # noqa: BLE001 - any decoding failure of untrusted bytes is a bad file
-        raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {' '.join(str(e).split())[:200]})") from None
-
-
-def _scalar(z: dict, path: Path, key: str, kind: str, required: bool = True) -> Any:
-    if key not in z:
-        if required:
-            raise FormatError(path, key, "missing")
-        return None
-    a = z[key]
-    if a.ndim != 0 and a.shape != (1,):
-        raise FormatError(path, key, f"must be a scalar, got shape {a.shape}")
-    v = a.reshape(())[()]
-    if kind == "int":
-        if a.dtype.kind not in "iu":
-            raise FormatError(path, key, f"must be an integer, got dtype {a.dtype}")
-        return int(v)
-    if a.dtype.kind != "U":
-        raise FormatError(path, key, f"must be a string, got dtype {a.dtype}")
-    return str(v)
-
-
 def _json(z: dict, path: Path, key: str, typ: type, required: bool = True) -> Any:
-    text = _scalar(z, path, key, "str", required)
+    text = npz_scalar(z, path, key, "str", required)
     if text is None:
         return typ()
     try:
@@ -132,17 +93,8 @@ def _json(z: dict, path: Path, key: str, typ: type, required: bool = True) -> An
 def read_vocabulary(path: str | os.PathLike) -> VocabularyRecord:
     """Read and check a vocabulary ``.npz`` (with or without the schema header)."""
     path = Path(path)
-    z = _load_npz(path)
-    kind = _scalar(z, path, "kind", "str", required=False)
-    if kind is None:
-        version = 1  # written before the header existed
-    else:
-        if kind != KIND:
-            raise FormatError(path, "kind", f"expected {KIND!r}, got {kind!r}")
-        version = _scalar(z, path, "schema_version", "int")
-        if version not in VERSIONS:
-            raise FormatError(path, "schema_version", f"unsupported version {version} (this vidstyle reads "
-                              f"{', '.join(map(str, VERSIONS))})")
+    z = load_npz(path, "vocabulary")
+    version = npz_version(z, path, KIND, VERSIONS)
     if "centres" not in z:
         raise FormatError(path, "centres", "missing")
     centres = z["centres"]
@@ -151,26 +103,26 @@ def read_vocabulary(path: str | os.PathLike) -> VocabularyRecord:
                                            f"{centres.dtype} {centres.shape}")
     if not np.isfinite(centres).all():
         raise FormatError(path, "centres", "not finite")
-    dim = _scalar(z, path, "dim", "int")
+    dim = npz_scalar(z, path, "dim", "int")
     if centres.shape[1] != dim:
         raise FormatError(path, "centres", f"has shape {centres.shape}, but dim is {dim}")
     params = _json(z, path, "params", dict)
     files = _json(z, path, "training_files", list)
     if not all(isinstance(f, str) for f in files):
         raise FormatError(path, "training_files", "expected a list of strings")
-    n_desc = _scalar(z, path, "n_descriptors", "int")
+    n_desc = npz_scalar(z, path, "n_descriptors", "int")
     if n_desc < 0:
         raise FormatError(path, "n_descriptors", f"must be >= 0, got {n_desc}")
-    seed = _scalar(z, path, "seed", "int", required=False)
+    seed = npz_scalar(z, path, "seed", "int", required=False)
     tree = {k[5:]: z[k] for k in z if k.startswith("tree_")}
     if tree:
         _check_tree(path, tree, dim, centres.shape[0])
     return VocabularyRecord(
         centres=centres.astype(np.float32), params=params, dim=dim,
-        descriptor_dtype=_scalar(z, path, "descriptor_dtype", "str"), n_descriptors=n_desc,
+        descriptor_dtype=npz_scalar(z, path, "descriptor_dtype", "str"), n_descriptors=n_desc,
         training_files=files, extra=_json(z, path, "extra", dict, required=False),
         seed=None if seed is None or seed < 0 else seed, tree=tree or None,
-        method=_scalar(z, path, "method", "str", required=False) or str(params.get("method", "")),
+        method=npz_scalar(z, path, "method", "str", required=False) or str(params.get("method", "")),
         schema_version=version,
     )
 
