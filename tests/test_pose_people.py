@@ -37,7 +37,7 @@ class LargestRectangle:
         ys, xs = np.nonzero(np.all(frame == colour, axis=-1))
         x, y, w, h = xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1
         pts = np.column_stack([x + TEMPLATE[:, 0] * (w - 1), y + TEMPLATE[:, 1] * (h - 1), np.full(15, 0.9)])
-        return PoseFrame(index, "front", pts, {"front": 1.0})
+        return PoseFrame(index, "front", pts, {"front": 1.0}, azimuth=12.5)
 
 
 def _scene(people, size=(240, 320)):
@@ -101,6 +101,7 @@ def test_tracker_stays_on_the_performer_and_reacquires_after_occlusion():
             missing.append(f)
             continue
         assert t.pose is not None, f"frame {f}: lost the performer ({t.missing})"
+        assert t.pose.frame == f and t.pose.azimuth == 12.5  # the backend's fields survive the crop search
         # identity: the pose's neck lies on the performer (red) even when blue hides most of them
         x, y = np.round(t.pose.points[1, :2]).astype(int)
         if tuple(img[y, x]) != RED:

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -129,10 +129,11 @@ def _found(pose: PoseFrame) -> bool:
 
 
 def _shift(pose: PoseFrame, dx: float, dy: float, index: int) -> PoseFrame:
+    """``pose`` moved by (dx, dy) pixels (found in a crop, placed in the frame); every other field kept."""
     pts = pose.points.copy()
     pts[:, 0] += dx
     pts[:, 1] += dy
-    return PoseFrame(index, pose.viewpoint, pts, dict(pose.viewpoint_scores))
+    return replace(pose, frame=index, points=pts, viewpoint_scores=dict(pose.viewpoint_scores))
 
 
 def _paint(frame: np.ndarray, box: np.ndarray) -> np.ndarray:
