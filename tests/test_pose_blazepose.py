@@ -119,7 +119,7 @@ def test_real_footage_finds_the_person(estimator):
 def test_rotated_phone_video_gives_the_upright_videos_poses(tmp_path, take):
     """A video stored sideways with a display matrix (as phones do) gives the same poses, in the displayed
     frame's pixels, as the upright video (lossless copies of one rendered clip, so the pixels agree)."""
-    import av
+    from video_util import write_lossless
 
     from vidstyle.pose.run import estimate_video
     from vidstyle.render import render_to_file
@@ -130,22 +130,8 @@ def test_rotated_phone_video_gives_the_upright_videos_poses(tmp_path, take):
     with VideoReader(video) as r:
         frames = [np.asarray(f) for f in r]
 
-    def write(path, images, deg=0):
-        c = av.open(str(path), "w")
-        st = c.add_stream("png", rate=20)
-        st.height, st.width = images[0].shape[:2]
-        st.pix_fmt = "rgb24"
-        if deg:
-            st.set_display_rotation(deg)
-        for im in images:
-            for p in st.encode(av.VideoFrame.from_ndarray(np.ascontiguousarray(im), format="bgr24")):
-                c.mux(p)
-        for p in st.encode():
-            c.mux(p)
-        c.close()
-
-    write(tmp_path / "up.mov", frames)
-    write(tmp_path / "side.mov", [np.ascontiguousarray(np.rot90(f, 1)) for f in frames], -90)  # stored sideways
+    write_lossless(tmp_path / "up.mov", frames)
+    write_lossless(tmp_path / "side.mov", [np.ascontiguousarray(np.rot90(f, 1)) for f in frames], -90)  # stored sideways
     up = estimate_video(tmp_path / "up.mov", "blazepose", frames=[0, 1], jobs=1)
     side = estimate_video(tmp_path / "side.mov", "blazepose", frames=[0, 1], jobs=1)
     for a, b in zip(up.frames, side.frames):

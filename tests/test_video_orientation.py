@@ -8,9 +8,9 @@ The files are lossless (PNG in MOV), so "equal" means every pixel.
 
 from __future__ import annotations
 
-import av
 import numpy as np
 import pytest
+from video_util import write_lossless
 
 from vidstyle.video import VideoReader, probe
 from vidstyle.video.orientation import (
@@ -27,22 +27,6 @@ FRAMES = [RNG.integers(0, 256, (48, 64, 3), dtype=np.uint8) for _ in range(3)]
 CASES = [(deg, hf, vf) for deg in (0, 90, 180, -90) for hf in (False, True) for vf in (False, True)]
 
 
-def _write(path, images, deg=0, hflip=False, vflip=False):
-    c = av.open(str(path), "w")
-    st = c.add_stream("png", rate=20)
-    st.height, st.width = images[0].shape[:2]
-    st.pix_fmt = "rgb24"
-    if deg or hflip or vflip:
-        st.set_display_rotation(deg, hflip=hflip, vflip=vflip)
-    for im in images:
-        for p in st.encode(av.VideoFrame.from_ndarray(np.ascontiguousarray(im), format="bgr24")):
-            c.mux(p)
-    for p in st.encode():
-        c.mux(p)
-    c.close()
-    return path
-
-
 def _coded(image, deg, hflip, vflip):
     """The coded picture whose display (rotate ``deg`` CCW, then mirror) is ``image``."""
     x = image
@@ -55,12 +39,12 @@ def _coded(image, deg, hflip, vflip):
 
 @pytest.fixture(scope="module")
 def upright(tmp_path_factory):
-    return _write(tmp_path_factory.mktemp("up") / "up.mov", FRAMES)
+    return write_lossless(tmp_path_factory.mktemp("up") / "up.mov", FRAMES)
 
 
 @pytest.mark.parametrize(("deg", "hflip", "vflip"), CASES)
 def test_every_orientation_decodes_to_the_upright_pixels(tmp_path, upright, deg, hflip, vflip):
-    path = _write(tmp_path / "t.mov", [_coded(f, deg, hflip, vflip) for f in FRAMES], deg, hflip, vflip)
+    path = write_lossless(tmp_path / "t.mov", [_coded(f, deg, hflip, vflip) for f in FRAMES], deg, hflip, vflip)
     with VideoReader(path) as r:
         assert (r.width, r.height) == (64, 48)
         assert (r.info.width, r.info.height) == (64, 48)
@@ -76,7 +60,7 @@ def test_every_orientation_decodes_to_the_upright_pixels(tmp_path, upright, deg,
 @pytest.mark.parametrize("deg", [90, -90, 180])
 def test_autorotate_off_gives_the_coded_pictures(tmp_path, deg):
     coded = [_coded(f, deg, False, False) for f in FRAMES]
-    path = _write(tmp_path / "t.mov", coded, deg)
+    path = write_lossless(tmp_path / "t.mov", coded, deg)
     with VideoReader(path, autorotate=False) as r:
         assert np.array_equal(r.read_all(), np.stack(coded))
         assert r.info.orientation.identity
@@ -91,7 +75,7 @@ def test_working_size_is_the_displayed_frames(tmp_path, upright, deg, gray):
     """At a working height the rotated file has the upright one's size; resampling happens before the
     transpose (one libswscale pass on the decoded picture), so pixels may differ by one grey level from
     resampling the upright picture (horizontal and vertical passes round differently), never more."""
-    path = _write(tmp_path / "t.mov", [_coded(f, deg, False, False) for f in FRAMES], deg)
+    path = write_lossless(tmp_path / "t.mov", [_coded(f, deg, False, False) for f in FRAMES], deg)
     with VideoReader(path, height=24, gray=gray) as r, VideoReader(upright, height=24, gray=gray) as u:
         a, b = r.read_all().astype(int), u.read_all().astype(int)
     assert a.shape == b.shape == ((3, 24, 32) if gray else (3, 24, 32, 3))

@@ -229,12 +229,10 @@ def evaluate_people(
     the person chosen first, per view, with the backend alone (naive) and followed (tracked)."""
     from ..evaluation.people import evaluate_crowd, format_table
     from ..formats.metrics import PEOPLE, write_metrics
-    from ..pose.interfaces import backend_factory
     from ..pose.run import check_estimate_params
 
     check_estimate_params(backend, model, None)
-    factory = backend_factory(backend)
-    metrics = evaluate_crowd(crowd, lambda: factory(None if model is None else str(model)))
+    metrics = evaluate_crowd(crowd, backend, None if model is None else str(model))
     metrics["params"] = {"crowd": str(crowd), "backend": backend, "model": None if model is None else str(model)}
     if out is not None:
         write_metrics(out, {"seed": 0, **metrics}, kind=PEOPLE)

@@ -68,11 +68,11 @@ def scene_cameras(motions: list[Motion], n_views: int = 4, size: tuple[int, int]
     from ..render.camera import Camera
 
     pos = np.concatenate([forward_kinematics(m)[0] for m in motions], axis=1)
+    # for_view's azimuth is relative to the first motion's facing: turn it into a world azimuth
+    facing = math.degrees(float(np.median(motions[0].facing_angles())))
     cams = []
     for v in range(n_views):
         az = first_azimuth_deg + 360.0 * v / n_views
-        # for_view's azimuth is relative to the first motion's facing: turn it into a world azimuth
-        facing = math.degrees(float(np.median(motions[0].facing_angles())))
         cams.append(Camera.for_view(motions[0], view=az - facing, elevation_deg=elevation_deg, size=size,
                                     positions=pos, margin=0.05))
     return cams

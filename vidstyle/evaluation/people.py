@@ -51,33 +51,24 @@ def score_view(estimates: np.ndarray, truth: np.ndarray) -> dict:
     ids = identities(estimates, truth)
     first = ids[ids >= 0]
     chosen = int(first[0]) if len(first) else -1
-    F = len(ids)
+    F, n = len(ids), switches(ids)
     return {"frames": F, "found": int((ids >= 0).sum()), "chosen": chosen,
-            "identity_switches": switches(ids), "switches_per_100_frames": 100.0 * switches(ids) / max(F, 1),
+            "identity_switches": n, "switches_per_100_frames": 100.0 * n / max(F, 1),
             "pck@0.2": pck(estimates, truth[chosen]) if chosen >= 0 else 0.0,
             "frames_on_chosen": float(np.mean(ids == chosen)) if chosen >= 0 else 0.0}
 
 
-def run_view(video: str | Path, backend, tracked: bool, person=None) -> np.ndarray:
-    """(F, 15, 3) poses of every frame of ``video`` (NaN rows where none)."""
-    from ..pose.people import PerformerTracker
-    from ..video import VideoReader
+def run_view(video: str | Path, backend: str, tracked: bool, model_path=None) -> np.ndarray:
+    """(F, 15, 3) poses of every frame of ``video`` from ``vidstyle pose``'s path
+    (:func:`vidstyle.pose.run.estimate_video`, followed or not), NaN rows where there is none."""
+    from ..pose.run import estimate_video
 
-    out = []
-    tracker = PerformerTracker(backend, person=person) if tracked else None
-    with VideoReader(video) as reader:
-        for i, frame in reader.iter_frames():
-            if tracker is not None:
-                pose = tracker.step(frame, i).pose
-            else:
-                pose = backend.estimate(frame, i)
-                if pose.viewpoint == "unknown":
-                    pose = None
-            out.append(np.full((15, 3), np.nan) if pose is None else pose.points)
-    return np.stack(out)
+    poses = estimate_video(video, backend, model_path, jobs=1, track=tracked)
+    return np.stack([pf.points for pf in poses.frames])
 
 
-def evaluate_crowd(crowd_dir: str | Path, backend_factory, modes=("naive", "tracked")) -> dict:
+def evaluate_crowd(crowd_dir: str | Path, backend: str = "blazepose", model_path=None,
+                   modes=("naive", "tracked")) -> dict:
     """Scores of every mode on every view of a crowd take, and the multi-view PCK of each mode's poses."""
     from ..formats.calibration import read_calibration
     from ..formats.keypoints import KEYPOINTS as NAMES
@@ -92,9 +83,7 @@ def evaluate_crowd(crowd_dir: str | Path, backend_factory, modes=("naive", "trac
     for mode in modes:
         per_view, poses = {}, []
         for v, name in enumerate(views):
-            backend = backend_factory()
-            est = run_view(crowd_dir / f"{name}.mp4", backend, tracked=(mode == "tracked"))
-            getattr(backend, "close", lambda: None)()
+            est = run_view(crowd_dir / f"{name}.mp4", backend, mode == "tracked", model_path)
             per_view[name] = score_view(est, kp2[v])
             poses.append(est)
         errors, _ = leave_one_view_out(calib.cameras, np.stack(poses), (NECK, PELVIS))

@@ -105,12 +105,16 @@ def appearance(frame: np.ndarray, points: np.ndarray) -> np.ndarray | None:
     torso = points[list(TORSO)]
     if np.any(torso[:, 2] < MIN_SCORE) or frame.ndim != 3:
         return None
-    mask = np.zeros(frame.shape[:2], np.uint8)
     quad = torso[[0, 1, 3, 2], :2].round().astype(np.int32)  # ls, rs, rh, lh
-    cv2.fillConvexPoly(mask, quad, 255)
+    # only the quadrilateral's bounding box is converted (not the whole frame: this runs every frame)
+    h, w = frame.shape[:2]
+    x0, y0 = np.clip(quad.min(axis=0), 0, [w - 1, h - 1])
+    x1, y1 = np.clip(quad.max(axis=0), 0, [w - 1, h - 1])
+    mask = np.zeros((y1 - y0 + 1, x1 - x0 + 1), np.uint8)
+    cv2.fillConvexPoly(mask, quad - [x0, y0], 255)
     if mask.sum() < 255 * 20:
         return None
-    hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
+    hsv = cv2.cvtColor(np.ascontiguousarray(frame[y0:y1 + 1, x0:x1 + 1]), cv2.COLOR_BGR2HSV)
     hist = cv2.calcHist([hsv], [0, 1], mask, [8, 8], [0, 180, 0, 256]).ravel()
     s = hist.sum()
     return (hist / s).astype(np.float32) if s > 0 else None
