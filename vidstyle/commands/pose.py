@@ -36,6 +36,34 @@ def parse_scales(text: str | None, option: str) -> list[float] | None:
     return zooms
 
 
+def parse_range(text: str | None, option: str) -> tuple[float, float] | None:
+    """``"LOW,HIGH"`` -> (low, high) (None for none given); anything else an :class:`InputError` naming
+    ``option``."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(x) for x in text.split(","))
+    except ValueError:
+        raise InputError(f"{option}: {text!r} is not LOW,HIGH") from None
+    if not (lo <= hi):  # also refuses nan
+        raise InputError(f"{option}: {text!r}: LOW must not exceed HIGH")
+    return lo, hi
+
+
+def _render_options(elevations: str | None, figure_scales: str | None) -> dict:
+    from ..pose.data import ELEVATION_RANGE, SCALE_RANGE
+
+    return {"elevation": parse_range(elevations, "--elevations") or ELEVATION_RANGE,
+            "scale": parse_range(figure_scales, "--figure-scales") or SCALE_RANGE}
+
+
+_ELEV_HELP = "Camera elevations LOW,HIGH in degrees (looking down), drawn uniformly per clip [default: 0,20]."
+_SCALE_HELP = ("Figure heights LOW,HIGH relative to the nominal (0.7 of the frame), drawn per clip "
+               "[default: 0.9,1.1].")
+_PROP_HELP = ("Vary bone lengths: arms, legs and trunk each scaled by a factor uniform in 1 +- this (0 = the "
+              "skeletons as recorded).")
+
+
 def train_pose(
     out: Path = typer.Option(..., "--out", "-o", help="Pose model file to write (.joblib)."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", envvar=CMU_ENV, help="CMU BVH clips to render as well as "
@@ -79,6 +107,9 @@ def train_pose(
     augment: str = typer.Option(CNN_DEFAULTS["augment"], "--augment", help="cnn detector's training augmentation: "
                                 "flip (mirror images and colour jitter) or affine (also random scale 0.8-1.25, "
                                 "rotation up to 20 degrees and shift)."),
+    elevations: str | None = typer.Option(None, "--elevations", help=_ELEV_HELP),
+    figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
+    proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
@@ -93,7 +124,8 @@ def train_pose(
                             views_per_clip=views_per_clip, seconds=seconds, fps=fps, seed=seed, jobs=jobs,
                             scheduler=scheduler, n_orient=n_orient, hard_rounds=hard_rounds, viewpoint=viewpoint,
                             unary_weight=unary_weight, fg_weight=fg_weight, epochs=epochs, channels=channels,
-                            stride=stride, flip_test=flip_test, refine=refine, augment=augment)
+                            stride=stride, flip_test=flip_test, refine=refine, augment=augment,
+                            proportions=proportions, **_render_options(elevations, figure_scales))
     save_model(out, model, {"training": training})
     log.info("wrote %s (%d training frames)", out, model.n_train_frames_)
 
@@ -185,6 +217,13 @@ def evaluate_pose(
                                          "as the log says)."),
     overlay_dir: Path = typer.Option(Path("pose_overlays"), "--overlay-dir", help="Where overlay PNGs go."),
     real_frames: int = typer.Option(6, "--real-frames", help="Frames per real video."),
+    other_dir: Path | None = typer.Option(None, "--other-dir", help="BVH clips of another skeleton or subjects "
+                                          "the model never saw (e.g. ../shared/data/mocap/bandai), rendered as "
+                                          "well and scored as their own group."),
+    other_clips: int = typer.Option(6, "--other-clips", help="Clips of --other-dir rendered (chosen by --seed)."),
+    elevations: str | None = typer.Option(None, "--elevations", help=_ELEV_HELP),
+    figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
+    proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of the held-out renders."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers for rendering (-1: all cores)."),
 ) -> None:
@@ -212,7 +251,8 @@ def evaluate_pose(
     from ..formats.metrics import POSE, write_metrics
 
     metrics = evaluate(model, cmu_dir, demo_performers, cmu_clips, views_per_clip, seconds, fps, real_dir, overlay_dir,
-                       real_frames, seed, jobs)
+                       real_frames, seed, jobs, other_dir=other_dir, other_clips=other_clips, proportions=proportions,
+                       **_render_options(elevations, figure_scales))
     if out is not None:
         write_metrics(out, {"seed": seed, **metrics}, kind=POSE)
     sys.stdout.write(format_tables(metrics) + "\n")

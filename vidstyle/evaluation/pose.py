@@ -117,8 +117,15 @@ def clip_backgrounds(samples) -> dict:
     return {c: background_model(fr) for c, fr in groups.items() if len(fr) >= 3 and c != -1}
 
 
-def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
-    """Run every method on the same held-out frames; return the metrics dict."""
+def source_group(source: str, others: set[str] = frozenset()) -> str:
+    """The group a rendered sample's source belongs to: ``demo`` (a demo performer), ``other`` (a clip
+    of ``others``, e.g. another skeleton) or ``cmu``."""
+    return "demo" if source.startswith("demo:") else "other" if source in others else "cmu"
+
+
+def evaluate_renders(model, samples, blazepose: bool = True, others: set[str] = frozenset()) -> dict:
+    """Run every method on the same held-out frames; return the metrics dict (``by_source``: the pictorial
+    structures' and BlazePose's scores per :func:`source_group`)."""
     from ..pose.blazepose import BlazePoseEstimator
 
     gt = np.stack([s.keypoints for s in samples])
@@ -156,7 +163,23 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
         est.close()
         methods["blazepose"] = bp
         vpred["blazepose"] = bview
-    out = {"n_frames": len(samples), "pcp": {}, "pck@0.2": {}, "viewpoint": {}}
+    out = {"n_frames": len(samples), "pcp": {}, "pck@0.2": {}, "viewpoint": {}, "by_source": {}}
+    group = np.array([source_group(s.source, others) for s in samples])
+    azimuths = [s.azimuth for s in samples]
+    for g in sorted(set(group)):
+        sel = np.flatnonzero(group == g)
+        row = {"n_frames": int(len(sel)), "clips": len({samples[i].clip for i in sel})}
+        for name in ("ps", "blazepose"):
+            if name not in methods:
+                continue
+            hits = strict_pcp(np.stack([methods[name][i] for i in sel]), gt[sel])
+            row[name] = {"pcp_mean": float(hits.mean()),
+                         "pcp_per_part": {p: float(v) for p, v in zip(PART_NAMES, hits.mean(axis=0))}}
+            vname = model.viewpoint if name == "ps" else "blazepose"
+            vs = viewpoint_scores([views[i] for i in sel], [azimuths[i] for i in sel], [vpred[vname][i] for i in sel])
+            row[name]["viewpoint_accuracy"] = vs["accuracy"]
+            row[name]["viewpoint_accuracy_off_boundary"] = vs["unambiguous"]["accuracy"]
+        out["by_source"][g] = row
     for name, preds in methods.items():
         P = np.stack(preds)
         hits = strict_pcp(P, gt)
@@ -166,7 +189,6 @@ def evaluate_renders(model, samples, blazepose: bool = True) -> dict:
             found = P[:, :, 2].max(axis=1) > 0
             out["blazepose_detected"] = float(found.mean())
         out["pck@0.2"][name] = {"all": float(k.mean()), **{kp: float(k[:, i].mean()) for i, kp in enumerate(KEYPOINTS)}}
-    azimuths = [s.azimuth for s in samples]
     for name, pred in vpred.items():
         out["viewpoint"][name] = viewpoint_scores(views, azimuths, pred)
     out["ps_cpu_ms_per_frame_median"] = float(np.median(times) * 1000) if times else None
@@ -270,13 +292,35 @@ def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov")
 
 
+def _other_clips(other_dir: str | Path | None, n: int, seed: int) -> list[str]:
+    """``n`` BVH files of ``other_dir`` chosen by ``seed`` (all when fewer), sorted; none without a directory."""
+    from ..errors import InputError
+
+    if other_dir is None or str(other_dir) in ("", "none") or n <= 0:
+        return []
+    d = Path(other_dir)
+    if not d.is_dir():
+        raise InputError(f"{d}: directory of other clips not found")
+    files = sorted(str(p) for p in d.glob("*.bvh"))
+    if not files:
+        raise InputError(f"{d}: no .bvh files")
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 7]))
+    return sorted(files[i] for i in rng.permutation(len(files))[:n])
+
+
 def evaluate(model_path: str | Path, cmu_dir: str | Path | None = None, demo_performers: int = 3, cmu_clips: int = 6,
              views_per_clip: int = 4, seconds: float = 2.0, fps: float = 4.0, real_dir: str | Path | None = None,
-             overlay_dir: str | Path = "pose_overlays", real_frames: int = 6, seed: int = 0, jobs: int = -1) -> dict:
+             overlay_dir: str | Path = "pose_overlays", real_frames: int = 6, seed: int = 0, jobs: int = -1, *,
+             other_dir: str | Path | None = None, other_clips: int = 6, elevation: tuple[float, float] | None = None,
+             scale: tuple[float, float] | None = None, proportions: float = 0.0) -> dict:
     """``vidstyle evaluate pose``: the metrics of a pose model file on held-out renders (test split: demo
     performers, and CMU clips of ``cmu_dir`` when given) for every method (:func:`evaluate_renders`), and,
     with ``real_dir`` (a directory of videos), the backends' agreement and overlays on that real footage
-    (:func:`evaluate_real`). Returns the metrics document (without ``seed``, which the caller adds)."""
+    (:func:`evaluate_real`). ``other_dir``: BVH clips of another skeleton (e.g. Bandai's), ``other_clips``
+    of them (chosen by ``seed``) rendered as well and scored as their own group (``by_source``);
+    ``elevation``, ``scale``, ``proportions``: the cameras and bodies of the renders
+    (:func:`vidstyle.pose.data.make_specs`). Returns the metrics document (without ``seed``, which the
+    caller adds)."""
     from ..errors import InputError
     from ..pose.data import make_specs, render_samples
     from ..pose.estimator import load_model
@@ -284,12 +328,24 @@ def evaluate(model_path: str | Path, cmu_dir: str | Path | None = None, demo_per
 
     pm, header = load_model(model_path)
     cmu = resolve_cmu_dir(cmu_dir, cmu_clips)
-    specs = make_specs("test", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    from ..pose.data import ELEVATION_RANGE, SCALE_RANGE
+
+    others = _other_clips(other_dir, other_clips, seed)
+    elevation = ELEVATION_RANGE if elevation is None else elevation
+    scale = SCALE_RANGE if scale is None else scale
+    try:
+        specs = make_specs("test", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds,
+                           elevation=elevation, scale=scale, proportions=proportions, other_clips=others)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
     samples = render_samples(specs, jobs=jobs, keep_bgr=True)
-    metrics = evaluate_renders(pm, samples)
+    metrics = evaluate_renders(pm, samples, others=set(others))
     metrics["params"] = {"model": str(model_path), "model_params": header.get("params"), "seed": seed,
                          "demo_performers": demo_performers, "cmu_clips": cmu_clips, "views_per_clip": views_per_clip,
-                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu)}
+                         "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu),
+                         "other_dir": None if other_dir is None else str(other_dir), "other_clips": len(others),
+                         "elevation": list(map(float, elevation)), "scale": list(map(float, scale)),
+                         "proportions": proportions}
     if real_dir is None or str(real_dir) in ("", "none"):
         log.info("no real footage directory given (--real-dir): backend agreement on real footage skipped")
     else:

@@ -74,6 +74,7 @@ class Spec:
     fps: float = 5.0
     size: tuple[int, int] = (160, 120)
     scale: float = 1.0  # figure size relative to the nominal (FIGURE_FRACTION of the frame height)
+    proportions: tuple[float, float, float] = (1.0, 1.0, 1.0)  # bone-length factors: arms, legs, trunk+head
 
 
 @dataclass
@@ -133,6 +134,37 @@ def load_source(source: str, seed: int = 0, seconds: float = 30.0, loader: Calla
     return m[1:]  # frame 0 of the CMU files is a T-pose
 
 
+def with_proportions(motion, arms: float, legs: float, trunk: float):
+    """``motion`` on a skeleton whose bones are scaled: arm bones (below the shoulders) by ``arms``, leg
+    bones (below the hips) by ``legs``, the others (spine, neck, head, shoulder and hip offsets) by
+    ``trunk``; the root's path by ``legs`` (its height follows the legs). Another body's proportions
+    under the same motion, for training and test renders."""
+    from ..mocap import Motion
+    from ..mocap.keypoints import keypoint_joints
+    from ..mocap.skeleton import Skeleton
+
+    if (arms, legs, trunk) == (1.0, 1.0, 1.0):
+        return motion
+    sk = motion.skeleton
+    kj = keypoint_joints(sk)
+    limb_root = {kj[f"{side}_shoulder"].joint: arms for side in ("left", "right")}
+    limb_root.update({kj[f"{side}_hip"].joint: legs for side in ("left", "right")})
+
+    def bone_factor(j: int) -> float:  # the bone ending at j: a limb's when a limb root is above j
+        p = int(sk.parents[j])
+        while p >= 0:
+            if p in limb_root:
+                return limb_root[p]
+            p = int(sk.parents[p])
+        return trunk
+
+    factor = np.array([legs if sk.parents[j] < 0 else bone_factor(j) for j in range(sk.n_joints)])
+    ends = {j: np.asarray(o, dtype=np.float64) * limb_root.get(j, factor[j] if sk.parents[j] >= 0 else trunk)
+            for j, o in sk.end_sites.items()}
+    skel = Skeleton(sk.names, sk.parents, sk.offsets * factor[:, None], sk.channels, ends)
+    return Motion(skel, motion.rotations, motion.translations * factor[None, :, None], fps=motion.fps)
+
+
 def render_spec(spec: Spec, keep_bgr: bool = False, loader: Callable | None = None) -> list[Sample]:
     """Render one spec into samples (one per rendered frame); ``loader``: its source's function
     (default: looked up in the registry of this process)."""
@@ -145,7 +177,7 @@ def render_spec(spec: Spec, keep_bgr: bool = False, loader: Callable | None = No
     b = min(motion.n_frames, a + max(2, int(spec.seconds * motion.fps)))
     if b - a < 2:
         a, b = 0, min(motion.n_frames, 2)
-    motion = motion[a:b].resample(spec.fps)
+    motion = with_proportions(motion[a:b].resample(spec.fps), *spec.proportions)
     _W, H = spec.size
     height = skeleton_height(motion.skeleton)
     probe = Camera.for_view(motion, view=spec.azimuth, elevation_deg=spec.elevation, size=spec.size)
@@ -185,12 +217,35 @@ def cmu_clips(cmu_dir: str | Path | None, subjects: tuple[str, ...] | None, excl
     return out
 
 
+#: camera elevations (degrees, looking down) and figure sizes (:attr:`Spec.scale`) drawn by default
+ELEVATION_RANGE = (0.0, 20.0)
+SCALE_RANGE = (0.9, 1.1)
+
+
+def _check_range(name: str, r: tuple[float, float], lo: float, hi: float) -> tuple[float, float]:
+    a, b = (float(v) for v in r)
+    if not (lo <= a <= b <= hi):
+        raise ValueError(f"{name} must be LOW,HIGH with {lo:g} <= LOW <= HIGH <= {hi:g}, got {a:g},{b:g}")
+    return a, b
+
+
 def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: int,
-               cmu_dir: str | Path | None, fps: float = 4.0, seconds: float = 2.0) -> list[Spec]:
+               cmu_dir: str | Path | None, fps: float = 4.0, seconds: float = 2.0, *,
+               elevation: tuple[float, float] = ELEVATION_RANGE, scale: tuple[float, float] = SCALE_RANGE,
+               proportions: float = 0.0, other_clips: list[str] | tuple[str, ...] = ()) -> list[Spec]:
     """Specs for ``split`` ``"train"``, ``"val"`` or ``"test"`` (see the module docstring for what is
-    held out)."""
+    held out). Each clip is seen from ``views_per_clip`` cameras, each at an elevation drawn from
+    ``elevation`` (degrees) with a figure size drawn from ``scale``; ``proportions`` > 0 also draws bone
+    lengths (arms, legs, trunk: each a factor uniform in 1 +- ``proportions``,
+    :func:`with_proportions`). ``other_clips``: BVH files rendered as well, as given (another skeleton
+    or subjects the splits do not name; the caller keeps them out of training when they test). The
+    defaults draw the specs this module always drew (same seed, same specs)."""
     if split not in FIRST_PERFORMER:
         raise ValueError(f"split must be train, val or test, got {split!r}")
+    elevation = _check_range("elevation", elevation, -60.0, 80.0)
+    scale = _check_range("scale", scale, 0.1, 3.0)
+    if not 0.0 <= proportions < 0.5:
+        raise ValueError(f"proportions must be in [0, 0.5), got {proportions}")
     if n_demo < 0 or n_demo > MAX_PERFORMERS.get(split, n_demo):
         raise ValueError(f"{split} split: n_demo must be between 0 and {MAX_PERFORMERS.get(split, n_demo)} "
                          f"(more would take the next split's performers), got {n_demo}")
@@ -207,15 +262,20 @@ def make_specs(split: str, n_demo: int, n_cmu: int, views_per_clip: int, seed: i
         jitter = 0.0
     if clips:
         clips = [clips[i] for i in rng.permutation(len(clips))[:n_cmu]]
-    sources = [f"demo:{i}" for i in demo_ids] + clips
+    sources = [f"demo:{i}" for i in demo_ids] + clips + [str(c) for c in other_clips]
     specs = []
     for si, src in enumerate(sources):
         for v in range(views_per_clip):
             az = float(base[(si * views_per_clip + v + int(rng.integers(len(base)))) % len(base)])
             az += float(rng.uniform(-jitter, jitter))
             start = float(rng.uniform(0.0, 6.0 if src.startswith("demo:") else 2.0))
-            specs.append(Spec(src, start, seconds, (az + 180.0) % 360.0 - 180.0, float(rng.uniform(0.0, 20.0)),
-                              int(rng.integers(2**31)), fps, (160, 120), float(rng.uniform(0.9, 1.1))))
+            el = float(rng.uniform(*elevation))
+            spec_seed = int(rng.integers(2**31))
+            size = float(rng.uniform(*scale))
+            props = ((1.0, 1.0, 1.0) if proportions == 0.0
+                     else tuple(float(x) for x in rng.uniform(1.0 - proportions, 1.0 + proportions, 3)))
+            specs.append(Spec(src, start, seconds, (az + 180.0) % 360.0 - 180.0, el, spec_seed, fps, (160, 120),
+                              size, props))
     return specs
 
 

@@ -17,3 +17,15 @@ TRAIN_SET = ("demo_performers", "cmu_clips", "views_per_clip")
 #: environment variables the CLI reads for ``--cmu-dir`` (CMU BVH clips) and ``evaluate pose --real-dir``
 CMU_ENV = "VIDSTYLE_CMU_DIR"
 REAL_ENV = "VIDSTYLE_REAL_DIR"
+
+#: the pictorial-structures model shipped inside the package (``vidstyle pose --backend ps`` without
+#: ``--model``), trained by ``scripts/train_default_pose.py`` (its settings and time are in the file's
+#: ``training`` record)
+SHIPPED_MODEL_NAME = "ps_cnn.joblib"
+
+
+def shipped_model_path():
+    """Path of the shipped pose model file (it may be absent from a source tree that has not trained it)."""
+    from importlib.resources import files
+
+    return files("vidstyle.pose") / "weights" / SHIPPED_MODEL_NAME

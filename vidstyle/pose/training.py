@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError, ParameterError
+from .data import ELEVATION_RANGE, SCALE_RANGE
 from .defaults import CMU_ENV, CNN_DEFAULTS, DETECTOR
 from .interfaces import detector_class
 
@@ -57,10 +58,14 @@ def make_model(detector: str = DETECTOR, **params: Any):
 def train(cmu_dir: str | os.PathLike | None = None, *, detector: str = DETECTOR,
           demo_performers: int = CNN_DEFAULTS["demo_performers"], cmu_clips: int = CNN_DEFAULTS["cmu_clips"],
           views_per_clip: int = CNN_DEFAULTS["views_per_clip"], seconds: float = 2.0, fps: float = 4.0,
-          seed: int = 0, jobs: int = -1, scheduler: str | None = None, **params: Any) -> tuple[Any, dict]:
+          seed: int = 0, jobs: int = -1, scheduler: str | None = None,
+          elevation: tuple[float, float] = ELEVATION_RANGE, scale: tuple[float, float] = SCALE_RANGE,
+          proportions: float = 0.0, **params: Any) -> tuple[Any, dict]:
     """Train a pose model on frames rendered from the demo performers (the ``"demo"`` training source,
     registered by :mod:`vidstyle.demo`) and ``cmu_clips`` CMU clips of ``cmu_dir`` (training subjects),
-    ``views_per_clip`` azimuths each. ``params``: the model's (:func:`make_model`). Returns the fitted
+    ``views_per_clip`` azimuths each, at camera elevations in ``elevation`` (degrees), figure sizes in
+    ``scale`` and, with ``proportions`` > 0, bone lengths varied by up to that fraction
+    (:func:`vidstyle.pose.data.make_specs`). ``params``: the model's (:func:`make_model`). Returns the fitted
     model and the ``training`` record its file keeps (:func:`vidstyle.pose.estimator.save_model`)."""
     from .data import MAX_PERFORMERS, make_specs
 
@@ -73,8 +78,14 @@ def train(cmu_dir: str | os.PathLike | None = None, *, detector: str = DETECTOR,
     if views_per_clip < 1:
         raise ParameterError("views_per_clip", "must be at least 1")
     cmu = resolve_cmu_dir(cmu_dir, cmu_clips)
-    specs = make_specs("train", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds)
+    try:
+        specs = make_specs("train", demo_performers, cmu_clips, views_per_clip, seed, cmu, fps=fps, seconds=seconds,
+                           elevation=elevation, scale=scale, proportions=proportions)
+    except ValueError as exc:
+        name = str(exc).split(" ", 1)[0]
+        raise ParameterError(name, str(exc).split(" ", 1)[1]) from None
     model.fit_specs(specs, jobs=jobs, scheduler=scheduler)
     training = {"demo_performers": demo_performers, "cmu_clips": cmu_clips, "views_per_clip": views_per_clip,
-                "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu), "n_specs": len(specs)}
+                "seconds": seconds, "fps": fps, "cmu_dir": None if cmu is None else str(cmu), "n_specs": len(specs),
+                "elevation": list(map(float, elevation)), "scale": list(map(float, scale)), "proportions": proportions}
     return model, training
