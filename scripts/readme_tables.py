@@ -267,10 +267,42 @@ def pose_table(items, root: Path) -> list[str]:
     for p, d in items:
         q = d.get("params") or {}
         if all(k in q for k in ("demo_performers", "cmu_clips", "views_per_clip")):
+            extra, flags = "", ""
+            if q.get("other_clips"):
+                extra += f", {q['other_clips']} clips of {Path(str(q.get('other_dir'))).name}"
+                flags += f" --other-dir {q.get('other_dir')} --other-clips {q['other_clips']}"
+            if q.get("elevation") and list(q["elevation"]) != [0.0, 20.0]:
+                el = q["elevation"]
+                extra += f", elevations {el[0]:g} to {el[1]:g} degrees"
+                flags += f" --elevations {el[0]:g},{el[1]:g}"
+            if q.get("scale") and list(q["scale"]) != [0.9, 1.1]:
+                flags += f" --figure-scales {q['scale'][0]:g},{q['scale'][1]:g}"
+            if q.get("proportions"):
+                extra += f", bone lengths varied by up to {q['proportions']:.0%}"
+                flags += f" --proportions {q['proportions']:g}"
+            model = Path(str(q.get("model") or "")).name
+            flags = (f" --model {model}" if model and model != "ps_cnn.joblib" else "") + flags
             sets.append(f"- `{_rel(p, root)}`: {d.get('n_frames')} frames of {q['demo_performers']} held-out demo performers "
-                        f"and up to {q['cmu_clips']} held-out CMU clips, {q['views_per_clip']} azimuths each "
+                        f"and up to {q['cmu_clips']} held-out CMU clips{extra}, {q['views_per_clip']} azimuths each "
                         f"(`vidstyle evaluate pose --demo-performers {q['demo_performers']} --cmu-clips {q['cmu_clips']} "
-                        f"--views-per-clip {q['views_per_clip']} --seed {q.get('seed', 0)}`)")
+                        f"--views-per-clip {q['views_per_clip']}{flags} --seed {q.get('seed', 0)}`)")
+    by_source = [(p, d) for p, d in items if d.get("by_source")]
+    if by_source:
+        lines += ["", "Pictorial structures (and BlazePose) per kind of held-out source: demo performers, CMU subjects "
+                  "never trained on, and another skeleton (`--other-dir`); strict PCP mean and its weakest part, "
+                  "viewpoint accuracy off view boundaries:", "",
+                  "| file | source | frames | PCP | weakest part | viewpoint (off boundaries) | BlazePose PCP |",
+                  "|---|---|---:|---:|---|---:|---:|"]
+        for p, d in by_source:
+            for g, row in d["by_source"].items():
+                ps, bp = row.get("ps") or {}, row.get("blazepose") or {}
+                parts = ps.get("pcp_per_part") or {}
+                weakest = min(parts, key=parts.get) if parts else None
+                vp = ps.get("viewpoint_accuracy_off_boundary")
+                lines.append(f"| `{_rel(p, root)}` | {g} | {row.get('n_frames')} | {ps.get('pcp_mean', float('nan')):.3f} | "
+                             f"{'' if weakest is None else f'{weakest} {parts[weakest]:.3f}'} | "
+                             f"{'' if vp is None else _pct(vp)} | "
+                             f"{'' if bp.get('pcp_mean') is None else format(bp['pcp_mean'], '.3f')} |")
     if sets:
         lines += ["", "Held-out render sets:", "", *sets]
     notes = []

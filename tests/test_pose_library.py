@@ -241,6 +241,12 @@ def test_cli_defaults_are_the_library_defaults():
     cli.pop("out")
     assert cli.pop("cmu_dir") is None and defaults(train)["cmu_dir"] is None  # no silent CMU folder
     assert cli.pop("scheduler") is None
+    # ranges are text options (LOW,HIGH) that default to the library's ranges
+    from vidstyle.commands.pose import _render_options
+
+    assert cli.pop("elevations") is None and cli.pop("figure_scales") is None
+    ranges = _render_options(None, None)
+    assert ranges == {"elevation": defaults(train)["elevation"], "scale": defaults(train)["scale"]}
     for k, v in cli.items():
         assert lib[k] == v, k
     assert cli["detector"] == "cnn" and defaults(CnnPoseModel.__init__)["unary_weight"] != defaults(PoseModel.__init__)[

@@ -133,7 +133,8 @@ def train_pose(
 def pose(
     video: Path = typer.Argument(..., help="Input video."),
     out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
-    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose); needed by --backend ps."),
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) of --backend ps "
+                                      "[default: the model shipped with vidstyle]."),
     backend: str | None = typer.Option(None, "--backend", help="ps (pictorial structures) or blazepose (MediaPipe) "
                                        "[default: ps with --model, else blazepose]."),
     frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
@@ -202,7 +203,7 @@ def evaluate_pose(
     calibration: Path | None = typer.Option(None, "--calibration", help="Score VIEWS without labels by "
                                             "leave-one-view-out consistency: a Qualisys .qca.txt or "
                                             "OpenCV/Pose2Sim .toml calibration of the views."),
-    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose): score it on held-out "
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose; default: the shipped one): score it on held-out "
                                       "renders (without --calibration)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
     cmu_dir: Path | None = typer.Option(None, "--cmu-dir", envvar=CMU_ENV,
@@ -242,14 +243,15 @@ def evaluate_pose(
             write_metrics(out, {"seed": seed, **metrics}, kind=MULTIVIEW_POSE)
         sys.stdout.write(format_table(metrics) + "\n")
         return
-    if model is None:
-        raise InputError("--model: give a pose model (train-pose), or --calibration with the views' poses files")
     if views:
         raise InputError("VIEWS: poses files are scored with --calibration")
     from ..demo import pose_sources  # noqa: F401 - registers the demo performers as a training source
     from ..evaluation.pose import evaluate, format_tables
     from ..formats.metrics import POSE, write_metrics
 
+    from ..pose.run import resolve_model
+
+    model = resolve_model("ps", model)
     metrics = evaluate(model, cmu_dir, demo_performers, cmu_clips, views_per_clip, seconds, fps, real_dir, overlay_dir,
                        real_frames, seed, jobs, other_dir=other_dir, other_clips=other_clips, proportions=proportions,
                        **_render_options(elevations, figure_scales))
@@ -263,7 +265,8 @@ def evaluate_people(
     crowd: Path = typer.Argument(..., help="A take of several people (vidstyle demo make-crowd)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Metrics JSON to write."),
     backend: str = typer.Option("blazepose", "--backend", help="Pose backend (blazepose, or ps with --model)."),
-    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) for --backend ps."),
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) for --backend ps "
+                                      "[default: the shipped one]."),
 ) -> None:
     """Following one performer among several people: identity switches per 100 frames and PCK@0.2 against
     the person chosen first, per view, with the backend alone (naive) and followed (tracked)."""

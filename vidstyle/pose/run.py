@@ -153,14 +153,28 @@ def parse_frames(text: str | None, n_frames: int) -> list[int]:
     return sorted(out)
 
 
+def resolve_model(backend: str, model_path):
+    """The pose model file of ``backend``: ``model_path`` when given, else, for a backend that needs one
+    (:data:`~vidstyle.pose.interfaces.MODEL_BACKENDS`), the model shipped with the package
+    (:func:`vidstyle.pose.defaults.shipped_model_path`); None for backends without a model file."""
+    if model_path is not None or backend not in MODEL_BACKENDS:
+        return model_path
+    from .defaults import shipped_model_path
+
+    path = shipped_model_path()
+    if not path.is_file():
+        raise ParameterError("model", f"the {backend} backend needs a pose model (vidstyle train-pose): none "
+                             f"given, and this installation has no shipped model ({path})")
+    return str(path)
+
+
 def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]:
     """The checks of :func:`estimate_video`'s settings (:class:`ParameterError` naming the parameter:
     ``backend``, ``model``, ``scales``); returns the zoom factors."""
     from .estimator import check_scales
 
     check_backend(backend)
-    if backend in MODEL_BACKENDS and model_path is None:
-        raise ParameterError("model", f"the {backend} backend needs a pose model (vidstyle train-pose)")
+    resolve_model(backend, model_path)
     if scales is not None and backend != "ps":
         raise ParameterError("scales", "multi-scale inference is a ps backend setting")
     try:
@@ -182,7 +196,7 @@ def estimate_video(video: str | Path, backend: str | None = None, model_path: st
                    person: tuple[float, float] | None = None, smooth: bool = False) -> Poses:
     """Poses of ``frames`` (default: all) of ``video`` (``vidstyle pose``); ``backend``: a name of
     :data:`vidstyle.pose.interfaces.BACKENDS` (default :func:`default_backend`; ``model_path``: the ``ps``
-    backend's pose model file); ``scales``: zoom factors of the ps backend's multi-scale inference
+    backend's pose model file, default the shipped one, :func:`resolve_model`); ``scales``: zoom factors of the ps backend's multi-scale inference
     (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only). ``track`` (default: on for
     :data:`TRACKED_BACKENDS`): follow one performer through the frames
     (:class:`vidstyle.pose.people.PerformerTracker`; ``person``: the one at that pixel of the first frame
@@ -194,6 +208,7 @@ def estimate_video(video: str | Path, backend: str | None = None, model_path: st
 
     backend = default_backend(model_path) if backend is None else backend
     scales = check_estimate_params(backend, model_path, scales)
+    model_path = resolve_model(backend, model_path)
     track = backend in TRACKED_BACKENDS if track is None else bool(track)
     if person is not None and not track:
         raise ParameterError("person", "choosing a person needs tracking (track=True)")
