@@ -338,3 +338,97 @@ def test_page_splits_segments_toggles_transitions_and_imports(browser, app):
     assert _segments(page) == [(0, 5, "Guard"), (60, 70, "Hook")]
     assert errors == []
     page.close()
+
+
+def _magenta(png: bytes) -> np.ndarray:
+    """Mask of the performer marker's colour (#ff3df2) in a screenshot."""
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR).astype(int)
+    return (img[..., 2] > 200) & (img[..., 1] < 120) & (img[..., 0] > 190)
+
+
+def _click_video_pixel(page, x: int, y: int, w: int = 320, h: int = 240):
+    """Click where the page shows the centre of video pixel (x, y) (the image is scaled to the stage), at the
+    nearest whole CSS pixel as a mouse does; returns the image's box and the point clicked."""
+    box = page.locator("#frame").bounding_box()
+    at = (round(box["x"] + (x + 0.5) * box["width"] / w), round(box["y"] + (y + 0.5) * box["height"] / h))
+    page.mouse.click(*at)
+    return box, at
+
+
+def test_choose_performer_stores_the_clicked_video_pixel(browser, app):
+    """Choose performer (button or P), then a click on the frame: the file holds that frame and the clicked
+    pixel of the 320x240 video, whatever the frame's displayed size; the marker is drawn on that frame
+    only; Esc cancels pick mode; Clear and undo go through the same save path."""
+    url, ann, _ = app
+    errors, scales = [], []
+    for viewport, (px, py), frame in [({"width": 1280, "height": 800}, (250, 60), 37),
+                                      ({"width": 1000, "height": 560}, (13, 201), 90),
+                                      ({"width": 760, "height": 420}, (301, 17), 5)]:
+        page = browser.new_page(viewport=viewport)
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(url + "/")
+        assert shown_number(page) == 0
+        goto(page, frame)
+        # a click without pick mode, and one after Esc, choose nobody
+        _click_video_pixel(page, px, py)
+        page.keyboard.press("p")
+        assert "Click the performer" in page.inner_text("#performer-pick")
+        page.keyboard.press("Escape")
+        _click_video_pixel(page, px, py)
+        assert state(page).get("performer") is None and page.evaluate("window.vidstyle.changes") == 0
+        before = int(_magenta(page.locator("#stage").screenshot()).sum())
+        still = page.locator("#frame").bounding_box()
+        page.click("#performer-pick")
+        box, at = _click_video_pixel(page, px, py)
+        assert box == still  # pick mode does not move the frame under the mouse
+        scale = box["width"] / 320
+        scales.append(scale)
+        got = state(page)["performer"]
+        if scale >= 1:  # every video pixel spans a whole CSS pixel: exactly the one aimed at
+            assert got == {"frame": frame, "x": px, "y": py}
+        else:  # shrunk: the stored pixel is the one under the point clicked
+            assert got["frame"] == frame
+            for v, c, lo, size, n in ((got["x"], at[0], box["x"], box["width"], 320),
+                                      (got["y"], at[1], box["y"], box["height"], 240)):
+                assert v * size / n <= c - lo < (v + 1) * size / n
+            px, py = got["x"], got["y"]
+            assert abs(px - 301) <= 1 and abs(py - 17) <= 1
+        wait_saved(page)
+        saved = read_annotations(ann)
+        assert (saved.videos[0].performer.frame, saved.videos[0].performer.x, saved.videos[0].performer.y) == (frame, px, py)
+        assert f"frame {frame}, pixel ({px}, {py})" in page.inner_text("#performer-info")
+        # the marker: a ring of radius 10 px about the clicked pixel, on this frame only
+        page.wait_for_timeout(100)
+        box, stage = page.locator("#frame").bounding_box(), page.locator("#stage").bounding_box()
+        if os.environ.get("VIDSTYLE_SCREENSHOT_PERFORMER"):
+            page.screenshot(path=os.environ["VIDSTYLE_SCREENSHOT_PERFORMER"])
+        shot = page.locator("#stage").screenshot()
+        mask = _magenta(shot)
+        assert before == 0 and mask.sum() > 40
+        cx = box["x"] - stage["x"] + (px + 0.5) * box["width"] / 320
+        cy = box["y"] - stage["y"] + (py + 0.5) * box["height"] / 240
+        for dx, dy in ((10, 0), (-10, 0), (0, 10), (0, -10)):
+            x, y = round(cx + dx), round(cy + dy)
+            if 0 <= x < mask.shape[1] and 0 <= y < mask.shape[0]:
+                assert mask[max(0, y - 2):y + 3, max(0, x - 2):x + 3].any(), (dx, dy)
+        page.keyboard.press("f")
+        assert shown_number(page) == frame + 1
+        page.wait_for_timeout(100)
+        assert int(_magenta(page.locator("#stage").screenshot()).sum()) == 0
+        # Clear, then undo: each saved
+        page.click("#performer-clear")
+        wait_saved(page)
+        assert read_annotations(ann).videos[0].performer is None
+        assert "none chosen" in page.inner_text("#performer-info")
+        page.keyboard.press("Control+z")
+        wait_saved(page)
+        assert read_annotations(ann).videos[0].performer.frame == frame
+        # the side panel's choice goes to its frame
+        page.click("#performer-info")
+        assert shown_number(page) == frame
+        page.keyboard.press("Control+z")  # back to no choice for the next round
+        wait_saved(page)
+        assert read_annotations(ann).videos[0].performer is None
+        page.close()
+    assert scales[0] > 1.5 and scales[-1] < 1  # enlarged and shrunk displays
+    assert errors == []

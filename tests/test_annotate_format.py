@@ -1,4 +1,5 @@
-"""The annotations file: round trip, validation naming file and field, fuzzing, and the JSON Schema."""
+"""The annotations file: round trip, validation naming file and field, fuzzing, the JSON Schema, and the
+performer choice (schema version 2; version 1 files still load)."""
 
 from __future__ import annotations
 
@@ -15,11 +16,13 @@ from hypothesis import strategies as st
 from vidstyle.formats import FormatError
 from vidstyle.formats.annotations import (
     JSON_SCHEMA,
+    ActionSpan,
     Annotations,
     CandidateDecision,
-    ActionSpan,
+    PerformerChoice,
     Transition,
     VideoAnnotations,
+    check_performer,
     file_sha256,
     frame_labels,
     from_document,
@@ -43,7 +46,8 @@ def sample() -> Annotations:
             transitions=[Transition(40, "jab", "kick", "accepted",
                                     [CandidateDecision("lib/x.bvh", 1.5, "accepted"), CandidateDecision("lib/y.bvh", 0.0, "discarded")]),
                          Transition(70, "kick", "cross", "discarded")],
-            segments=[ActionSpan(0, 38, "jab"), ActionSpan(42, 68, "kick"), ActionSpan(72, 100, "cross")])],
+            segments=[ActionSpan(0, 38, "jab"), ActionSpan(42, 68, "kick"), ActionSpan(72, 100, "cross")],
+            performer=PerformerChoice(55, 212.0, 97.5))],
     )
 
 
@@ -64,8 +68,10 @@ def annotations(draw):
                  for m in sorted(marks)]
         cuts = sorted(draw(st.lists(st.integers(0, frames), unique=True, max_size=8)))
         segs = [ActionSpan(a, b, draw(st.sampled_from(classes))) for a, b in zip(cuts[::2], cuts[1::2]) if b > a]
+        performer = draw(st.none() | st.builds(PerformerChoice, st.integers(0, frames - 1),
+                                               st.floats(0, 1e4, allow_nan=False), st.floats(0, 1e4, allow_nan=False)))
         videos.append(VideoAnnotations(draw(st.text(min_size=1, max_size=20)), sha, frames,
-                                       draw(st.floats(0, 240, allow_nan=False)), trans, segs))
+                                       draw(st.floats(0, 240, allow_nan=False)), trans, segs, performer))
     return Annotations(classes, videos, draw(st.integers(0, 10**6)))
 
 
@@ -135,12 +141,23 @@ def test_every_broken_field_is_a_format_error_naming_file(tmp_path):
                          lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=8), c, max_size=5),
                          max_leaves=30))
 def test_fuzz_any_json_is_read_or_format_error(data):
-    doc = {"kind": "vidstyle.annotations", "schema_version": 1, "revision": 0, "classes": ["a"], "videos": data}
-    for d in (data, doc):
+    docs = [data]
+    for version in (1, 2):
+        docs.append({"kind": "vidstyle.annotations", "schema_version": version, "revision": 0, "classes": ["a"],
+                     "videos": data})
+        # any value as the performer of a valid video
+        docs.append({"kind": "vidstyle.annotations", "schema_version": version, "revision": 0, "classes": ["a"],
+                     "videos": [{"path": "v.mp4", "sha256": SHA, "frames": 10, "fps": 25.0, "transitions": [],
+                                 "segments": [], "performer": data}]})
+    for d in docs:
         try:
-            from_document(d, "fuzz.json")
+            got = from_document(d, "fuzz.json")
         except FormatError as e:
-            assert "fuzz.json" in str(e)
+            assert "fuzz.json" in str(e) and "\n" not in str(e)
+            continue
+        p = got.videos[0].performer if got.videos else None
+        assert p is None or (0 <= p.frame < got.videos[0].frames and np.isfinite([p.x, p.y]).all()
+                             and min(p.x, p.y) >= 0)
 
 
 def test_specific_errors_name_the_field(tmp_path):
@@ -154,6 +171,16 @@ def test_specific_errors_name_the_field(tmp_path):
         (["videos", 0, "sha256"], "XYZ", "videos[0].sha256", "hex"),
         (["videos", 0, "transitions", 0, "candidates", 0, "status"], "maybe", "candidates[0].status", "not one of"),
         (["revision"], -1, "revision", "at least 0"),
+        (["videos", 0, "performer", "frame"], 100, "videos[0].performer.frame", "at most 99"),
+        (["videos", 0, "performer", "frame"], 2.5, "videos[0].performer.frame", "expected an integer"),
+        (["videos", 0, "performer", "x"], -0.5, "videos[0].performer.x", "at least 0"),
+        (["videos", 0, "performer", "y"], "12", "videos[0].performer.y", "expected a number"),
+        (["videos", 0, "performer", "y"], None, "videos[0].performer.y", "expected a number"),
+        (["videos", 0, "performer", "z"], 1, "videos[0].performer", "unknown field"),
+        (["videos", 0, "performer"], [55, 1, 2], "videos[0].performer", "expected an object"),
+        (["videos", 0, "performer"], None, "videos[0].performer", "expected an object"),
+        (["schema_version"], 1, "videos[0]", "unknown field(s) 'performer'"),  # version 1 had none
+        (["schema_version"], 3, "schema_version", "not supported"),
     ]
     for path, value, field, problem in cases:
         p = tmp_path / "x.json"
@@ -164,6 +191,46 @@ def test_specific_errors_name_the_field(tmp_path):
     (tmp_path / "t.json").write_text("{not json")
     with pytest.raises(FormatError, match="not valid JSON"):
         read_annotations(tmp_path / "t.json")
+    # non-finite pixels: not JSON on disk, and refused in a parsed document too
+    (tmp_path / "n.json").write_text(json.dumps(doc).replace('"x": 212.0', '"x": NaN'))
+    with pytest.raises(FormatError) as e:
+        read_annotations(tmp_path / "n.json")
+    assert str(tmp_path / "n.json") in str(e.value)
+    for bad in (float("nan"), float("inf")):
+        with pytest.raises(FormatError, match=r"videos\[0\]\.performer\.x: must be a finite number"):
+            from_document(_apply(doc, ["videos", 0, "performer", "x"], bad), "a.json")
+
+
+def test_performer_choice_versions_and_frame_size(tmp_path):
+    """Version 1 files (written before the performer choice) load unchanged and are written back as version
+    2; the choice round-trips exactly; its pixel is checked against the frame of the video it is used on."""
+    v1 = to_document(sample())
+    v1["schema_version"] = 1
+    del v1["videos"][0]["performer"]
+    p = tmp_path / "v1.json"
+    p.write_text(json.dumps(v1))
+    jsonschema.validate(v1, JSON_SCHEMA)
+    old = read_annotations(p)
+    assert old.videos[0].performer is None and old.videos[0].segments == sample().videos[0].segments
+    write_annotations(p, old)
+    doc = json.loads(p.read_text())
+    assert doc["schema_version"] == 2 and "performer" not in doc["videos"][0]
+    assert read_annotations(p) == old
+    # the published schema refuses a performer in a version-1 file, as the reader does
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**to_document(sample()), "schema_version": 1}, JSON_SCHEMA)
+    write_annotations(p, sample())
+    doc = json.loads(p.read_text())
+    assert doc["videos"][0]["performer"] == {"frame": 55, "x": 212.0, "y": 97.5}
+    v = read_annotations(p).videos[0]
+    assert v.performer == PerformerChoice(55, 212.0, 97.5)
+    # pixel centres at integers: a W x H frame holds x <= W - 0.5, y <= H - 0.5
+    assert check_performer(v, 213, 98) == v.performer
+    for w, h in ((212, 98), (213, 97)):
+        with pytest.raises(FormatError, match=r"a\.json: performer: pixel \(212, 97\.5\) is outside"):
+            check_performer(v, w, h, "a.json")
+    v.performer = None
+    assert check_performer(v, 1, 1) is None
 
 
 def test_writer_refuses_invalid_object_and_leaves_file(tmp_path):

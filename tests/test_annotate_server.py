@@ -119,6 +119,60 @@ def test_save_reload_conflict_and_validation(videos, tmp_path):
     assert saved.revision == 2 and len(saved.videos[0].transitions) == 1 and saved.videos[1].segments == []
 
 
+def test_performer_choice_is_stored_kept_and_cleared(videos, tmp_path):
+    """The performer choice goes through the same save path as the marks: token, revision, validation
+    (frame inside the video, pixel inside its 160x120 frame), atomic write; leaving it out of a PUT keeps it,
+    null clears it."""
+    ann = tmp_path / "ann.json"
+    seg = [{"start": 0, "end": 5, "action": "Jab"}]
+    with running(videos, ann) as url, _client(url) as c:
+        tok = {"X-Vidstyle-Token": _token(c)}
+        assert [v["performer"] for v in _state(c)["videos"]] == [None, None]
+        choice = {"frame": 42, "x": 151, "y": 7}
+        body = {"revision": 0, "videos": [{"id": "1", "transitions": [], "segments": seg, "performer": choice}]}
+        assert c.put("/api/annotations", json=body).status_code == 403  # no token: refused, nothing written
+        assert not ann.exists()
+        r = c.put("/api/annotations", json=body, headers=tok)
+        assert r.status_code == 200 and r.json() == {"revision": 1}
+        saved = read_annotations(ann)
+        assert saved.videos[0].performer is None
+        assert (saved.videos[1].performer.frame, saved.videos[1].performer.x, saved.videos[1].performer.y) == (42, 151, 7)
+        assert json.loads(ann.read_text())["videos"][1]["performer"] == {"frame": 42, "x": 151.0, "y": 7.0}
+        assert [v["performer"] for v in _state(c)["videos"]] == [None, {"frame": 42, "x": 151.0, "y": 7.0}]
+        # invalid choices: 422 naming the problem, the file unchanged
+        before = ann.read_bytes()
+        for bad, problem in [({"frame": 70, "x": 1, "y": 1}, "performer.frame: must be at most 69"),
+                             ({"frame": 3, "x": 160, "y": 1}, "outside"),
+                             ({"frame": 3, "x": 1, "y": 119.6}, "outside"),
+                             ({"frame": 3, "x": -1, "y": 1}, "performer.x: must be at least 0"),
+                             ({"frame": 3, "x": 1}, "performer.y: missing"),
+                             ({"frame": 3, "x": 1, "y": 1, "who": "me"}, "unknown field"),
+                             ("left one", "expected an object")]:
+            r = c.put("/api/annotations", json={"revision": 1, "videos": [{"id": "1", "performer": bad}]}, headers=tok)
+            assert r.status_code == 422 and problem in r.json()["error"], (bad, r.json())
+        r = c.put("/api/annotations", content=b'{"revision": 1, "videos": [{"id": "1", "performer": '
+                  b'{"frame": 3, "x": Infinity, "y": 1}}]}', headers={**tok, "Content-Type": "application/json"})
+        assert r.status_code == 400
+        assert ann.read_bytes() == before
+        # a PUT without the key keeps the choice
+        r = c.put("/api/annotations", json={"revision": 1, "videos": [{"id": "1", "segments": []}]}, headers=tok)
+        assert r.status_code == 200 and read_annotations(ann).videos[1].performer.frame == 42
+    with running(videos, ann) as url, _client(url) as c:  # a restarted server serves it
+        tok = {"X-Vidstyle-Token": _token(c)}
+        assert _state(c)["videos"][1]["performer"] == {"frame": 42, "x": 151.0, "y": 7.0}
+        r = c.put("/api/annotations", json={"revision": 2, "videos": [{"id": "1", "performer": None}]}, headers=tok)
+        assert r.status_code == 200
+        assert read_annotations(ann).videos[1].performer is None
+        assert "performer" not in json.loads(ann.read_text())["videos"][1]
+        assert _state(c)["videos"][1]["performer"] is None
+    # a file whose choice lies outside the served video's frame is refused at start, as a wrong frame count is
+    doc = json.loads(ann.read_text())
+    doc["videos"][1]["performer"] = {"frame": 0, "x": 200.0, "y": 1.0}
+    ann.write_text(json.dumps(doc))
+    with pytest.raises(FormatError, match=r"ann\.json: performer: pixel \(200, 1\) is outside"):
+        running(videos, ann)
+
+
 def test_two_servers_on_one_file_conflict(videos, tmp_path):
     ann = tmp_path / "ann.json"
     with running(videos[:1], ann) as u1, running(videos[:1], ann) as u2, _client(u1) as c1, _client(u2) as c2:

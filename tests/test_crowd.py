@@ -59,3 +59,44 @@ def test_identity_switches_and_pck_on_known_tracks():
     assert s["chosen"] == 0 and s["identity_switches"] == 2
     assert s["pck@0.2"] == pytest.approx(4 / 6)
     assert pck(est[:1], truth[0, :1]) == 1.0
+
+
+def test_pose_annotations_follow_the_person_clicked_in_the_crowd(tmp_path, caplog):
+    """BlazePose on a two-person take: the performer stored in the annotations file (a person's true pelvis
+    at the middle frame, as a click would give) is followed on every marked frame, before and after that
+    frame, and it is the person the default choice (the most prominent) does not follow."""
+    from vidstyle.formats.annotations import (
+        Annotations,
+        PerformerChoice,
+        Transition,
+        VideoAnnotations,
+        file_sha256,
+        write_annotations,
+    )
+    from vidstyle.pose.run import estimate_marks
+
+    take = make_crowd(tmp_path / "take", n_people=2, n_views=1, seconds=1.5, fps=10.0, size=(320, 240), seed=3)
+    kp2 = np.load(take / "truth.npz")["keypoints2d"][0].astype(np.float64)  # (people, frames, 15, 2)
+    video = take / "cam01.mp4"
+    F = kp2.shape[1]
+    entry = VideoAnnotations(video.name, file_sha256(video), F, 10.0, [Transition(2, "a", "b"), Transition(12, "b", "a")])
+    ann = take / "ann.json"
+    write_annotations(ann, Annotations(["a", "b"], [entry]))
+
+    def followed():
+        poses = estimate_marks(video, ann, "blazepose", context=2, jobs=1, track=True)
+        assert [pf.frame for pf in poses.frames] == [0, 1, 2, 3, 4, 10, 11, 12, 13, 14]
+        est = np.stack([pf.points for pf in poses.frames])
+        return identities(est, kp2[:, [pf.frame for pf in poses.frames]])
+
+    default = followed()
+    assert len(set(default.tolist())) == 1 and default[0] >= 0  # the most prominent person, throughout
+    other = 1 - int(default[0])
+    mid = F // 2  # 7: not a marked frame; marks lie both before and after it
+    x, y = kp2[other, mid, 2]  # the pelvis
+    entry.performer = PerformerChoice(mid, round(float(x)), round(float(y)))
+    write_annotations(ann, Annotations(["a", "b"], [entry]))
+    with caplog.at_level("INFO", logger="vidstyle.pose.run"):
+        chosen = followed()
+    assert f"of frame {mid}, as chosen in" in caplog.text
+    assert chosen.tolist() == [other] * len(chosen)

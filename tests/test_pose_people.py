@@ -137,3 +137,121 @@ def test_parameters_are_checked(kw, param):
     with pytest.raises(ParameterError) as e:
         PerformerTracker(LargestRectangle(), **kw)
     assert e.value.param == param
+
+
+# ------------------------------------------------------------------ the performer chosen at a frame
+class RectangleBackend(LargestRectangle):
+    """:class:`LargestRectangle` as a ``vidstyle pose --backend`` (registered by the tests that use it)."""
+
+    uses_background = False
+
+    def working_height(self, native_height):
+        return native_height
+
+    def set_inference(self, scales=None):
+        return self
+
+    def close(self):
+        pass
+
+
+def _passing(frames=30):
+    """Red (the bigger, so the most prominent) walks right along the top, blue walks left along the bottom;
+    they never overlap. (130, 175) is on blue at frame 25, and nearest red (the nearest box centre) at the
+    start: where the choice is made decides who is followed."""
+    return [_scene([(RED, 20 + 6 * f, 10, 60, 100), (BLUE, 260 - 6 * f, 130, 40, 90)]) for f in range(frames)]
+
+
+def _on_colour(img, pose):
+    x, y = np.round(pose.points[1, :2]).astype(int)  # the neck
+    return tuple(int(c) for c in img[y, x])
+
+
+def test_follow_chooses_at_the_start_frame_and_tracks_both_ways():
+    frames = _passing()
+    pick = [1, 2, 3, 14, 28, 29]  # the choice's frame (25) is not among them
+    for start, who in ((25, BLUE), (None, RED)):  # None: the first frame with people, as --person
+        ts = PerformerTracker(LargestRectangle(), person=(130, 175)).follow(lambda i: frames[i], pick, start)
+        assert [t.index for t in ts] == pick
+        assert all(t.pose is not None and _on_colour(frames[t.index], t.pose) == who for t in ts), start
+    # nobody at the chosen frame: the choice falls back to the first frame with people (logged)
+    frames[25] = _scene([])
+    ts = PerformerTracker(LargestRectangle(), person=(130, 175)).follow(lambda i: frames[i], pick, 25)
+    assert all(_on_colour(frames[t.index], t.pose) == RED for t in ts)
+
+
+@pytest.fixture
+def passing_video(tmp_path, monkeypatch):
+    """The passing scene as a lossless video, its annotations (marks at 3 and 27; the performer: blue,
+    clicked at frame 25) and the stand-in backend registered as ``rectangles``."""
+    from video_util import write_lossless
+
+    from vidstyle.formats import poses
+    from vidstyle.formats.annotations import (
+        Annotations,
+        PerformerChoice,
+        Transition,
+        VideoAnnotations,
+        file_sha256,
+        write_annotations,
+    )
+    from vidstyle.pose import interfaces
+
+    monkeypatch.setitem(interfaces.BACKENDS, "rectangles", "test_pose_people:RectangleBackend")
+    monkeypatch.setattr(poses, "BACKENDS", (*poses.BACKENDS, "rectangles"))  # poses.json may name it
+    frames = _passing()
+    video = write_lossless(tmp_path / "two.mov", frames)
+    ann = tmp_path / "ann.json"
+    entry = VideoAnnotations(video.name, file_sha256(video), len(frames), 20.0,
+                             [Transition(3, "a", "b"), Transition(27, "b", "a")],
+                             performer=PerformerChoice(25, 130.0, 175.0))
+    write_annotations(ann, Annotations(["a", "b"], [entry]))
+    return frames, video, ann
+
+
+def test_pose_annotations_follow_the_performer_chosen_in_the_file(passing_video, tmp_path, caplog, capsys):
+    from vidstyle.cli import main
+    from vidstyle.formats.annotations import read_annotations, write_annotations
+    from vidstyle.formats.poses import read_poses
+    from vidstyle.pose.run import estimate_marks
+
+    frames, video, ann = passing_video
+    marks = [1, 2, 3, 4, 5, 25, 26, 27, 28, 29]
+    with caplog.at_level("INFO", logger="vidstyle.pose.run"):
+        poses = estimate_marks(video, ann, "rectangles", context=2, jobs=1)
+    assert "the person at pixel (130, 175) of frame 25, as chosen in" in caplog.text
+    assert [pf.frame for pf in poses.frames] == marks
+    assert all(pf.found and _on_colour(frames[pf.frame], pf) == BLUE for pf in poses.frames)
+    assert poses.params == {"tracked": True, "person": [130.0, 175.0], "person_frame": 25}
+    # the CLI (-j 1: the stand-in backend is registered in this process only): the same poses; --person
+    # overrides the file (chosen at the first marked frame: red); --no-track ignores it (the backend alone
+    # takes the most prominent, red)
+    out = tmp_path / "p.json"
+    cli = ["pose", str(video), "-a", str(ann), "--backend", "rectangles", "-j", "1", "-o", str(out)]
+    assert main([*cli, "--context", "2"]) == 0
+    written = read_poses(out)
+    assert written.params == poses.params and [pf.frame for pf in written.frames] == marks
+    np.testing.assert_allclose([pf.points for pf in written.frames], [pf.points for pf in poses.frames], atol=0.006)
+    for extra in (["--person", "130,175"], ["--no-track"]):
+        assert main([*cli, "--context", "2", *extra]) == 0
+        assert all(_on_colour(frames[pf.frame], pf) == RED for pf in read_poses(out).frames), extra
+    # a choice outside this video's 320x240 frame: one line naming the file, exit 2, no output
+    a = read_annotations(ann)
+    a.videos[0].performer.x = 320.0
+    write_annotations(ann, a)
+    out.unlink()
+    capsys.readouterr()
+    assert main(cli) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and str(ann) in err and "outside" in err and not out.exists()
+
+
+def test_person_frame_is_checked(passing_video):
+    from vidstyle.pose.run import estimate_video
+
+    _, video, _ = passing_video
+    for kw in ({"person_frame": 3}, {"person": (1.0, 1.0), "person_frame": 30},
+               {"person": (1.0, 1.0), "person_frame": -1}):
+        with pytest.raises(ParameterError) as e:
+            estimate_video(video, "rectangles", track=True, **kw)
+        assert e.value.param == "person_frame"

@@ -1,5 +1,6 @@
 """``vidstyle annotate``: a local web page to mark transition frames and action segments on videos,
-frame-exact (frames are decoded on the server by index; the page never derives a frame from a time).
+frame-exact (frames are decoded on the server by index; the page never derives a frame from a time), and
+to choose each video's performer (a click on the frame: that frame and pixel of the input video).
 
 * :mod:`.session` - the videos a server was started with (one locked reader each) and the annotations
   store (atomic, schema-validated saves, revision check against stale pages);

@@ -32,7 +32,8 @@ video: 0-based decoded frame indices, half-open segments ``[start, end)``, sha25
     nearest frame boundary).
 
 Export then import is the identity on the transitions, segments and classes (tested on constant and
-variable frame-rate videos).
+variable frame-rate videos). The performer choice (``performer``) travels in ``native`` only, and an import
+brings marks, not a choice: the page keeps its own.
 """
 
 from __future__ import annotations
@@ -47,10 +48,11 @@ import numpy as np
 
 from ..formats import FormatError
 from ..formats.annotations import (
+    SCHEMA_VERSION,
     STATUSES,
+    ActionSpan,
     Annotations,
     CandidateDecision,
-    ActionSpan,
     Transition,
     VideoAnnotations,
     from_document,
@@ -111,7 +113,8 @@ def import_(fmt: str, data: bytes, classes: list[str], target: Target, name: str
 
 
 def to_document_unchecked(marks: Marks, v: VideoAnnotations) -> dict:
-    return {"kind": "vidstyle.annotations", "schema_version": 1, "revision": 0, "classes": marks.classes,
+    return {"kind": "vidstyle.annotations", "schema_version": SCHEMA_VERSION, "revision": 0,
+            "classes": marks.classes,
             "videos": [{"path": v.path, "sha256": v.sha256, "frames": v.frames, "fps": v.fps,
                         "transitions": [_t_doc(t) for t in marks.transitions],
                         "segments": [{"start": s.start, "end": s.end, "action": s.action} for s in marks.segments]}]}

@@ -8,8 +8,10 @@ API (the page and the tests use it; ``{id}`` is a video's position on the comman
 * ``GET /api/videos/{id}/timestamps`` - decoded timestamps (seconds) of every frame
 * ``GET /api/videos/{id}/overlays`` - recognised actions, 2D poses, pose matches (see :mod:`.overlays`)
 * ``GET /api/annotations`` / ``PUT /api/annotations`` - ``{revision, classes, videos: [{id, transitions,
-  segments}]}``; a PUT names the revision it was made from: 200 ``{revision}`` (the new one), 409 on a
-  stale revision, 400/422 on bad JSON or content (nothing changes)
+  segments, performer}]}`` (``performer``: ``{frame, x, y}``, the chosen performer in the input video's
+  pixels, or null; a PUT may leave any of the three out to keep it, null clears the performer); a PUT
+  names the revision it was made from: 200 ``{revision}`` (the new one), 409 on a stale revision, 400/422
+  on bad JSON or content (nothing changes)
 * ``GET /api/export/{format}?video={id}`` - a download (native | labelstudio | cvat | via)
 * ``POST /api/import/{format}?video={id}`` - body: the exported file; answers the marks in the API's
   shape, for the page to apply (and save) as one undoable step; nothing is saved by the import itself

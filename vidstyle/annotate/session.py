@@ -21,6 +21,7 @@ from ..formats import FormatError
 from ..formats.annotations import (
     Annotations,
     VideoAnnotations,
+    check_performer,
     file_sha256,
     from_document,
     read_annotations,
@@ -194,6 +195,7 @@ class Store:
             elif entry.frames != v.frames:
                 raise FormatError(self.path, "frames", f"{entry.path}: the file says {entry.frames} frames, "
                                   f"{v.path} decodes to {v.frames}")
+            check_performer(entry, v.reader.width, v.reader.height, self.path)
         to_document(ann)  # validate the merged state before serving it
         self.ann = ann
 
@@ -201,13 +203,15 @@ class Store:
         return self.ann.video(self.videos[video_id].sha256)  # type: ignore[return-value]
 
     def state(self) -> dict[str, Any]:
-        """The API view: revision, classes, and per served video its transitions and segments."""
+        """The API view: revision, classes, and per served video its transitions, segments and performer
+        choice (``{frame, x, y}`` as in the file, or null)."""
         with self.lock:
             doc = to_document(self.ann)
         by_sha = {v["sha256"]: v for v in doc["videos"]}
         return {"revision": doc["revision"], "classes": doc["classes"],
                 "videos": [{"id": v.id, "transitions": by_sha[v.sha256]["transitions"],
-                            "segments": by_sha[v.sha256]["segments"]} for v in self.videos.values()]}
+                            "segments": by_sha[v.sha256]["segments"],
+                            "performer": by_sha[v.sha256].get("performer")} for v in self.videos.values()]}
 
     def save(self, body: Any) -> int:
         """Apply an API-view ``body`` (see :meth:`state`) made at ``body["revision"]``; write; return the
@@ -243,13 +247,20 @@ class Store:
             seen.add(v["id"])
             sha = self.videos[v["id"]].sha256
             target = next(d for d in doc["videos"] if d["sha256"] == sha)
-            extra = set(v) - {"id", "transitions", "segments"}
+            extra = set(v) - {"id", "transitions", "segments", "performer"}
             if extra:
                 raise FormatError("request", f"videos[{k}]", f"unknown field(s) {sorted(extra)}")
             for key in ("transitions", "segments"):
                 if key in v:
                     target[key] = v[key]
-        return from_document(copy.deepcopy(doc), "request")
+            if "performer" in v:  # null clears the choice (the file then has none)
+                target.pop("performer", None)
+                if v["performer"] is not None:
+                    target["performer"] = v["performer"]
+        new = from_document(copy.deepcopy(doc), "request")
+        for vid in self.videos.values():  # the file cannot know the frame size; the server does
+            check_performer(new.video(vid.sha256), vid.reader.width, vid.reader.height, "request")
+        return new
 
     def _disk_revision(self) -> int | None:
         if not self.path.exists():

@@ -1,4 +1,5 @@
-"""``vidstyle annotate``: mark transition frames and action segments in the browser, frame-exact.
+"""``vidstyle annotate``: mark transition frames and action segments in the browser, frame-exact, and choose
+the performer ``vidstyle pose --annotations`` follows.
 
     vidstyle annotate v1.mp4 v2.mp4 --annotations annotations.json [--labels v1.json] [--poses p.json]
         [--matches m.json] [--port 8765] [--no-browser]
@@ -36,7 +37,8 @@ def annotate(
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a browser."),
     max_body_mb: float = typer.Option(16.0, "--max-body-mb", help="Largest request body accepted (MB)."),
 ) -> None:
-    """Open a local web page to mark transition frames (T) and action segments ([ ]) frame by frame.
+    """Open a local web page to mark transition frames (T) and action segments ([ ]) frame by frame, and
+    to choose the performer (P, then click them; `pose --annotations` follows that person).
 
     Frames are decoded on the server by index and the annotations file is saved atomically, tied to each
     video's sha256 and decoded frame count. Press ? in the page for the keys."""

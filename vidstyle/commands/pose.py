@@ -140,7 +140,8 @@ def pose(
     frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
     annotations: Path | None = typer.Option(
         None, "--annotations", "-a", help="Annotations file (vidstyle annotate): the frames are this video's "
-        "transition marks (the video must be the annotated one: same sha256)."),
+        "transition marks (the video must be the annotated one: same sha256); the performer chosen for it "
+        "there (a frame and a pixel) is followed, unless --person or --no-track."),
     context: int = typer.Option(0, "--context", help="With --annotations: also the frames up to this many "
                                 "either side of every mark (AugMG's temporal coherence matches them too)."),
     scales: str | None = typer.Option(None, "--scales", help="ps backend: comma-separated zoom factors of "
@@ -149,9 +150,11 @@ def pose(
                                       "or larger than the training figures; time grows with their number)."),
     track: bool | None = typer.Option(None, "--track/--no-track", help="Follow one performer through the video "
                                       "(other people are ignored; frames without the performer get no pose) "
-                                      "[default: on for blazepose without --annotations]."),
+                                      "[default: on for blazepose without --annotations; with --annotations, on "
+                                      "when a performer is chosen (--person, or in the file)]."),
     person: str | None = typer.Option(None, "--person", help="X,Y: follow the person at this pixel of the first "
-                                      "frame with people (default: the most prominent, i.e. largest and clearest)."),
+                                      "frame with people (default: the performer chosen in --annotations, else "
+                                      "the most prominent, i.e. largest and clearest)."),
     smooth: bool = typer.Option(False, "--smooth", help="One-Euro filter the keypoint tracks (jitter)."),
     overlay: Path | None = typer.Option(None, "--overlay", help="Also write every frame with its keypoints drawn "
                                         "(DIR/<frame>.jpg), to check the poses by eye."),
@@ -179,7 +182,7 @@ def pose(
     who = parse_person(person)
     if annotations is not None:
         poses = estimate_marks(video, annotations, backend, model, context, jobs=jobs, scheduler=scheduler,
-                               scales=zooms, track=bool(track) or who is not None, person=who)
+                               scales=zooms, track=True if who is not None else track, person=who)
     else:
         with VideoReader(video) as r:
             idx = parse_frames(frames, len(r))

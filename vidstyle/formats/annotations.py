@@ -1,6 +1,7 @@
-"""The annotations file (``kind: "vidstyle.annotations"``, ``schema_version: 1``): what a person marked on
-their videos in ``vidstyle annotate``, read by ``augment`` (transition marks and enhancement-node decisions)
-and ``train-recognizer --annotations`` (action segments).
+"""The annotations file (``kind: "vidstyle.annotations"``, ``schema_version: 2``; version 1 files still load):
+what a person marked on their videos in ``vidstyle annotate``, read by ``augment`` (transition marks and
+enhancement-node decisions), ``train-recognizer --annotations`` (action segments) and ``pose --annotations``
+(the marks' frames, and the performer to follow).
 
 Conventions (the ones the exchange formats disagree about, fixed here once):
 
@@ -13,18 +14,29 @@ Conventions (the ones the exchange formats disagree about, fixed here once):
   display only (times come from the decoded timestamps);
 * ``path`` is stored as written; a relative path is relative to the annotations file's directory;
 * ``revision`` counts saves; the annotation server refuses a save whose revision is not the current one
-  (a stale page), see :mod:`vidstyle.annotate.server`.
+  (a stale page), see :mod:`vidstyle.annotate.server`;
+* ``performer`` (optional, one per video) is the person to follow when several are in view: the decoded
+  ``frame`` where it was chosen and the pixel ``x`` (column), ``y`` (row) clicked there, in the input
+  video's pixels of the upright frame as a player shows it (phone rotation applied; pixel centres at
+  integers, as ``poses.json`` keypoints). The file does not know the video's size: ``x``, ``y`` are
+  checked against it where the video is read (:func:`check_performer`).
+
+Versions: 2 added ``performer``. A version-1 reader refuses any field it does not know, so a file holding
+the new field had to change version (an older vidstyle then says the version is not supported, instead of
+naming an unknown field); version 1 files are read as before (a ``performer`` in one is refused), and
+every file is written as version 2.
 
 Document layout::
 
-    {"kind": "vidstyle.annotations", "schema_version": 1, "revision": 3,
+    {"kind": "vidstyle.annotations", "schema_version": 2, "revision": 3,
      "classes": ["jab", "cross", ...],
      "videos": [{"path": "v.mp4", "sha256": "<64 hex>", "frames": 300, "fps": 30.0,
                  "transitions": [{"frame": 120, "from_action": "jab", "to_action": "cross",
                                   "status": "accepted",
                                   "candidates": [{"clip": "lib/01_01.bvh", "time": 1.25,
                                                   "status": "discarded"}]}],
-                 "segments": [{"start": 0, "end": 118, "action": "jab"}]}]}
+                 "segments": [{"start": 0, "end": 118, "action": "jab"}],
+                 "performer": {"frame": 12, "x": 241.0, "y": 160.0}}]}
 
 :data:`JSON_SCHEMA` is the JSON Schema of this file (also at the repository's ``annotations/schema.json``);
 :func:`write_annotations` checks an object against both the field rules here and that schema.
@@ -44,7 +56,9 @@ import numpy as np
 from ._base import Fields, FormatError, check_header, header, read_json_document, write_json_document
 
 KIND = "vidstyle.annotations"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: versions the reader accepts (1: before ``performer``)
+VERSIONS = (1, 2)
 STATUSES = ("accepted", "discarded")
 _SHA = re.compile(r"^[0-9a-f]{64}$")
 
@@ -88,6 +102,17 @@ class ActionSpan:
 
 
 @dataclass
+class PerformerChoice:
+    """The person to follow (``vidstyle pose --annotations``), as clicked in ``vidstyle annotate``: the one at
+    pixel ``x`` (column), ``y`` (row) of decoded frame ``frame``, in the input video's pixels of the upright
+    frame (pixel centres at integers)."""
+
+    frame: int
+    x: float
+    y: float
+
+
+@dataclass
 class VideoAnnotations:
     path: str
     sha256: str
@@ -95,6 +120,7 @@ class VideoAnnotations:
     fps: float
     transitions: list[Transition] = field(default_factory=list)
     segments: list[ActionSpan] = field(default_factory=list)
+    performer: PerformerChoice | None = None
 
 
 @dataclass
@@ -123,17 +149,19 @@ _INDEX = {"type": "integer", "minimum": 0}
 JSON_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://vidstyle.invalid/annotations/schema.json",
-    "title": "vidstyle annotations (transition frames, action segments)",
+    "title": "vidstyle annotations (transition frames, action segments, performer)",
     "description": "0-based decoded frame indices; segments half-open [start, end); videos tied to the "
-                   "sha256 of the file and its decoded frame count. Rules JSON Schema cannot say (frames "
-                   "and segments inside the video, no overlapping segments, actions among the classes, "
-                   "one mark per frame) are checked by vidstyle.formats.annotations.",
+                   "sha256 of the file and its decoded frame count; performer: a frame and a pixel of the "
+                   "upright frame in the input video's pixels (schema_version 2; version 1 files have "
+                   "none). Rules JSON Schema cannot say (frames, segments and the performer's frame inside "
+                   "the video, no overlapping segments, actions among the classes, one mark per frame) are "
+                   "checked by vidstyle.formats.annotations.",
     "type": "object",
     "required": ["kind", "schema_version", "revision", "classes", "videos"],
     "additionalProperties": False,
     "properties": {
         "kind": {"const": KIND},
-        "schema_version": {"const": SCHEMA_VERSION},
+        "schema_version": {"enum": list(VERSIONS)},
         "revision": _INDEX,
         "classes": {"type": "array", "items": _NAME, "uniqueItems": True},
         "videos": {
@@ -181,10 +209,20 @@ JSON_SCHEMA: dict[str, Any] = {
                                            "action": _NAME},
                         },
                     },
+                    "performer": {
+                        "type": "object",
+                        "required": ["frame", "x", "y"],
+                        "additionalProperties": False,
+                        "properties": {"frame": _INDEX, "x": {"type": "number", "minimum": 0},
+                                       "y": {"type": "number", "minimum": 0}},
+                    },
                 },
             },
         },
     },
+    # version 1 (before the performer choice) has no performer
+    "if": {"properties": {"schema_version": {"const": 1}}},
+    "then": {"properties": {"videos": {"items": {"not": {"required": ["performer"]}}}}},
 }
 
 
@@ -203,7 +241,7 @@ def file_sha256(path: str | os.PathLike, chunk: int = 1 << 20) -> str:
 
 def from_document(doc: Any, path: str | os.PathLike | None = None) -> Annotations:
     """Validate a parsed JSON document; :class:`FormatError` (naming ``path`` and the field) otherwise."""
-    check_header(doc, path, KIND, (SCHEMA_VERSION,))
+    version = check_header(doc, path, KIND, VERSIONS)
     f = Fields(doc, path)
     _no_extra(f, {"kind", "schema_version", "revision", "classes", "videos"})
     revision = f.int("revision", min=0)
@@ -213,7 +251,8 @@ def from_document(doc: Any, path: str | os.PathLike | None = None) -> Annotation
     seen_sha: set[str] = set()
     for i, v in enumerate(f.list("videos")):
         vf = Fields(v, path, f"videos[{i}]")
-        _no_extra(vf, {"path", "sha256", "frames", "fps", "transitions", "segments"})
+        _no_extra(vf, {"path", "sha256", "frames", "fps", "transitions", "segments"}
+                  | ({"performer"} if version >= 2 else set()))
         vpath = vf.str("path", nonempty=True)
         sha = vf.str("sha256")
         if not _SHA.match(sha):
@@ -254,7 +293,13 @@ def from_document(doc: Any, path: str | os.PathLike | None = None) -> Annotation
             if segments[b].start < segments[a].end:
                 raise FormatError(path, f"videos[{i}].segments[{b}]",
                                   f"overlaps segments[{a}] ({segments[a].start}..{segments[a].end})")
-        videos.append(VideoAnnotations(vpath, sha, frames, fps, transitions, segments))
+        performer = None
+        if vf.has("performer"):
+            pf = Fields(vf.get("performer"), path, vf.name("performer"))
+            _no_extra(pf, {"frame", "x", "y"})
+            performer = PerformerChoice(pf.int("frame", min=0, max=frames - 1), pf.number("x", min=0),
+                                        pf.number("y", min=0))
+        videos.append(VideoAnnotations(vpath, sha, frames, fps, transitions, segments, performer))
     return Annotations(classes, videos, revision)
 
 
@@ -297,6 +342,8 @@ def to_document(ann: Annotations) -> dict[str, Any]:
                 ],
                 "segments": [{"start": int(s.start), "end": int(s.end), "action": s.action}
                              for s in sorted(v.segments, key=lambda s: s.start)],
+                **({"performer": {"frame": int(v.performer.frame), "x": float(v.performer.x),
+                                  "y": float(v.performer.y)}} if v.performer is not None else {}),
             }
             for v in ann.videos
         ],
@@ -372,3 +419,14 @@ def check_video(video: VideoAnnotations, video_path: str | os.PathLike, frames: 
     if frames != video.frames:
         raise FormatError(where, "frames", f"{video_path} decodes to {frames} frames, the annotations "
                                            f"say {video.frames}")
+
+
+def check_performer(video: VideoAnnotations, width: int, height: int,
+                    where: str | os.PathLike | None = None) -> PerformerChoice | None:
+    """``video``'s performer choice, refused when its pixel lies outside the (upright) ``width`` x ``height``
+    frame of the video it is used on (the file itself does not know the size); None when there is none."""
+    p = video.performer
+    if p is not None and not (p.x <= width - 0.5 and p.y <= height - 0.5):
+        raise FormatError(where, "performer", f"pixel ({p.x:g}, {p.y:g}) is outside {video.path}'s "
+                                              f"{width}x{height} frame")
+    return p

@@ -11,7 +11,9 @@ people in view they jump between them. :class:`PerformerTracker` turns such a ba
 2. **The performer** is chosen in the first frame where anyone is found: by default the most prominent
    person, i.e. the largest box area times mean keypoint confidence (the person nearest the camera and
    clearly seen); ``person=(x, y)`` picks the person whose box contains that pixel (the nearest box
-   centre if none does).
+   centre if none does). A choice made at a known frame (``vidstyle annotate``'s performer: a frame and a
+   pixel) is made there instead: :meth:`PerformerTracker.follow` chooses at that frame, then follows
+   forward to the later frames and, from the same state, backward to the earlier ones.
 3. **Following**: each frame, the backend first runs on the whole frame; when the person it returns
    overlaps the performer's last box (IoU >= ``min_iou``) with a matching appearance (torso colour
    within ``max_appearance``), that is the pose (so with one person in view the poses are exactly the
@@ -29,8 +31,9 @@ and to report nobody found as viewpoint ``"unknown"`` or all scores 0.
 
 from __future__ import annotations
 
+import copy
 import logging
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -309,3 +312,30 @@ class PerformerTracker:
     def track(self, frames: Iterable[tuple[int, np.ndarray]]) -> Iterator[TrackedFrame]:
         for index, frame in frames:
             yield self.step(frame, index)
+
+    def follow(self, read: Callable[[int], np.ndarray], frames: list[int],
+               start: int | None = None) -> list[TrackedFrame]:
+        """The performer in each of ``frames`` (``read(i)``: frame ``i``), in the order of ``frames``.
+
+        ``start`` None: the frames in their order (:meth:`track`: the choice at the first with people).
+        ``start`` = a frame index (one of ``frames`` or not): the choice (``person``) is made at that frame,
+        then the performer is followed forward over the later frames and, from the state right after the
+        choice (last box, torso appearance), backward over the earlier ones in descending order: each frame
+        continues from its neighbour nearer ``start``, which is symmetric in time. When nobody is found at
+        ``start``, the frames are tracked in order as with ``start`` None (logged)."""
+        if start is None:
+            return [self.step(read(i), i) for i in frames]
+        if self.box is not None or self.look is not None:
+            raise ValueError("follow(start=...) needs a tracker that has not chosen yet")
+        first = self.step(read(start), start)
+        if first.pose is None:
+            log.warning("frame %d: nobody found where the performer was chosen; choosing at the first frame "
+                        "with people instead", start)
+            return [self.step(read(i), i) for i in frames]
+        back = copy.copy(self)  # the state after the choice; step() rebinds box and look, never mutates them
+        out = {start: first}
+        for i in sorted(f for f in frames if f > start):
+            out[i] = self.step(read(i), i)
+        for i in sorted((f for f in frames if f < start), reverse=True):
+            out[i] = back.step(read(i), i)
+        return [out[i] for i in frames]

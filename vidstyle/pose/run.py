@@ -3,6 +3,7 @@ worker opening its own :class:`vidstyle.video.VideoReader`: memory stays bounded
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,6 +13,8 @@ import numpy as np
 from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame, Poses
 from .interfaces import MODEL_BACKENDS, PoseBackend, backend_factory, check_backend
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -23,6 +26,7 @@ class _Chunk:
     scales: tuple[float, ...] = (1.0,)
     track: bool = False
     person: tuple[float, float] | None = None
+    person_frame: int | None = None
 
 #: backends followed through the video by default (single-person estimators run on real footage, where
 #: other people may be in view); the pictorial structures run on the whole frame unless asked
@@ -67,16 +71,16 @@ def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
             person = ((chunk.person[0] + 0.5) * scale - 0.5, (chunk.person[1] + 0.5) * scale - 0.5)
         tracker = PerformerTracker(est, person=person)
     with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
-        bg = video_background(reader) if est.uses_background else None
-        for i in chunk.frames:
-            frame = np.asarray(reader.frame(i))
-            if tracker is not None:
-                t = tracker.step(frame, i)
-                pf = t.pose if t.pose is not None else PoseFrame.none(i, t.missing or "performer not found")
-            else:
-                pf = est.estimate(frame, i, background=bg)
+        if tracker is not None:
+            tracked = tracker.follow(lambda i: np.asarray(reader.frame(i)), chunk.frames, chunk.person_frame)
+            poses = (t.pose if t.pose is not None else PoseFrame.none(t.index, t.missing or "performer not found")
+                     for t in tracked)
+        else:
+            bg = video_background(reader) if est.uses_background else None
+            poses = (est.estimate(np.asarray(reader.frame(i)), i, background=bg) for i in chunk.frames)
+        for pf in poses:
             if pf.found:
-                pf.points = to_input_pixels(pf.points, (frame.shape[1], frame.shape[0]), in_size)
+                pf.points = to_input_pixels(pf.points, reader.size, in_size)
                 pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
             out.append(pf)
     est.close()
@@ -193,16 +197,19 @@ def default_backend(model_path) -> str:
 def estimate_video(video: str | Path, backend: str | None = None, model_path: str | Path | None = None,
                    frames: list[int] | None = None, jobs: int = -1, scheduler: str | None = None,
                    chunk_frames: int = 16, scales=None, track: bool | None = None,
-                   person: tuple[float, float] | None = None, smooth: bool = False) -> Poses:
+                   person: tuple[float, float] | None = None, smooth: bool = False,
+                   person_frame: int | None = None) -> Poses:
     """Poses of ``frames`` (default: all) of ``video`` (``vidstyle pose``); ``backend``: a name of
     :data:`vidstyle.pose.interfaces.BACKENDS` (default :func:`default_backend`; ``model_path``: the ``ps``
     backend's pose model file, default the shipped one, :func:`resolve_model`); ``scales``: zoom factors of the ps backend's multi-scale inference
     (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only). ``track`` (default: on for
     :data:`TRACKED_BACKENDS`): follow one performer through the frames
-    (:class:`vidstyle.pose.people.PerformerTracker`; ``person``: the one at that pixel of the first frame
-    with people, else the most prominent), in one worker since each frame continues from the last;
-    frames without the performer have no pose (a reason instead). ``smooth``: One-Euro filter the
-    keypoint tracks (:func:`smooth_poses`)."""
+    (:class:`vidstyle.pose.people.PerformerTracker`; ``person``: the one at that pixel of the input video
+    in the first frame with people, or in frame ``person_frame`` when given (chosen there, then followed
+    forward and backward from it: :meth:`~vidstyle.pose.people.PerformerTracker.follow`; the frame need
+    not be one of ``frames``), else the most prominent), in one worker since each frame continues from
+    the last; frames without the performer have no pose (a reason instead). ``smooth``: One-Euro filter
+    the keypoint tracks (:func:`smooth_poses`)."""
     from ..parallel import parallel_map
     from ..video import VideoReader
 
@@ -212,15 +219,20 @@ def estimate_video(video: str | Path, backend: str | None = None, model_path: st
     track = backend in TRACKED_BACKENDS if track is None else bool(track)
     if person is not None and not track:
         raise ParameterError("person", "choosing a person needs tracking (track=True)")
+    if person_frame is not None and person is None:
+        raise ParameterError("person_frame", "is the frame of a chosen person: give person as well")
     with VideoReader(video) as r:
         n = len(r)
         fps = r.fps
+    if person_frame is not None and not (isinstance(person_frame, (int, np.integer)) and 0 <= person_frame < n):
+        raise ParameterError("person_frame", f"{person_frame!r} is not a frame of the video (0..{n - 1})")
     frames = list(range(n)) if frames is None else frames
     if backend in MODEL_BACKENDS:  # fail early on a bad model file, before any worker starts
         _make_estimator(backend, str(model_path))
     size = len(frames) if track else max(1, min(chunk_frames, math.ceil(len(frames) / 2)))
     chunks = [_Chunk(str(video), frames[i:i + size], backend, None if model_path is None else str(model_path),
-                     scales, track, person) for i in range(0, len(frames), max(size, 1))]
+                     scales, track, person, None if person_frame is None else int(person_frame))
+              for i in range(0, len(frames), max(size, 1))]
     res = parallel_map(_run_chunk, chunks, jobs=1 if track else jobs, scheduler=None if track else scheduler,
                        description=f"pose ({backend})")
     params: dict = {"scales": list(scales)} if scales != (1.0,) else {}
@@ -228,6 +240,8 @@ def estimate_video(video: str | Path, backend: str | None = None, model_path: st
         params["tracked"] = True
         if person is not None:
             params["person"] = [float(person[0]), float(person[1])]
+        if person_frame is not None:
+            params["person_frame"] = int(person_frame)
     poses = Poses(str(video), backend, [pf for part in res for pf in part], params=params)
     if smooth:
         poses = smooth_poses(poses, fps if fps > 0 else 1.0)
@@ -239,6 +253,11 @@ def mark_frames(video: str | Path, annotations: str | Path, context: int = 0) ->
     """The frames of ``video``'s transition marks in an annotations file (``vidstyle annotate``; the video
     must be the annotated one: same sha256), with ``context`` frames either side of each (inside the
     video); :class:`InputError` when there are none."""
+    return _marks_of(video, annotations, context)[0]
+
+
+def _marks_of(video, annotations, context: int):
+    """(:func:`mark_frames`, the video's annotations entry, its upright ``(width, height)``)."""
     from ..formats.annotations import check_video, read_annotations
     from ..video import VideoReader
 
@@ -246,25 +265,50 @@ def mark_frames(video: str | Path, annotations: str | Path, context: int = 0) ->
         raise ParameterError("context", f"must be at least 0, got {context}")
     with VideoReader(video) as r:
         n = r.info.frames
+        size = (r.info.width, r.info.height)
     ann = read_annotations(annotations)
     entry = ann.video_for(video, annotations)
     check_video(entry, video, n, annotations)
     idx = sorted({t.frame + d for t in entry.transitions for d in range(-context, context + 1) if 0 <= t.frame + d < n})
     if not idx:
         raise InputError(f"{annotations}: no transition marks for {video}")
-    return idx
+    return idx, entry, size
 
 
 def estimate_marks(video: str | Path, annotations: str | Path, backend: str | None = None,
                    model_path: str | Path | None = None, context: int = 0, jobs: int = -1,
-                   scheduler: str | None = None, scales=None, track: bool = False,
+                   scheduler: str | None = None, scales=None, track: bool | None = None,
                    person: tuple[float, float] | None = None) -> Poses:
     """Poses of the frames of ``video``'s transition marks (:func:`mark_frames`; ``vidstyle pose
-    --annotations``), the frames AugMG matches; the other parameters as :func:`estimate_video`. The marks
-    are scattered frames, not a continuous video, so they are not followed by default (``track``): AugMG's
-    validated thresholds were chosen on whole-frame poses."""
+    --annotations``), the frames AugMG matches; the other parameters as :func:`estimate_video`.
+
+    The marks are scattered frames, not a continuous video, so without a performer choice they are not
+    followed (AugMG's validated thresholds were chosen on whole-frame poses). A choice turns following
+    on (``track`` None): ``person`` (a pixel of the input video, chosen in the first of these frames with
+    people), else the performer stored for this video in the annotations file (``vidstyle annotate``'s
+    "Choose performer": a frame and a pixel; chosen at that frame, then followed forward and backward
+    from it). ``track=False`` ignores a stored choice; ``track=True`` without one follows the most
+    prominent person. The choice used is logged."""
+    from ..formats.annotations import check_performer
+
     backend = default_backend(model_path) if backend is None else backend
     check_estimate_params(backend, model_path, scales)
-    idx = mark_frames(video, annotations, context)
+    idx, entry, size = _marks_of(video, annotations, context)
+    stored = check_performer(entry, *size, annotations)
+    person_frame = None
+    if person is not None:
+        track = True if track is None else track
+        if stored is not None:
+            log.info("performer: the person at pixel (%g, %g) given, not the one chosen in %s", *person, annotations)
+        else:
+            log.info("performer: the person at pixel (%g, %g) of the first marked frame with people", *person)
+    elif stored is not None and track is not False:
+        track, person, person_frame = True, (stored.x, stored.y), stored.frame
+        log.info("performer: the person at pixel (%g, %g) of frame %d, as chosen in %s", stored.x, stored.y,
+                 stored.frame, annotations)
+    elif stored is not None:
+        log.info("performer: the choice in %s is not used (not following the performer)", annotations)
+    elif track:
+        log.info("performer: the most prominent person (no choice in %s)", annotations)
     return estimate_video(video, backend, model_path, idx, jobs=jobs, scheduler=scheduler, scales=scales,
-                          track=track, person=person)
+                          track=bool(track), person=person, person_frame=person_frame)

@@ -1,14 +1,16 @@
 // vidstyle annotate: one page, no build step. Frames are fetched by decoded index from the server; the
-// page never turns a playback time into a frame number. Segments are stored half-open [start, end).
+// page never turns a playback time into a frame number. Segments are stored half-open [start, end). The
+// performer choice is a decoded frame and a pixel of the input video (upright, pixel centres at integers).
 "use strict";
 
 const TOKEN = document.querySelector('meta[name="vidstyle-token"]').content;
 const $ = (id) => document.getElementById(id);
+const PERFORMER = "#ff3df2"; // the performer choice's colour (ring on the frame, diamond on the timeline)
 const S = {
   videos: [], vid: null, frame: 0, frames: {}, timestamps: {}, overlays: {},
   revision: 0, classes: [], marks: {}, action: 0, pending: null,
   undo: [], redo: [], changes: 0, savedChanges: 0, saving: false, conflict: false,
-  playing: false, saveTimer: null,
+  playing: false, saveTimer: null, picking: false,
 };
 window.vidstyle = S; // for tests and the curious
 
@@ -44,7 +46,9 @@ async function loadAnnotations() {
   S.revision = a.revision;
   S.classes = a.classes;
   S.marks = {};
-  for (const v of a.videos) S.marks[v.id] = { transitions: v.transitions, segments: v.segments };
+  for (const v of a.videos) {
+    S.marks[v.id] = { transitions: v.transitions, segments: v.segments, performer: v.performer || null };
+  }
   S.undo = []; S.redo = []; S.changes = S.savedChanges = 0; S.conflict = false;
   renderClasses();
   setStatus();
@@ -59,6 +63,7 @@ async function selectVideo(id) {
     S.overlays[id] = (await api("GET", `/api/videos/${id}/overlays`)).data || {};
   }
   S.pending = null;
+  S.picking = false;
   go(S.frames[id] || 0);
 }
 
@@ -196,6 +201,29 @@ function decideCandidate(c, status) {
   });
 }
 
+// performer: P (or the button) arms pick mode; the next click on the frame stores the frame shown and the
+// clicked pixel of the input video. The image is the upright frame scaled to the stage, so the click is
+// scaled back by the video's size over the image's displayed size; a click inside pixel k gives k.
+function togglePick() { S.picking = !S.picking; render(); }
+
+function pickPerformer(e) {
+  if (!S.picking || !S.vid) return;
+  const img = $("frame"), r = img.getBoundingClientRect();
+  if (img.dataset.video !== S.vid.id || img.dataset.frame !== String(S.frame) || !r.width || !r.height) {
+    flash("wait for the frame to load, then click the performer"); return;
+  }
+  const px = (v, lo, size, n) => Math.min(n - 1, Math.max(0, Math.floor(((v - lo) / size) * n)));
+  const p = { frame: S.frame, x: px(e.clientX, r.left, r.width, S.vid.width),
+              y: px(e.clientY, r.top, r.height, S.vid.height) };
+  S.picking = false;
+  change(() => { marks().performer = p; });
+  render(); // also when the same pixel was chosen again (no change): pick mode ends
+}
+
+function clearPerformer() { S.picking = false; change(() => { marks().performer = null; }); render(); }
+
+$("frame").addEventListener("click", pickPerformer);
+
 // ------------------------------------------------------------------ saving
 async function save() {
   clearTimeout(S.saveTimer);
@@ -203,7 +231,8 @@ async function save() {
   S.saving = true; setStatus();
   const at = S.changes;
   const body = { revision: S.revision, classes: S.classes,
-                 videos: Object.entries(S.marks).map(([id, m]) => ({ id, transitions: m.transitions, segments: m.segments })) };
+                 videos: Object.entries(S.marks).map(([id, m]) => ({ id, transitions: m.transitions, segments: m.segments,
+                                                                     performer: m.performer || null })) };
   let r;
   try { r = await api("PUT", "/api/annotations", body); } catch (e) { r = { status: 0, data: { error: String(e) } }; }
   S.saving = false;
@@ -248,7 +277,9 @@ $("import-file").addEventListener("change", async () => {
   if (!r.ok) { flash((r.data && r.data.error) || `import failed (${r.status})`); return; }
   change(() => {
     S.classes = r.data.classes;
-    S.marks[r.data.video] = { transitions: r.data.transitions, segments: r.data.segments };
+    // an import brings marks, not a performer choice: the current one is kept
+    S.marks[r.data.video] = { transitions: r.data.transitions, segments: r.data.segments,
+                              performer: S.marks[r.data.video].performer || null };
   });
   renderClasses();
 });
@@ -260,7 +291,11 @@ document.addEventListener("keydown", (e) => {
   const k = e.key;
   const ctrl = e.ctrlKey || e.metaKey;
   if (ctrl && (k === "s" || k === "S")) { e.preventDefault(); save(); return; }
-  if (k === "Escape") { $("help").hidden = true; $("goto-form").hidden = true; return; }
+  if (k === "Escape") {
+    $("help").hidden = true; $("goto-form").hidden = true;
+    if (S.picking) { S.picking = false; render(); }
+    return;
+  }
   if (typing(e)) return;
   if (ctrl && (k === "z" || k === "Z")) { e.preventDefault(); if (e.shiftKey) redo(); else undo(); return; }
   if (ctrl && (k === "y" || k === "Y")) { e.preventDefault(); redo(); return; }
@@ -279,6 +314,7 @@ document.addEventListener("keydown", (e) => {
     case "t": case "T": markTransition(); break;
     case "[": startSegment(); break;
     case "]": endSegment(); break;
+    case "p": case "P": togglePick(); break;
     case "Delete": case "Backspace": removeHere(); break;
     case "?": $("help").hidden = !$("help").hidden; break;
     default:
@@ -306,6 +342,9 @@ $("goto-form").addEventListener("submit", (e) => {
 $("video").addEventListener("change", () => { selectVideo($("video").value); $("video").blur(); });
 $("save").addEventListener("click", () => save());
 $("help-button").addEventListener("click", () => { $("help").hidden = !$("help").hidden; });
+$("performer-pick").addEventListener("click", () => { togglePick(); $("performer-pick").blur(); });
+$("performer-clear").addEventListener("click", () => { clearPerformer(); $("performer-clear").blur(); });
+$("performer-info").addEventListener("click", () => { const p = marks().performer; if (p) go(p.frame); });
 $("t-status").addEventListener("click", () => change(() => {
   const t = transitionAt(S.frame); if (t) t.status = t.status === "accepted" ? "discarded" : "accepted";
 }));
@@ -355,6 +394,7 @@ function render() {
   if (!S.vid) return;
   renderInfo();
   $("pending").textContent = S.pending === null ? "" : `segment from ${S.pending} (] ends it, action ${actionName()})`;
+  renderPerformer();
   const m = marks();
   const segs = $("segments"); segs.innerHTML = "";
   for (const s of m.segments) {
@@ -383,6 +423,20 @@ function render() {
   renderCandidates(t);
   drawTimeline();
   drawOverlay();
+}
+
+function renderPerformer() {
+  const p = marks().performer;
+  const info = $("performer-info");
+  info.textContent = p ? `frame ${p.frame}, pixel (${+p.x.toFixed(1)}, ${+p.y.toFixed(1)})`
+    : "none chosen (pose follows the most prominent person)";
+  info.className = p ? "chosen" + (p.frame === S.frame ? " here" : "") : "";
+  info.title = p ? "go to that frame" : "";
+  $("performer-clear").disabled = !p;
+  $("performer-pick").className = S.picking ? "active" : "";
+  // the hint stays in the side panel: a longer header could wrap and move the frame under the mouse
+  $("performer-pick").textContent = S.picking ? "Click the performer on the frame (Esc cancels)" : "Choose performer";
+  $("stage").classList.toggle("picking", S.picking);
 }
 
 function renderCandidates(t) {
@@ -437,12 +491,18 @@ function drawTimeline() {
   const step = [1, 2, 5, 10, 25, 50, 100, 250, 500, 1000, 2500, 5000, 10000].find((k) => (k / n) * w >= 60) || 25000;
   g.fillStyle = "#aaa"; g.font = "10px sans-serif";   // frame ticks (0-based decoded indices)
   for (let f = 0; f < n; f += step) { g.fillRect(x(f), h - 6, 1, 6); g.fillText(String(f), x(f) + 2, h - 1); }
+  const perf = marks().performer;
+  if (perf) {                                // the performer choice: a diamond on row 3
+    const c = x(perf.frame + 0.5);
+    g.fillStyle = PERFORMER;
+    g.beginPath(); g.moveTo(c, 44); g.lineTo(c + 5, 50); g.lineTo(c, 56); g.lineTo(c - 5, 50); g.fill();
+  }
   g.fillStyle = "#ff4d4d"; g.globalAlpha = 0.7;  // the current frame
   g.fillRect(x(S.frame), 0, Math.max(2, x(S.frame + 1) - x(S.frame)), h - 8);
   g.globalAlpha = 1;
   const leg = $("legend");
   leg.textContent = `timeline: ${ov.recognized ? "top row recognised (" + ov.recognized.file + "), " : ""}` +
-    "middle row your segments, ▲ transition marks (grey: discarded), red line: this frame";
+    "middle row your segments, ▲ transition marks (grey: discarded), ◆ performer chosen, red line: this frame";
 }
 
 function fitFrame() {            // scale the frame to the stage, keeping its aspect ratio
@@ -462,16 +522,33 @@ function drawOverlay() {
   const g = cv.getContext("2d");
   g.clearRect(0, 0, cv.width, cv.height);
   const shown = img.dataset.frame;
-  const pose = ov.poses && shown !== undefined && ov.poses.frames[shown];
-  if (!pose || !img.naturalWidth) return;
+  if (!img.naturalWidth || shown === undefined || !S.vid || img.dataset.video !== S.vid.id) return;
   const sx = cv.width / img.naturalWidth, sy = cv.height / img.naturalHeight;
-  g.lineWidth = 3; g.strokeStyle = "#39e639"; g.fillStyle = "#ffe14d";
-  for (const [a, b] of ov.poses.edges) {
-    const p = pose.points[a], q = pose.points[b];
-    g.beginPath(); g.moveTo(p[0] * sx, p[1] * sy); g.lineTo(q[0] * sx, q[1] * sy); g.stroke();
+  const pose = ov.poses && ov.poses.frames[shown];
+  if (pose) {
+    g.lineWidth = 3; g.strokeStyle = "#39e639"; g.fillStyle = "#ffe14d";
+    for (const [a, b] of ov.poses.edges) {
+      const p = pose.points[a], q = pose.points[b];
+      g.beginPath(); g.moveTo(p[0] * sx, p[1] * sy); g.lineTo(q[0] * sx, q[1] * sy); g.stroke();
+    }
+    for (const p of pose.points) { g.beginPath(); g.arc(p[0] * sx, p[1] * sy, 3.5, 0, 2 * Math.PI); g.fill(); }
+    if (pose.viewpoint) { g.font = "14px sans-serif"; g.fillText(pose.viewpoint, 6, cv.height - 8); }
   }
-  for (const p of pose.points) { g.beginPath(); g.arc(p[0] * sx, p[1] * sy, 3.5, 0, 2 * Math.PI); g.fill(); }
-  if (pose.viewpoint) { g.font = "14px sans-serif"; g.fillText(pose.viewpoint, 6, cv.height - 8); }
+  const perf = marks().performer;
+  if (perf && String(perf.frame) === shown) {  // the chosen pixel's centre (pixel centres at integers)
+    const cx = (perf.x + 0.5) * sx, cy = (perf.y + 0.5) * sy;
+    g.lineWidth = 5; g.strokeStyle = "#000";
+    g.beginPath(); g.arc(cx, cy, 10, 0, 2 * Math.PI); g.stroke();
+    g.lineWidth = 3; g.strokeStyle = PERFORMER;
+    g.beginPath(); g.arc(cx, cy, 10, 0, 2 * Math.PI); g.stroke();
+    g.beginPath(); g.moveTo(cx - 16, cy); g.lineTo(cx - 4, cy); g.moveTo(cx + 4, cy); g.lineTo(cx + 16, cy);
+    g.moveTo(cx, cy - 16); g.lineTo(cx, cy - 4); g.moveTo(cx, cy + 4); g.lineTo(cx, cy + 16); g.stroke();
+    g.font = "13px sans-serif"; g.fillStyle = PERFORMER;   // the label inside the frame, near the ring
+    const right = cx + 80 < cv.width;
+    g.textAlign = right ? "left" : "right";
+    g.fillText("performer", right ? cx + 13 : cx - 13, cy > 24 ? cy - 13 : cy + 24);
+    g.textAlign = "left";
+  }
 }
 
 $("timeline").addEventListener("click", (e) => {
