@@ -22,18 +22,14 @@ from sklearn.base import BaseEstimator
 
 from ..errors import InputError, ParameterError
 from . import defaults as D
-from .classifier import OvaOvoSVC, OvrSVC
+from .framebase import CLASSIFIERS, FrameRecognizerMixin, sample_per_class
 from .histograms import (NORMS, FrameFeaturizer, IdentityGrouping, WordGrouping, context_sum, frame_word_counts,
                          normalize_rows)
 from .io import VideoFeatures, load_features
-from .smoothing import METHODS as SMOOTHERS
-from .smoothing import duration_model, smooth_labels, transition_matrix
+from .smoothing import transition_matrix
 from .vocabulary import Vocabulary
 
 log = logging.getLogger(__name__)
-
-CLASSIFIERS = ("ova-ovo", "svc-ovr")
-
 
 def _as_features(x: VideoFeatures | str | Path) -> VideoFeatures:
     return x if isinstance(x, VideoFeatures) else load_features(x)
@@ -48,7 +44,7 @@ def load_many(paths: Sequence[str | Path], n_jobs: int | None = None) -> list[Vi
     return Parallel(n_jobs=n_jobs, prefer="threads")(delayed(load_features)(p) for p in paths)
 
 
-class ActionRecognizer(BaseEstimator):
+class ActionRecognizer(FrameRecognizerMixin, BaseEstimator):
     """Per-frame action recognizer with scikit-learn conventions.
 
     Parameters
@@ -140,15 +136,6 @@ class ActionRecognizer(BaseEstimator):
         if self.max_frames_per_class is not None and self.max_frames_per_class < 1:
             raise ParameterError("max_frames_per_class", f"must be >= 1 (or None for all), got {self.max_frames_per_class}")
 
-    def _check_prediction_params(self) -> None:
-        """Checks of the parameters :meth:`smooth` uses (they may be changed on a fitted model)."""
-        if self.smoothing not in SMOOTHERS:
-            raise ParameterError("smoothing", f"must be one of {', '.join(SMOOTHERS)}, got {self.smoothing!r}")
-        if self.smoothing_window < 1:
-            raise ParameterError("window", f"must be >= 1, got {self.smoothing_window}")
-        if not self.emission_weight > 0:
-            raise ParameterError("emission_weight", f"must be > 0, got {self.emission_weight}")
-
     @property
     def n_blocks(self) -> int:
         """Histogram blocks per frame: 1, or 2 with a coarse context."""
@@ -235,7 +222,7 @@ class ActionRecognizer(BaseEstimator):
         Hs = self.histograms_many(videos)
         H = sp.vstack(Hs).tocsr()
         rng = np.random.default_rng(self.random_state)
-        rows = _sample_per_class(yi, self.max_frames_per_class, rng)
+        rows = sample_per_class(yi, self.max_frames_per_class, rng)
 
         if self.grouping:
             self.grouping_ = WordGrouping(self.grouping_threshold, self.grouping_distribution, self.grouping_pooling)
@@ -246,10 +233,7 @@ class ActionRecognizer(BaseEstimator):
         n_comp = int(min(self.n_components, Xg.shape[0], Xg.shape[1]))
         self.pca_ = PCA(n_components=n_comp, random_state=self.random_state).fit(Xg)
         Z = self.pca_.transform(Xg)
-        if self.classifier == "ova-ovo":
-            self.clf_ = OvaOvoSVC(C=self.C, gamma=self.gamma, n_jobs=self.n_jobs).fit(Z, yi[rows])
-        else:
-            self.clf_ = OvrSVC(C=self.C, gamma=self.gamma).fit(Z, yi[rows])
+        self.fit_classifier(Z, yi[rows])
         self.n_train_frames_ = int(len(yi))
         self.n_fit_frames_ = int(len(rows))
         self.train_class_counts_ = {str(c): int((yi == i).sum()) for i, c in enumerate(self.classes_)}
@@ -259,22 +243,7 @@ class ActionRecognizer(BaseEstimator):
         )
         return self
 
-    def fit_durations(self, y: Sequence[Sequence[str]]):
-        """Learn ``durations_`` (the run lengths and class changes the ``duration`` smoother decodes with,
-        :func:`~vidstyle.recognition.smoothing.duration_model`) from per-frame label sequences (set B)."""
-        index = {str(c): i for i, c in enumerate(self.classes_)}
-        seqs = [np.array([index[str(c)] for c in lab], np.int64) for lab in y]
-        self.durations_ = duration_model(seqs, len(self.classes_))
-        return self
-
     # ------------------------------------------------------------- predict
-    def _scores_full(self, pred: np.ndarray, scores: np.ndarray, conf: np.ndarray):
-        """Map the classifier's class indices (classes seen in training) to ``classes_``."""
-        present = self.clf_.classes_.astype(np.int64)
-        full = np.zeros((scores.shape[0], len(self.classes_)))
-        full[:, present] = scores
-        return present[pred], full, conf
-
     def frame_scores(self, H: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Unsmoothed per-frame output of context histograms ``H`` (:meth:`histograms`):
         ``(raw, scores, confidence)`` with ``raw`` the class index into ``classes_`` per frame,
@@ -283,43 +252,16 @@ class ActionRecognizer(BaseEstimator):
         together are :meth:`predict_histograms` (a validation search scores once and smooths many ways)."""
         if H.shape[0] == 0:
             return np.zeros(0, np.int64), np.zeros((0, len(self.classes_))), np.zeros(0)
-        return self._scores_full(*self.clf_.predict_with_scores(self.embed(H)))
+        return self.classify(self.embed(H))
 
     def predict_histograms(self, H: sp.spmatrix) -> dict[str, np.ndarray]:
         """:meth:`smooth` of :meth:`frame_scores`: see :meth:`predict_video`."""
         return self.smooth(*self.frame_scores(H))
 
-    def smooth(self, raw: np.ndarray, scores: np.ndarray, conf: np.ndarray) -> dict[str, np.ndarray]:
-        """Smooth :meth:`frame_scores` output with the recognizer's ``smoothing``, ``smoothing_window``
-        and ``emission_weight`` (and its learned ``transitions_`` / ``durations_``); returns the
-        :meth:`predict_video` dict (``raw``, ``scores``, ``confidence``, ``smoothed``, ``smoothed_confidence``)."""
-        self._check_prediction_params()
-        if len(raw) == 0:
-            e = np.zeros(0, np.int64)
-            return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
-                    "smoothed": e, "smoothed_confidence": np.zeros(0)}
-        sm, sconf = smooth_labels(
-            raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing,
-            transitions=getattr(self, "transitions_", None), emission_weight=self.emission_weight,
-            durations=getattr(self, "durations_", None),
-        )
-        return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}
-
     def predict_video(self, video) -> dict[str, np.ndarray]:
         """Class indices into ``classes_`` per frame: ``raw``, ``smoothed``, with ``confidence``,
         ``smoothed_confidence`` and ``scores`` (n_frames, n_classes)."""
         return self.predict_histograms(self.histograms(video))
-
-    def predict(self, video) -> np.ndarray:
-        """Raw per-frame class names of one video."""
-        return self.classes_[self.predict_video(video)["raw"]]
-
-    def predict_many(self, videos: Sequence) -> list[dict[str, np.ndarray]]:
-        from joblib import Parallel, delayed
-
-        if len(videos) <= 1 or self.n_jobs in (None, 1):
-            return [self.predict_video(v) for v in videos]
-        return Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(self.predict_video)(v) for v in videos)
 
     # ---------------------------------------------------------------- info
     def summary(self) -> dict[str, Any]:
@@ -352,18 +294,6 @@ def mirrored_features(v: VideoFeatures) -> VideoFeatures | None:
         return None
     return VideoFeatures(mirror_descriptors(v.descriptors), v.frame_index, v.n_frames,
                          video=f"mirror:{v.video}", path=f"mirror:{v.path}", variant=v.variant)
-
-
-def _sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) -> np.ndarray:
-    if cap is None:
-        return np.arange(len(y))
-    rows = []
-    for c in np.unique(y):
-        idx = np.flatnonzero(y == c)
-        if idx.size > cap:
-            idx = np.sort(rng.choice(idx, cap, replace=False))
-        rows.append(idx)
-    return np.sort(np.concatenate(rows))
 
 
 # ------------------------------------------------------------------- files

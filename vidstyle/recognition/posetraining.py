@@ -1,0 +1,171 @@
+"""Training pose tracks from labelled 3D motion seen from any camera (issue 28, item 2).
+
+A :class:`LabelledMotion` is the 15 keypoints of a mocap take in 3D at the recognizer's working rate
+with a label per frame (:func:`labelled_motion` reads a BVH and its per-frame labels file; the labels are
+at the mocap's rate and are subsampled with the keypoints). :func:`virtual_views` projects each through
+cameras drawn by :func:`sample_cameras` — azimuth about the performer's median facing direction,
+elevation, distance (in body heights) and vertical field of view, uniform over the given ranges; one
+static camera per view, looking at the centre of the take — and corrupts the 2D keypoints with
+:class:`KeypointNoise` so that training tracks look like a pose estimator's.
+
+Projection is :meth:`vidstyle.render.camera.Camera.project` (numpy only); a keypoint behind the camera
+is missing (NaN).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+from ..render.camera import Camera, circular_median, intrinsics, look_at_rotation
+from .posefeatures import NECK, PELVIS, PoseTrack
+
+log = logging.getLogger(__name__)
+
+UP = np.array([0.0, 1.0, 0.0])
+
+
+@dataclass
+class LabelledMotion:
+    """``points`` (F, 15, 3) world keypoints (+Y up) at ``fps``, ``labels`` one class name per frame,
+    ``facing`` the performer's median facing angle (radians about +Y, 0 = +Z)."""
+
+    points: np.ndarray
+    labels: list[str]
+    fps: float
+    facing: float = 0.0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        self.points = np.asarray(self.points, dtype=np.float64)
+        if len(self.labels) != self.points.shape[0]:
+            raise InputError(f"{self.name or 'motion'}: {len(self.labels)} labels for {self.points.shape[0]} frames")
+
+    @property
+    def height(self) -> float:
+        """Body height (world units): the largest vertical extent of the keypoints in a frame."""
+        h = self.points[:, :, 1].max(axis=1) - self.points[:, :, 1].min(axis=1)
+        return float(np.nanmax(h)) if h.size else 1.0
+
+
+def labelled_motion(bvh: str | Path, labels: str | Path, fps: float, phase: int = 0) -> LabelledMotion:
+    """The keypoints and labels of a BVH take with a per-frame labels file at the mocap's rate
+    (``vidstyle.labels``, e.g. the demo's ``mocap/<take>.labels.json``), resampled to ``fps`` by taking
+    every ``mocap_fps / fps``-th frame from ``phase``."""
+    from ..formats.labels import read_labels
+    from ..mocap import read_bvh
+    from ..mocap.keypoints import keypoint_positions
+
+    motion = read_bvh(bvh)
+    track = read_labels(labels)
+    if len(track.labels) != motion.n_frames:
+        raise InputError(f"{labels}: {len(track.labels)} labels for the {motion.n_frames} frames of {bvh}")
+    src_fps = float(track.fps or motion.fps)
+    step = src_fps / float(fps)
+    idx = np.round(np.arange(phase, motion.n_frames, step)).astype(int)
+    idx = idx[idx < motion.n_frames]
+    pts = keypoint_positions(motion)[idx]
+    facing = circular_median(motion.facing_angles())
+    return LabelledMotion(pts, [track.labels[i] for i in idx], float(fps), facing, Path(bvh).stem)
+
+
+def sample_cameras(rng: np.random.Generator, n: int, azimuth=(0.0, 360.0), elevation=(-10.0, 45.0),
+                   distance=(2.5, 6.0), vfov=(30.0, 60.0)) -> list[dict]:
+    """``n`` camera draws: ``azimuth_deg``, ``elevation_deg``, ``distance`` (body heights), ``vfov_deg``,
+    each uniform over its range."""
+    for name, r in (("azimuth", azimuth), ("elevation", elevation), ("distance", distance), ("vfov", vfov)):
+        if len(r) != 2 or r[0] > r[1]:
+            raise ParameterError(name, f"must be a (low, high) range, got {r}")
+    if not -89 < elevation[0] <= elevation[1] < 89 or distance[0] <= 0:
+        raise ParameterError("elevation", "elevations must lie in (-89, 89) degrees and distances be > 0")
+    return [{"azimuth_deg": float(rng.uniform(*azimuth)), "elevation_deg": float(rng.uniform(*elevation)),
+             "distance": float(rng.uniform(*distance)), "vfov_deg": float(rng.uniform(*vfov))} for _ in range(n)]
+
+
+def camera_for(motion: LabelledMotion, azimuth_deg: float, elevation_deg: float, distance: float,
+               vfov_deg: float = 40.0, size: tuple[int, int] = (160, 120)) -> Camera:
+    """A static camera at ``azimuth_deg`` about the performer's facing (0 = in front, +90 = their left)
+    and ``elevation_deg`` (positive = looking down), ``distance`` body heights from the centre of the
+    take's keypoints, looking at it (the conventions of :class:`~vidstyle.render.camera.Camera`)."""
+    pts = motion.points.reshape(-1, 3)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    target = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
+    ang = motion.facing + math.radians(azimuth_deg)
+    el = math.radians(elevation_deg)
+    back = math.cos(el) * np.array([math.sin(ang), 0.0, math.cos(ang)]) + math.sin(el) * UP
+    eye = target + distance * motion.height * back
+    R = look_at_rotation(eye, target)
+    return Camera(intrinsics(size, vfov_deg), R, -R @ eye, azimuth_deg, elevation_deg, size,
+                  math.degrees(motion.facing), {"target": target, "distance": distance * motion.height})
+
+
+def project_keypoints(points: np.ndarray, camera: Camera) -> np.ndarray:
+    """(F, 15, 2) pixel coordinates of world keypoints (F, 15, 3); NaN where behind the camera."""
+    uv, z = camera.project(points)
+    uv = np.array(uv, dtype=np.float64)
+    uv[~(z > 1e-6)] = np.nan
+    return uv
+
+
+@dataclass
+class KeypointNoise:
+    """Corruption of projected keypoints, in units of the track's torso length (so it does not depend on
+    the image size): Gaussian noise of ``sigma`` per coordinate; ``outlier_rate`` of the keypoints
+    displaced by a Gaussian of ``outlier_sigma`` instead (a limb found in the wrong place); frames dropped
+    (the performer not found) in runs that start with probability ``dropout_rate / dropout_length`` per
+    frame and last a geometric number of frames with mean ``dropout_length``."""
+
+    sigma: float = 0.05
+    outlier_rate: float = 0.05
+    outlier_sigma: float = 0.5
+    dropout_rate: float = 0.02
+    dropout_length: float = 4.0
+    extra: dict = field(default_factory=dict)
+
+    def apply(self, xy: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        xy = np.array(xy, dtype=np.float64)
+        F = xy.shape[0]
+        if F == 0:
+            return xy
+        torso = np.nanmedian(np.linalg.norm(xy[:, NECK] - xy[:, PELVIS], axis=-1))
+        if not np.isfinite(torso) or torso <= 0:
+            return xy
+        noise = rng.normal(0.0, self.sigma, xy.shape)
+        out = rng.random(xy.shape[:2]) < self.outlier_rate
+        noise[out] = rng.normal(0.0, self.outlier_sigma, (int(out.sum()), 2))
+        xy += noise * torso
+        if self.dropout_rate > 0:
+            p_start = min(1.0, self.dropout_rate / max(self.dropout_length, 1.0))
+            starts = np.flatnonzero(rng.random(F) < p_start)
+            for s in starts:
+                n = int(rng.geometric(1.0 / max(self.dropout_length, 1.0)))
+                xy[s:s + n] = np.nan
+        return xy
+
+    def to_dict(self) -> dict:
+        return {"sigma": self.sigma, "outlier_rate": self.outlier_rate, "outlier_sigma": self.outlier_sigma,
+                "dropout_rate": self.dropout_rate, "dropout_length": self.dropout_length, **self.extra}
+
+
+def virtual_views(motions: Sequence[LabelledMotion], n_views: int, rng: np.random.Generator | int,
+                  noise: KeypointNoise | None = None, **camera_ranges) -> tuple[list[PoseTrack], list[list[str]]]:
+    """``n_views`` projections of every motion through cameras of :func:`sample_cameras`
+    (``camera_ranges``: its ranges), corrupted by ``noise`` (None = exact 2D). Returns tracks and labels."""
+    rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
+    tracks, labels = [], []
+    for m in motions:
+        for cam in sample_cameras(rng, n_views, **camera_ranges):
+            c = camera_for(m, **cam)
+            xy = project_keypoints(m.points, c)
+            if noise is not None:
+                xy = noise.apply(xy, rng)
+            tracks.append(PoseTrack(xy, m.fps, source=f"{m.name}@az{cam['azimuth_deg']:.0f},el{cam['elevation_deg']:.0f}",
+                                    extra=cam))
+            labels.append(list(m.labels))
+    return tracks, labels
