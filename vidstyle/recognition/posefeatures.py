@@ -108,14 +108,30 @@ def torso_scale(xy: np.ndarray, known: np.ndarray, window: int) -> np.ndarray:
     ``window`` frames (NaN when none is known)."""
     F = xy.shape[0]
     torso = np.linalg.norm(xy[:, NECK] - xy[:, PELVIS], axis=-1)
-    torso = np.where(known, torso, np.nan)
+    torso = np.where(known & (torso > 0), torso, np.nan)
+    if F == 0:
+        return torso
+    padded = np.concatenate([np.full(window, np.nan), torso, np.full(window, np.nan)])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1)
     out = np.full(F, np.nan)
-    for t in range(F):
-        w = torso[max(0, t - window): t + window + 1]
-        w = w[np.isfinite(w) & (w > 0)]
-        if w.size:
-            out[t] = np.median(w)
+    ok = np.isfinite(windows).any(axis=1)
+    if ok.any():
+        out[ok] = np.nanmedian(windows[ok], axis=1)
     return out
+
+
+def track_from_poses(poses, fps: float, n_frames: int | None = None) -> PoseTrack:
+    """The :class:`PoseTrack` of a :class:`~vidstyle.formats.poses.Poses` (``vidstyle pose`` output) whose
+    frames are the decoded frames of a video at ``fps``: one working frame per decoded frame from 0 to
+    ``n_frames - 1`` (default: the last frame with a pose); frames without a pose (absent from the file,
+    or ``points: null``) are missing (NaN)."""
+    last = max((f.frame for f in poses.frames), default=-1)
+    n = int(n_frames) if n_frames is not None else last + 1
+    xy = np.full((n, N_KEYPOINTS, 2), np.nan)
+    for f in poses.frames:
+        if f.found and f.frame < n:
+            xy[f.frame] = f.xy
+    return PoseTrack(xy, float(fps), np.arange(n), source=str(poses.video))
 
 
 class PoseFeaturizer:
