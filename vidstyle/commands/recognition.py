@@ -65,7 +65,12 @@ def train_recognizer(
         None, "--annotations",
         help="Annotations file(s) from `vidstyle annotate`: train on the action segments of your own videos "
              "(with their FEATURES files, or --features-dir holding <video stem>.npz). Unlabelled frames are left out."),
-    vocab: Path = typer.Option(..., "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A)."),
+    vocab: Optional[Path] = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A); required with --features sift3d."),
+    features_kind: str = typer.Option("sift3d", "--features", help="sift3d (3D SIFT words from FEATURES files, the default) | pose (2D pose sequences: trains on the mocap takes of --dataset's training performers, sets A and B of --split, seen from --views virtual cameras)."),
+    views: int = typer.Option(8, "--views", help="--features pose: virtual cameras per mocap take (azimuth 0-360, elevation -10..45 deg, 2.5-6 body heights)."),
+    noise_sigma: float = typer.Option(0.05, "--noise-sigma", help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
+    outlier_rate: float = typer.Option(0.05, "--outlier-rate", help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
+    dropout_rate: float = typer.Option(0.02, "--dropout-rate", help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
@@ -94,6 +99,14 @@ def train_recognizer(
     from ..recognition.recognizer import save_model
 
     t0 = time.perf_counter()
+    if features_kind == "pose":
+        _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
+                    max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations)
+        return
+    if features_kind != "sift3d":
+        raise InputError(f"--features: must be sift3d or pose, got {features_kind!r}")
+    if vocab is None:
+        raise InputError("train-recognizer: --vocab is required with --features sift3d")
     run = train(
         vocab, features or [], labels=labels or [], annotations=annotations or [], dataset=dataset,
         features_dir=features_dir, split=split, test_view=test_view, context=context,
@@ -111,6 +124,23 @@ def train_recognizer(
         onnx_path = out.with_suffix(".onnx")
         export_onnx(rec, onnx_path)
         log.info("wrote %s", onnx_path)
+
+
+def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
+                max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations):
+    from ..formats.dataset import read_dataset
+    from ..recognition.poserecognizer import save_pose_model
+    from ..recognition.posetraining import KeypointNoise, train_from_dataset
+
+    if dataset is None or features or annotations:
+        raise InputError("--features pose: give --dataset (its mocap takes and labels), not FEATURES or --annotations")
+    noise = KeypointNoise(sigma=noise_sigma, outlier_rate=outlier_rate, dropout_rate=dropout_rate)
+    params = {"classifier": classifier, "C": c, "max_frames_per_class": max_frames_per_class or None,
+              "smoothing_window": window, "smoothing": smoothing, "emission_weight": emission_weight,
+              "mirror": mirror, "n_jobs": jobs}
+    rec, extra = train_from_dataset(read_dataset(dataset), split, seed, test_view, views, noise, params)
+    header = save_pose_model(out, rec, extra["training"], {"split": extra["split"]})
+    log.info("wrote %s (pose recognizer, %d classes): %s", out, len(rec.classes_), header["summary"])
 
 
 def recognize(

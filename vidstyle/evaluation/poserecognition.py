@@ -30,7 +30,7 @@ from ..formats.dataset import Dataset
 from ..formats.labels import read_labels
 from ..recognition.posefeatures import NECK, PELVIS, PoseTrack, track_from_poses
 from ..recognition.poserecognizer import PoseRecognizer
-from ..recognition.posetraining import KeypointNoise, labelled_motion, virtual_views
+from ..recognition.posetraining import KeypointNoise, dataset_motions, virtual_views
 from ..recognition.splits import make_split
 from .recognition import score_videos
 
@@ -76,21 +76,6 @@ def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str]) -> dic
             "outlier_share": float((e >= 0.5).mean()) if e.size else None}
 
 
-def training_motions(dataset: Dataset, performers: list[str], fps: float, phases=(0,)) -> list:
-    """The labelled mocap takes of ``performers`` (each take once, whatever its number of videos)."""
-    seen, out = set(), []
-    for v in sorted(dataset.videos, key=lambda v: v.id):
-        bvh = v.raw.get("bvh")
-        if v.performer not in performers or not bvh or bvh in seen:
-            continue
-        seen.add(bvh)
-        for ph in phases:
-            out.append(labelled_motion(dataset.root / bvh, dataset.root / v.raw["bvh_labels"], fps, phase=ph))
-    if not out:
-        raise InputError(f"dataset: no mocap takes (bvh + bvh_labels) of the performers {performers}")
-    return out
-
-
 def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-performer", seed: int = 0,
                               test_dataset: Dataset | None = None, poses_dir: str | Path | None = None,
                               n_views: int = 8, noise: KeypointNoise | None = None,
@@ -106,7 +91,7 @@ def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-perfor
         ids, score_ds = split.test, (test_dataset if split.kind == "unseen-camera" else dataset)
     train_perf = sorted(set(split.vocab_performers) | set(split.train_performers))
     t0 = time.perf_counter()
-    motions = training_motions(dataset, train_perf, dataset.fps, phases)
+    motions = dataset_motions(dataset, train_perf, dataset.fps, phases)
     tracks, labels = virtual_views(motions, n_views, seed, noise)
     params = {"random_state": seed, "fps": dataset.fps, **(recognizer_params or {})}
     rec = PoseRecognizer(**params).fit(tracks, labels, classes=dataset.classes or None)

@@ -360,6 +360,8 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
     from ..formats.recognised import RecognisedLabels
 
     input = Path(input)
+    if header.get("input") == "pose":
+        return _recognize_poses(model, input, fps, model_path)
     if input.suffix.lower() == ".npz":
         feats = load_features(input)
         video = feats.video or str(input)
@@ -376,6 +378,31 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
         raw=[classes[i] for i in res["raw"]], raw_confidence=np.clip(np.round(res["confidence"], 4), 0, 1),
         smoothing=str(model.smoothing), smoothing_window=int(model.smoothing_window), model=str(model_path),
         features=str(input), extra={"emission_weight": model.emission_weight},
+    )
+
+
+def _recognize_poses(model, input: Path, fps: float | None, model_path):
+    """:func:`recognize_file` of a pose model: ``input`` is a ``poses.json`` (``vidstyle pose``) whose
+    frames are a video's decoded frames at ``fps`` (default: the model's working rate)."""
+    from ..formats.poses import read_poses
+    from ..formats.recognised import RecognisedLabels
+    from .posefeatures import track_from_poses
+
+    if input.suffix.lower() != ".json":
+        raise InputError(f"{input}: a pose model recognises poses.json files (run `vidstyle pose VIDEO --out P` first)")
+    fps = float(fps or model.fps)
+    if abs(fps - float(model.fps)) > 1e-6:
+        raise InputError(f"{input}: poses at {fps:g} fps, the model was trained at {model.fps:g} fps "
+                         "(resampling is not implemented yet)")
+    poses = read_poses(input)
+    res = model.predict_video(track_from_poses(poses, fps))
+    classes = [str(c) for c in model.classes_]
+    return RecognisedLabels(
+        labels=[classes[i] for i in res["smoothed"]], classes=tuple(classes), fps=fps, video=poses.video,
+        confidence=np.clip(np.round(res["smoothed_confidence"], 4), 0, 1),
+        raw=[classes[i] for i in res["raw"]], raw_confidence=np.clip(np.round(res["confidence"], 4), 0, 1),
+        smoothing=str(model.smoothing), smoothing_window=int(model.smoothing_window), model=str(model_path),
+        features=str(input), extra={"emission_weight": model.emission_weight, "input": "pose"},
     )
 
 

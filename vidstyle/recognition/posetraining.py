@@ -169,3 +169,39 @@ def virtual_views(motions: Sequence[LabelledMotion], n_views: int, rng: np.rando
                                     extra=cam))
             labels.append(list(m.labels))
     return tracks, labels
+
+
+def dataset_motions(dataset, performers: list[str], fps: float, phases=(0,)) -> list:
+    """The labelled mocap takes of ``performers`` (each take once, whatever its number of videos)."""
+    seen, out = set(), []
+    for v in sorted(dataset.videos, key=lambda v: v.id):
+        bvh = v.raw.get("bvh")
+        if v.performer not in performers or not bvh or bvh in seen:
+            continue
+        seen.add(bvh)
+        for ph in phases:
+            out.append(labelled_motion(dataset.root / bvh, dataset.root / v.raw["bvh_labels"], fps, phase=ph))
+    if not out:
+        raise InputError(f"dataset: no mocap takes (bvh + bvh_labels) of the performers {performers}")
+    return out
+
+
+def train_from_dataset(dataset, split: str = "unseen-performer", seed: int = 0, test_view: str | None = None,
+                       n_views: int = 8, noise: KeypointNoise | None = None, params: dict | None = None):
+    """``(PoseRecognizer, header extra)`` trained on the mocap takes of the training performers (sets A
+    and B) of ``split`` of a demo ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`), each seen
+    from ``n_views`` virtual cameras with ``noise``."""
+    from .pipeline import split_header
+    from .poserecognizer import PoseRecognizer
+    from .splits import make_split
+
+    kind = "unseen-performer" if split == "unseen-camera" else split
+    sp = make_split(dataset, kind, seed=seed, test_view=test_view)
+    performers = sorted(set(sp.vocab_performers) | set(sp.train_performers))
+    motions = dataset_motions(dataset, performers, dataset.fps)
+    tracks, labels = virtual_views(motions, n_views, seed, noise)
+    rec = PoseRecognizer(**{"random_state": seed, "fps": dataset.fps, **(params or {})})
+    rec.fit(tracks, labels, classes=dataset.classes or None)
+    training = {"performers": performers, "takes": [m.name for m in motions], "n_views": n_views,
+                "noise": noise.to_dict() if noise else None}
+    return rec, {"training": training, "split": split_header(sp, "A+B")}

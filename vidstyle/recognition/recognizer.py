@@ -332,13 +332,16 @@ def save_model(path: str | Path, model: ActionRecognizer, training_files: Sequen
 
 
 def load_model(path: str | Path) -> tuple[ActionRecognizer, dict]:
-    """``(recognizer, header)`` of a model file (:mod:`vidstyle.formats.recognizer_model`); warns when it was
-    saved with another scikit-learn."""
+    """``(recognizer, header)`` of a model file (:mod:`vidstyle.formats.recognizer_model`): an
+    :class:`ActionRecognizer`, or a :class:`~vidstyle.recognition.poserecognizer.PoseRecognizer` (header
+    ``"input": "pose"``); warns when it was saved with another scikit-learn."""
     import sklearn
 
     from ..formats.recognizer_model import read_recognizer_model
 
-    model, header = read_recognizer_model(path, ActionRecognizer)
+    from .poserecognizer import PoseRecognizer
+
+    model, header = read_recognizer_model(path, (ActionRecognizer, PoseRecognizer))
     if header.get("sklearn") != sklearn.__version__:
         log.warning("%s was saved with scikit-learn %s, running %s", path, header.get("sklearn"), sklearn.__version__)
     return model, header
