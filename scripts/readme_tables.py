@@ -92,6 +92,14 @@ EXTRA_ROOTS: list[Path] = []
 
 def _config(d: dict) -> str:
     """The recognizer values a metrics file records (the decoding of scored labels when it differs)."""
+    if d.get("recognizer") == "pose":  # the pose-sequence recognizer keeps its values in params
+        q = d.get("params") or {}
+        views = (d.get("training") or {}).get("n_views")
+        return ", ".join(x for x in ("pose sequences" + (f" from {d['input']}" if d.get("input") else ""),
+                                     f"{views} virtual views per take" if views else "",
+                                     f"C {q['C']:g}" if q.get("C") is not None else "",
+                                     f"cap {q['max_frames_per_class']}" if "max_frames_per_class" in q else "",
+                                     f"{q['smoothing']}" if q.get("smoothing") else "") if x)
     rp = (d.get("params") or {}).get("recognizer") or {}
     dec = (d.get("decoding") or [{}])[0] if len(d.get("decoding") or []) == 1 else {}
     sm = dec.get("smoothing") or rp.get("smoothing")
@@ -138,6 +146,9 @@ def recognition_table(items, root: Path) -> list[str]:
             kind += ", no mirror training"
         if d.get("scored_set") == "V":
             kind += ", validation set"
+        if d.get("recognizer") == "pose":
+            sp = d.get("split")
+            kind = f"{sp if isinstance(sp, str) else kind}, pose sequences ({d.get('input', '?')})"
         groups[kind].append((p, d))
     lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
              "|---|---|---|---:|---:|---:|---:|---|"]
