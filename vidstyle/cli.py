@@ -8,6 +8,11 @@ message on stderr and a non-zero exit status.
 Exit status: 0 success; 1 internal error (a bug: traceback on stderr); 2 bad input or usage (a file,
 an argument); 3 out of memory (:class:`MemoryError` or :class:`vidstyle.errors.ResourceError`: the
 input is too large at these settings); 130 interrupted.
+
+Start-up stays light: this module and the command modules import no numerical package at module level
+(NumPy, SciPy, scikit-learn, OpenCV, PyTorch, MediaPipe ...); each command imports what it runs, so
+``vidstyle --help`` and a command that needs none of them do not pay for them
+(``tests/test_startup_imports.py``, ``scripts/bench_startup.py``).
 """
 
 from __future__ import annotations

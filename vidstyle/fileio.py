@@ -10,13 +10,16 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from .errors import FormatError, InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
 
 
 @contextlib.contextmanager
@@ -149,19 +152,24 @@ def read_json(path: str | os.PathLike) -> Any:
 
 
 def write_npz(path: str | os.PathLike, **arrays: Any) -> None:
+    import numpy as np  # here, not at the top: the CLI imports this module at start-up
+
     with atomic_path(path, suffix=".npz") as tmp:
         np.savez_compressed(tmp, **arrays)
 
 
 def write_npy(path: str | os.PathLike, array: np.ndarray) -> None:
+    import numpy as np
+
     with atomic_path(path, suffix=".npy") as tmp:
         np.save(tmp, array)
 
 
 def json_default(o: Any) -> Any:
-    if isinstance(o, np.generic):
+    np = sys.modules.get("numpy")  # a numpy value exists only once numpy is imported (not at CLI start-up)
+    if np is not None and isinstance(o, np.generic):
         return o.item()
-    if isinstance(o, np.ndarray):
+    if np is not None and isinstance(o, np.ndarray):
         return o.tolist()
     if isinstance(o, Path):
         return str(o)

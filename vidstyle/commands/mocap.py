@@ -6,7 +6,6 @@ import json
 import logging
 from pathlib import Path
 
-import numpy as np
 import typer
 
 from ..errors import InputError
@@ -61,6 +60,8 @@ def positions(
 
     The CSV has one row per frame and columns ``<joint>_x, <joint>_y, <joint>_z`` for every joint.
     """
+    import numpy as np
+
     from ..fileio import atomic_path, write_npy
     from ..mocap import global_positions, read_bvh
 

@@ -8,7 +8,6 @@ import time
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
 
 from ..errors import InputError
@@ -221,6 +220,8 @@ def evaluate_recognition(
 
     With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""
+    import numpy as np
+
     from ..evaluation.recognition import confusion_png, run_evaluation
     from ..formats.metrics import write_metrics
 

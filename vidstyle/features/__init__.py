@@ -21,10 +21,43 @@ Modules:
   its validated defaults (:mod:`~vidstyle.features.defaults`), what ``vidstyle features`` runs.
 """
 
-from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
-from .extract import extract_videos
-from .salient import SalientParams, salient_points
-from .sift3d import Sift3DParams
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
+    from .extract import extract_videos
+    from .salient import SalientParams, salient_points
+    from .sift3d import Sift3DParams
+
+# The names below load their submodule on first use (PEP 562), as in :mod:`vidstyle.motiongraph`: the
+# CLI reads ``vidstyle.features.defaults`` when it builds its options, and that must not import
+# scikit-learn, SciPy or OpenCV into every command's start-up. Submodules load on first use too.
+_WHERE = {
+    "DEFAULT_VARIANT": "descriptors",
+    "Descriptor": "descriptors",
+    "describe": "descriptors",
+    "get_descriptor": "descriptors",
+    "extract_videos": "extract",
+    "SalientParams": "salient",
+    "salient_points": "salient",
+    "Sift3DParams": "sift3d",
+}
+_SUBMODULES = frozenset({
+    "defaults", "descriptors", "extract", "salient", "scovanner2007", "sift2d", "sift3d",
+})
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
+    elif name in _SUBMODULES:
+        value = import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
 
 __all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "extract_videos", "get_descriptor",
            "salient_points"]

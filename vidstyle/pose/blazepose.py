@@ -40,8 +40,8 @@ from collections.abc import Iterable
 import numpy as np
 
 from ..errors import VidstyleError
+from ..formats.keypoints import KEYPOINTS
 from ..formats.poses import VIEWPOINTS, PoseFrame
-from ..mocap.keypoints import KEYPOINTS
 
 log = logging.getLogger(__name__)
 

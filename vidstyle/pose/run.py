@@ -175,14 +175,16 @@ def resolve_model(backend: str, model_path):
 def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]:
     """The checks of :func:`estimate_video`'s settings (:class:`ParameterError` naming the parameter:
     ``backend``, ``model``, ``scales``); returns the zoom factors."""
-    from .estimator import check_scales
-
     check_backend(backend)
     resolve_model(backend, model_path)
-    if scales is not None and backend != "ps":
+    if scales is None:
+        return (1.0,)
+    if backend != "ps":
         raise ParameterError("scales", "multi-scale inference is a ps backend setting")
+    from .estimator import check_scales  # the ps model's module (scikit-learn, numba): not for BlazePose
+
     try:
-        return (1.0,) if scales is None else check_scales(scales)
+        return check_scales(scales)
     except ValueError as exc:
         raise ParameterError("scales", str(exc)) from None
 

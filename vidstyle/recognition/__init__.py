@@ -20,26 +20,81 @@ Evaluation (metrics, confusion PNG, the evaluation run) lives in :mod:`vidstyle.
 - :mod:`~vidstyle.recognition.synthetic` — synthetic feature files with known labels (tests, benchmarks).
 """
 
-from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
-from .histograms import FrameFeaturizer, WordGrouping, normalize_rows
-from .io import VideoFeatures, load_features
-from .pipeline import (TrainingRun, VocabularyRun, load_recognizer, recognize, recognize_file, train,
-                       train_vocabulary)
-from .recognizer import ActionRecognizer, load_model, save_model
-from .smoothing import smooth_labels
-from .splits import Split, make_split
-from .vocabulary import Vocabulary
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
+    from .histograms import FrameFeaturizer, WordGrouping, normalize_rows
+    from .io import VideoFeatures, load_features
+    from .pipeline import (
+        TrainingRun,
+        VocabularyRun,
+        load_recognizer,
+        recognize,
+        recognize_file,
+        train,
+        train_vocabulary,
+    )
+    from .recognizer import ActionRecognizer, load_model, save_model
+    from .smoothing import smooth_labels
+    from .splits import Split, make_split
+    from .vocabulary import Vocabulary
+
+# The names below load their submodule on first use (PEP 562), as in :mod:`vidstyle.motiongraph`: the
+# CLI reads ``vidstyle.recognition.defaults`` when it builds its options, and that must not import
+# scikit-learn, SciPy or OpenCV into every command's start-up. Submodules load on first use too.
+_WHERE = {
+    "OvaOvoSVC": "classifier",
+    "OvrSVC": "classifier",
+    "combine_ova_ovo": "classifier",
+    "FrameFeaturizer": "histograms",
+    "WordGrouping": "histograms",
+    "normalize_rows": "histograms",
+    "VideoFeatures": "io",
+    "load_features": "io",
+    "TrainingRun": "pipeline",
+    "VocabularyRun": "pipeline",
+    "load_recognizer": "pipeline",
+    "recognize": "pipeline",
+    "recognize_file": "pipeline",
+    "train": "pipeline",
+    "train_vocabulary": "pipeline",
+    "ActionRecognizer": "recognizer",
+    "load_model": "recognizer",
+    "save_model": "recognizer",
+    "smooth_labels": "smoothing",
+    "Split": "splits",
+    "make_split": "splits",
+    "Vocabulary": "vocabulary",
+}
+_SUBMODULES = frozenset({
+    "classifier", "defaults", "histograms", "io", "onnx_export", "pipeline", "recognizer", "smoothing",
+    "splits", "synthetic", "vocabulary",
+})
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
+    elif name in _SUBMODULES:
+        value = import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "ActionRecognizer",
-    "TrainingRun",
-    "VocabularyRun",
     "FrameFeaturizer",
     "OvaOvoSVC",
     "OvrSVC",
     "Split",
+    "TrainingRun",
     "VideoFeatures",
     "Vocabulary",
+    "VocabularyRun",
     "WordGrouping",
     "combine_ova_ovo",
     "load_features",
