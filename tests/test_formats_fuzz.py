@@ -21,6 +21,7 @@ from vidstyle.formats.labels import FrameLabels, parse_labels, read_labels, writ
 from vidstyle.formats.library import parse_library, read_library, write_library
 from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
+from vidstyle.formats.runrecord import parse_run_record, read_run_record, write_run_record
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
 from vidstyle.formats.style import StyleRecord, parse_style, read_style, style_to_dict, write_style
 from vidstyle.formats.truth import parse_truth, read_truth, write_truth
@@ -118,7 +119,21 @@ METRICS = {
     "headline": {"kind": "vidstyle.metrics.headline", "schema_version": 1, "seed": 0,
                  "recognition": {"frame_accuracy_raw": 0.5, "video_accuracy": None},
                  "style": {"transition_mae_truth": 0.05}, "motion": {"label_fidelity": 0.8}},
+    "timing": {"kind": "vidstyle.metrics.timing", "schema_version": 1, "records_dir": "out/timings", "recorded": True,
+               "dvc_file": "dvc.yaml", "started": 100.0, "finished": 160.5, "run_wall_seconds": 70.0,
+               "stages_wall_seconds": 60.5, "cpu_seconds": 90.25, "unreadable_records": 0,
+               "stages": [{"stage": "features", "status": "ran", "invocations": 2, "failed": 0, "wall_seconds": 60.5,
+                           "cpu_seconds": 90.25, "peak_rss_mb": 512.0, "commands": ["features"]},
+                          {"stage": "report", "status": "skipped", "invocations": 0, "failed": 0,
+                           "wall_seconds": None, "cpu_seconds": None, "peak_rss_mb": None, "commands": []}]},
 }
+
+
+def _run_record_doc() -> dict:
+    return {"kind": "vidstyle.run_record", "schema_version": 1, "command": "demo make-dataset",
+            "argv": ["demo", "make-dataset", "--out", "d"], "stage": "make_dataset", "pid": 42, "start_time": 100.0,
+            "end_time": 102.5, "wall_seconds": 2.5, "cpu_seconds": 1.25, "children_cpu_seconds": 3.0,
+            "peak_rss_mb": 120.5, "children_peak_rss_mb": 80.0, "exit_status": 0}
 
 
 def _truth_arrays() -> dict:
@@ -223,6 +238,7 @@ READERS = {
     "sequence": (parse_sequence, write_sequence, read_sequence, _sequence_doc),
     "walk": (parse_walk_labels, write_walk_labels, read_walk_labels, _walk_doc),
     "library": (parse_library, write_library, read_library, _library_doc),
+    "run_record": (parse_run_record, write_run_record, read_run_record, _run_record_doc),
     **{f"metrics_{k}": (parse_metrics, write_metrics, read_metrics, (lambda d=d: d)) for k, d in METRICS.items()},
 }
 

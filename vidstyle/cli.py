@@ -9,6 +9,9 @@ Exit status: 0 success; 1 internal error (a bug: traceback on stderr); 2 bad inp
 an argument); 3 out of memory (:class:`MemoryError` or :class:`vidstyle.errors.ResourceError`: the
 input is too large at these settings); 130 interrupted.
 
+With ``VIDSTYLE_TIMINGS=DIR`` in the environment, every command also writes its own timing record into
+DIR as it exits, whatever its exit status (:mod:`vidstyle.timing`; ``vidstyle timing`` makes the table).
+
 Start-up stays light: this module and the command modules import no numerical package at module level
 (NumPy, SciPy, scikit-learn, OpenCV, PyTorch, MediaPipe ...); each command imports what it runs, so
 ``vidstyle --help`` and a command that needs none of them do not pay for them
@@ -19,8 +22,10 @@ from __future__ import annotations
 
 import importlib
 import logging
+import os
 import pkgutil
 import sys
+import time
 
 import typer
 
@@ -68,8 +73,8 @@ def _register_commands() -> None:
 #: --help lists the commands in pipeline order, stages apart from the tools
 _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
           "synthesize", "train-pose", "pose", "match-pose", "augment", "annotate", "demo", "render", "evaluate",
-          "report", "mocap"]
-_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report"}
+          "report", "timing", "mocap"]
+_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing"}
 
 
 def _arrange_help() -> None:
@@ -169,8 +174,47 @@ def _as_flags(error: VidstyleError, argv: list[str]) -> str:
     return str(error)
 
 
+def _command_path(argv: list[str]) -> str:
+    """The subcommand words of ``argv`` (``"demo make-dataset"``; ``""`` for the bare ``vidstyle``)."""
+    words: list[str] = []
+    try:
+        cmd = typer.main.get_command(app)
+        for tok in argv:
+            sub = getattr(cmd, "commands", None)
+            if sub is None:
+                break
+            if tok.startswith("-"):  # a root or group flag (none of them takes a value)
+                continue
+            if tok not in sub:
+                break
+            words.append(tok)
+            cmd = sub[tok]
+    except Exception:  # noqa: BLE001 - the record then names no command; the run itself is unaffected
+        return ""
+    return " ".join(words)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Console-script entry point. Returns the exit status instead of raising SystemExit."""
+    """Console-script entry point. Returns the exit status instead of raising SystemExit. With
+    ``VIDSTYLE_TIMINGS`` set, records the run on the way out (:func:`vidstyle.timing.record_run`)."""
+    entered = time.time()
+    args = sys.argv[1:] if argv is None else list(argv)
+    status = 1
+    try:
+        status = _main(argv)
+    except SystemExit as e:  # not raised by the commands; counted all the same
+        status = e.code if isinstance(e.code, int) else 0 if e.code is None else 1
+        raise
+    finally:
+        directory = os.environ.get("VIDSTYLE_TIMINGS")
+        if directory:
+            from .timing import process_start_time, record_run
+
+            record_run(directory, _command_path(args), args, status, process_start_time() or entered)
+    return status
+
+
+def _main(argv: list[str] | None) -> int:
     try:
         app(args=argv, standalone_mode=False)
     except VidstyleError as e:

@@ -38,6 +38,14 @@ computed, e.g. video accuracy without single-action test videos):
   ``multiview_pck@0.2`` in [0, 1] or null and ``per_view`` an object; ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null.
+* ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
+  a string; ``recorded`` a boolean (the records directory existed); ``dvc_file`` a string or null;
+  ``started`` / ``finished`` Unix seconds or null (both null, or ``finished`` >= ``started``);
+  ``run_wall_seconds`` >= 0 or null; ``stages_wall_seconds``, ``cpu_seconds`` >= 0;
+  ``unreadable_records`` >= 0; ``stages`` a list of unique ``stage`` names, each with ``status`` one of
+  :data:`TIMING_STATUSES`, ``invocations`` and ``failed`` >= 0 (``failed`` <= ``invocations``; a stage with
+  invocations has ``wall_seconds``, ``cpu_seconds``, ``peak_rss_mb`` >= 0, one without has them null),
+  ``commands`` a list of strings.
 """
 
 from __future__ import annotations
@@ -65,8 +73,13 @@ STRIKES = "vidstyle.metrics.strikes"
 POSE = "vidstyle.metrics.pose"
 MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
 PEOPLE = "vidstyle.metrics.people"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE)
+TIMING = "vidstyle.metrics.timing"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING)
 SCHEMA_VERSION = 1
+#: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
+#: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
+#: DVC found it up to date); no records kept at all (not recorded: the pipeline ran without VIDSTYLE_TIMINGS)
+TIMING_STATUSES = ("ran", "failed", "running", "skipped", "not recorded")
 
 
 @dataclass
@@ -267,8 +280,41 @@ def _people(f: Fields) -> None:
     f.sub("params")
 
 
+def _timing(f: Fields) -> None:
+    f.str("records_dir")
+    f.bool("recorded")
+    if f.obj.get("dvc_file") is not None:
+        f.str("dvc_file")
+    started, finished = _opt_number(f, "started", 0), _opt_number(f, "finished", 0)
+    if (started is None) != (finished is None):
+        raise f.fail("finished", "started and finished are both numbers or both null")
+    if started is not None and finished < started:
+        raise f.fail("finished", f"{finished} is before started {started}")
+    _opt_number(f, "run_wall_seconds", 0)
+    f.number("stages_wall_seconds", min=0)
+    f.number("cpu_seconds", min=0)
+    f.int("unreadable_records", min=0)
+    seen = set()
+    for i, row in enumerate(f.list("stages")):
+        s = Fields(row, f.path, f"stages[{i}]")
+        name = s.str("stage", nonempty=True)
+        if name in seen:
+            raise s.fail("stage", f"{name!r} appears more than once")
+        seen.add(name)
+        s.str("status", choices=TIMING_STATUSES)
+        n = s.int("invocations", min=0)
+        if s.int("failed", min=0) > n:
+            raise s.fail("failed", f"more than the {n} invocation(s)")
+        for key in ("wall_seconds", "cpu_seconds", "peak_rss_mb"):
+            if n:
+                s.number(key, min=0)
+            elif s.get(key) is not None:
+                raise s.fail(key, "must be null for a stage without invocations")
+        s.str_list("commands", nonempty_items=False)
+
+
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
-           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people}
+           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -313,6 +359,8 @@ __all__ = [
     "RECOGNITION",
     "STRIKES",
     "STYLE",
+    "TIMING",
+    "TIMING_STATUSES",
     "Metrics",
     "check_array",
     "parse_metrics",

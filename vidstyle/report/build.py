@@ -11,6 +11,7 @@ It reads the run directory written by the kickboxing pipeline (``pipelines/kickb
     RUN/graph/graph.npz               vidstyle build-graph
     RUN/motion/<performer>.mp4        vidstyle synthesize --preview
     RUN/metrics/motion.json           vidstyle evaluate motion
+    RUN/metrics/timing.json           vidstyle timing (the stage-time table; make demo writes it)
 
 Every section whose inputs are missing says so on the page (the report is also useful on a partial
 run); none is silently skipped. Charts are inline SVG, the motion preview an inline animated GIF.
@@ -28,7 +29,7 @@ import numpy as np
 from ..errors import InputError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, STYLE, read_metrics
+from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, STYLE, TIMING, read_metrics
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
@@ -363,6 +364,41 @@ def _augmg_transitions_html(run: Path, dataset: Dataset | None) -> str:
             f'<script>{ANIM_JS}</script>')
 
 
+def _seconds(v) -> str:
+    return "" if v is None else f"{v:.1f}"
+
+
+def timing_section(page: Page, run: Path) -> None:
+    """The stage-time table of the run (metrics/timing.json, :mod:`vidstyle.timing`): per stage its status,
+    wall time, CPU time, peak RSS and invocations."""
+    path = run / "metrics" / "timing.json"
+    m = _metrics(path, TIMING)
+    if m is None:
+        page.add("Stage times", _missing("stage times (make demo writes them with vidstyle timing)", path))
+        return
+    if not m["recorded"]:
+        page.add("Stage times", f'<p class="missing">Not recorded: this run kept no timing records '
+                 f'({esc(m["records_dir"])}); <code>make demo</code> sets VIDSTYLE_TIMINGS to keep them.</p>')
+        return
+    rows = [[s["stage"], s["status"], _seconds(s["wall_seconds"]), _seconds(s["cpu_seconds"]),
+             "" if s["peak_rss_mb"] is None else f"{s['peak_rss_mb']:.0f}", s["invocations"]]
+            for s in m["stages"]]
+    ran = [s for s in m["stages"] if s["invocations"]]
+    rows.append(["total", f"{len(ran)} stage(s) with runs", _seconds(m["stages_wall_seconds"]),
+                 _seconds(m["cpu_seconds"]), "", sum(s["invocations"] for s in m["stages"])])
+    notes = [("Each vidstyle process times itself (wall time from its start, CPU time of the process and its "
+              "children, peak resident memory); a stage's wall time runs from its first process's start to its "
+              "last one's end. skipped: DVC found the stage up to date; running: the stage that made this table "
+              "(the report itself).")]
+    if m.get("run_wall_seconds") is not None:
+        notes.append(f"The run took {m['run_wall_seconds']:.1f} s of wall time, "
+                     f"{max(m['run_wall_seconds'] - m['stages_wall_seconds'], 0):.1f} s of it outside vidstyle "
+                     "processes (DVC, the shell).")
+    body = (table(rows, ["stage", "status", "wall s", "CPU s", "peak RSS MB", "processes"])
+            + "".join(f'<p class="note">{esc(n)}</p>' for n in notes))
+    page.add("Stage times", body)
+
+
 def _get(doc: dict | None, *keys):
     for k in keys:
         if not isinstance(doc, dict) or k not in doc:
@@ -434,4 +470,5 @@ def build_report(run: Path) -> str:
     _style_section(page, run, dataset)
     _motion_section(page, run)
     _augmg_section(page, run, dataset)
+    timing_section(page, run)
     return page.render()
