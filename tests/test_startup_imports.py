@@ -60,3 +60,10 @@ def test_lazy_packages_export_their_api_whatever_loads_first(pkg, name, module):
             f"assert {name} is getattr(sub, '{name}') and pkg.{name} is {name}, (pkg.{name}, {name})\n"
             f"for n in pkg.__all__:\n    getattr(pkg, n)")
     _loaded(code)
+
+
+def test_lazy_packages_reach_their_submodules_as_attributes():
+    code = ("import types, vidstyle.recognition as r, vidstyle.features as f\n"
+            "assert isinstance(r.smoothing, types.ModuleType) and isinstance(f.scovanner2007, types.ModuleType)\n"
+            "assert not hasattr(r, 'no_such_module') and not hasattr(r, '_private')")
+    _loaded(code)

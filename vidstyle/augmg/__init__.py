@@ -17,6 +17,7 @@ Entry points (the commands' library calls, defaults from :mod:`.defaults`):
 
 import sys
 from importlib import import_module
+from importlib.util import find_spec
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -35,16 +36,12 @@ _WHERE = {
     "query_views": "index",
     "match_poses": "match",
 }
-_SUBMODULES = frozenset({
-    "annotations_io", "augment", "defaults", "enhance", "index", "keypoints", "match", "poses_io",
-    "projection",
-})
 
 
 def __getattr__(name: str):
     if name in _WHERE:
         value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif name in _SUBMODULES:
+    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
         value = import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

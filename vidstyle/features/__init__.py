@@ -22,6 +22,7 @@ Modules:
 """
 
 from importlib import import_module
+from importlib.util import find_spec
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -43,15 +44,12 @@ _WHERE = {
     "salient_points": "salient",
     "Sift3DParams": "sift3d",
 }
-_SUBMODULES = frozenset({
-    "defaults", "descriptors", "extract", "salient", "scovanner2007", "sift2d", "sift3d",
-})
 
 
 def __getattr__(name: str):
     if name in _WHERE:
         value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif name in _SUBMODULES:
+    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
         value = import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -21,6 +21,7 @@ Evaluation (metrics, confusion PNG, the evaluation run) lives in :mod:`vidstyle.
 """
 
 from importlib import import_module
+from importlib.util import find_spec
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -68,16 +69,12 @@ _WHERE = {
     "make_split": "splits",
     "Vocabulary": "vocabulary",
 }
-_SUBMODULES = frozenset({
-    "classifier", "defaults", "histograms", "io", "onnx_export", "pipeline", "recognizer", "smoothing",
-    "splits", "synthetic", "vocabulary",
-})
 
 
 def __getattr__(name: str):
     if name in _WHERE:
         value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif name in _SUBMODULES:
+    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
         value = import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -7,6 +7,7 @@ The stage as library calls (what ``learn-style`` / ``generate`` run): :func:`sty
 
 import sys
 from importlib import import_module
+from importlib.util import find_spec
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -40,13 +41,12 @@ _WHERE = {
     "ngram_counts": "ngram",
     "ngram_jsd": "ngram",
 }
-_SUBMODULES = frozenset({"artifact", "defaults", "events", "learn", "models", "ngram", "synthetic"})
 
 
 def __getattr__(name: str):
     if name in _WHERE:
         value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif name in _SUBMODULES:
+    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
         value = import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
