@@ -76,3 +76,17 @@ def test_train_refuses_a_bad_range_naming_it():
 
     with pytest.raises(ParameterError, match="elevation"):
         train(None, demo_performers=1, cmu_clips=0, views_per_clip=1, elevation=(50.0, 10.0))
+
+
+def test_the_ps_backend_defaults_to_the_shipped_model_file(tmp_path, monkeypatch):
+    from vidstyle.pose import defaults, run
+
+    shipped = tmp_path / "weights" / "ps_cnn.joblib"
+    monkeypatch.setattr(defaults, "shipped_model_path", lambda: shipped)
+    with pytest.raises(ParameterError, match="no shipped model"):
+        run.resolve_model("ps", None)
+    shipped.parent.mkdir()
+    shipped.write_bytes(b"x")
+    assert run.resolve_model("ps", None) == str(shipped)
+    assert run.resolve_model("ps", "mine.joblib") == "mine.joblib"  # a given model always wins
+    assert run.resolve_model("blazepose", None) is None

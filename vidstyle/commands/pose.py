@@ -134,7 +134,7 @@ def pose(
     video: Path = typer.Argument(..., help="Input video."),
     out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
     model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) of --backend ps "
-                                      "[default: the model shipped with vidstyle]."),
+                                      "[default: the model shipped with vidstyle, when it ships one]."),
     backend: str | None = typer.Option(None, "--backend", help="ps (pictorial structures) or blazepose (MediaPipe) "
                                        "[default: ps with --model, else blazepose]."),
     frames: str | None = typer.Option(None, "--frames", help="Comma-separated frame indices (default: all)."),
