@@ -38,15 +38,18 @@ TINY = {
 }
 
 
-def _env() -> dict:
+def _env(timings: Path | None = None) -> dict:
     env = dict(os.environ)
+    if timings is not None:  # as make demo runs it: every vidstyle process records its time
+        env["VIDSTYLE_TIMINGS"] = str(timings)
     env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
     env["DVC_NO_ANALYTICS"] = "1"
     return env
 
 
-def _dvc(cwd: Path, *args: str, check: bool = True, timeout: float = 1200) -> subprocess.CompletedProcess:
-    res = subprocess.run([str(BIN / "dvc"), *args], cwd=cwd, env=_env(), capture_output=True, text=True,
+def _dvc(cwd: Path, *args: str, check: bool = True, timeout: float = 1200,
+         timings: Path | None = None) -> subprocess.CompletedProcess:
+    res = subprocess.run([str(BIN / "dvc"), *args], cwd=cwd, env=_env(timings), capture_output=True, text=True,
                          timeout=timeout)
     if check and res.returncode != 0:
         raise AssertionError(f"dvc {' '.join(args)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
@@ -80,7 +83,8 @@ def _digest(directory: Path) -> dict[str, str]:
 def run(tmp_path_factory):
     work = _setup(tmp_path_factory.mktemp("pipeline"))
     t0 = time.perf_counter()
-    _dvc(work, "repro")
+    (work / "out" / "timings").mkdir(parents=True)
+    _dvc(work, "repro", timings=work / "out" / "timings")
     print(f"tiny pipeline: {time.perf_counter() - t0:.1f} s")
     return work
 
@@ -187,9 +191,10 @@ def test_report_renders_in_chromium(run, tmp_path):
     dom = dump_dom(report)
     assert 'data-rendered="ok"' in dom and "data-errors" not in dom
     for heading in ("Action recognition", "Timeline", "Behaviour style", "Generated action sequences",
-                    "Motion graph", "Synthesized motion"):
+                    "Motion graph", "Synthesized motion", "Stage times"):
         assert heading in dom, heading
-    assert 'class="missing"' not in dom  # every section had its inputs
+    assert 'class="missing"' not in dom  # every section had its inputs (the stage times too)
+    assert "<td>features</td><td>ran</td>" in dom.replace(" ", "")  # this run's own stages, timed
     assert "data:image/gif;base64," in dom
     import cv2
 
