@@ -21,9 +21,9 @@ Modules:
   its validated defaults (:mod:`~vidstyle.features.defaults`), what ``vidstyle features`` runs.
 """
 
-from importlib import import_module
-from importlib.util import find_spec
 from typing import TYPE_CHECKING
+
+from ..lazy import lazy_package
 
 if TYPE_CHECKING:  # pragma: no cover
     from .descriptors import DEFAULT_VARIANT, Descriptor, describe, get_descriptor
@@ -31,9 +31,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .salient import SalientParams, salient_points
     from .sift3d import Sift3DParams
 
-# The names below load their submodule on first use (PEP 562), as in :mod:`vidstyle.motiongraph`: the
-# CLI reads ``vidstyle.features.defaults`` when it builds its options, and that must not import
-# scikit-learn, SciPy or OpenCV into every command's start-up. Submodules load on first use too.
+# The names below load their submodule on first use (PEP 562, :mod:`vidstyle.lazy`): the CLI reads
+# ``vidstyle.features.defaults`` when it builds its options, and that must not import scikit-learn, SciPy
+# or OpenCV into every command's start-up. Submodules load on first use too.
 _WHERE = {
     "DEFAULT_VARIANT": "descriptors",
     "Descriptor": "descriptors",
@@ -44,17 +44,7 @@ _WHERE = {
     "salient_points": "salient",
     "Sift3DParams": "sift3d",
 }
-
-
-def __getattr__(name: str):
-    if name in _WHERE:
-        value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
-        value = import_module(f".{name}", __name__)
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value
-    return value
+__getattr__ = lazy_package(__name__, _WHERE)
 
 
 __all__ = ["DEFAULT_VARIANT", "Descriptor", "SalientParams", "Sift3DParams", "describe", "extract_videos", "get_descriptor",

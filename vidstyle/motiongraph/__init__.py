@@ -11,8 +11,9 @@ component, and walks that realise an action sequence at minimum transition cost.
 Defaults (shared with the CLI): :mod:`vidstyle.motiongraph.defaults`.
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from ..lazy import lazy_package
 
 if TYPE_CHECKING:  # pragma: no cover
     from .blend import blend_frames, blend_weight, slerp
@@ -31,8 +32,9 @@ if TYPE_CHECKING:  # pragma: no cover
         walk_labels,
     )
 
-# The names below load their submodule on first use (PEP 562), so ``vidstyle.motiongraph.defaults`` (read
-# by the CLI when it builds its options) does not import numpy/scipy at start-up.
+# The names below load their submodule on first use (PEP 562, :mod:`vidstyle.lazy`): the CLI reads
+# ``vidstyle.motiongraph.defaults`` when it builds its options, and that must not import scikit-learn, SciPy
+# or OpenCV into every command's start-up. Submodules load on first use too.
 _WHERE = {
     "blend_frames": "blend",
     "blend_weight": "blend",
@@ -66,14 +68,7 @@ _WHERE = {
     "render_walk": "synthesis",
     "walk_labels": "synthesis",
 }
-
-
-def __getattr__(name: str):
-    if name in _WHERE:
-        value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_package(__name__, _WHERE)
 
 
 __all__ = [

@@ -20,9 +20,9 @@ Evaluation (metrics, confusion PNG, the evaluation run) lives in :mod:`vidstyle.
 - :mod:`~vidstyle.recognition.synthetic` — synthetic feature files with known labels (tests, benchmarks).
 """
 
-from importlib import import_module
-from importlib.util import find_spec
 from typing import TYPE_CHECKING
+
+from ..lazy import lazy_package
 
 if TYPE_CHECKING:  # pragma: no cover
     from .classifier import OvaOvoSVC, OvrSVC, combine_ova_ovo
@@ -42,9 +42,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .splits import Split, make_split
     from .vocabulary import Vocabulary
 
-# The names below load their submodule on first use (PEP 562), as in :mod:`vidstyle.motiongraph`: the
-# CLI reads ``vidstyle.recognition.defaults`` when it builds its options, and that must not import
-# scikit-learn, SciPy or OpenCV into every command's start-up. Submodules load on first use too.
+# The names below load their submodule on first use (PEP 562, :mod:`vidstyle.lazy`): the CLI reads
+# ``vidstyle.recognition.defaults`` when it builds its options, and that must not import scikit-learn, SciPy
+# or OpenCV into every command's start-up. Submodules load on first use too.
 _WHERE = {
     "OvaOvoSVC": "classifier",
     "OvrSVC": "classifier",
@@ -69,17 +69,7 @@ _WHERE = {
     "make_split": "splits",
     "Vocabulary": "vocabulary",
 }
-
-
-def __getattr__(name: str):
-    if name in _WHERE:
-        value = getattr(import_module(f".{_WHERE[name]}", __name__), name)
-    elif not name.startswith("_") and find_spec(f"{__name__}.{name}") is not None:  # a submodule
-        value = import_module(f".{name}", __name__)
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value
-    return value
+__getattr__ = lazy_package(__name__, _WHERE)
 
 
 __all__ = [

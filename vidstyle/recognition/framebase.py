@@ -39,6 +39,21 @@ def sample_per_class(y: np.ndarray, cap: int | None, rng: np.random.Generator) -
 class FrameRecognizerMixin:
     """Classifier, label chain and smoothing of a frame recognizer (see the module docstring)."""
 
+    def _set_frame_params(self, classifier, C, gamma, max_frames_per_class, smoothing_window, smoothing,
+                          emission_weight, mirror, n_jobs, random_state) -> None:
+        """Store the shared constructor parameters unchanged (scikit-learn convention: ``__init__`` only
+        stores; checks happen in ``fit`` and ``predict``)."""
+        self.classifier = classifier
+        self.C = C
+        self.gamma = gamma
+        self.max_frames_per_class = max_frames_per_class
+        self.smoothing_window = smoothing_window
+        self.smoothing = smoothing
+        self.emission_weight = emission_weight
+        self.mirror = mirror
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
     def _check_classifier_params(self) -> None:
         if self.classifier not in CLASSIFIERS:
             raise ParameterError("classifier", f"must be one of {', '.join(CLASSIFIERS)}, got {self.classifier!r}")

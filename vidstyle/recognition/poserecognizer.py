@@ -50,16 +50,8 @@ class PoseRecognizer(FrameRecognizerMixin, BaseEstimator):
         self.max_gap = max_gap
         self.scale_window = scale_window
         self.fps = fps
-        self.classifier = classifier
-        self.C = C
-        self.gamma = gamma
-        self.max_frames_per_class = max_frames_per_class
-        self.smoothing_window = smoothing_window
-        self.smoothing = smoothing
-        self.emission_weight = emission_weight
-        self.mirror = mirror
-        self.n_jobs = n_jobs
-        self.random_state = random_state
+        self._set_frame_params(classifier, C, gamma, max_frames_per_class, smoothing_window, smoothing,
+                               emission_weight, mirror, n_jobs, random_state)
 
     @property
     def featurizer(self) -> PoseFeaturizer:

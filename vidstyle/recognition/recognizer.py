@@ -105,16 +105,8 @@ class ActionRecognizer(FrameRecognizerMixin, BaseEstimator):
         self.grouping_pooling = grouping_pooling
         self.normalize = normalize
         self.n_components = n_components
-        self.classifier = classifier
-        self.C = C
-        self.gamma = gamma
-        self.max_frames_per_class = max_frames_per_class
-        self.smoothing_window = smoothing_window
-        self.smoothing = smoothing
-        self.emission_weight = emission_weight
-        self.mirror = mirror
-        self.n_jobs = n_jobs
-        self.random_state = random_state
+        self._set_frame_params(classifier, C, gamma, max_frames_per_class, smoothing_window, smoothing,
+                               emission_weight, mirror, n_jobs, random_state)
 
     # ------------------------------------------------------------ features
     def _check_params(self) -> None:
