@@ -6,6 +6,10 @@ identity of the true person whose keypoints it lies closest to (mean distance ov
 backend found); an *identity switch* is a frame whose identity differs from the previous estimated
 frame's. PCK@0.2 (torso-normalised, true torso) is scored against the person the pose stage chose in its
 first frame with a pose; frames without a pose count as misses.
+
+:func:`follow_everyone` follows each person of each view in turn (chosen by pixel) with given tracker
+settings, the protocol of ``scripts/validate_people.py``, which chose the tracker's defaults on crowds of
+other seeds than the committed result's.
 """
 
 from __future__ import annotations
@@ -67,6 +71,64 @@ def run_view(video: str | Path, backend: str, tracked: bool, model_path=None) ->
     return np.stack([pf.points for pf in poses.frames])
 
 
+def follow_person(video: str | Path, pixel: tuple[float, float], estimator, params: dict | None = None) -> np.ndarray:
+    """(F, 15, 3) poses of the person at ``pixel`` (the input video's pixels) of the first frame with people,
+    followed through ``video`` by :class:`vidstyle.pose.people.PerformerTracker` (``params``: its settings)
+    on ``estimator`` (a :class:`vidstyle.pose.interfaces.PoseBackend`), frames read as ``vidstyle pose``
+    reads them (the backend's working height); NaN rows where the performer is missing."""
+    from ..pose.people import PerformerTracker
+    from ..pose.run import to_input_pixels, working_height
+    from ..video import VideoReader
+
+    with VideoReader(video) as probe:
+        in_size = (probe.info.width, probe.info.height)
+    h = working_height(estimator, in_size[1])
+    scale = h / in_size[1]
+    tracker = PerformerTracker(estimator, person=((pixel[0] + 0.5) * scale - 0.5, (pixel[1] + 0.5) * scale - 0.5),
+                               **(params or {}))
+    out = []
+    with VideoReader(video, height=None if h == in_size[1] else h) as reader:
+        for i in range(len(reader)):
+            frame = np.asarray(reader.frame(i))
+            t = tracker.step(frame, i)
+            if t.pose is None:
+                out.append(np.full((len(KEYPOINTS), 3), np.nan))
+            else:
+                pts = to_input_pixels(t.pose.points, (frame.shape[1], frame.shape[0]), in_size)
+                pts[:, 2] = np.clip(pts[:, 2], 0.0, 1.0)
+                out.append(pts)
+    return np.stack(out)
+
+
+def follow_everyone(crowd_dir: str | Path, estimator, params: dict | None = None) -> dict:
+    """Every person of a crowd take followed in turn in every view (chosen by the pixel halfway between
+    their true neck and pelvis in the first frame), each run scored by :func:`score_view` (against the
+    person the tracker took first, which is another one when the asked-for person is hidden there); totals
+    over the runs: identity switches per 100 frames, mean PCK@0.2, missing frames."""
+    crowd_dir = Path(crowd_dir)
+    truth = np.load(crowd_dir / "truth.npz")
+    kp2 = truth["keypoints2d"].astype(np.float64)
+    views = [str(v) for v in truth["views"]]
+    runs = []
+    for v, name in enumerate(views):
+        for p in range(kp2.shape[1]):
+            pixel = tuple(float(x) for x in (kp2[v, p, 0, NECK] + kp2[v, p, 0, PELVIS]) / 2)
+            est = follow_person(crowd_dir / f"{name}.mp4", pixel, estimator, params)
+            s = score_view(est, kp2[v])
+            s.update(view=name, person=p, missing=int(np.isnan(est[:, 0, 0]).sum()))
+            runs.append(s)
+    return {"crowd": str(crowd_dir), "views": views, "people": int(kp2.shape[1]), "runs": runs, **totals(runs)}
+
+
+def totals(runs: list[dict]) -> dict:
+    """Identity switches (count and per 100 frames), mean PCK@0.2 and missing frames over ``runs``."""
+    n = sum(r["identity_switches"] for r in runs)
+    frames = sum(r["frames"] for r in runs)
+    return {"frames": frames, "identity_switches": n, "identity_switches_per_100_frames": 100.0 * n / max(frames, 1),
+            "pck@0.2": float(np.mean([r["pck@0.2"] for r in runs])) if runs else 0.0,
+            "missing_frames": sum(r.get("missing", 0) for r in runs)}
+
+
 def evaluate_crowd(crowd_dir: str | Path, backend: str = "blazepose", model_path=None,
                    modes=("naive", "tracked")) -> dict:
     """Scores of every mode on every view of a crowd take, and the multi-view PCK of each mode's poses."""
@@ -108,5 +170,5 @@ def format_table(metrics: dict) -> str:
 
     for mode, m in metrics["modes"].items():
         lines.append(f"  {mode:<8} {m['identity_switches_per_100_frames']:>20.2f} {f(m['pck@0.2']):>8} "
-                     f"{f(m['multiview_pck@0.2']):>19} {str(m['same_person_in_every_view']):>12}")
+                     f"{f(m['multiview_pck@0.2']):>19} {m['same_person_in_every_view']!s:>12}")
     return "\n".join(lines)
