@@ -22,27 +22,104 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
 
+#: a writer's temporary file beside ``<stem><suffix>`` is ``.<stem>.<8 random characters>.tmp<suffix>``
+#: (:func:`tempfile.mkstemp`'s names)
+_TEMP = r"\.{stem}\.[a-z0-9_]{{8}}\.tmp{suffix}"
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds.
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds (the
+    temporary file is removed if it fails).
 
     ``suffix`` defaults to the destination's own suffix so that libraries which pick a format from the
-    extension (OpenCV's VideoWriter, ``np.save``) behave as they would for the real name.
+    extension (OpenCV's VideoWriter, ``np.save``) behave as they would for the real name. A ``path`` that
+    is a symlink stays one: the file it points to is replaced. An existing file keeps its permission bits
+    (a 0600 file stays 0600); a new one gets those a plain ``open()`` would give.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     suffix = path.suffix if suffix is None else suffix
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{suffix}", dir=path.parent)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path  # a link: replace what it points to
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        mode = os.stat(target).st_mode & 0o777
+    except (FileNotFoundError, NotADirectoryError):
+        mode = 0o666 & ~_umask()
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=target.parent)
     os.close(fd)
     tmp_path = Path(tmp)
     try:
         yield tmp_path
-        # mkstemp makes the file owner-only (0600); give it the mode a plain open() would have
-        os.chmod(tmp_path, 0o666 & ~_umask())
-        os.replace(tmp_path, path)
+        os.chmod(tmp_path, mode)  # mkstemp makes the file owner-only (0600)
+        os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
+        raise
+
+
+def sweep_temporaries(out_dir: str | os.PathLike, names, before: float | None = None) -> list[Path]:
+    """Remove the temporary files :func:`atomic_path` left in ``out_dir`` for the outputs ``names`` (file
+    names or paths) when a run was killed before it could remove them: only names of the writer's own
+    pattern (``.<stem>.<8 random characters>.tmp<suffix>``), only regular files, and only those last
+    modified before ``before`` (default: now), so a concurrent writer's fresh file is left alone. Returns
+    the removed paths."""
+    import re
+    import time
+
+    out_dir = Path(out_dir)
+    before = time.time() if before is None else before
+    wanted = [re.compile(_TEMP.format(stem=re.escape(Path(n).stem), suffix=re.escape(Path(n).suffix)))
+              for n in names]
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(out_dir))
+    except (FileNotFoundError, NotADirectoryError):
+        return removed
+    for e in entries:
+        if not e.name.startswith(".") or not any(w.fullmatch(e.name) for w in wanted):
+            continue
+        try:
+            if e.is_file(follow_symlinks=False) and e.stat(follow_symlinks=False).st_mtime < before:
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+        except FileNotFoundError:
+            pass
+    return removed
+
+
+@contextlib.contextmanager
+def output_dir(out_dir: str | os.PathLike, names=()) -> Iterator[Path]:
+    """The output directory of a stage's run: created (with its parents) if missing, with the temporaries
+    a killed earlier run left for the outputs ``names`` swept (:func:`sweep_temporaries`, those older than
+    this run's start). If the block fails, the directories this run created are removed again when they
+    are empty (a failed run leaves no empty output directory). An ``out_dir`` that is a file is an
+    :class:`InputError`."""
+    import time
+
+    start = time.time()
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a directory")
+    created = []  # deepest first
+    p = out_dir
+    while not p.exists() and not p.is_symlink() and p != p.parent:
+        created.append(p)
+        p = p.parent
+    out_dir.mkdir(parents=True, exist_ok=True)
+    swept = sweep_temporaries(out_dir, names, before=start)
+    if swept:
+        import logging
+
+        logging.getLogger(__name__).info("%s: removed %d temporary file(s) a killed run left", out_dir, len(swept))
+    try:
+        yield out_dir
+    except BaseException:
+        for d in created:
+            try:
+                d.rmdir()  # only an empty directory goes
+            except OSError:
+                break
         raise
 
 
@@ -108,7 +185,11 @@ def read_json_document(path: str | os.PathLike, max_bytes: int = 1 << 30) -> Any
     path = Path(path)
     if path.is_dir():
         raise FormatError(path, None, "is a directory, not a file")
-    raw = read_bytes(path, max_bytes)
+    return parse_json_bytes(read_bytes(path, max_bytes), path)
+
+
+def parse_json_bytes(raw: bytes, path: str | os.PathLike | None) -> Any:
+    """Parse ``raw`` as strict UTF-8 JSON (as :func:`read_json_document`); errors name ``path``."""
     if raw.startswith(b"\xef\xbb\xbf"):
         raw = raw[3:]
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or (len(raw) > 1 and raw[1:2] == b"\x00"):

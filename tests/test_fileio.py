@@ -1,0 +1,119 @@
+"""The atomic writer keeps a symlink and the file's mode and leaves nothing behind on failure; a stage's run
+sweeps the temporaries a killed run left and leaves no empty output directory when it fails (issue 33
+item 4)."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from vidstyle.cli import main
+from vidstyle.errors import InputError
+from vidstyle import fileio
+from vidstyle.fileio import atomic_path, write_json, write_npz, write_text
+
+
+def test_a_symlink_stays_a_link_and_its_target_is_written(tmp_path):
+    (tmp_path / "data").mkdir()
+    real = tmp_path / "data" / "ann.json"
+    real.write_text("old")
+    link = tmp_path / "ann.json"
+    link.symlink_to(os.path.relpath(real, tmp_path))  # relative, as a user would make it
+    write_text(link, "new")
+    assert link.is_symlink() and os.readlink(link) == os.path.join("data", "ann.json")
+    assert real.read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ann.json", "data"]
+    assert sorted(p.name for p in real.parent.iterdir()) == ["ann.json"]
+    dangling = tmp_path / "later.json"  # a link to a file not yet there: the file is made where it points
+    dangling.symlink_to(tmp_path / "data" / "later.json")
+    write_json(dangling, {"x": 1})
+    assert dangling.is_symlink() and (tmp_path / "data" / "later.json").read_text().startswith("{")
+
+
+@pytest.mark.parametrize("mode", [0o600, 0o640, 0o604])
+def test_the_file_keeps_its_mode(tmp_path, mode):
+    p = tmp_path / "secret.json"
+    p.write_text("{}")
+    os.chmod(p, mode)
+    write_json(p, {"x": 1})
+    assert os.stat(p).st_mode & 0o777 == mode
+    link = tmp_path / "link.json"
+    link.symlink_to(p)
+    write_json(link, {"x": 2})
+    assert os.stat(p).st_mode & 0o777 == mode and link.is_symlink()
+
+
+def test_a_new_file_gets_the_mode_open_gives(tmp_path):
+    write_json(tmp_path / "a.json", {"x": 1})
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    assert os.stat(tmp_path / "a.json").st_mode & 0o777 == os.stat(plain).st_mode & 0o777
+
+
+def test_a_failed_write_leaves_no_temporary_and_the_old_file(tmp_path):
+    p = tmp_path / "a.npz"
+    write_npz(p, x=[1, 2])
+    before = p.read_bytes()
+    with pytest.raises(RuntimeError), atomic_path(p) as tmp:
+        tmp.write_bytes(b"half")
+        raise RuntimeError("killed")
+    with pytest.raises(ValueError):
+        write_npz(p, x=[[1], [1, 2]])  # a ragged array: numpy refuses it while writing
+    assert p.read_bytes() == before and [q.name for q in tmp_path.iterdir()] == ["a.npz"]
+
+
+def _old(p, age=3600):
+    p.write_bytes(b"partial")
+    t = time.time() - age
+    os.utime(p, (t, t))
+    return p
+
+
+def test_sweep_removes_only_stale_temporaries_of_the_named_outputs(tmp_path):
+    stale = _old(tmp_path / ".p00_lowkick_front.k3j_x9a2.tmp.npz")
+    fresh = tmp_path / ".p00_lowkick_front.zzzzzzzz.tmp.npz"
+    fresh.write_bytes(b"being written now")
+    keep = [_old(tmp_path / ".other.abcdefgh.tmp.npz"),          # another output's
+            _old(tmp_path / ".p00_lowkick_front.abc.tmp.npz"),   # not the writer's pattern
+            _old(tmp_path / "p00_lowkick_front.abcdefgh.tmp.npz"),  # not hidden
+            _old(tmp_path / ".p00_lowkick_front.abcdefgh.tmp.json"),  # another suffix
+            _old(tmp_path / "p00_lowkick_front.npz")]
+    (tmp_path / ".p00_lowkick_front.dddddddd.tmp.npz").mkdir()  # a directory is never removed
+    removed = fileio.sweep_temporaries(tmp_path, [tmp_path / "p00_lowkick_front.npz"], before=time.time() - 60)
+    assert removed == [stale] and not stale.exists() and fresh.exists()
+    assert all(p.exists() for p in keep) and (tmp_path / ".p00_lowkick_front.dddddddd.tmp.npz").is_dir()
+    assert fileio.sweep_temporaries(tmp_path / "missing", ["a.npz"]) == []
+
+
+def test_output_dir_removes_what_a_failed_run_created_empty(tmp_path):
+    out = tmp_path / "a" / "b" / "feat"
+    with pytest.raises(RuntimeError), fileio.output_dir(out, ["x.npz"]):
+        assert out.is_dir()
+        raise RuntimeError("the run failed")
+    assert not (tmp_path / "a").exists()
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(RuntimeError), fileio.output_dir(tmp_path / "kept", ["x.npz"]):
+        raise RuntimeError("the run failed")
+    assert (tmp_path / "kept").is_dir()  # it was there before the run
+    with pytest.raises(RuntimeError), fileio.output_dir(tmp_path / "new", ["x.npz"]) as d:
+        (d / "x.npz").write_bytes(b"done")
+        raise RuntimeError("the second video failed")
+    assert (tmp_path / "new" / "x.npz").exists()  # not empty: kept
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="not a directory"), fileio.output_dir(tmp_path / "file"):
+        pass
+
+
+def test_features_sweeps_a_killed_runs_partial_files_and_a_failed_run_leaves_no_directory(tmp_path, capsys):
+    bad = tmp_path / "clip.mp4"
+    bad.write_bytes(b"not a video at all" * 100)
+    out = tmp_path / "feat"
+    assert main(["features", str(bad), "--out", str(out), "--jobs", "1"]) != 0
+    assert not out.exists()  # created by the failed run, empty: removed
+    out.mkdir()
+    stale = _old(out / ".clip.q1w2e3r4.tmp.npz")
+    other = _old(out / ".notes.q1w2e3r4.tmp.txt")
+    assert main(["features", str(bad), "--out", str(out), "--jobs", "1"]) != 0
+    assert not stale.exists() and other.exists() and out.is_dir()
