@@ -4,7 +4,9 @@ decoded frame count; a save from a stale revision is refused)."""
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import fcntl
 import logging
 import os
 import threading
@@ -17,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..fileio import parse_json_bytes
 from ..formats import FormatError
 from ..formats.annotations import (
     Annotations,
@@ -24,7 +27,6 @@ from ..formats.annotations import (
     check_performer,
     file_sha256,
     from_document,
-    read_annotations,
     resolve_video_path,
     stored_path,
     to_document,
@@ -41,13 +43,19 @@ READ_AHEAD = 4
 JPEG_QUALITY = 90
 
 
-class Conflict(Exception):
-    """A save from a page that did not see the current revision."""
+#: the largest annotations file read (bytes)
+MAX_FILE = 64 << 20
 
-    def __init__(self, current: int) -> None:
+
+class Conflict(Exception):
+    """A save from a page that did not see the current revision (or a file changed on disk that cannot be
+    used). ``current``: the revision the store is at; the page reloads (``GET /api/annotations``), puts
+    its changes onto that state and saves again from ``current``."""
+
+    def __init__(self, current: int, message: str | None = None) -> None:
         self.current = current
-        super().__init__(f"the annotations changed since this page loaded them (now at revision {current}); "
-                         f"reload to see them")
+        super().__init__(message or f"the annotations changed since this page loaded them (now at revision "
+                                    f"{current}); reload them and redo or merge your changes")
 
 
 @dataclass
@@ -168,44 +176,128 @@ class Store:
 
     Videos of the file not opened in this session are kept as they are. A video is matched by content
     (sha256); a file entry with the same path but another content, or the same content but another decoded
-    frame count, is refused at start (an annotation never lands on another video)."""
+    frame count, is refused at start (an annotation never lands on another video).
+
+    Several processes may serve one file (two ``annotate`` runs, a script): a save is a compare-and-swap
+    on the file itself - under an exclusive ``flock`` of a lock file beside it (``.<name>.lock``, beside
+    the symlink's target when the file is a link) the store re-reads the file if it changed on disk, refuses
+    a save made from another revision (:class:`Conflict`), and writes. Every read of the state re-reads the
+    file when its identity (inode, size, modification time) changed, so a reloaded page sees what another
+    process or an editor wrote. An outside edit that kept the revision number counts as a new revision."""
 
     def __init__(self, path: str | os.PathLike, videos: list[Video], classes: list[str]) -> None:
         self.path = Path(path)
         self.videos = {v.id: v for v in videos}
+        self.classes = list(classes)
         self.lock = threading.Lock()
-        if self.path.exists():
-            ann = read_annotations(self.path)
-        else:
-            ann = Annotations(classes=list(classes), videos=[], revision=0)
-        for c in classes:
-            if c not in ann.classes:
+        self._stamp: tuple | None = None
+        ann, self._stamp = self._read_disk()
+        self.ann = self._merge(ann, self.path)
+
+    # ---------------------------------------------------------------------------------------- the file
+    def _lock_path(self) -> Path:
+        target = Path(os.path.realpath(self.path))
+        return target.parent / f".{target.name}.lock"
+
+    @contextlib.contextmanager
+    def file_lock(self):
+        """Hold the exclusive lock on the annotations file (blocks while another process saves)."""
+        lp = self._lock_path()
+        lp.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(lp, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            yield
+        finally:
+            os.close(fd)  # closing the descriptor releases the lock
+
+    def _read_disk(self) -> tuple[Annotations | None, tuple | None]:
+        """The file's annotations and its stamp (None, None when there is no file). The stamp and the
+        bytes come from one open descriptor, so they belong together."""
+        try:
+            with open(self.path, "rb") as f:
+                st = os.fstat(f.fileno())
+                raw = f.read(MAX_FILE + 1)
+        except FileNotFoundError:
+            return None, None
+        except OSError as e:
+            raise FormatError(self.path, None, f"cannot be read ({e.strerror or e})") from None
+        stamp = (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+        if len(raw) > MAX_FILE:
+            raise FormatError(self.path, None, f"larger than {MAX_FILE} bytes")
+        return from_document(parse_json_bytes(raw, self.path), self.path), stamp
+
+    def _disk_stamp(self) -> tuple | None:
+        try:
+            st = os.stat(self.path)
+        except FileNotFoundError:
+            return None
+        return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+    def _merge(self, ann: Annotations | None, where) -> Annotations:
+        """``ann`` (the file's content, or None) with this session's classes and videos put in, validated."""
+        if ann is None:
+            ann = Annotations(classes=list(self.classes), videos=[], revision=0)
+        known = set(ann.classes)
+        for c in self.classes:  # linear: a set of the names, not a list search per name
+            if c not in known:
+                known.add(c)
                 ann.classes.append(c)
         by_sha = {v.sha256: v for v in ann.videos}
-        for v in videos:
+        by_path = None
+        for v in self.videos.values():
             entry = by_sha.get(v.sha256)
             if entry is None:
-                for other in ann.videos:
-                    if resolve_video_path(self.path, other) == v.path:
-                        raise FormatError(self.path, "sha256", f"annotates {other.path} with another content "
-                                          "(the video file changed since it was annotated); refusing to put "
-                                          "its marks on this video")
+                if by_path is None:
+                    by_path = {resolve_video_path(self.path, other): other for other in ann.videos}
+                other = by_path.get(v.path)
+                if other is not None:
+                    raise FormatError(where, "sha256", f"annotates {other.path} with another content "
+                                      "(the video file changed since it was annotated); refusing to put "
+                                      "its marks on this video")
                 entry = VideoAnnotations(stored_path(self.path, v.path), v.sha256, v.frames, v.fps)
                 ann.videos.append(entry)
             elif entry.frames != v.frames:
-                raise FormatError(self.path, "frames", f"{entry.path}: the file says {entry.frames} frames, "
+                raise FormatError(where, "frames", f"{entry.path}: the file says {entry.frames} frames, "
                                   f"{v.path} decodes to {v.frames}")
-            check_performer(entry, v.reader.width, v.reader.height, self.path)
+            check_performer(entry, v.reader.width, v.reader.height, where)
         to_document(ann)  # validate the merged state before serving it
-        self.ann = ann
+        return ann
 
+    def refresh(self) -> None:
+        """Re-read the file if it changed on disk since this store last read or wrote it (call holding
+        ``self.lock``). :class:`Conflict` when the changed file cannot be used (invalid, or it contradicts
+        this session's videos): the in-memory state is kept, nothing is overwritten."""
+        stamp = self._disk_stamp()
+        if stamp == self._stamp:
+            return
+        if stamp is None:  # the file was removed: keep what we have; the next save writes it again
+            self._stamp = None
+            return
+        try:
+            ann, stamp = self._read_disk()
+            merged = self._merge(ann, self.path)
+        except FormatError as e:
+            raise Conflict(self.ann.revision, f"the annotations file changed on disk and cannot be used "
+                                              f"({e}); fix or restore it, then reload") from None
+        if merged.revision <= self.ann.revision and to_document(merged) != to_document(self.ann):
+            merged.revision = self.ann.revision + 1  # an outside edit is a change the page has not seen
+        self.ann, self._stamp = merged, stamp
+        log.info("annotate: %s changed on disk; now at revision %d", self.path, merged.revision)
+
+    # ---------------------------------------------------------------------------------------- the API
     def entry(self, video_id: str) -> VideoAnnotations:
         return self.ann.video(self.videos[video_id].sha256)  # type: ignore[return-value]
 
     def state(self) -> dict[str, Any]:
         """The API view: revision, classes, and per served video its transitions, segments and performer
-        choice (``{frame, x, y}`` as in the file, or null)."""
+        choice (``{frame, x, y}`` as in the file, or null). The file is re-read when it changed on disk
+        (a file that cannot be used is logged and the last good state served)."""
         with self.lock:
+            try:
+                self.refresh()
+            except Conflict as e:
+                log.warning("annotate: %s", e)
             doc = to_document(self.ann)
         by_sha = {v["sha256"]: v for v in doc["videos"]}
         return {"revision": doc["revision"], "classes": doc["classes"],
@@ -216,20 +308,21 @@ class Store:
     def save(self, body: Any) -> int:
         """Apply an API-view ``body`` (see :meth:`state`) made at ``body["revision"]``; write; return the
         new revision. :class:`Conflict` on a stale revision, :class:`FormatError` on invalid content; in
-        both cases nothing changes."""
+        both cases nothing changes. The revision check and the write happen under the file lock, after
+        re-reading a file another process changed: two saves from one revision never both succeed."""
         if not isinstance(body, dict):
             raise FormatError("request", None, "expected a JSON object")
         rev = body.get("revision")
         if isinstance(rev, bool) or not isinstance(rev, int):
             raise FormatError("request", "revision", "expected the integer revision the page loaded")
-        with self.lock:
-            on_disk = self._disk_revision()
-            if rev != self.ann.revision or (on_disk is not None and on_disk != self.ann.revision):
-                raise Conflict(max(self.ann.revision, on_disk or 0))
+        with self.lock, self.file_lock():
+            self.refresh()
+            if rev != self.ann.revision:
+                raise Conflict(self.ann.revision)
             new = self.apply(body)
             new.revision = self.ann.revision + 1
             write_annotations(self.path, new)
-            self.ann = new
+            self.ann, self._stamp = new, self._disk_stamp()
             return new.revision
 
     def apply(self, body: dict) -> Annotations:
@@ -241,15 +334,16 @@ class Store:
         if not isinstance(vids, list):
             raise FormatError("request", "videos", "expected a list")
         seen = set()
+        by_sha = {d["sha256"]: d for d in doc["videos"]}
         for k, v in enumerate(vids):
-            if not isinstance(v, dict) or v.get("id") not in self.videos or v.get("id") in seen:
+            vid = v.get("id") if isinstance(v, dict) else None
+            if not isinstance(vid, str) or vid not in self.videos or vid in seen:
                 raise FormatError("request", f"videos[{k}].id", "not a video of this session (or repeated)")
-            seen.add(v["id"])
-            sha = self.videos[v["id"]].sha256
-            target = next(d for d in doc["videos"] if d["sha256"] == sha)
+            seen.add(vid)
+            target = by_sha[self.videos[vid].sha256]
             extra = set(v) - {"id", "transitions", "segments", "performer"}
             if extra:
-                raise FormatError("request", f"videos[{k}]", f"unknown field(s) {sorted(extra)}")
+                raise FormatError("request", f"videos[{k}]", f"unknown field(s) {sorted(extra)}"[:300])
             for key in ("transitions", "segments"):
                 if key in v:
                     target[key] = v[key]
@@ -257,15 +351,10 @@ class Store:
                 target.pop("performer", None)
                 if v["performer"] is not None:
                     target["performer"] = v["performer"]
-        new = from_document(copy.deepcopy(doc), "request")
+        try:
+            new = from_document(copy.deepcopy(doc), "request")
+        except RecursionError:
+            raise FormatError("request", None, "nested too deeply") from None
         for vid in self.videos.values():  # the file cannot know the frame size; the server does
             check_performer(new.video(vid.sha256), vid.reader.width, vid.reader.height, "request")
         return new
-
-    def _disk_revision(self) -> int | None:
-        if not self.path.exists():
-            return None
-        try:
-            return read_annotations(self.path).revision
-        except FormatError:
-            return None
