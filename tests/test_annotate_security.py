@@ -118,3 +118,80 @@ def test_page_carries_token_and_a_strict_csp(server):
     assert "script-src 'self'" in csp and "frame-ancestors 'none'" in csp
     # each server start makes a new token
     assert c.get("/api/annotations").status_code == 200
+
+
+# ------------------------------------------------------------------ beyond loopback: a secret (issue 33 item 5)
+SECRET = "k3y-" + "s" * 28
+API = ["/api/videos", "/api/annotations", "/api/videos/0/frames/0", "/api/videos/0/timestamps",
+       "/api/videos/0/overlays", "/api/export/native?video=0"]
+
+
+@pytest.fixture
+def keyed(video, tmp_path):
+    from annotate_util import session
+
+    from vidstyle.annotate.server import Running
+
+    s = session([video], tmp_path / "ann.json", max_body=64 << 10)
+    s.secret = SECRET  # as launch sets it for a --host beyond loopback
+    with Running(s) as url:
+        c = httpx.Client(base_url=url, timeout=30)
+        yield c, url, s.token, tmp_path / "ann.json"
+        c.close()
+
+
+def test_beyond_loopback_every_api_request_needs_the_secret(keyed):
+    c, url, token, ann = keyed
+    seen = []
+    for path in API:
+        for headers in ({}, {"X-Vidstyle-Secret": "wrong"}, {"X-Vidstyle-Secret": SECRET[:-1]}):
+            r = c.get(path, headers=headers)
+            assert r.status_code == 401 and "key" in r.json()["error"], path
+            seen.append(r)
+        r = c.get(path, headers={"X-Vidstyle-Secret": SECRET})
+        assert r.status_code == 200, path
+        sep = "&" if "?" in path else "?"
+        assert c.get(f"{path}{sep}key={SECRET}").status_code == 200  # image and download URLs carry it
+        assert c.get(f"{path}{sep}key=nope").status_code == 401
+        seen.append(r)
+    assert _put(c, url, token, json=BODY).status_code == 401 and not ann.exists()  # token + Origin: not enough
+    r = _put(c, url, token, json=BODY, headers={"X-Vidstyle-Secret": SECRET})
+    assert r.status_code == 200 and ann.exists()
+    r = c.post("/api/import/native?video=0", content=b"{}", headers={"Origin": url, "X-Vidstyle-Token": token})
+    assert r.status_code == 401
+    # the page and its script load without it (the page takes the key from the URL fragment) and never hold it
+    for path in ("/", "/static/app.js", "/static/style.css"):
+        r = c.get(path)
+        assert r.status_code == 200
+        seen.append(r)
+    for r in seen:
+        assert SECRET not in r.text and SECRET not in str(r.headers)
+
+
+def test_the_secret_is_printed_once_at_start_and_only_beyond_loopback(video, tmp_path, monkeypatch, capsys):
+    import uvicorn
+
+    from vidstyle.annotate import server as srv
+    from vidstyle.cli import app
+
+    sessions = []
+    monkeypatch.setattr(srv, "serve", lambda session, host, port, open_browser: sessions.append(session))
+    for host in ("0.0.0.0", "192.0.2.7", "::"):
+        res = CliRunner().invoke(app, ["annotate", str(video), "-a", str(tmp_path / "a.json"), "--host", host,
+                                       "--no-browser"])
+        assert res.exit_code == 0, res.output
+        assert sessions[-1].secret and len(sessions[-1].secret) >= 32
+    assert len({s.secret for s in sessions}) == 3  # a new one per start
+    for host in ("127.0.0.1", "localhost", "::1", "127.0.0.5"):
+        res = CliRunner().invoke(app, ["annotate", str(video), "-a", str(tmp_path / "a.json"), "--host", host,
+                                       "--no-browser"])
+        assert res.exit_code == 0 and sessions[-1].secret is None  # loopback: as before, no secret
+    monkeypatch.undo()
+    monkeypatch.setattr(uvicorn.Server, "run", lambda self, sockets=None: None)
+    keyed = sessions[0]
+    capsys.readouterr()
+    srv.serve(keyed, "127.0.0.1", 0, open_browser=False)
+    out = capsys.readouterr()
+    assert out.err.count(keyed.secret) == 1 and f"#key={keyed.secret}" in out.err and keyed.secret not in out.out
+    srv.serve(sessions[-1], "127.0.0.1", 0, open_browser=False)
+    assert "#key=" not in capsys.readouterr().err

@@ -100,10 +100,12 @@ def import_(fmt: str, data: bytes, classes: list[str], target: Target, name: str
         raise FormatError(None, "format", f"{fmt!r} is not one of {', '.join(FORMATS)}")
     try:
         marks = {"native": _native_in, "labelstudio": _ls_in, "cvat": _cvat_in, "via": _via_in}[fmt](
-            data, list(classes), target, name)
+            data, ClassList(classes), target, name)
     except FormatError:
         raise
-    except (ValueError, KeyError, TypeError, IndexError, AttributeError, ET.ParseError) as e:
+    except RecursionError:
+        raise FormatError(name, None, f"not a valid {fmt} export (nested too deeply)") from None
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OverflowError, ET.ParseError) as e:
         raise FormatError(name, None, f"not a valid {fmt} export ({type(e).__name__}: {e})"[:300]) from None
     # one validation for all formats: the marks as our own file
     v = target.video
@@ -140,10 +142,23 @@ def _transition(frame: int, extra: dict) -> Transition:
     return Transition(int(frame), str(extra["from_action"]), str(extra["to_action"]), status, cands)
 
 
-def _add_class(classes: list[str], name: str) -> str:
-    if name not in classes:
-        classes.append(name)
-    return name
+class ClassList(list):
+    """Class names in order with a set of them beside: adding one is O(1), so an import of many classes
+    takes linear time (a list search per name made 20k classes take seconds)."""
+
+    def __init__(self, names=()) -> None:
+        super().__init__(names)
+        self.known = set(self)
+
+    def add(self, name: str) -> str:
+        if name not in self.known:
+            self.known.add(name)
+            self.append(name)
+        return name
+
+
+def _add_class(classes: ClassList, name: str) -> str:
+    return classes.add(name)
 
 
 # ------------------------------------------------------------------------------------------ native
@@ -345,9 +360,12 @@ def _via_out(classes, target: Target) -> bytes:
               "options": {}, "default_option_id": ""},
     }
     metadata = {}
+    option = {}
+    for k, c in enumerate(classes):
+        option.setdefault(c, k)
     for k, s in enumerate(sorted(v.segments, key=lambda s: s.start)):
         metadata[f"1_seg{k}"] = {"vid": "1", "flg": 0, "z": [round(float(b[s.start]), 3), round(float(b[s.end]), 3)],
-                                 "xy": [], "av": {"1": str(classes.index(s.action))}}
+                                 "xy": [], "av": {"1": str(option[s.action])}}
     for k, t in enumerate(sorted(v.transitions, key=lambda t: t.frame)):
         metadata[f"1_tr{k}"] = {"vid": "1", "flg": 0, "z": [round(float(b[t.frame]), 3)], "xy": [],
                                 "av": {"2": t.from_action, "3": t.to_action, "4": str(STATUSES.index(t.status)),

@@ -25,16 +25,12 @@ def class_names(classes: str | Sequence[str] | None, annotations: Path, overlays
     appearance; else ``default_classes``."""
     if classes:
         if isinstance(classes, str):
-            return [c.strip() for c in classes.split(",") if c.strip()]
-        return list(classes)
+            classes = [c.strip() for c in classes.split(",") if c.strip()]
+        return list(dict.fromkeys(classes))  # repeated names once, in order (linear time)
     if annotations.exists():
         return []
-    names: list[str] = []
-    for ov in overlays.values():
-        for c in ov.get("recognized", {}).get("classes", []):
-            if c not in names:
-                names.append(c)
-    return names or list(default_classes)
+    names = dict.fromkeys(c for ov in overlays.values() for c in ov.get("recognized", {}).get("classes", []))
+    return list(names) or list(default_classes)
 
 
 def annotate(
@@ -61,12 +57,28 @@ def annotate(
         raise ParameterError("port", f"must be in 0..65535, got {port}")
     if max_body_mb <= 0:
         raise ParameterError("max_body_mb", f"must be positive, got {max_body_mb}")
-    if host not in LOOPBACK:
-        log.warning("annotate: listening on %s: anyone who can reach this address can read the videos; "
-                    "saving still needs the page's session token", host)
+    secret = None
+    if not is_loopback(host):
+        import secrets
+
+        secret = secrets.token_urlsafe(24)
+        log.warning("annotate: listening on %s: the page and the API need the key printed below (give it only "
+                    "to people who may read the videos and change the annotations)", host)
     annotations = Path(annotations)
     vids = open_videos(list(videos))
     overlays = load_overlays(vids, list(labels), list(poses), list(matches))
     store = Store(annotations, vids, class_names(classes, annotations, overlays, default_classes))
-    server.serve(server.new_session(vids, store, overlays, max_body=int(max_body_mb * (1 << 20))), host, port,
-                 open_browser=open_browser)
+    server.serve(server.new_session(vids, store, overlays, max_body=int(max_body_mb * (1 << 20)), secret=secret),
+                 host, port, open_browser=open_browser)
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` is a loopback address (or ``localhost``): only this machine can connect."""
+    import ipaddress
+
+    if host in LOOPBACK:
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False

@@ -10,8 +10,12 @@ API (the page and the tests use it; ``{id}`` is a video's position on the comman
 * ``GET /api/annotations`` / ``PUT /api/annotations`` - ``{revision, classes, videos: [{id, transitions,
   segments, performer}]}`` (``performer``: ``{frame, x, y}``, the chosen performer in the input video's
   pixels, or null; a PUT may leave any of the three out to keep it, null clears the performer); a PUT
-  names the revision it was made from: 200 ``{revision}`` (the new one), 409 on a stale revision, 400/422
-  on bad JSON or content (nothing changes)
+  names the revision it was made from: 200 ``{revision}`` (the new one); 409 ``{error, revision}`` when the
+  annotations changed since that revision (another page, another ``annotate`` process on the same file, an
+  edit on disk): ``revision`` is the current one, and the page recovers by reloading ``GET
+  /api/annotations`` (which re-reads the file), putting its own changes onto that state and saving from
+  ``revision`` (the page does this itself when the other change touched other videos); 400/422 on bad
+  JSON or content (nothing changes)
 * ``GET /api/export/{format}?video={id}`` - a download (native | labelstudio | cvat | via)
 * ``POST /api/import/{format}?video={id}`` - body: the exported file; answers the marks in the API's
   shape, for the page to apply (and save) as one undoable step; nothing is saved by the import itself
@@ -20,20 +24,32 @@ Security (each rule is tested): binds 127.0.0.1 unless told otherwise; a request
 not this server's address is refused (DNS rebinding); a state-changing request (PUT, POST, ...) needs the
 page's session token (``X-Vidstyle-Token``, written into the served page) and an ``Origin`` of this server;
 videos are addressed by id only and static files by a fixed table - nothing from a request becomes a file
-path; bodies over ``max_body`` bytes get 413.
+path; bodies over ``max_body`` bytes get 413; bad input of any kind is a 4xx, never a 500 (frame numbers
+are ASCII digits only; ids must be strings; JSON nested too deeply or with numbers out of range is refused).
+Bodies are parsed and applied in the thread pool, never on the event loop.
+
+With a ``--host`` beyond loopback the token alone protects nothing (anyone who reaches the port can fetch
+the page that carries it), so the server also needs a **secret**: generated at start, printed once to
+stderr (as the page's URL ending ``#key=...``) and never served. The page reads it from the URL fragment
+(which the browser never sends) or asks for it, and sends it with every API request (``X-Vidstyle-Secret``,
+or ``?key=`` on image and download URLs); without it every ``/api/`` request gets 401. Loopback servers
+need no secret.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import re
 import secrets
+import sys
 import socket
 import threading
 from dataclasses import dataclass, field
 from importlib import resources
 
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
@@ -60,6 +76,8 @@ class Session:
     token: str = field(default_factory=lambda: secrets.token_urlsafe(32))
     allowed_hosts: set[str] = field(default_factory=set)
     max_body: int = MAX_BODY
+    #: needed on every API request when set (a server reachable beyond loopback); never served
+    secret: str | None = None
 
     def allow(self, host: str, port: int) -> None:
         """Accept ``Host: host:port`` (and the loopback names when ``host`` is a loopback address)."""
@@ -94,6 +112,11 @@ class Guard:
         host = headers.get("host", "")
         if host not in s.allowed_hosts:
             return await _err(400, f"Host {host!r} is not this server (DNS rebinding?)")(scope, receive, send)
+        if s.secret is not None and scope["path"].startswith("/api/"):
+            given = headers.get("x-vidstyle-secret") or _query_key(scope.get("query_string", b""))
+            if not secrets.compare_digest(given.encode("utf-8", "replace"), s.secret.encode()):
+                return await _err(401, "this server needs the key it printed when it started (open the URL it "
+                                       "printed, ending #key=...)")(scope, receive, send)
         if scope["method"] not in SAFE_METHODS:
             origin = headers.get("origin")
             if origin not in s.origins:
@@ -126,6 +149,19 @@ class Guard:
 
 class _TooLarge(Exception):
     pass
+
+
+def _query_key(query: bytes) -> str:
+    from urllib.parse import parse_qs
+
+    try:
+        return parse_qs(query.decode("latin-1")).get("key", [""])[-1]
+    except ValueError:
+        return ""
+
+
+#: a frame number: ASCII digits only (str.isdigit also accepts "²" and Arabic or full-width digits)
+FRAME_INDEX = re.compile(r"[0-9]{1,9}")
 
 
 def _page(token: str) -> bytes:
@@ -162,7 +198,7 @@ def create_app(session: Session) -> Starlette:
         if v is None:
             return _err(404, "no such video")
         raw = request.path_params["index"]
-        if not raw.isdigit() or len(raw) > 9:
+        if not FRAME_INDEX.fullmatch(raw):
             return _err(400, f"frame index must be a non-negative integer, got {raw[:20]!r}")
         index = int(raw)
         if index >= v.frames:
@@ -194,25 +230,23 @@ def create_app(session: Session) -> Starlette:
         return JSONResponse(session.overlays.get(v.id, {}))
 
     async def get_annotations(request: Request):
-        return JSONResponse(store.state(), headers=nocache)
+        return JSONResponse(await run_in_threadpool(store.state), headers=nocache)
 
-    async def body_json(request: Request):
-        raw = await request.body()
-        try:
-            return json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
-        except (UnicodeDecodeError, ValueError) as e:
-            raise _BadRequest(f"request body is not valid JSON ({e})"[:300]) from None
+    def save(raw: bytes) -> int:  # in the thread pool: parsing and validating a large body takes a while
+        return store.save(parse_body(raw))
 
     async def put_annotations(request: Request):
+        raw = await request.body()
         try:
-            body = await body_json(request)
-            rev = store.save(body)
+            rev = await run_in_threadpool(save, raw)
         except _BadRequest as e:
             return _err(400, str(e))
         except Conflict as e:
-            return JSONResponse({"error": str(e), "revision": e.current}, status_code=409)
+            return JSONResponse({"error": str(e), "revision": e.current}, status_code=409, headers=nocache)
         except FormatError as e:
             return _err(422, str(e))
+        except RecursionError:
+            return _err(400, "request body is nested too deeply")
         return JSONResponse({"revision": rev})
 
     def target(v: Video) -> exchange.Target:
@@ -228,14 +262,20 @@ def create_app(session: Session) -> Starlette:
             raise _NotFound("no such video (give ?video=ID)")
         return fmt, v
 
+    def export_data(fmt: str, v: Video) -> tuple[bytes, str]:
+        with store.lock:
+            try:
+                store.refresh()
+            except Conflict as e:
+                log.warning("annotate: %s", e)
+            return exchange.export(fmt, store.ann.classes, target(v)), exchange.default_filename(fmt, target(v))
+
     async def export(request: Request):
         try:
             fmt, v = _fmt_video(request)
         except _RequestError as e:
             return _err(e.status, str(e))
-        with store.lock:
-            data = exchange.export(fmt, store.ann.classes, target(v))
-            name = exchange.default_filename(fmt, target(v))
+        data, name = await run_in_threadpool(export_data, fmt, v)
         safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
         return Response(data, media_type=exchange.MEDIA[fmt][0],
                         headers={"Content-Disposition": f'attachment; filename="{safe}"', **nocache})
@@ -247,13 +287,17 @@ def create_app(session: Session) -> Starlette:
             return _err(e.status, str(e))
         raw = await request.body()
         try:
-            with store.lock:
-                marks = exchange.import_(fmt, raw, store.ann.classes, target(v), name=f"imported {fmt}")
+            answer = await run_in_threadpool(import_marks, fmt, v, raw)
         except FormatError as e:
             return _err(422, str(e))
-        doc = exchange.to_document_unchecked(marks, store.entry(v.id))
-        return JSONResponse({"classes": marks.classes, "video": v.id,
-                             "transitions": doc["videos"][0]["transitions"], "segments": doc["videos"][0]["segments"]})
+        return JSONResponse(answer)
+
+    def import_marks(fmt: str, v: Video, raw: bytes) -> dict:  # in the thread pool (a large file takes a while)
+        with store.lock:
+            marks = exchange.import_(fmt, raw, store.ann.classes, target(v), name=f"imported {fmt}")
+            doc = exchange.to_document_unchecked(marks, store.entry(v.id))
+        return {"classes": marks.classes, "video": v.id,
+                "transitions": doc["videos"][0]["transitions"], "segments": doc["videos"][0]["segments"]}
 
     routes = [
         Route("/", index, methods=["GET"]),
@@ -288,6 +332,17 @@ class _NotFound(_RequestError):
 
 def _no_constant(name: str):
     raise ValueError(f"{name} is not a JSON number")
+
+
+def parse_body(raw: bytes):
+    """A request body as strict JSON; :class:`_BadRequest` for anything else (not UTF-8, not JSON, NaN or
+    Infinity, nested too deeply, an integer too long to convert)."""
+    try:
+        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
+    except RecursionError:
+        raise _BadRequest("request body is nested too deeply") from None
+    except (UnicodeDecodeError, ValueError) as e:
+        raise _BadRequest(f"request body is not valid JSON ({e})"[:300]) from None
 
 
 def bind(host: str, port: int) -> socket.socket:
@@ -349,6 +404,10 @@ def serve(session: Session, host: str, port: int, open_browser: bool = True) -> 
     shown = f"[{host}]" if ":" in host else host
     url = f"http://{shown}:{port}/"
     log.info("annotate: %s (Ctrl+C to stop); annotations -> %s", url, session.store.path)
+    if session.secret is not None:  # shown once, here only: the page takes it from the URL fragment
+        url = f"{url}#key={session.secret}"
+        print(f"annotate: open {url}\n  (the #key=... part is this server's secret, needed to use the page; "
+              "it is shown only now)", file=sys.stderr, flush=True)
     if open_browser:
         import webbrowser
 
@@ -362,8 +421,9 @@ def serve(session: Session, host: str, port: int, open_browser: bool = True) -> 
             v.close()
 
 
-def new_session(videos: list[Video], store: Store, overlays: dict | None = None, max_body: int = MAX_BODY) -> Session:
-    return Session(videos, store, overlays or {}, max_body=max_body)
+def new_session(videos: list[Video], store: Store, overlays: dict | None = None, max_body: int = MAX_BODY,
+                secret: str | None = None) -> Session:
+    return Session(videos, store, overlays or {}, max_body=max_body, secret=secret)
 
 
 __all__ = ["Running", "Session", "bind", "create_app", "new_session", "serve"]

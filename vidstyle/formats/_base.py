@@ -153,8 +153,9 @@ class Fields:
             if not isinstance(s, str) or (nonempty_items and not s):
                 raise FormatError(self.path, f"{self.name(key)}[{i}]", f"expected a non-empty string, got {s!r}"[:200])
         if unique and len(set(v)) != len(v):
-            dup = next(s for s in v if v.count(s) > 1)
-            raise self.fail(key, f"{dup!r} appears more than once")
+            seen: set[str] = set()
+            dup = next(s for s in v if s in seen or seen.add(s))  # linear: a set, not a count per name
+            raise self.fail(key, f"{dup!r} appears more than once"[:200])
         return v
 
     def sub(self, key: str, required: bool = True) -> "Fields | None":
