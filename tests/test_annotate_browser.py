@@ -432,3 +432,90 @@ def test_choose_performer_stores_the_clicked_video_pixel(browser, app):
         page.close()
     assert scales[0] > 1.5 and scales[-1] < 1  # enlarged and shrunk displays
     assert errors == []
+
+
+@pytest.fixture
+def two_videos(tmp_path):
+    vids = [numbered_video(tmp_path / "a.mp4", 40, 25.0, size=(160, 120)),
+            numbered_video(tmp_path / "b.mp4", 30, 25.0, size=(160, 120), vfr=True, seed=2)]
+    ann = tmp_path / "annotations.json"
+    yield vids, ann
+
+
+def _select(page, vid):
+    page.select_option("#video", vid)
+    page.wait_for_function(f"() => window.vidstyle.vid.id === '{vid}'")
+    assert shown_number(page) == 0
+
+
+def test_a_409_merges_changes_to_other_videos_and_an_outside_write_is_seen_after_reload(browser, two_videos):
+    vids, ann = two_videos
+    with Running(session(vids, ann)) as url, Running(session(vids, ann)) as url2:  # two processes' servers
+        a, b = browser.new_page(), browser.new_page()
+        a.goto(url + "/")
+        b.goto(url2 + "/")
+        for p in (a, b):
+            assert shown_number(p) == 0
+        a.keyboard.press("t")                       # a: a transition on video 0
+        wait_saved(a)
+        _select(b, "1")                             # b (other server, stale): a transition on video 1
+        b.keyboard.press("f")
+        b.keyboard.press("t")
+        wait_saved(b)                               # 409, merged (other video), saved again
+        assert not b.evaluate("window.vidstyle.conflict")
+        saved = read_annotations(ann)
+        assert saved.revision == 2
+        assert [t.frame for t in saved.videos[0].transitions] == [0]
+        assert [t.frame for t in saved.videos[1].transitions] == [1]
+        assert b.evaluate("window.vidstyle.marks['0'].transitions.length") == 1  # b now shows a's mark
+        # both change the same video: a real conflict, nothing overwritten
+        a.keyboard.press("f")
+        a.keyboard.press("t")
+        wait_saved(a)
+        _select(b, "0")
+        b.keyboard.press("End")
+        b.keyboard.press("t")
+        b.wait_for_function("() => window.vidstyle.conflict")
+        assert "conflict" in b.inner_text("#status")
+        assert [t.frame for t in read_annotations(ann).videos[0].transitions] == [0, 1]
+        # an outside write, then a reload of the page: the page sees it and saves from it
+        outside = read_annotations(ann)
+        outside.videos[1].transitions = []
+        outside.revision += 5
+        from vidstyle.formats.annotations import write_annotations
+
+        write_annotations(ann, outside)
+        b.reload()
+        assert shown_number(b) == 0
+        assert b.evaluate("window.vidstyle.revision") == outside.revision
+        b.keyboard.press("v")
+        b.keyboard.press("t")
+        wait_saved(b)
+        saved = read_annotations(ann)
+        assert saved.revision == outside.revision + 1 and saved.videos[1].transitions == []
+        assert [t.frame for t in saved.videos[0].transitions] == [0, 1, 10]
+        a.close(), b.close()
+
+
+def test_beyond_loopback_the_page_takes_the_key_from_the_fragment_or_asks(browser, tmp_path):
+    vid = numbered_video(tmp_path / "k.mp4", 20, 25.0)
+    s = session([vid], tmp_path / "keyed.json")
+    s.secret = "the-secret-" + "k" * 24
+    with Running(s) as kurl:
+        page = browser.new_page()
+        page.goto(f"{kurl}/#key={s.secret}")
+        assert shown_number(page) == 0
+        page.keyboard.press("f")
+        page.keyboard.press("t")
+        wait_saved(page)
+        assert [t.frame for t in read_annotations(tmp_path / "keyed.json").videos[0].transitions] == [1]
+        page.close()
+        page = browser.new_page()             # no key in the URL: the page asks for it
+        asked = []
+        page.on("dialog", lambda d: (asked.append(d.message), d.accept(f"{kurl}/#key={s.secret}")))
+        page.goto(f"{kurl}/")
+        assert shown_number(page) == 0 and len(asked) == 1 and "key" in asked[0]
+        page.keyboard.press("t")
+        wait_saved(page)
+        assert [t.frame for t in read_annotations(tmp_path / "keyed.json").videos[0].transitions] == [0, 1]
+        page.close()

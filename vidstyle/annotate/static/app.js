@@ -4,28 +4,58 @@
 "use strict";
 
 const TOKEN = document.querySelector('meta[name="vidstyle-token"]').content;
+// a server reachable beyond loopback needs the key it printed at start: from the URL fragment (#key=...,
+// never sent to the server by the browser) or asked for on the first 401
+let KEY = (location.hash.match(/[#&]key=([^&]*)/) || [])[1];
+KEY = KEY ? decodeURIComponent(KEY) : "";
+const withKey = (url) => (KEY ? `${url}${url.includes("?") ? "&" : "?"}key=${encodeURIComponent(KEY)}` : url);
 const $ = (id) => document.getElementById(id);
 const PERFORMER = "#ff3df2"; // the performer choice's colour (ring on the frame, diamond on the timeline)
 const S = {
   videos: [], vid: null, frame: 0, frames: {}, timestamps: {}, overlays: {},
   revision: 0, classes: [], marks: {}, action: 0, pending: null,
-  undo: [], redo: [], changes: 0, savedChanges: 0, saving: false, conflict: false,
+  undo: [], redo: [], changes: 0, savedChanges: 0, saving: false, conflict: false, base: null,
   playing: false, saveTimer: null, picking: false,
 };
 window.vidstyle = S; // for tests and the curious
 
 // ------------------------------------------------------------------ server
-async function api(method, url, body, raw) {
+async function api(method, url, body, raw, asked) {
   const opts = { method, headers: {} };
   if (method !== "GET") opts.headers["X-Vidstyle-Token"] = TOKEN;
+  if (KEY) opts.headers["X-Vidstyle-Secret"] = KEY;
   if (body !== undefined) {
     opts.body = raw ? body : JSON.stringify(body);
     opts.headers["Content-Type"] = raw ? "application/octet-stream" : "application/json";
   }
   const r = await fetch(url, opts);
+  if (r.status === 401 && !asked) {
+    const k = window.prompt("This annotation server needs the key it printed when it started (the part after #key=):");
+    if (k) { KEY = k.trim().replace(/^.*#key=/, ""); return api(method, url, body, raw, true); }
+  }
   let data = null;
   try { data = await r.json(); } catch (e) { data = null; }
   return { status: r.status, ok: r.ok, data };
+}
+
+// the marks in one canonical form (sorted, fixed key order) so the page's and the server's compare equal
+function canon(m) {
+  const t = [...m.transitions].sort((a, b) => a.frame - b.frame).map((x) => ({
+    frame: x.frame, from_action: x.from_action, to_action: x.to_action, status: x.status,
+    candidates: (x.candidates || []).map((c) => ({ clip: c.clip, time: c.time, status: c.status })) }));
+  const s = [...m.segments].sort((a, b) => a.start - b.start).map((x) => ({ start: x.start, end: x.end, action: x.action }));
+  const p = m.performer ? { frame: m.performer.frame, x: m.performer.x, y: m.performer.y } : null;
+  return JSON.stringify({ transitions: t, segments: s, performer: p });
+}
+function baseOf(classes, marks) {
+  const b = { classes: JSON.stringify(classes), marks: {} };
+  for (const [id, m] of Object.entries(marks)) b.marks[id] = canon(m);
+  return b;
+}
+function marksOf(state) {
+  const out = {};
+  for (const v of state.videos) out[v.id] = { transitions: v.transitions, segments: v.segments, performer: v.performer || null };
+  return out;
 }
 
 async function load() {
@@ -45,10 +75,8 @@ async function loadAnnotations() {
   const a = (await api("GET", "/api/annotations")).data;
   S.revision = a.revision;
   S.classes = a.classes;
-  S.marks = {};
-  for (const v of a.videos) {
-    S.marks[v.id] = { transitions: v.transitions, segments: v.segments, performer: v.performer || null };
-  }
+  S.marks = marksOf(a);
+  S.base = baseOf(S.classes, S.marks);
   S.undo = []; S.redo = []; S.changes = S.savedChanges = 0; S.conflict = false;
   renderClasses();
   setStatus();
@@ -68,7 +96,7 @@ async function selectVideo(id) {
 }
 
 // ------------------------------------------------------------------ frames
-function frameUrl(i) { return `/api/videos/${S.vid.id}/frames/${i}?v=${S.vid.sha256.slice(0, 12)}`; }
+function frameUrl(i) { return withKey(`/api/videos/${S.vid.id}/frames/${i}?v=${S.vid.sha256.slice(0, 12)}`); }
 
 function go(i) {
   if (!S.vid) return;
@@ -230,18 +258,52 @@ async function save() {
   if (S.conflict || S.saving || S.changes === S.savedChanges) { setStatus(); return S.changes === S.savedChanges; }
   S.saving = true; setStatus();
   const at = S.changes;
+  const sent = baseOf(S.classes, S.marks);
   const body = { revision: S.revision, classes: S.classes,
                  videos: Object.entries(S.marks).map(([id, m]) => ({ id, transitions: m.transitions, segments: m.segments,
                                                                      performer: m.performer || null })) };
   let r;
   try { r = await api("PUT", "/api/annotations", body); } catch (e) { r = { status: 0, data: { error: String(e) } }; }
   S.saving = false;
-  if (r.ok) { S.revision = r.data.revision; S.savedChanges = at; S.lastError = null; }
-  else if (r.status === 409) { S.conflict = true; S.lastError = r.data.error; }
+  if (r.ok) { S.revision = r.data.revision; S.savedChanges = at; S.lastError = null; S.base = sent; S.merges = 0; }
+  else if (r.status === 409) {
+    // changed elsewhere (another page, another process, the file on disk): reload the current state and
+    // keep our changes when they touch other videos (and the class list) than the other change did
+    if ((S.merges = (S.merges || 0) + 1) <= 3 && await merge()) { S.lastError = null; setStatus(); return save(); }
+    S.conflict = true; S.lastError = r.data && r.data.error;
+  }
   else { S.lastError = (r.data && r.data.error) || `save failed (${r.status})`; }
   setStatus();
   if (r.ok && S.changes !== S.savedChanges) S.saveTimer = setTimeout(save, 300);
   return r.ok;
+}
+
+// a three-way merge per video (and of the class list) of our changes and theirs since S.base; false when
+// both changed the same one (the page then stays in conflict: reload to see theirs)
+async function merge() {
+  const r = await api("GET", "/api/annotations");
+  // the server must have moved on (a 409 at our own revision: the file on disk cannot be used)
+  if (!r.ok || !S.base || r.data.revision === S.revision) return false;
+  const theirs = marksOf(r.data), base = S.base;
+  const merged = {};
+  let took = false;
+  for (const id of Object.keys(theirs)) {
+    const mine = S.marks[id];
+    const mineChanged = !mine || canon(mine) !== base.marks[id];
+    const theirsChanged = canon(theirs[id]) !== base.marks[id];
+    if (mineChanged && theirsChanged && canon(mine) !== canon(theirs[id])) return false;
+    merged[id] = theirsChanged ? theirs[id] : mine;
+    took = took || theirsChanged;
+  }
+  const mineC = JSON.stringify(S.classes) !== base.classes, theirsC = JSON.stringify(r.data.classes) !== base.classes;
+  if (mineC && theirsC && JSON.stringify(S.classes) !== JSON.stringify(r.data.classes)) return false;
+  S.classes = theirsC ? r.data.classes : S.classes;
+  S.marks = merged;
+  S.revision = r.data.revision;
+  S.base = baseOf(r.data.classes, theirs);
+  if (took) { S.undo = []; S.redo = []; }  // an undo must not bring back what the other change replaced
+  renderClasses(); render();
+  return true;
 }
 
 function setStatus() {
@@ -263,7 +325,7 @@ window.addEventListener("beforeunload", (e) => {
 $("export").addEventListener("click", async () => {
   await save();
   const a = document.createElement("a");
-  a.href = `/api/export/${$("export-format").value}?video=${S.vid.id}`;
+  a.href = withKey(`/api/export/${$("export-format").value}?video=${S.vid.id}`);
   a.download = "";
   document.body.appendChild(a); a.click(); a.remove();
 });
@@ -356,8 +418,10 @@ for (const [id, key] of [["t-from", "from_action"], ["t-to", "to_action"]]) {
 }
 
 // ------------------------------------------------------------------ drawing
-function color(name) {
-  const i = Math.max(0, S.classes.indexOf(name));
+let classIndex = { of: null, map: new Map() };
+function color(name) {   // a map of the names, rebuilt when the list changes (indexOf per name: quadratic)
+  if (classIndex.of !== S.classes) classIndex = { of: S.classes, map: new Map(S.classes.map((c, k) => [c, k])) };
+  const i = classIndex.map.get(name) || 0;
   return `hsl(${(i * 137.5) % 360} 65% 55%)`;
 }
 
