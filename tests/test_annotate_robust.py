@@ -127,11 +127,11 @@ def test_class_lists_are_merged_without_a_list_search_per_name(video, tmp_path):
 
 def test_class_names_and_duplicates_in_linear_time():
     Counted.calls = 0
-    names = class_names(None, Path_missing(), {"0": {"recognized": {"classes": _names()}},
+    names = class_names(None, NoFile(), {"0": {"recognized": {"classes": _names()}},
                                                "1": {"recognized": {"classes": _names()}}})
     assert names == [f"c{i}" for i in range(N)] and Counted.calls < 10 * N
     Counted.calls = 0
-    assert class_names(_names() + _names(), Path_missing(), {}) == [f"c{i}" for i in range(N)]
+    assert class_names(_names() + _names(), NoFile(), {}) == [f"c{i}" for i in range(N)]
     assert Counted.calls < 10 * N
     doc = {"kind": "vidstyle.annotations", "schema_version": 2, "revision": 0,
            "classes": _names() + [Counted(f"c{N - 1}")], "videos": []}
@@ -141,7 +141,7 @@ def test_class_names_and_duplicates_in_linear_time():
     assert Counted.calls < 10 * N, Counted.calls
 
 
-class Path_missing:  # noqa: N801 - an annotations path that does not exist
+class NoFile:  # an annotations path that does not exist
     def exists(self):
         return False
 

@@ -9,9 +9,9 @@ import time
 
 import pytest
 
+from vidstyle import fileio
 from vidstyle.cli import main
 from vidstyle.errors import InputError
-from vidstyle import fileio
 from vidstyle.fileio import atomic_path, write_json, write_npz, write_text
 
 

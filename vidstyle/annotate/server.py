@@ -42,8 +42,8 @@ import json
 import logging
 import re
 import secrets
-import sys
 import socket
+import sys
 import threading
 from dataclasses import dataclass, field
 from importlib import resources
