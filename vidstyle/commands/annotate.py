@@ -32,7 +32,8 @@ def annotate(
         help="Comma-separated action classes (keys 1-9 pick the first nine). Default: the file's, else the "
              "recognised labels', else the demo's kickboxing classes."),
     host: str = typer.Option("127.0.0.1", "--host", help="Address to listen on (anything but loopback is "
-                                                          "reachable by others: a warning is logged)."),
+                                                          "reachable by others: the page then needs a key, "
+                                                          "printed once at start as the URL's #key=...)."),
     port: int = typer.Option(8765, "--port", help="Port (0: any free port)."),
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a browser."),
     max_body_mb: float = typer.Option(16.0, "--max-body-mb", help="Largest request body accepted (MB)."),
