@@ -77,6 +77,13 @@ _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-styl
 _TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing"}
 
 
+def _check_numbers() -> None:
+    """Every int / float option finite and in its range, checked as it is parsed (:mod:`.commands._numbers`)."""
+    from .commands._numbers import check_all_numbers
+
+    check_all_numbers(app)
+
+
 def _arrange_help() -> None:
     def name(info) -> str:
         return info.name or (info.typer_instance.info.name if getattr(info, "typer_instance", None) else "") or ""
@@ -142,6 +149,7 @@ def _flags_take_no_value() -> None:
 
 _register_commands()
 _arrange_help()
+_check_numbers()
 _literal_help(app)
 _flags_take_no_value()
 
