@@ -167,6 +167,7 @@ def pose(
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
     y = row in the input video's pixels, as a player shows the video)."""
+    from ..fileio import check_writable
     from ..formats.poses import write_poses
     from ..pose.run import (
         check_estimate_params,
@@ -180,6 +181,7 @@ def pose(
 
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
+    check_writable(out)
     backend = default_backend(model) if backend is None else backend
     zooms = parse_scales(scales, "--scales")
     check_estimate_params(backend, model, zooms)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ParameterError, ResourceError
-from ..fileio import outputs_by_stem
+from ..fileio import make_dir, outputs_by_stem
 from ..parallel import limit_threads
 from . import defaults as D
 from .descriptors import DEFAULT_VARIANT, REGISTRY, Descriptor, get_descriptor
@@ -181,7 +181,7 @@ def run_features(
         if not Path(v).is_file():
             raise InputError(f"{v}: file not found")
     outs = outputs_by_stem(videos, out_dir, ".npz")
-    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    make_dir(out_dir)
     items = [(str(v), str(o), descriptor, salient, None, fps, height) for v, o in zip(videos, outs)]
     return parallel_map(_process_item, items, jobs=jobs, scheduler=scheduler, description="features")
 
