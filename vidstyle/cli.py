@@ -6,7 +6,7 @@ touches one new file. Errors derived from :class:`vidstyle.errors.VidstyleError`
 message on stderr and a non-zero exit status.
 
 Exit status: 0 success; 1 internal error (a bug: traceback on stderr); 2 bad input or usage (a file,
-an argument); 3 out of memory (:class:`MemoryError` or :class:`vidstyle.errors.ResourceError`: the
+an argument; also a file or directory the system refuses: an ``OSError`` naming it); 3 out of memory (:class:`MemoryError` or :class:`vidstyle.errors.ResourceError`: the
 input is too large at these settings); 130 interrupted.
 
 With ``VIDSTYLE_TIMINGS=DIR`` in the environment, every command also writes its own timing record into
@@ -77,6 +77,13 @@ _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-styl
 _TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing"}
 
 
+def _check_numbers() -> None:
+    """Every int / float option finite and in its range, checked as it is parsed (:mod:`.commands._numbers`)."""
+    from .commands._numbers import check_all_numbers
+
+    check_all_numbers(app)
+
+
 def _arrange_help() -> None:
     def name(info) -> str:
         return info.name or (info.typer_instance.info.name if getattr(info, "typer_instance", None) else "") or ""
@@ -142,6 +149,7 @@ def _flags_take_no_value() -> None:
 
 _register_commands()
 _arrange_help()
+_check_numbers()
 _literal_help(app)
 _flags_take_no_value()
 
@@ -233,6 +241,15 @@ def _main(argv: list[str] | None) -> int:
         # the input is too large for this machine at these settings: the user's to fix, like bad input
         print("vidstyle: error: out of memory (try a smaller input, working size or fewer jobs)", file=sys.stderr)
         return MEMORY_EXIT
+    except OSError as e:
+        if not getattr(e, "filename", None):  # not about a file the user named: a bug, shown in full below
+            logging.getLogger("vidstyle").exception("internal error")
+            return 1
+        # a file or directory the system refused (missing parent, permission, not a directory, disk full)
+        from .fileio import os_reason
+
+        print(f"vidstyle: error: {os_reason(e)}", file=sys.stderr)
+        return VidstyleError.exit_code
     except Exception as e:
         # usage errors (unknown option, missing argument): Typer raises click's ClickException, from
         # its vendored copy of click in recent versions, so match the interface rather than the class

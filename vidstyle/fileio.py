@@ -38,14 +38,19 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     (a 0600 file stays 0600); a new one gets those a plain ``open()`` would give.
     """
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, cannot write a file there")
     suffix = path.suffix if suffix is None else suffix
     target = Path(os.path.realpath(path)) if path.is_symlink() else path  # a link: replace what it points to
-    target.parent.mkdir(parents=True, exist_ok=True)
     try:
-        mode = os.stat(target).st_mode & 0o777
-    except (FileNotFoundError, NotADirectoryError):
-        mode = 0o666 & ~_umask()
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=target.parent)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            mode = os.stat(target).st_mode & 0o777
+        except (FileNotFoundError, NotADirectoryError):
+            mode = 0o666 & ~_umask()
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=target.parent)
+    except OSError as e:  # a parent that is a file, or cannot be made (/proc/nope), or not writable
+        raise InputError(f"{path}: cannot write ({os_reason(e)})") from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:
@@ -56,6 +61,43 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
         raise
+
+
+def os_reason(e: OSError) -> str:
+    """The one-line reason of an OS error (``No such file or directory: '/proc/nope'``)."""
+    where = f": {e.filename!r}" if getattr(e, "filename", None) else ""
+    return f"{e.strerror or type(e).__name__}{where}"
+
+
+def check_writable(path: str | os.PathLike) -> Path:
+    """Refuse, before any work, an output ``path`` that cannot be written: a directory, or whose nearest
+    existing ancestor is not a writable directory (``/proc/nope/p.json``); nothing is created."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, cannot write a file there")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{path}: cannot write ({parent} is not a directory)")
+    try:  # the one sure test (permissions, read-only or pseudo file systems such as /proc): a file made there
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError as e:
+        raise InputError(f"{path}: cannot write in {parent} ({e.strerror or type(e).__name__})") from None
+    return path
+
+
+def make_dir(path: str | os.PathLike) -> Path:
+    """``mkdir -p path``; a path that is a file, or that cannot be made, is an :class:`InputError`."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path}: exists and is not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"{path}: cannot make the directory ({os_reason(e)})") from None
+    return path
 
 
 def sweep_temporaries(out_dir: str | os.PathLike, names, before: float | None = None) -> list[Path]:
@@ -106,7 +148,7 @@ def output_dir(out_dir: str | os.PathLike, names=()) -> Iterator[Path]:
     while not p.exists() and not p.is_symlink() and p != p.parent:
         created.append(p)
         p = p.parent
-    out_dir.mkdir(parents=True, exist_ok=True)
+    make_dir(out_dir)
     swept = sweep_temporaries(out_dir, names, before=start)
     if swept:
         import logging

@@ -36,4 +36,7 @@ def progress(items: Iterable[T], description: str, total: int | None = None) -> 
     """Iterate with a rich progress bar (on stderr; hidden when stderr is not a terminal)."""
     from rich.progress import track
 
-    yield from track(items, description=description, total=total, transient=True, console=stderr_console())
+    console = stderr_console()
+    # not even a blank line when stderr is not a terminal (rich's transient bar leaves one there)
+    yield from track(items, description=description, total=total, transient=True, console=console,
+                     disable=not console.is_terminal)

@@ -39,7 +39,10 @@ brings marks, not a choice: the page keeps its own.
 from __future__ import annotations
 
 import json
+import math
+import re
 import xml.etree.ElementTree as ET
+import xml.parsers.expat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -103,9 +106,12 @@ def import_(fmt: str, data: bytes, classes: list[str], target: Target, name: str
             data, ClassList(classes), target, name)
     except FormatError:
         raise
+    except _Refused as e:
+        raise FormatError(name, e.field, e.problem) from None
     except RecursionError:
         raise FormatError(name, None, f"not a valid {fmt} export (nested too deeply)") from None
-    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OverflowError, ET.ParseError) as e:
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, ET.ParseError, OverflowError,
+            xml.parsers.expat.ExpatError) as e:
         raise FormatError(name, None, f"not a valid {fmt} export ({type(e).__name__}: {e})"[:300]) from None
     # one validation for all formats: the marks as our own file
     v = target.video
@@ -135,7 +141,12 @@ def _extra(t: Transition) -> dict:
 
 
 def _transition(frame: int, extra: dict) -> Transition:
-    cands = [CandidateDecision(str(c["clip"]), float(c["time"]), str(c["status"])) for c in extra.get("candidates", [])]
+    cands = []
+    for k, c in enumerate(extra.get("candidates", [])):
+        time = c["time"]
+        if isinstance(time, bool) or not isinstance(time, (int, float)) or not math.isfinite(time):
+            raise _Refused(f"candidates[{k}].time", f"{time!r} is not a finite number of seconds")
+        cands.append(CandidateDecision(str(c["clip"]), float(time), str(c["status"])))
     status = str(extra.get("status", "accepted"))
     if status not in STATUSES:
         raise ValueError(f"transition status {status!r}")
@@ -155,6 +166,54 @@ class ClassList(list):
             self.known.add(name)
             self.append(name)
         return name
+
+
+class _Refused(Exception):
+    """A value an importer refuses: the field and the problem (made a :class:`FormatError` naming the file)."""
+
+    def __init__(self, field: str, problem: str) -> None:
+        super().__init__(f"{field}: {problem}")
+        self.field, self.problem = field, problem
+
+
+_DIGITS = re.compile(r"[0-9]{1,12}")
+
+
+def _int(value: Any, field: str) -> int:
+    """A JSON integer, strictly: a float (even 3.0), a string, a boolean, ``Infinity`` or ``1e400`` is
+    refused, never truncated."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _Refused(field, f"{value!r} is not an integer frame number")
+    return value
+
+
+def _xml_int(text: str | None, field: str) -> int:
+    """A non-negative integer written in ASCII digits in XML (``" 12"``, ``"1e3"``, ``"١٢"`` refused)."""
+    if text is None or not _DIGITS.fullmatch(text):
+        raise _Refused(field, f"{text!r} is not a frame number (ASCII digits)")
+    return int(text)
+
+
+def _seconds(value: Any, field: str, duration: float) -> float:
+    """A VIA time: a finite number of seconds inside the video (0 .. duration, to VIA's millisecond)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _Refused(field, f"{value!r} is not a number of seconds")
+    t = float(value)
+    if not math.isfinite(t):
+        raise _Refused(field, f"{value!r} is not a finite time")
+    if not -_VIA_TOLERANCE <= t <= duration + _VIA_TOLERANCE:
+        raise _Refused(field, f"{t:g} s is outside the video (0 .. {duration:.3f} s)")
+    return t
+
+
+def _no_constants(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _json(data: bytes) -> Any:
+    """Strict JSON: UTF-8, and NaN / Infinity refused (``1e400`` parses as infinity and is refused where a
+    number is read)."""
+    return json.loads(data.decode("utf-8"), parse_constant=_no_constants)
 
 
 def _add_class(classes: ClassList, name: str) -> str:
@@ -204,7 +263,7 @@ def _ls_out(classes, target: Target) -> bytes:
 
 
 def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
-    doc = json.loads(data.decode("utf-8"))
+    doc = _json(data)
     tasks = doc if isinstance(doc, list) else [doc]
     if not tasks:
         raise FormatError(name, None, "no task")
@@ -214,7 +273,7 @@ def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
             raise FormatError(name, None, f"{len(tasks)} tasks and none is {target.name} (vidstyle_sha256)")
         task = tasks[0]
     d = task.get("data", {})
-    if "vidstyle_frames" in d and int(d["vidstyle_frames"]) != target.video.frames:
+    if "vidstyle_frames" in d and _int(d["vidstyle_frames"], "data.vidstyle_frames") != target.video.frames:
         raise FormatError(name, "data.vidstyle_frames", f"{d['vidstyle_frames']} frames, the video decodes to "
                                                         f"{target.video.frames}")
     for c in d.get("vidstyle_classes", []):
@@ -223,17 +282,21 @@ def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
     if not anns:
         raise FormatError(name, "annotations", "the task has no annotation")
     segs, trans = [], []
-    for r in anns[-1]["result"]:
+    for i, r in enumerate(anns[-1]["result"]):
         if r.get("type") != "timelinelabels":
             continue
         val = r["value"]
         label = val["timelinelabels"][0]
-        for rg in val["ranges"]:
-            start, end = int(rg["start"]), int(rg["end"])  # 1-based inclusive
+        for j, rg in enumerate(val["ranges"]):
+            where = f"annotations[-1].result[{i}].value.ranges[{j}]"
+            start, end = _int(rg["start"], f"{where}.start"), _int(rg["end"], f"{where}.end")  # 1-based inclusive
+            if not 1 <= start <= end <= target.video.frames:
+                raise _Refused(where, f"frames {start}..{end} are not inside the video's 1..{target.video.frames} "
+                                      "(1-based, inclusive, start <= end)")
             if r.get("from_name") == "transitions" or label == TRANSITION and "meta" in r:
                 if start != end:
                     raise ValueError(f"a transition spans frames {start}..{end}")
-                extra = json.loads(r["meta"]["text"][0])
+                extra = json.loads(r["meta"]["text"][0], parse_constant=_no_constants)
                 t = _transition(start - 1, extra)
                 _add_class(classes, t.from_action)
                 _add_class(classes, t.to_action)
@@ -290,25 +353,43 @@ def _cvat_out(classes, target: Target) -> bytes:
     return b'<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="utf-8") + b"\n"
 
 
+def _refuse_dtd(*_args) -> None:
+    raise _Refused("DOCTYPE", "XML with a document type declaration or entities is not accepted")
+
+
+def _safe_xml(data: bytes) -> ET.Element:
+    """Parse ``data`` with no DTD and no entity: expat reads it first, in whatever encoding it declares
+    (UTF-16 too, which a byte search for ``<!DOCTYPE`` misses), and stops at a document type
+    declaration, an entity declaration or an external entity reference; only then is the tree built."""
+    scan = xml.parsers.expat.ParserCreate()
+    scan.SetParamEntityParsing(xml.parsers.expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    scan.StartDoctypeDeclHandler = _refuse_dtd
+    scan.EntityDeclHandler = _refuse_dtd
+    scan.UnparsedEntityDeclHandler = _refuse_dtd
+    scan.ExternalEntityRefHandler = _refuse_dtd
+    scan.Parse(data, True)
+    return ET.fromstring(data)
+
+
 def _cvat_in(data: bytes, classes, target: Target, name) -> Marks:
-    if b"<!DOCTYPE" in data or b"<!ENTITY" in data:
-        raise FormatError(name, None, "XML with a DOCTYPE or entities is not accepted")
-    root = ET.fromstring(data)
+    root = _safe_xml(data)
     if root.tag != "annotations":
         raise FormatError(name, None, f"root element <{root.tag}>, expected <annotations> (CVAT for video 1.1)")
     n = target.video.frames
     size = root.findtext("meta/task/size")
-    if size is not None and int(size) != n:
+    if size is not None and _xml_int(size, "meta.task.size") != n:
         raise FormatError(name, "meta.task.size", f"{size} frames, the video decodes to {n}")
-    start_frame = int(root.findtext("meta/task/start_frame") or 0)
+    start_frame = _xml_int(root.findtext("meta/task/start_frame") or "0", "meta.task.start_frame")
     for lab in root.findall("meta/task/labels/label"):
         nm = lab.findtext("name")
         if nm and nm != TRANSITION and (lab.findtext("type") or "") != "tag":
             _add_class(classes, nm)
     segs = []
-    for tr in root.findall("track"):
+    for k, tr in enumerate(root.findall("track")):
         label = tr.get("label")
-        shapes = sorted(((int(b.get("frame")) - start_frame, b.get("outside", "0") == "1") for b in tr), key=lambda x: x[0])
+        shapes = sorted(((_xml_int(b.get("frame"), f"track[{k}].{b.tag}.frame") - start_frame,
+                          _xml_flag(b.get("outside", "0"), f"track[{k}].{b.tag}.outside")) for b in tr),
+                        key=lambda x: x[0])
         if not shapes:
             continue
         _add_class(classes, label)
@@ -322,17 +403,23 @@ def _cvat_in(data: bytes, classes, target: Target, name) -> Marks:
         if run_start is not None:
             segs.append(ActionSpan(run_start, n, label))
     trans = []
-    for tag in root.findall("tag"):
+    for k, tag in enumerate(root.findall("tag")):
         if tag.get("label") != TRANSITION:
             continue
         attrs = {a.get("name"): (a.text or "") for a in tag.findall("attribute")}
         extra = {k: attrs[k] for k in ("from_action", "to_action", "status") if k in attrs}
-        extra["candidates"] = json.loads(attrs.get("candidates") or "[]")
-        t = _transition(int(tag.get("frame")) - start_frame, extra)
+        extra["candidates"] = json.loads(attrs.get("candidates") or "[]", parse_constant=_no_constants)
+        t = _transition(_xml_int(tag.get("frame"), f"tag[{k}].frame") - start_frame, extra)
         _add_class(classes, t.from_action)
         _add_class(classes, t.to_action)
         trans.append(t)
     return Marks(classes, trans, segs)
+
+
+def _xml_flag(text: str | None, field: str) -> bool:
+    if text not in ("0", "1"):
+        raise _Refused(field, f"{text!r} is not 0 or 1")
+    return text == "1"
 
 
 # ------------------------------------------------------------------------------------------ VIA 3
@@ -387,16 +474,20 @@ def _via_out(classes, target: Target) -> bytes:
     return (json.dumps(doc, indent=2) + "\n").encode()
 
 
+#: how far (seconds) a VIA time may lie outside the video: VIA keeps times to the millisecond
+_VIA_TOLERANCE = 0.0005
+
+
 def _nearest(b: np.ndarray, t: float, lo: int, hi: int) -> int:
     i = int(np.argmin(np.abs(b[lo:hi + 1] - t)))
     return lo + i
 
 
 def _via_in(data: bytes, classes, target: Target, name) -> Marks:
-    doc = json.loads(data.decode("utf-8"))
+    doc = _json(data)
     n = target.video.frames
     vs = doc.get("vidstyle", {})
-    if "frames" in vs and int(vs["frames"]) != n:
+    if "frames" in vs and _int(vs["frames"], "vidstyle.frames") != n:
         raise FormatError(name, "vidstyle.frames", f"{vs['frames']} frames, the video decodes to {n}")
     names = {aid: a["aname"] for aid, a in doc["attribute"].items()}
     by_name = {v: k for k, v in names.items()}
@@ -406,20 +497,26 @@ def _via_in(data: bytes, classes, target: Target, name) -> Marks:
     status_opts = doc["attribute"].get(by_name.get("status", ""), {}).get("options", {})
     b = _boundaries(target)
     segs, trans = [], []
-    for md in doc["metadata"].values():
-        z = [float(x) for x in md["z"]]
+    duration = float(b[-1])
+    for key, md in doc["metadata"].items():
+        z = [_seconds(x, f"metadata.{key}.z[{j}]", duration) for j, x in enumerate(md["z"])]
         av = {names.get(k, k): v for k, v in md.get("av", {}).items()}
         if len(z) == 2:
             opt = av["action"]
             action = action_opts.get(opt, opt)
+            if not z[0] < z[1]:
+                raise _Refused(f"metadata.{key}.z", f"segment {z[0]:g} .. {z[1]:g} s does not end after it starts")
             start = _nearest(b, z[0], 0, n - 1)
-            end = _nearest(b, z[1], start + 1, n)
+            end = _nearest(b, z[1], 0, n)
+            if end <= start:
+                raise _Refused(f"metadata.{key}.z", f"segment {z[0]:g} .. {z[1]:g} s is shorter than one frame")
             segs.append(ActionSpan(start, end, _add_class(classes, action)))
         elif len(z) == 1:
             frame = _nearest(b, z[0], 0, n - 1)
             status = status_opts.get(av.get("status", "0"), av.get("status", "accepted"))
             t = _transition(frame, {"from_action": av["from_action"], "to_action": av["to_action"],
-                                    "status": status, "candidates": json.loads(av.get("candidates") or "[]")})
+                                    "status": status,
+                                    "candidates": json.loads(av.get("candidates") or "[]", parse_constant=_no_constants)})
             _add_class(classes, t.from_action)
             _add_class(classes, t.to_action)
             trans.append(t)

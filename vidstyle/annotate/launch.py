@@ -15,7 +15,22 @@ log = logging.getLogger(__name__)
 HOST = "127.0.0.1"
 PORT = 8765
 MAX_BODY_MB = 16.0
+#: the range ``max_body_mb`` may take (below 1 MB a save of a few videos' marks would be refused)
+MIN_BODY_MB = 1.0
+MAX_BODY_LIMIT_MB = 1024.0
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
+
+
+def _given_classes(classes: str | Sequence[str] | None) -> list[str] | None:
+    """The class names given (None: none given); a string of separators only (``",,,"``) is an error."""
+    if not classes:
+        return None
+    if isinstance(classes, str):
+        names = [c.strip() for c in classes.split(",") if c.strip()]
+        if not names:
+            raise ParameterError("classes", f"no class name in {classes!r} (comma-separated names expected)")
+        return names
+    return list(classes)
 
 
 def class_names(classes: str | Sequence[str] | None, annotations: Path, overlays: dict,
@@ -23,10 +38,9 @@ def class_names(classes: str | Sequence[str] | None, annotations: Path, overlays
     """The page's class list: ``classes`` (names or one comma-separated string); else none when the
     annotations file exists (it holds its own); else the recognised labels' classes, in order of first
     appearance; else ``default_classes``."""
-    if classes:
-        if isinstance(classes, str):
-            classes = [c.strip() for c in classes.split(",") if c.strip()]
-        return list(dict.fromkeys(classes))  # repeated names once, in order (linear time)
+    given = _given_classes(classes)
+    if given is not None:
+        return list(dict.fromkeys(given))  # repeated names once, in order (linear time)
     if annotations.exists():
         return []
     names = dict.fromkeys(c for ov in overlays.values() for c in ov.get("recognized", {}).get("classes", []))
@@ -55,8 +69,10 @@ def annotate(
 
     if not 0 <= port < 65536:
         raise ParameterError("port", f"must be in 0..65535, got {port}")
-    if max_body_mb <= 0:
-        raise ParameterError("max_body_mb", f"must be positive, got {max_body_mb}")
+    if not MIN_BODY_MB <= max_body_mb <= MAX_BODY_LIMIT_MB:  # also refuses NaN
+        raise ParameterError("max_body_mb", f"must be a number in {MIN_BODY_MB:g}..{MAX_BODY_LIMIT_MB:g} (MB), "
+                                            f"got {max_body_mb}")
+    _given_classes(classes)  # before any video is opened
     secret = None
     if not is_loopback(host):
         import secrets

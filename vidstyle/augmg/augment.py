@@ -87,7 +87,7 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     (:func:`augment` picks it from :data:`.defaults.MAX_MATCH_COST` by the poses' source).
     """
     check_augment_params(k=k, n_views=n_views, edges_per_side=edges_per_side, context=context, anchor=anchor,
-                         hold=hold, max_match_cost=max_match_cost)
+                         hold=hold, max_match_cost=max_match_cost, enhancement_cost=enhancement_cost)
     from ..mocap import read_bvh
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind
@@ -211,16 +211,19 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
 
 def check_augment_params(k: int = D.K, n_views: int = D.N_VIEWS, edges_per_side: int = D.EDGES_PER_SIDE,
                          context: int = D.CONTEXT, anchor: str = D.ANCHOR, hold: float = D.HOLD,
-                         max_match_cost=None) -> None:
+                         max_match_cost=None, enhancement_cost: float = D.ENHANCEMENT_COST) -> None:
     """:class:`~vidstyle.errors.ParameterError` naming the first bad parameter of :func:`augment_graph` /
     :func:`augment` (``max_match_cost``: a number, None, or per source ``{source or "*": number or None}``)."""
     from .enhance import check_placement
 
     check_placement(anchor=anchor, hold=hold)
-    for name, value, low in (("k", k, 1), ("views", n_views, 1), ("edges_per_side", edges_per_side, 1),
-                             ("context", context, 0)):
-        if value < low:
-            raise ParameterError(name, f"must be at least {low}, got {value}")
+    for name, value, low, high in (("k", k, 1, D.MAX_K), ("views", n_views, 1, D.MAX_VIEWS),
+                                   ("edges_per_side", edges_per_side, 1, D.MAX_EDGES_PER_SIDE),
+                                   ("context", context, 0, D.MAX_CONTEXT)):
+        if not low <= value <= high:
+            raise ParameterError(name, f"must be in {low}..{high}, got {value}")
+    if not (np.isfinite(enhancement_cost) and enhancement_cost > 0):
+        raise ParameterError("enhancement_cost", f"must be a finite number > 0, got {enhancement_cost}")
     check_thresholds(max_match_cost=max_match_cost)
 
 
@@ -274,7 +277,7 @@ def augment(graph, annotations: str | os.PathLike, library: Sequence[str | os.Pa
     from .poses_io import read_frame_poses
 
     check_augment_params(k=k, n_views=views, edges_per_side=edges_per_side, context=context, anchor=anchor,
-                         hold=hold, max_match_cost=max_match_cost)
+                         hold=hold, max_match_cost=max_match_cost, enhancement_cost=enhancement_cost)
     if pose_model is not None and video is None:
         raise ParameterError("pose_model", "give video too (the poses of its marked frames are estimated)")
     marks = read_marks(annotations)
@@ -289,6 +292,8 @@ def augment(graph, annotations: str | os.PathLike, library: Sequence[str | os.Pa
         marks = [m for m in marks if m["video"] == video.stem]
         if not marks:
             raise InputError(f"{annotations}: no transition marks for {video.name}")
+        if va is not None and context >= va.frames:
+            raise ParameterError("context", f"must be less than the video's {va.frames} frames, got {context}")
     by_video: dict = {}
     if pose_model is not None:
         frames = sorted({m["frame"] + d for m in marks for d in range(-context, context + 1) if m["frame"] + d >= 0})

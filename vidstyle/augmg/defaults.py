@@ -58,3 +58,15 @@ ENH_WINDOW = 9
 SEGMENT_SCALE = 1.0
 #: 2D noise sigma of the ``noisy`` source, as a fraction of the torso length
 NOISE = 0.05
+
+# --- bounds of the parameters (checked by the commands and the library; refused beyond them) ---------
+#: most video frames either side of a mark (``--context``; also less than the video's frame count)
+MAX_CONTEXT = 1000
+#: most azimuths (``--views``: one per degree)
+MAX_VIEWS = 360
+#: most candidates per query / mark (``--k``)
+MAX_K = 1000
+#: most enhancement nodes on each side of a mark (``--edges-per-side``)
+MAX_EDGES_PER_SIDE = 1000
+#: most library frames skipped between indexed ones (``--stride``)
+MAX_STRIDE = 10000

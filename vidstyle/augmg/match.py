@@ -40,14 +40,14 @@ def match_poses(poses: str | os.PathLike, library: Sequence[str | os.PathLike], 
     from .index import PoseIndex, coherent_ranking, library_clips, query_views
     from .poses_io import read_frame_poses
 
-    if k < 1:
-        raise ParameterError("k", f"must be at least 1, got {k}")
-    if views < 1:
-        raise ParameterError("views", f"must be at least 1, got {views}")
-    if stride < 1:
-        raise ParameterError("stride", f"must be at least 1, got {stride}")
-    if not fps > 0:
-        raise ParameterError("fps", f"must be > 0, got {fps}")
+    if not 1 <= k <= D.MAX_K:
+        raise ParameterError("k", f"must be in 1..{D.MAX_K}, got {k}")
+    if not 1 <= views <= D.MAX_VIEWS:
+        raise ParameterError("views", f"must be in 1..{D.MAX_VIEWS}, got {views}")
+    if not 1 <= stride <= D.MAX_STRIDE:
+        raise ParameterError("stride", f"must be in 1..{D.MAX_STRIDE}, got {stride}")
+    if not (fps > 0 and np.isfinite(fps)):
+        raise ParameterError("fps", f"must be a finite number > 0, got {fps}")
     video, frames = read_frame_poses(poses)
     if not frames:
         raise InputError(f"{poses}: no frames to match")

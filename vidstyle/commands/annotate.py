@@ -12,6 +12,9 @@ from pathlib import Path
 
 import typer
 
+from ..annotate.launch import MAX_BODY_LIMIT_MB, MAX_BODY_MB, MIN_BODY_MB
+from ._numbers import number
+
 log = logging.getLogger(__name__)
 
 
@@ -34,9 +37,9 @@ def annotate(
     host: str = typer.Option("127.0.0.1", "--host", help="Address to listen on (anything but loopback is "
                                                           "reachable by others: the page then needs a key, "
                                                           "printed once at start as the URL's #key=...)."),
-    port: int = typer.Option(8765, "--port", help="Port (0: any free port)."),
+    port: int = number(8765, "--port", lo=0, hi=65535, help="Port (0: any free port)."),
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a browser."),
-    max_body_mb: float = typer.Option(16.0, "--max-body-mb", help="Largest request body accepted (MB)."),
+    max_body_mb: float = number(MAX_BODY_MB, "--max-body-mb", lo=MIN_BODY_MB, hi=MAX_BODY_LIMIT_MB, help="Largest request body accepted (MB)."),
 ) -> None:
     """Open a local web page to mark transition frames (T) and action segments ([ ]) frame by frame, and
     to choose the performer (P, then click them; `pose --annotations` follows that person).

@@ -12,6 +12,7 @@ import typer
 from ..augmg import defaults as D
 from ..errors import InputError
 from ._evaluate import evaluate_app
+from ._numbers import jobs_option, number
 from .demo import demo_app
 
 log = logging.getLogger(__name__)
@@ -25,7 +26,7 @@ def _per_source_text(values: dict) -> list[str]:
     return [f"{s}={v}" if s != "*" else str(v) for s, v in values.items()]
 
 
-_JOBS = typer.Option(1, "--jobs", "-j", help="Parallel workers for projecting and indexing (-1 = all cores).")
+_JOBS = jobs_option(1, help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
 
@@ -43,16 +44,16 @@ def augment(
     poses: List[Path] = typer.Option([], "--poses", "-p", help="poses.json of the marked frames (from vidstyle pose; repeatable, one per video)."),
     pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Pose model: estimate the marked frames' poses here (needs --video)."),
     pose_scales: Optional[str] = typer.Option(",".join(str(z) for z in D.POSE_SCALES) if D.POSE_SCALES else None, "--pose-scales", help="With --pose-model: zoom factors of multi-scale pose inference (as vidstyle pose --scales). Default: chosen on validation performers."),
-    k: int = typer.Option(D.K, "--k", help="Candidate reference points per mark."),
-    views: int = typer.Option(D.N_VIEWS, "--views", help="Azimuths the library is projected at."),
-    edges_per_side: int = typer.Option(D.EDGES_PER_SIDE, "--edges-per-side", help="Enhancement nodes on each side: departures x arrivals edges per mark."),
-    enhancement_cost: float = typer.Option(D.ENHANCEMENT_COST, "--enhancement-cost", help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
-    context: int = typer.Option(D.CONTEXT, "--context", help="Match each mark together with the poses of up to this many frames either side (temporal coherence; run vidstyle pose with --context)."),
+    k: int = number(D.K, "--k", lo=1, hi=D.MAX_K, help="Candidate reference points per mark."),
+    views: int = number(D.N_VIEWS, "--views", lo=1, hi=D.MAX_VIEWS, help="Azimuths the library is projected at."),
+    edges_per_side: int = number(D.EDGES_PER_SIDE, "--edges-per-side", lo=1, hi=D.MAX_EDGES_PER_SIDE, help="Enhancement nodes on each side: departures x arrivals edges per mark."),
+    enhancement_cost: float = number(D.ENHANCEMENT_COST, "--enhancement-cost", lo=0, lo_open=True, help="Edge cost as a fraction of the cheapest plain blend of that action pair (< 1: the planner prefers the enhancement)."),
+    context: int = number(D.CONTEXT, "--context", lo=0, hi=D.MAX_CONTEXT, help="Match each mark together with the poses of up to this many frames either side (temporal coherence; run vidstyle pose with --context; less than the video's frame count)."),
     scores: bool = typer.Option(D.SCORES, "--scores/--no-scores", help="Weight bones by the poses' confidence scores."),
     foreshortening: bool = typer.Option(D.FORESHORTENING, "--foreshortening/--no-foreshortening", help="Also weight bones by their image length against their side-on length (a bone pointing at the camera counts less)."),
     max_match_cost: List[str] = typer.Option(_per_source_text(D.MAX_MATCH_COST), "--max-match-cost", help="Reject a reference point whose match cost exceeds this (the pair keeps its plain transitions): VALUE, or SOURCE=VALUE per pose source (model = ps, blazepose); repeatable. Default: chosen on validation performers (scripts/validate_augmg.py)."),
     anchor: str = typer.Option(D.ANCHOR, "--anchor", help="Align the enhancement segment by the library's enhancement nodes (nodes: its frames most like the departure and the arrival) or by the windows beside the reference pose (ends). Default: chosen on validation performers (as evaluate augmg)."),
-    hold: float = typer.Option(D.HOLD, "--hold", help="Fraction of an enhancement shown with the segment's full weight, about the reference pose (0: the thesis' two-half blend). Default: chosen on validation performers."),
+    hold: float = number(D.HOLD, "--hold", lo=0, hi=1, hi_open=True, help="Fraction of an enhancement shown with the segment's full weight, about the reference pose (0: the thesis' two-half blend). Default: chosen on validation performers."),
     jobs: int = _JOBS,
 ) -> None:
     """Insert enhancement nodes (thesis 5.2) for the accepted transition marks: match each marked frame's
@@ -92,12 +93,12 @@ def per_source(values: list[str], option: str) -> dict:
 def make_library_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the library performers (disjoint from every dataset performer)."),
-    performers: int = typer.Option(3, "--performers", help="Library performers."),
-    action_seconds: float = typer.Option(6.0, "--action-seconds", help="Length of each single-action clip."),
+    performers: int = number(3, "--performers", lo=1, hi=100, help="Library performers."),
+    action_seconds: float = number(6.0, "--action-seconds", lo=0, lo_open=True, hi=600, help="Length of each single-action clip."),
     cmu: Optional[Path] = typer.Option(None, "--cmu", help="Also add CMU BVH clips from this directory (retargeted)."),
-    cmu_clips: int = typer.Option(-1, "--cmu-clips", help="How many CMU clips (sorted by name) to add; -1 = all."),
+    cmu_clips: int = number(-1, "--cmu-clips", lo=-1, help="How many CMU clips (sorted by name) to add; -1 = all."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace a non-empty --out once the new library is complete."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
     scheduler: str = _SCHEDULER,
 ) -> None:
     """Write the AugMG mocap library: every action per library performer, plus dodge / stance-switch /
@@ -115,12 +116,12 @@ def match_pose(
     poses: Path = typer.Argument(..., help="poses.json of the annotated frames (from vidstyle pose)."),
     library: List[Path] = typer.Option(..., "--library", "-l", help="Library BVH clips or directories (repeatable)."),
     out: Path = typer.Option(..., "--out", "-o", help="matches.json to write."),
-    k: int = typer.Option(D.K, "--k", help="Candidates per frame."),
-    views: int = typer.Option(D.N_VIEWS, "--views", help="Azimuths the library is projected at (360 / views apart)."),
-    elevation: float = typer.Option(D.ELEVATION_DEG, "--elevation", help="Camera elevation of the projection (degrees)."),
-    stride: int = typer.Option(D.STRIDE, "--stride", help="Index every N-th library frame."),
+    k: int = number(D.K, "--k", lo=1, hi=D.MAX_K, help="Candidates per frame."),
+    views: int = number(D.N_VIEWS, "--views", lo=1, hi=D.MAX_VIEWS, help="Azimuths the library is projected at (360 / views apart)."),
+    elevation: float = number(D.ELEVATION_DEG, "--elevation", lo=-89, hi=89, help="Camera elevation of the projection (degrees)."),
+    stride: int = number(D.STRIDE, "--stride", lo=1, hi=D.MAX_STRIDE, help="Index every N-th library frame."),
     coherence: bool = typer.Option(False, "--coherence/--no-coherence", help="Re-rank candidates of consecutive frames by temporal coherence (Tautges' lazy neighbourhood graph)."),
-    fps: float = typer.Option(D.VIDEO_FPS, "--fps", help="Video rate of the poses' frame numbers (for --coherence)."),
+    fps: float = number(D.VIDEO_FPS, "--fps", lo=0, lo_open=True, hi=1000, help="Video rate of the poses' frame numbers (for --coherence)."),
     jobs: int = _JOBS,
     scheduler: str = _SCHEDULER,
 ) -> None:
@@ -143,23 +144,23 @@ def evaluate_augmg_cmd(
     out: Path = typer.Option(Path("metrics/augmg.json"), "--out", "-o", help="Metrics JSON."),
     annotations: Optional[Path] = typer.Option(None, "--annotations", "-a", help="Query the accepted marks of this annotations file instead of every transition's key frame."),
     poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of poses.json files (<video id>.poses.json) of the pose stage: adds an estimated 2D source named by its backend ('model' for ps, 'blazepose'); repeatable."),
-    noise: float = typer.Option(D.NOISE, "--noise", help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
-    k: int = typer.Option(D.K, "--k", help="Candidates per query (the reference point is chosen among them)."),
-    views: int = typer.Option(D.N_VIEWS, "--views", help="Azimuths the library is projected at."),
+    noise: float = number(D.NOISE, "--noise", lo=0, hi=10, help="2D noise sigma of the 'noisy' source, as a fraction of the torso length."),
+    k: int = number(D.K, "--k", lo=1, hi=D.MAX_K, help="Candidates per query (the reference point is chosen among them)."),
+    views: int = number(D.N_VIEWS, "--views", lo=1, hi=D.MAX_VIEWS, help="Azimuths the library is projected at."),
     segment: str = typer.Option(D.SEGMENT, "--segment", help="Library segment through the reference point: fixed (w_z-h..w_z+h, h = --segment-scale x half the transition), nodes (between the enhancement nodes w_z0..w_z2) or adaptive (each side's length chosen by the enhanced distance)."),
-    segment_scale: float = typer.Option(D.SEGMENT_SCALE, "--segment-scale", help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
+    segment_scale: float = number(D.SEGMENT_SCALE, "--segment-scale", lo=0, lo_open=True, hi=1, help="Library half-segment around the reference point, as a fraction of the transition's half-length (time-warped to it)."),
     place: str = typer.Option(D.PLACE, "--place", help="Placement of the library segment on the performer: first (aligned onto the departing pose), both (the mean of that and the alignment onto the arriving pose) or drift (moving from one to the other over the segment)."),
     anchor: str = typer.Option(D.ANCHOR, "--anchor", help="Library poses aligned for --place: ends (the segment's first and last frames) or nodes (the clip's enhancement nodes: its frames most like the departure and the arrival)."),
-    hold: float = typer.Option(D.HOLD, "--hold", help="Fraction of the transition, centred on the reference pose, that follows the library segment with full weight (0: the thesis' two-half blend)."),
-    enh_window: int = typer.Option(D.ENH_WINDOW, "--enh-window", help="Window (frames) of the enhanced distance."),
-    context: int = typer.Option(D.CONTEXT, "--context", help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold)."),
+    hold: float = number(D.HOLD, "--hold", lo=0, hi=1, hi_open=True, help="Fraction of the transition, centred on the reference pose, that follows the library segment with full weight (0: the thesis' two-half blend)."),
+    enh_window: int = number(D.ENH_WINDOW, "--enh-window", lo=1, hi=1000, help="Window (frames) of the enhanced distance."),
+    context: int = number(D.CONTEXT, "--context", lo=0, hi=D.MAX_CONTEXT, help="Match the marked frame together with this many video frames either side (temporal coherence; estimated sources use the neighbours their poses hold; less than the videos' frame count)."),
     scores: bool = typer.Option(D.SCORES, "--scores/--no-scores", help="Weight bones by the estimated pose's confidence scores."),
     foreshortening: bool = typer.Option(D.FORESHORTENING, "--foreshortening/--no-foreshortening", help="Also weight bones by their image length against their side-on length (a bone pointing at the camera counts less)."),
     max_match_cost: List[str] = typer.Option(_per_source_text(D.MAX_MATCH_COST), "--max-match-cost", help="Accept an enhancement only when its match cost is at most this, else keep the plain transition: VALUE or SOURCE=VALUE (- = none); repeatable. Default: chosen per source on validation performers (scripts/validate_augmg.py)."),
     max_enh_cost: List[str] = typer.Option(_per_source_text(D.MAX_ENH_COST), "--max-enh-cost", help="... and its enhanced distance (CMU length units) at most this: VALUE or SOURCE=VALUE; repeatable; default from validation."),
     min_gain: List[str] = typer.Option(_per_source_text(D.MIN_GAIN), "--min-gain", help="... and the reference pose at least this far (mm) from the plain transition's middle frame: VALUE or SOURCE=VALUE; repeatable; default from validation."),
     seed: int = typer.Option(0, "--seed", help="Seed of the 2D noise."),
-    unit_mm: Optional[float] = typer.Option(None, "--unit-mm", help="Millimetres per mocap length unit (default: the dataset manifest's mocap_unit_m)."),
+    unit_mm: Optional[float] = number(None, "--unit-mm", integer=False, lo=0, lo_open=True, help="Millimetres per mocap length unit (default: the dataset manifest's mocap_unit_m)."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge augmg.* keys into this headline JSON."),
     transitions: Optional[Path] = typer.Option(None, "--transitions", help="Also write the headline source's poses and plain / AugMG / true transitions of every query (transitions.json, for the report's animations)."),
     jobs: int = _JOBS,

@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from ..features import defaults as D
+from ._numbers import jobs_option, number
 
 log = logging.getLogger(__name__)
 
@@ -19,7 +20,7 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(
             ..., "--out", "-o", help="Output directory; writes <video stem>.npz per video."
         ),
-        jobs: int = typer.Option(-1, "--jobs", "-j", help="Videos processed in parallel (-1: all cores)."),
+        jobs: int = jobs_option(-1, help="Videos processed in parallel (-1: all cores)."),
         scheduler: str = typer.Option(
             None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): run the videos on that "
             "cluster instead of local workers; its workers must see the same paths.",
@@ -36,34 +37,34 @@ def register(app: typer.Typer) -> None:
             "'sift2d' (ablation: 2D SIFT of "
             "the frame patch, 4x4 cells x 8 bins, rotation-invariant, 128-D).",
         ),
-        fps: float = typer.Option(
-            D.WORKING_FPS, "--fps", help="Working frame rate: the nearest decoded frame to each tick of a clock at "
+        fps: float = number(
+            D.WORKING_FPS, "--fps", integer=False, lo=0, hi=1000, help="Working frame rate: the nearest decoded frame to each tick of a clock at "
             "this rate (the method's 20 fps; a slower video keeps its own frames; 0: every decoded frame).",
         ),
-        height: int = typer.Option(
-            D.WORKING_HEIGHT, "--height", help="Working frame height in pixels, width keeping the aspect ratio (120 keeps "
+        height: int = number(
+            D.WORKING_HEIGHT, "--height", lo=8, hi=8640, also=(0,), help="Working frame height in pixels, width keeping the aspect ratio (120 keeps "
             "the demo's 160x120 and turns a 1080x1920 phone clip into 68x120; 0: the video's own size).",
         ),
-        points: int = typer.Option(D.N_POINTS, "--points", "-n", help="Salient points per frame (default: chosen on validation performers and a validation camera, pipelines/kickboxing/validation/recognition.json; thesis: 10)."),
-        threshold: float = typer.Option(
+        points: int = number(D.N_POINTS, "--points", "-n", lo=1, hi=10000, help="Salient points per frame (default: chosen on validation performers and a validation camera, pipelines/kickboxing/validation/recognition.json; thesis: 10)."),
+        threshold: float = number(
             D.THRESHOLD,
-            "--threshold",
+            "--threshold", lo=0, hi=1,
             help="Silhouette threshold on |frame(t+1) - frame(t-1)|, intensities in [0, 1].",
         ),
-        min_distance: float = typer.Option(
-            D.MIN_DISTANCE, "--min-distance", help="Minimum distance in pixels between the points of one frame."
+        min_distance: float = number(
+            D.MIN_DISTANCE, "--min-distance", integer=False, lo=0, hi=10000, help="Minimum distance in pixels between the points of one frame."
         ),
         flow: str = typer.Option(
             D.FLOW, "--flow", help="Optical flow: dis, dis-ultrafast, dis-medium, farneback."
         ),
-        subregions: int = typer.Option(
-            D.SUBREGIONS, "--subregions", help="Thesis variant: sub-regions per axis (2 -> 2x2x2 -> 256-D; 4 -> 1024-D)."
+        subregions: int = number(
+            D.SUBREGIONS, "--subregions", lo=1, hi=16, help="Thesis variant: sub-regions per axis (2 -> 2x2x2 -> 256-D; 4 -> 1024-D)."
         ),
-        subregion_size: float = typer.Option(
-            D.SUBREGION_SIZE, "--subregion-size", help="Thesis variant: sub-region edge in pixels and frames."
+        subregion_size: float = number(
+            D.SUBREGION_SIZE, "--subregion-size", integer=False, lo=0, lo_open=True, hi=1000, help="Thesis variant: sub-region edge in pixels and frames."
         ),
-        smooth: float = typer.Option(
-            D.SMOOTH, "--smooth", help="Thesis variant: Gaussian smoothing sigma of the volume before gradients."
+        smooth: float = number(
+            D.SMOOTH, "--smooth", integer=False, lo=0, hi=100, help="Thesis variant: Gaussian smoothing sigma of the volume before gradients."
         ),
     ) -> None:
         """Extract per-frame salient points (largest optical flow on the frame-difference silhouette) and

@@ -8,6 +8,9 @@ from pathlib import Path
 
 import typer
 
+from ..augmg.defaults import MAX_CONTEXT
+from ._numbers import jobs_option, number
+
 from ..errors import InputError
 from ..pose.defaults import CMU_ENV, CNN_DEFAULTS, DEFAULTS, DETECTOR, REAL_ENV
 from ._evaluate import evaluate_app
@@ -111,7 +114,7 @@ def train_pose(
     figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
     proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
@@ -142,8 +145,9 @@ def pose(
         None, "--annotations", "-a", help="Annotations file (vidstyle annotate): the frames are this video's "
         "transition marks (the video must be the annotated one: same sha256); the performer chosen for it "
         "there (a frame and a pixel) is followed, unless --person or --no-track."),
-    context: int = typer.Option(0, "--context", help="With --annotations: also the frames up to this many "
-                                "either side of every mark (AugMG's temporal coherence matches them too)."),
+    context: int = number(0, "--context", lo=0, hi=MAX_CONTEXT, help="With --annotations: also the frames up to this many "
+                           "either side of every mark (AugMG's temporal coherence matches them too; less than the "
+                           "video's frame count)."),
     scales: str | None = typer.Option(None, "--scales", help="ps backend: comma-separated zoom factors of "
                                       "multi-scale inference, e.g. 1,1.2,1.4 (each frame is also zoomed about the "
                                       "person by each factor and the most confident pose kept; for people smaller "
@@ -158,11 +162,12 @@ def pose(
     smooth: bool = typer.Option(False, "--smooth", help="One-Euro filter the keypoint tracks (jitter)."),
     overlay: Path | None = typer.Option(None, "--overlay", help="Also write every frame with its keypoints drawn "
                                         "(DIR/<frame>.jpg), to check the poses by eye."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1: all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
     y = row in the input video's pixels, as a player shows the video)."""
+    from ..fileio import check_writable
     from ..formats.poses import write_poses
     from ..pose.run import (
         check_estimate_params,
@@ -176,6 +181,7 @@ def pose(
 
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
+    check_writable(out)
     backend = default_backend(model) if backend is None else backend
     zooms = parse_scales(scales, "--scales")
     check_estimate_params(backend, model, zooms)
@@ -229,7 +235,7 @@ def evaluate_pose(
     figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
     proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of the held-out renders."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers for rendering (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers for rendering (-1: all cores)."),
 ) -> None:
     """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
     held-out renders for both backends; backend agreement and overlays on real footage. With

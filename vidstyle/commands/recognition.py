@@ -14,6 +14,7 @@ from ..errors import InputError
 from ..fileio import outputs_by_stem
 from ..recognition import defaults as D
 from ._evaluate import evaluate_app
+from ._numbers import jobs_option, number
 
 log = logging.getLogger(__name__)
 
@@ -30,16 +31,16 @@ def register(app: typer.Typer) -> None:
 def vocabulary(
     features: list[Path] = typer.Argument(None, help="Features .npz files of set A (or use --dataset)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output vocab.npz."),
-    words: int = typer.Option(D.N_WORDS, "--words", help="Number of words (thesis: 1000 of 500/1000/1500)."),
+    words: int = number(D.N_WORDS, "--words", lo=2, hi=100000, help="Number of words (thesis: 1000 of 500/1000/1500)."),
     method: str = typer.Option(D.VOCAB_METHOD, "--method", help="minibatch | hierarchical | kmeans."),
-    branching: int = typer.Option(D.BRANCHING, "--branching", help="Children per node of the hierarchical tree."),
-    max_descriptors: int = typer.Option(D.MAX_DESCRIPTORS, "--max-descriptors", help="Fit on at most this many (sampled)."),
+    branching: int = number(D.BRANCHING, "--branching", lo=2, hi=10000, help="Children per node of the hierarchical tree."),
+    max_descriptors: int = number(D.MAX_DESCRIPTORS, "--max-descriptors", lo=1, help="Fit on at most this many (sampled)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: fit on set A of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (sampling, k-means, split)."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel file loading (-1 = all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel file loading (-1 = all cores)."),
 ) -> None:
     """Cluster 3D SIFT descriptors of set A into visual words (k-means centres)."""
     from ..recognition.pipeline import train_vocabulary
@@ -66,32 +67,32 @@ def train_recognizer(
              "(with their FEATURES files, or --features-dir holding <video stem>.npz). Unlabelled frames are left out."),
     vocab: Optional[Path] = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A); required with --features sift3d."),
     features_kind: str = typer.Option("sift3d", "--features", help="sift3d (3D SIFT words from FEATURES files, the default) | pose (2D pose sequences: trains on the mocap takes of --dataset's training performers, sets A and B of --split, seen from --views virtual cameras)."),
-    views: int = typer.Option(8, "--views", help="--features pose: virtual cameras per mocap take (azimuth 0-360, elevation -10..45 deg, 2.5-6 body heights)."),
-    noise_sigma: float = typer.Option(0.05, "--noise-sigma", help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
-    outlier_rate: float = typer.Option(0.05, "--outlier-rate", help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
-    dropout_rate: float = typer.Option(0.02, "--dropout-rate", help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
+    views: int = number(8, "--views", lo=1, hi=360, help="--features pose: virtual cameras per mocap take (azimuth 0-360, elevation -10..45 deg, 2.5-6 body heights)."),
+    noise_sigma: float = number(0.05, "--noise-sigma", lo=0, hi=10, help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
+    outlier_rate: float = number(0.05, "--outlier-rate", lo=0, hi=1, help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
+    dropout_rate: float = number(0.02, "--dropout-rate", lo=0, hi=1, help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
-    context: int = typer.Option(D.CONTEXT, "--context", help="Frames each side in a frame's histogram (thesis 2)."),
-    coarse_context: int = typer.Option(D.COARSE_CONTEXT, "--coarse-context", help="Frames each side of a second, coarser histogram appended to each frame's (multi-scale context; 0 = off, the thesis)."),
+    context: int = number(D.CONTEXT, "--context", lo=0, hi=D.MAX_CONTEXT, help="Frames each side in a frame's histogram (thesis 2)."),
+    coarse_context: int = number(D.COARSE_CONTEXT, "--coarse-context", lo=0, hi=D.MAX_CONTEXT, help="Frames each side of a second, coarser histogram appended to each frame's (multi-scale context; 0 = off, the thesis)."),
     grouping: bool = typer.Option(D.GROUPING, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
-    grouping_threshold: float = typer.Option(D.GROUPING_THRESHOLD, "--grouping-threshold", help="Correlation above which words pool."),
+    grouping_threshold: float = number(D.GROUPING_THRESHOLD, "--grouping-threshold", lo=-1, hi=1, help="Correlation above which words pool."),
     normalize: str = typer.Option(D.NORMALIZE, "--normalize", help="l1 | sqrt | l2 | none."),
-    components: int = typer.Option(D.N_COMPONENTS, "--components", help="PCA dimensions."),
+    components: int = number(D.N_COMPONENTS, "--components", lo=1, hi=100000, help="PCA dimensions."),
     classifier: str = typer.Option(D.CLASSIFIER, "--classifier", help="ova-ovo (thesis) | svc-ovr (baseline)."),
-    c: float = typer.Option(D.C, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
-    max_frames_per_class: int = typer.Option(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
-    window: int = typer.Option(D.SMOOTHING_WINDOW, "--window", help="Smoothing window in frames (thesis 6)."),
+    c: float = number(D.C, "--C", lo=0, lo_open=True, hi=1e6, help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
+    max_frames_per_class: int = number(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", lo=0, help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
+    window: int = number(D.SMOOTHING_WINDOW, "--window", lo=1, hi=D.MAX_WINDOW, help="Smoothing window in frames (thesis 6)."),
     smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
-    emission_weight: float = typer.Option(D.EMISSION_WEIGHT, "--emission-weight", help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
+    emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
     """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on set B."""
     from ..recognition.pipeline import train
@@ -149,11 +150,11 @@ def recognize(
     out_dir: Optional[Path] = typer.Option(
         None, "--out-dir", help="Output directory: <input stem>.json per input (any number of inputs)."
     ),
-    window: Optional[int] = typer.Option(None, "--window", help="Smoothing window (default: the model's)."),
+    window: Optional[int] = number(None, "--window", integer=True, lo=1, hi=D.MAX_WINDOW, help="Smoothing window (default: the model's)."),
     smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi | duration (default: the model's)."),
-    emission_weight: Optional[float] = typer.Option(None, "--emission-weight", help="viterbi / duration: power of the frame scores (default: the model's)."),
-    fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate to record (default: from the features, else 20)."),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
+    emission_weight: Optional[float] = number(None, "--emission-weight", integer=False, lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: the model's)."),
+    fps: Optional[float] = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000, help="Frame rate to record (default: from the features, else 20)."),
+    jobs: int = jobs_option(1, help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
     scheduler: Optional[str] = typer.Option(
         None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): recognise on that cluster; its workers must see the same paths."
     ),
@@ -195,18 +196,18 @@ def evaluate_recognition(
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
     ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing | no-mirror."),
-    words: int = typer.Option(D.N_WORDS, "--words", help="Vocabulary size (ablation: 500/1000/1500)."),
+    words: int = number(D.N_WORDS, "--words", lo=2, hi=100000, help="Vocabulary size (ablation: 500/1000/1500)."),
     vocab_method: str = typer.Option(D.VOCAB_METHOD, "--vocab-method", help="minibatch | hierarchical | kmeans."),
     classifier: str = typer.Option(D.CLASSIFIER, "--classifier", help="ova-ovo | svc-ovr."),
     baseline: bool = typer.Option(True, "--baseline/--no-baseline", help="Also score a plain SVC on the same features."),
-    grouping_threshold: float = typer.Option(D.GROUPING_THRESHOLD, "--grouping-threshold", help="Word grouping correlation threshold."),
-    components: int = typer.Option(D.N_COMPONENTS, "--components", help="PCA dimensions."),
-    coarse_context: int = typer.Option(D.COARSE_CONTEXT, "--coarse-context", help="Multi-scale context: frames each side of a second histogram (0 = off)."),
-    max_frames_per_class: int = typer.Option(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
-    window: int = typer.Option(D.SMOOTHING_WINDOW, "--window", help="Smoothing window."),
+    grouping_threshold: float = number(D.GROUPING_THRESHOLD, "--grouping-threshold", lo=-1, hi=1, help="Word grouping correlation threshold."),
+    components: int = number(D.N_COMPONENTS, "--components", lo=1, hi=100000, help="PCA dimensions."),
+    coarse_context: int = number(D.COARSE_CONTEXT, "--coarse-context", lo=0, hi=D.MAX_CONTEXT, help="Multi-scale context: frames each side of a second histogram (0 = off)."),
+    max_frames_per_class: int = number(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", lo=0, help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
+    window: int = number(D.SMOOTHING_WINDOW, "--window", lo=1, hi=D.MAX_WINDOW, help="Smoothing window."),
     smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
-    c: float = typer.Option(D.C, "--C", help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
-    emission_weight: float = typer.Option(D.EMISSION_WEIGHT, "--emission-weight", help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
+    c: float = number(D.C, "--C", lo=0, lo_open=True, hi=1e6, help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
+    emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
     test_dataset: Optional[Path] = typer.Option(
         None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "
@@ -214,7 +215,7 @@ def evaluate_recognition(
     test_features_dir: Optional[Path] = typer.Option(
         None, "--test-features-dir", help="unseen-camera: features directory of --test-dataset's videos."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (split, vocabulary, sampling)."),
-    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
     """Train vocabulary (set A) and recognizer (set B) on a split, test on held-out videos, write metrics.
 

@@ -79,16 +79,16 @@ def check_evaluate_params(segment: str = D.SEGMENT, segment_scale: float = D.SEG
     if segment not in ("fixed", "nodes", "adaptive"):
         raise ParameterError("segment", f"fixed, nodes or adaptive, got {segment!r}")
     check_placement(place, anchor, hold)
-    if context < 0:
-        raise ParameterError("context", f"must be at least 0, got {context}")
+    if not 0 <= context <= D.MAX_CONTEXT:
+        raise ParameterError("context", f"must be in 0..{D.MAX_CONTEXT}, got {context}")
     if enh_window < 1:
         raise ParameterError("enh_window", f"must be at least 1, got {enh_window}")
     if not 0 < segment_scale <= 1:
         raise ParameterError("segment_scale", f"must be in (0, 1], got {segment_scale}")
-    if k < 1:
-        raise ParameterError("k", f"must be at least 1, got {k}")
-    if views < 1:
-        raise ParameterError("views", f"must be at least 1, got {views}")
+    if not 1 <= k <= D.MAX_K:
+        raise ParameterError("k", f"must be in 1..{D.MAX_K}, got {k}")
+    if not 1 <= views <= D.MAX_VIEWS:
+        raise ParameterError("views", f"must be in 1..{D.MAX_VIEWS}, got {views}")
     if not (np.isfinite(noise) and noise >= 0):
         raise ParameterError("noise", f"must be a finite number >= 0, got {noise}")
 

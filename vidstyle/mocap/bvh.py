@@ -245,6 +245,7 @@ def _parse_motion(lines: list[str], motion_line: int, skeleton: Skeleton, path) 
     m = _FRAMES_RE.match(lines[i]) if i < len(lines) else None
     if not m:
         raise BVHError(path, i + 1, "missing 'Frames:' line after MOTION")
+    frames_line = i + 1
     try:
         n_frames = int(m.group(1))
         if n_frames < 0:
@@ -265,6 +266,8 @@ def _parse_motion(lines: list[str], motion_line: int, skeleton: Skeleton, path) 
     n_channels = sum(len(c) for c in skeleton.channels)
     data_lines = lines[data_start:]
     values = _parse_values(data_lines, data_start, n_frames, n_channels, path)
+    if len(values) == 0:
+        raise BVHError(path, frames_line, "no motion: 'Frames: 0' and no frame lines (at least one frame is needed)")
     fps = 1.0 / frame_time
     if abs(fps - round(fps)) < 1e-3 * fps and round(fps) > 0:
         fps = float(round(fps))  # ".0083333" means 120 fps: the file rounded 1/120
@@ -279,6 +282,9 @@ def _parse_values(data_lines: list[str], first_line: int, n_frames: int, n_chann
         log.warning("%s: %d frame lines but 'Frames: %d'; reading all %d frames (as Blender does)",
                     path if path is not None else "<bvh>", len(body), n_frames, len(body))
         n_frames = len(body)
+    if not body:  # no frame lines: 'Frames: 0' (or a count the file does not hold, said below)
+        if n_frames == 0:
+            return np.zeros((0, n_channels))
     if n_channels == 0:
         if body:
             raise BVHError(path, first_line + 1, "frame values given but the hierarchy has no channels")

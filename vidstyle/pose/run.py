@@ -263,15 +263,19 @@ def _marks_of(video, annotations, context: int):
     from ..formats.annotations import check_video, read_annotations
     from ..video import VideoReader
 
-    if not context >= 0:
-        raise ParameterError("context", f"must be at least 0, got {context}")
+    from ..augmg.defaults import MAX_CONTEXT
+
+    if not 0 <= context <= MAX_CONTEXT:
+        raise ParameterError("context", f"must be in 0..{MAX_CONTEXT}, got {context}")
     with VideoReader(video) as r:
         n = r.info.frames
         size = (r.info.width, r.info.height)
+    if context >= n:
+        raise ParameterError("context", f"must be less than the video's {n} frames, got {context}")
     ann = read_annotations(annotations)
     entry = ann.video_for(video, annotations)
     check_video(entry, video, n, annotations)
-    idx = sorted({t.frame + d for t in entry.transitions for d in range(-context, context + 1) if 0 <= t.frame + d < n})
+    idx = sorted({f for t in entry.transitions for f in range(max(0, t.frame - context), min(n, t.frame + context + 1))})
     if not idx:
         raise InputError(f"{annotations}: no transition marks for {video}")
     return idx, entry, size

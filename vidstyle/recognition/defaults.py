@@ -49,3 +49,8 @@ RECOGNIZER_PARAMS = {
     "mirror": MIRROR,
 }
 """The recognizer's validated parameters by :class:`ActionRecognizer` argument name."""
+
+#: most frames each side of a frame's histogram (``--context``, ``--coarse-context``)
+MAX_CONTEXT = 1000
+#: largest smoothing window in frames (``--window``)
+MAX_WINDOW = 1000

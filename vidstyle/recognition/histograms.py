@@ -43,7 +43,8 @@ def context_sum(counts: sp.spmatrix, context: int) -> sp.csr_matrix:
     n = counts.shape[0]
     if context <= 0 or n == 0:
         return sp.csr_matrix(counts, dtype=np.float32)
-    offsets = [k for k in range(-context, context + 1) if abs(k) < n]  # a video shorter than the window
+    reach = min(context, n - 1)  # a video shorter than the window
+    offsets = list(range(-reach, reach + 1))
     band = sp.diags([np.ones(n - abs(k), np.float32) for k in offsets], offsets, shape=(n, n), format="csr")
     return (band @ counts).tocsr().astype(np.float32)
 

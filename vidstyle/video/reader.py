@@ -46,6 +46,8 @@ log = logging.getLogger(__name__)
 
 #: decoded frames kept for random access (a window, never the video)
 CACHE_FRAMES = 16
+#: FFmpeg demuxers of still images (a PNG renamed .mp4 is one picture, not a video); any "*_pipe" too
+IMAGE_FORMATS = frozenset({"image2", "image2pipe", "png_pipe", "jpeg_pipe", "webp_pipe", "bmp_pipe", "tiff_pipe"})
 
 
 @dataclass(frozen=True)
@@ -101,7 +103,22 @@ def _open(path: Path):
     if not container.streams.video:
         container.close()
         raise InputError(f"{path}: cannot be read as video (no video stream)")
+    formats = (container.format.name or "").split(",")
+    if any(f in IMAGE_FORMATS or f.endswith("_pipe") for f in formats):
+        codec = container.streams.video[0].codec_context.name
+        container.close()
+        raise InputError(f"{path}: is a still image ({codec}), not a video")
     return container
+
+
+def _decodable(container, stream) -> Iterator:
+    """Decoded frames of ``stream`` in presentation order, leaving out corrupt packets (the last packet of
+    a file cut short is truncated: the demuxer flags it, :func:`probe` does not count it, and feeding it to
+    the decoder would lose the frames still held for reordering)."""
+    for packet in container.demux(stream):
+        if packet.size and packet.is_corrupt:
+            continue
+        yield from packet.decode()
 
 
 def _display_matrix(stream, packet) -> tuple[bool, tuple[int, ...] | None]:
@@ -144,11 +161,15 @@ def probe(path: str | os.PathLike, autorotate: bool = True) -> VideoInfo:
         tb = stream.time_base or Fraction(1, 1)
         pts: list[int] = []
         missing_pts = 0
+        corrupt = 0
         matrix = None
         need_matrix = True
         try:
             for packet in container.demux(stream):
                 if packet.size == 0:  # flush packet at the end
+                    continue
+                if packet.is_corrupt:  # a truncated packet (a file cut short): no frame decodes from it
+                    corrupt += 1
                     continue
                 if need_matrix:  # decode until the first picture: its side data carries the display matrix
                     found, matrix = _display_matrix(stream, packet)
@@ -178,6 +199,8 @@ def probe(path: str | os.PathLike, autorotate: bool = True) -> VideoInfo:
     width, height = orientation.display_size(width, height)
     if not pts:
         raise InputError(f"{path}: cannot be read as video (no frame could be decoded)")
+    if corrupt:
+        log.warning("%s: %d corrupt packet(s) left out (truncated or damaged video)", path, corrupt)
     if missing_pts:
         log.debug("%s: %d packets without pts; using dts / order", path, missing_pts)
     order = np.unique(np.asarray(pts, dtype=np.int64))
@@ -347,7 +370,7 @@ class VideoReader:
                 self._container.seek(0, stream=stream)
         else:
             self._container.seek(int(self._pts[0]), backward=True, any_frame=False, stream=stream)
-        self._decoder = self._container.decode(stream)
+        self._decoder = _decodable(self._container, stream)
         self._next_src = -1  # unknown until the first frame's pts is seen
 
     def _decode(self, src: int):
