@@ -310,7 +310,9 @@ def _run_block(args) -> TileResult:
 
 
 def _run_block_dask(ws, block, threshold_sq, min_gap, dtype) -> TileResult:
-    return _run_block((ws, block, threshold_sq, min_gap, dtype))
+    from ..parallel import dask_task
+
+    return dask_task(_run_block, (ws, block, threshold_sq, min_gap, dtype))
 
 
 def all_pair_candidates(
@@ -355,9 +357,11 @@ def all_pair_candidates(
     else:
         from joblib import Parallel, delayed
 
+        from ..parallel import loky_backend
+
         workers = (os.cpu_count() or 1) if n_jobs < 0 else n_jobs
         log.info("%d distance tiles on %d joblib workers", len(blocks), workers)
-        par = Parallel(n_jobs=workers, backend="loky", return_as="generator", max_nbytes="1M")
+        par = Parallel(n_jobs=workers, backend=loky_backend(), return_as="generator", max_nbytes="1M")
         results = list(par(delayed(_run_block)((ws, b, threshold_sq, min_gap, dtype)) for b in blocks))
     return merge_results(results)
 
