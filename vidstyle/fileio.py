@@ -107,27 +107,97 @@ def sweep_temporaries(out_dir: str | os.PathLike, names, before: float | None = 
     modified before ``before`` (default: now), so a concurrent writer's fresh file is left alone. Returns
     the removed paths."""
     import re
-    import time
 
-    out_dir = Path(out_dir)
-    before = time.time() if before is None else before
     wanted = [re.compile(_TEMP.format(stem=re.escape(Path(n).stem), suffix=re.escape(Path(n).suffix)))
               for n in names]
-    removed: list[Path] = []
+    return _sweep(out_dir, wanted, before, dirs=False)
+
+
+def sweep_staging(out: str | os.PathLike, before: float | None = None) -> list[Path]:
+    """Remove the staging directories (:func:`staging_dir`: ``.<name>.<8 random characters>.tmp`` beside
+    ``out``) a killed run left, only those last modified before ``before`` (default: now), and settle a
+    replacement a kill interrupted (:func:`replace_dir`'s ``.<name>.old-<pid>`` of a process that is gone):
+    put back as ``out`` when ``out`` is missing (the kill came between the two renames), else removed.
+    Returns the removed paths."""
+    import re
+    import shutil
+
+    out = Path(out)
+    removed = _sweep(out.parent, [re.compile(_TEMP.format(stem=re.escape(out.name), suffix=""))], before,
+                     dirs=True)
+    old = re.compile(rf"\.{re.escape(out.name)}\.old-([0-9]+)")
     try:
-        entries = list(os.scandir(out_dir))
+        entries = list(os.scandir(out.parent))
     except (FileNotFoundError, NotADirectoryError):
         return removed
     for e in entries:
-        if not e.name.startswith(".") or not any(w.fullmatch(e.name) for w in wanted):
+        m = old.fullmatch(e.name)
+        if not m or not e.is_dir(follow_symlinks=False) or _process_alive(int(m.group(1))):
+            continue
+        if not out.exists() and not out.is_symlink():
+            os.replace(e.path, out)
+        else:
+            shutil.rmtree(e.path, ignore_errors=True)
+            removed.append(Path(e.path))
+    return removed
+
+
+def _sweep(parent: str | os.PathLike, patterns, before: float | None, dirs: bool) -> list[Path]:
+    """Remove the entries of ``parent`` whose name matches one of ``patterns`` (compiled, matched whole),
+    regular files (``dirs`` False) or directories (True, with their content; never a symlink), last
+    modified before ``before`` (default: now)."""
+    import shutil
+    import time
+
+    before = time.time() if before is None else before
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(parent))
+    except (FileNotFoundError, NotADirectoryError):
+        return removed
+    for e in entries:
+        if not e.name.startswith(".") or not any(w.fullmatch(e.name) for w in patterns):
             continue
         try:
-            if e.is_file(follow_symlinks=False) and e.stat(follow_symlinks=False).st_mtime < before:
-                os.unlink(e.path)
+            kind = e.is_dir(follow_symlinks=False) if dirs else e.is_file(follow_symlinks=False)
+            if kind and e.stat(follow_symlinks=False).st_mtime < before:
+                if dirs:
+                    shutil.rmtree(e.path)
+                else:
+                    os.unlink(e.path)
                 removed.append(Path(e.path))
         except FileNotFoundError:
             pass
     return removed
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def _missing_dirs(path: Path) -> list[Path]:
+    """``path`` and its ancestors that do not exist yet, deepest first."""
+    created = []
+    p = path
+    while not p.exists() and not p.is_symlink() and p != p.parent:
+        created.append(p)
+        p = p.parent
+    return created
+
+
+def _remove_empty(created: list[Path]) -> None:
+    """Remove the directories ``created`` (deepest first) while they are empty."""
+    for d in created:
+        try:
+            d.rmdir()  # only an empty directory goes
+        except OSError:
+            break
 
 
 @contextlib.contextmanager
@@ -143,11 +213,7 @@ def output_dir(out_dir: str | os.PathLike, names=()) -> Iterator[Path]:
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: exists and is not a directory")
-    created = []  # deepest first
-    p = out_dir
-    while not p.exists() and not p.is_symlink() and p != p.parent:
-        created.append(p)
-        p = p.parent
+    created = _missing_dirs(out_dir)
     make_dir(out_dir)
     swept = sweep_temporaries(out_dir, names, before=start)
     if swept:
@@ -157,11 +223,7 @@ def output_dir(out_dir: str | os.PathLike, names=()) -> Iterator[Path]:
     try:
         yield out_dir
     except BaseException:
-        for d in created:
-            try:
-                d.rmdir()  # only an empty directory goes
-            except OSError:
-                break
+        _remove_empty(created)
         raise
 
 
@@ -180,16 +242,52 @@ def outputs_by_stem(inputs, out_dir: str | os.PathLike, ext: str) -> list[Path]:
     return paths
 
 
+@contextlib.contextmanager
+def staged_dir(out: str | os.PathLike, overwrite: bool = False) -> Iterator[Path]:
+    """Build the directory ``out`` in a fresh hidden sibling (:func:`staging_dir`, which first sweeps what a
+    killed earlier run left there) and put it at ``out`` (:func:`replace_dir`) only when the block
+    succeeds. If it fails, the staging directory is removed, and so are the parents of ``out`` this call
+    created, when empty."""
+    out = Path(out)
+    created = _missing_dirs(out.parent)
+    try:
+        tmp = staging_dir(out, overwrite)
+    except BaseException:
+        _remove_empty(created)
+        raise
+    try:
+        yield tmp
+        replace_dir(tmp, out)
+    except BaseException:
+        import shutil
+
+        shutil.rmtree(tmp, ignore_errors=True)
+        _remove_empty(created)
+        raise
+
+
 def staging_dir(out: str | os.PathLike, overwrite: bool = False) -> Path:
-    """A fresh hidden directory beside ``out`` to build it in (finish with :func:`replace_dir`). An ``out``
+    """A fresh hidden directory beside ``out`` to build it in (finish with :func:`replace_dir`; prefer
+    :func:`staged_dir`, which also cleans up after a failure). What a killed earlier run left beside
+    ``out`` is swept first (:func:`sweep_staging`: staging directories older than this call). An ``out``
     that is a file, or a non-empty directory without ``overwrite``, is an :class:`InputError`."""
+    import time
+
+    start = time.time()
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: exists and is not a directory")
+    swept = sweep_staging(out, before=start)
+    if swept:
+        import logging
+
+        logging.getLogger(__name__).info("%s: removed %d staging director(ies) a killed run left", out, len(swept))
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise InputError(f"{out}: directory is not empty (use --overwrite to replace it)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    make_dir(out.parent)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes it owner-only (0700); ``out`` gets a plain mkdir's mode
+    return tmp
 
 
 def replace_dir(tmp: str | os.PathLike, out: str | os.PathLike) -> None:

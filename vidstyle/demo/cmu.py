@@ -29,7 +29,6 @@ from __future__ import annotations
 import csv
 import logging
 import os
-import shutil
 import time
 from collections import defaultdict
 from dataclasses import asdict, dataclass, field
@@ -38,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, ParameterError
-from ..fileio import replace_dir, staging_dir
+from ..fileio import staged_dir
 from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels
 from .dataset import VIEW_NAMES, validate_views
@@ -370,8 +369,7 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
     log_stats(stats)
     if not segments:
         raise InputError(f"{cmu_dir}: no clip of the actions {', '.join(params.class_names)} is long enough")
-    tmp = staging_dir(out, overwrite)
-    try:
+    with staged_dir(out, overwrite) as tmp:
         for sub in ("videos", "labels"):
             (tmp / sub).mkdir()
         t0 = time.perf_counter()
@@ -400,12 +398,8 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
             "videos": videos,
         }
         write_dataset(tmp / "dataset.json", manifest)
-        replace_dir(tmp, out)
-        log.info("wrote %s: %d subjects, %d windows, %d videos (%d frames) in %.1f s", out, len(performers),
-                 len(segments), len(videos), sum(v["frames"] for v in videos), time.perf_counter() - t0)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    log.info("wrote %s: %d subjects, %d windows, %d videos (%d frames) in %.1f s", out, len(performers),
+             len(segments), len(videos), sum(v["frames"] for v in videos), time.perf_counter() - t0)
     return out / "dataset.json"
 
 

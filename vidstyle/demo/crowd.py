@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import replace_dir, staging_dir
+from ..fileio import staged_dir
 from ..formats.calibration import Calibration, CameraCalibration, calibration_toml
 from ..mocap import Motion, forward_kinematics
 from ..mocap.keypoints import keypoint_positions
@@ -99,8 +99,7 @@ def make_crowd(out: str | os.PathLike, n_people: int = 2, n_views: int = 4, seco
     F = kp3.shape[1]
     kp2 = np.empty((n_views, n_people, F, 15, 2))
     depth = np.empty((n_views, n_people, F))
-    tmp = staging_dir(out, overwrite=True)
-    try:
+    with staged_dir(out, overwrite=True) as tmp:
         for v, cam in enumerate(cams):
             layers = []
             for p, m in enumerate(motions):
@@ -123,10 +122,4 @@ def make_crowd(out: str | os.PathLike, n_people: int = 2, n_views: int = 4, seco
         np.savez_compressed(tmp / KEYPOINTS_FILE, keypoints2d=kp2.astype(np.float32), depth=depth.astype(np.float32),
                             keypoints3d=(kp3 * UNIT_M * 1000.0).astype(np.float32), performers=np.array(ids),
                             fps=np.float64(fps), views=np.array(names))
-    except BaseException:
-        import shutil
-
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    replace_dir(tmp, out)
     return out

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import logging
 import os
-import shutil
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -35,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError
-from ..fileio import replace_dir, staging_dir
+from ..fileio import staged_dir
 from ..formats.dataset import write_dataset
 from ..formats.labels import write_labels
 from .actions import ACTIONS, CLASSES
@@ -263,8 +262,7 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
 
     params.validate()
     out = Path(out)
-    tmp = staging_dir(out, overwrite)
-    try:
+    with staged_dir(out, overwrite) as tmp:
         for sub in ("videos", "labels", "mocap"):
             (tmp / sub).mkdir()
         t0 = time.perf_counter()
@@ -290,12 +288,8 @@ def make_dataset(out: str | os.PathLike, params: DatasetParams, overwrite: bool 
             "videos": videos,
         }
         write_dataset(tmp / "dataset.json", manifest)
-        replace_dir(tmp, out)
-        log.info("wrote %s: %d performers, %d videos (%d frames) in %.1f s", out, len(performers), len(videos),
-                 sum(v["frames"] for v in videos), time.perf_counter() - t0)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    log.info("wrote %s: %d performers, %d videos (%d frames) in %.1f s", out, len(performers), len(videos),
+             sum(v["frames"] for v in videos), time.perf_counter() - t0)
     return out / "dataset.json"
 
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import logging
 import os
-import shutil
 import zlib
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -35,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import replace_dir, staging_dir
+from ..fileio import staged_dir
 
 log = logging.getLogger(__name__)
 
@@ -163,8 +162,7 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
 
     params.validate()
     out = Path(out)
-    tmp = staging_dir(out, overwrite)
-    try:
+    with staged_dir(out, overwrite) as tmp:
         (tmp / "clips").mkdir()
         results = parallel_map(make_library_clip, library_jobs(params), jobs=jobs, scheduler=scheduler,
                                description="library clips")
@@ -179,10 +177,6 @@ def make_library(out: str | os.PathLike, params: LibraryParams, cmu_dir: str | o
             entries += _add_cmu(Path(cmu_dir), tmp, params, results[0][1].skeleton)
         write_library(tmp / "library.json", library_document(
             asdict(params), [library_performer(params, i).to_dict() for i in range(params.performers)], entries))
-        replace_dir(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     log.info("wrote %s: %d clips", out, len(entries))
     return out / "library.json"
 
