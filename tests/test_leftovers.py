@@ -130,3 +130,59 @@ def _umask() -> int:
     m = os.umask(0)
     os.umask(m)
     return m
+
+
+def _video(tmp_path: Path) -> Path:
+    from tests.test_features_cli import write_video
+
+    p = tmp_path / "clip.avi"
+    write_video(p, T=6)
+    return p
+
+
+def test_pose_overlays_sweep_stale_frames_and_a_failure_leaves_no_empty_dir(tmp_path):
+    import numpy as np
+
+    from vidstyle.formats.poses import PoseFrame, Poses
+    from vidstyle.pose.overlay import write_overlays
+
+    video = _video(tmp_path)
+    pts = np.column_stack([np.linspace(5, 50, 15), np.linspace(5, 40, 15), np.ones(15)])
+    frames = [PoseFrame(i, "front", pts.copy(), {"front": 1.0}) for i in range(3)]
+    out = tmp_path / "ov" / "clip"
+    with pytest.raises(Exception):  # noqa: B017 - whichever error the reader gives for a frame past the end
+        write_overlays(video, Poses(str(video), "blazepose", [PoseFrame(99, "front", pts, {"front": 1.0})]), out)
+    assert not (tmp_path / "ov").exists()  # before: an empty ov/clip/ was left
+    out.mkdir(parents=True)
+    stale = _old(out / ".000001.q1w2e3r4.tmp.jpg")
+    other = _old(out / ".notes.q1w2e3r4.tmp.txt")
+    assert write_overlays(video, Poses(str(video), "blazepose", frames), out) == 3
+    assert sorted(os.listdir(out)) == [".notes.q1w2e3r4.tmp.txt", "000000.jpg", "000001.jpg", "000002.jpg"]
+    assert not stale.exists() and other.exists()
+
+
+def test_recognize_out_dir_sweeps_what_a_killed_run_left(tmp_path, capsys):
+    feats = [_old(tmp_path / f"v{i}.npz", data=b"not an npz") for i in range(2)]
+    model = _old(tmp_path / "m.joblib", data=b"not a model")
+    out = tmp_path / "rec"
+    out.mkdir()
+    stale = _old(out / ".v0.q1w2e3r4.tmp.json")
+    other = _old(out / ".v9.q1w2e3r4.tmp.json")  # not an output of this run: left
+    args = ["recognize", *map(str, feats), "--model", str(model)]
+    assert main([*args, "--out-dir", str(out)]) == 2
+    assert not stale.exists() and other.exists()
+    assert main([*args, "--out-dir", str(tmp_path / "new" / "rec")]) == 2
+    assert not (tmp_path / "new").exists()
+    capsys.readouterr()
+
+
+def test_learn_style_out_dir_sweeps_what_a_killed_run_left(tmp_path):
+    from vidstyle.style.synthetic import write_fake_dataset
+
+    ds = tmp_path / "ds"
+    write_fake_dataset(ds, n_performers=2, n_videos=2, events_per_video=40, seed=3)
+    out = tmp_path / "styles"
+    out.mkdir()
+    stale = _old(out / ".p01.q1w2e3r4.tmp.json")
+    assert main(["learn-style", "--dataset", str(ds), "--out-dir", str(out), "--n-init", "1", "--modes", "1-2"]) == 0
+    assert sorted(os.listdir(out)) == ["p00.json", "p01.json"] and not stale.exists()

@@ -105,12 +105,17 @@ def sweep_temporaries(out_dir: str | os.PathLike, names, before: float | None = 
     names or paths) when a run was killed before it could remove them: only names of the writer's own
     pattern (``.<stem>.<8 random characters>.tmp<suffix>``), only regular files, and only those last
     modified before ``before`` (default: now), so a concurrent writer's fresh file is left alone. Returns
-    the removed paths."""
+    the removed paths. One pass over the directory, however many names."""
     import re
 
-    wanted = [re.compile(_TEMP.format(stem=re.escape(Path(n).stem), suffix=re.escape(Path(n).suffix)))
-              for n in names]
-    return _sweep(out_dir, wanted, before, dirs=False)
+    wanted = {(Path(n).stem, Path(n).suffix) for n in names}
+    any_temp = re.compile(_TEMP.format(stem="(.+)", suffix="(.*)"))
+
+    def match(name: str) -> bool:
+        m = any_temp.fullmatch(name)
+        return m is not None and (m.group(1), m.group(2)) in wanted
+
+    return _sweep(out_dir, match, before, dirs=False)
 
 
 def sweep_staging(out: str | os.PathLike, before: float | None = None) -> list[Path]:
@@ -123,7 +128,7 @@ def sweep_staging(out: str | os.PathLike, before: float | None = None) -> list[P
     import shutil
 
     out = Path(out)
-    removed = _sweep(out.parent, [re.compile(_TEMP.format(stem=re.escape(out.name), suffix=""))], before,
+    removed = _sweep(out.parent, re.compile(_TEMP.format(stem=re.escape(out.name), suffix="")).fullmatch, before,
                      dirs=True)
     old = re.compile(rf"\.{re.escape(out.name)}\.old-([0-9]+)")
     try:
@@ -142,9 +147,8 @@ def sweep_staging(out: str | os.PathLike, before: float | None = None) -> list[P
     return removed
 
 
-def _sweep(parent: str | os.PathLike, patterns, before: float | None, dirs: bool) -> list[Path]:
-    """Remove the entries of ``parent`` whose name matches one of ``patterns`` (compiled, matched whole),
-    regular files (``dirs`` False) or directories (True, with their content; never a symlink), last
+def _sweep(parent: str | os.PathLike, match, before: float | None, dirs: bool) -> list[Path]:
+    """Remove the entries of ``parent`` whose name ``match`` accepts (hidden names only), regular files (``dirs`` False) or directories (True, with their content; never a symlink), last
     modified before ``before`` (default: now)."""
     import shutil
     import time
@@ -156,7 +160,7 @@ def _sweep(parent: str | os.PathLike, patterns, before: float | None, dirs: bool
     except (FileNotFoundError, NotADirectoryError):
         return removed
     for e in entries:
-        if not e.name.startswith(".") or not any(w.fullmatch(e.name) for w in patterns):
+        if not e.name.startswith(".") or not match(e.name):
             continue
         try:
             kind = e.is_dir(follow_symlinks=False) if dirs else e.is_file(follow_symlinks=False)

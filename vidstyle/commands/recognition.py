@@ -11,7 +11,7 @@ from typing import Optional
 import typer
 
 from ..errors import InputError
-from ..fileio import outputs_by_stem
+from ..fileio import output_dir, outputs_by_stem
 from ..recognition import defaults as D
 from ._evaluate import evaluate_app
 from ._numbers import jobs_option, number
@@ -175,7 +175,12 @@ def recognize(
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
     from ._flags import as_flags
 
-    with as_flags(jobs="--jobs", scheduler="--scheduler"):
+    import contextlib
+
+    # --out-dir: created if missing (removed again if the run fails and it is empty), with the temporaries
+    # a killed run left for these outputs swept
+    into = output_dir(out_dir, targets) if out_dir is not None else contextlib.nullcontext()
+    with as_flags(jobs="--jobs", scheduler="--scheduler"), into:
         run(model, inputs, targets, window=window, smoothing=smoothing, emission_weight=emission_weight, fps=fps,
             jobs=jobs, scheduler=scheduler)
     if out_dir is not None:

@@ -93,10 +93,17 @@ def learn_style(
     wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
     learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params)
     styles = [(out if pid is None else Path(out_dir) / f"{pid}.json", style) for pid, style in learned]
-    for dest, style in styles:
-        style.save(dest)
-        log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
-                 style.model_b.n_modes_)
+    import contextlib
+
+    from ..fileio import output_dir
+
+    # --out-dir: made if missing (removed again, when empty, if writing fails), its stale temporaries swept
+    into = output_dir(out_dir, [d for d, _ in styles]) if out_dir is not None else contextlib.nullcontext()
+    with into:
+        for dest, style in styles:
+            style.save(dest)
+            log.info("wrote %s (%d events, model (b): %d modes)", dest, int(style.action_counts.sum()),
+                     style.model_b.n_modes_)
 
 
 def generate(

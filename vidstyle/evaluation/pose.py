@@ -260,33 +260,41 @@ def draw_overlay(frame: np.ndarray, poses: dict[str, np.ndarray]) -> np.ndarray:
 
 def evaluate_real(model_path: str, videos: list[Path], overlay_dir: Path, frames_per_video: int = 6,
                   jobs: int = 1) -> dict:
+    from ..fileio import output_dir
+
+    # overlay_dir is made if missing and removed again, when empty, if this fails; temporaries a killed run
+    # left for these overlays are swept
+    with output_dir(overlay_dir, [f"{Path(v).stem}.pose_overlay.png" for v in videos]):
+        return {Path(v).stem: _real_video(model_path, v, overlay_dir, frames_per_video, jobs) for v in videos}
+
+
+def _real_video(model_path: str, v: Path, overlay_dir: Path, frames_per_video: int, jobs: int) -> dict:
+    """One video of :func:`evaluate_real`: the backends' agreement and its overlay PNG (written atomically)."""
     import cv2
 
+    from ..fileio import atomic_path
     from ..pose.run import estimate_video
     from ..video import VideoReader
 
-    overlay_dir.mkdir(parents=True, exist_ok=True)
-    out = {}
-    for v in videos:
-        with VideoReader(v) as r:
-            n = len(r)
-        idx = sorted(set(np.linspace(0, n - 1, frames_per_video).round().astype(int).tolist()))
-        ps = estimate_video(v, "ps", model_path, idx, jobs=jobs)
-        bp = estimate_video(v, "blazepose", None, idx, jobs=jobs)
-        P = np.stack([f.points for f in ps.frames])
-        B = np.stack([f.points for f in bp.frames])
-        found = B[:, :, 2].max(axis=1) > 0
-        agree = pck(P[found], B[found]).mean() if found.any() else float("nan")
-        mid = int(np.flatnonzero(found)[len(np.flatnonzero(found)) // 2]) if found.any() else 0
-        with VideoReader(v) as r:
-            frame = np.array(r.frame(idx[mid]))
-        png = overlay_dir / f"{Path(v).stem}.pose_overlay.png"
-        cv2.imwrite(str(png), draw_overlay(frame, {"ps": P[mid], "blazepose": B[mid]}))
-        out[Path(v).stem] = {"pck": float(agree), "frames": len(idx), "blazepose_found": int(found.sum()),
-                             "overlay": str(png),
-                             "ps_viewpoints": [f.viewpoint for f in ps.frames],
-                             "blazepose_viewpoints": [f.viewpoint for f in bp.frames]}
-    return out
+    with VideoReader(v) as r:
+        n = len(r)
+    idx = sorted(set(np.linspace(0, n - 1, frames_per_video).round().astype(int).tolist()))
+    ps = estimate_video(v, "ps", model_path, idx, jobs=jobs)
+    bp = estimate_video(v, "blazepose", None, idx, jobs=jobs)
+    P = np.stack([f.points for f in ps.frames])
+    B = np.stack([f.points for f in bp.frames])
+    found = B[:, :, 2].max(axis=1) > 0
+    agree = pck(P[found], B[found]).mean() if found.any() else float("nan")
+    mid = int(np.flatnonzero(found)[len(np.flatnonzero(found)) // 2]) if found.any() else 0
+    with VideoReader(v) as r:
+        frame = np.array(r.frame(idx[mid]))
+    png = overlay_dir / f"{Path(v).stem}.pose_overlay.png"
+    with atomic_path(png) as tmp:
+        if not cv2.imwrite(str(tmp), draw_overlay(frame, {"ps": P[mid], "blazepose": B[mid]})):
+            raise OSError(f"{png}: cannot write the overlay")
+    return {"pck": float(agree), "frames": len(idx), "blazepose_found": int(found.sum()), "overlay": str(png),
+            "ps_viewpoints": [f.viewpoint for f in ps.frames],
+            "blazepose_viewpoints": [f.viewpoint for f in bp.frames]}
 
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import numpy as np
 
@@ -52,16 +51,16 @@ def draw_pose(frame: np.ndarray, pose: PoseFrame, min_score: float = 0.3) -> np.
 
 def write_overlays(video: str | os.PathLike, poses, out_dir: str | os.PathLike) -> int:
     """``<out_dir>/<frame>.jpg`` for every frame of ``poses`` (a :class:`~vidstyle.formats.poses.Poses`),
-    streamed one frame at a time; returns how many were written."""
+    streamed one frame at a time; returns how many were written. ``out_dir`` is made if missing (and
+    removed again, when empty, if this fails); temporaries a killed run left for these frames are swept."""
     import cv2
 
-    from ..fileio import atomic_path
+    from ..fileio import atomic_path, output_dir
     from ..video import VideoReader
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     n = 0
-    with VideoReader(video) as reader:
+    names = [f"{int(pf.frame):06d}.jpg" for pf in poses.frames]
+    with VideoReader(video) as reader, output_dir(out_dir, names) as out:
         for pf in poses.frames:
             img = draw_pose(np.asarray(reader.frame(int(pf.frame))), pf)
             ok, buf = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 90])
