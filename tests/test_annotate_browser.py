@@ -1,6 +1,8 @@
 """The annotation page in a real browser (Playwright driving Debian's chromium): keyboard navigation with the
 shown frame read back from its own pixels, marking segments and transitions, undo/redo, save, reload,
-export and import, accepting library poses, and a screenshot checked by the test."""
+export and import, accepting library poses, and a screenshot checked by the test; the page's icon (no
+console error on load), a header that keeps its layout when the pending-segment message appears, and the
+recognised action and confidence of the current frame beside it."""
 
 from __future__ import annotations
 
@@ -519,3 +521,81 @@ def test_beyond_loopback_the_page_takes_the_key_from_the_fragment_or_asks(browse
         wait_saved(page)
         assert [t.frame for t in read_annotations(tmp_path / "keyed.json").videos[0].transitions] == [0, 1]
         page.close()
+
+
+@pytest.fixture
+def recognised_app(tmp_path):
+    """A session with recognised labels at half the video's rate (each label covers two decoded frames),
+    with a confidence per label."""
+    video = numbered_video(tmp_path / "rec.mp4", 60, 25.0, size=(320, 240))
+    n = 30
+    labels = ["Jab"] * 20 + ["Hook"] * (n - 20)
+    confidence = [round(0.05 + (k % 10) / 10, 2) for k in range(n)]
+    rec = tmp_path / "rec.json"
+    rec.write_text(json.dumps({"video": str(video), "fps": 12.5, "classes": ["Jab", "Hook", "Guard"],
+                               "labels": labels, "confidence": confidence}))
+    s = session([video], tmp_path / "annotations.json")
+    s.overlays = load_overlays(s.videos, labels=[rec])
+    with Running(s) as url:
+        yield url
+
+
+def _header_layout(page) -> dict:
+    return page.evaluate("""() => {
+        const box = (id) => { const r = document.getElementById(id).getBoundingClientRect();
+                              return [Math.round(r.left), Math.round(r.top), Math.round(r.width), Math.round(r.height)]; };
+        return {header: Math.round(document.querySelector('header').getBoundingClientRect().height),
+                status: box('status'), save: box('save'), video: box('video')};
+    }""")
+
+
+@pytest.mark.parametrize("width", [1280, 1100, 900])
+def test_page_icon_stable_header_and_recognised_label_of_the_frame(browser, recognised_app, width):
+    """No console error on load (the icon is declared and served, no /favicon.ico 404); the header keeps its
+    height and layout when the pending-segment message appears; the recognised action and its confidence
+    of the current frame are shown beside it and follow frame steps."""
+    url = recognised_app
+    page = browser.new_page(viewport={"width": width, "height": 800})
+    problems = []
+    page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: problems.append(str(e)))
+    page.on("response", lambda r: problems.append(f"{r.status} {r.url}") if r.status >= 400 else None)
+    page.goto(url + "/")
+    assert shown_number(page) == 0
+    icon = page.evaluate("() => { const l = document.querySelector('link[rel~=\"icon\"]'); return l && l.href; }")
+    assert icon, "the page declares no icon: the browser asks for /favicon.ico"
+    for where in (icon, url + "/favicon.ico"):
+        got = page.request.get(where)
+        assert got.status == 200 and got.headers["content-type"].startswith("image/svg+xml"), where
+    page.wait_for_timeout(300)
+    assert problems == []
+
+    # the header: the same height and the same places with and without the pending-segment message
+    before = _header_layout(page)
+    page.keyboard.press("[")
+    page.wait_for_function("() => document.getElementById('pending').textContent.includes('segment from 0')")
+    assert _header_layout(page) == before
+    page.keyboard.press("Escape")
+    goto(page, 57)
+    page.keyboard.press("[")
+    page.wait_for_function("() => document.getElementById('pending').textContent.includes('segment from 57')")
+    assert _header_layout(page) == before
+
+    # the recognised action of the current frame, beside it: frames 2k and 2k+1 are working frame k
+    def recognised():
+        return page.inner_text("#recognised")
+
+    assert page.is_visible("#recognised")
+    goto(page, 0)
+    assert "Jab" in recognised() and "confidence 0.05" in recognised()
+    page.keyboard.press("f")
+    assert shown_number(page) == 1 and "Jab" in recognised() and "confidence 0.05" in recognised()
+    page.keyboard.press("f")
+    assert shown_number(page) == 2 and "Jab" in recognised() and "confidence 0.15" in recognised()
+    goto(page, 41)  # working frame 20: the first Hook
+    assert "Hook" in recognised() and "confidence 0.05" in recognised()
+    page.keyboard.press("d")
+    page.keyboard.press("d")
+    assert shown_number(page) == 39 and "Jab" in recognised() and "confidence 0.95" in recognised()
+    assert problems == []
+    page.close()

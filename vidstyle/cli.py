@@ -147,11 +147,31 @@ def _flags_take_no_value() -> None:
     option.display_type_rich = display_type_rich
 
 
+def _help_fits_the_terminal() -> None:
+    """--help fits an 80-column terminal without cutting an option name or a word
+    (:mod:`.commands._helplayout`; the layout is installed as help is first formatted, which is when
+    Typer imports Rich's table code)."""
+    for cls in (typer.core.TyperCommand, typer.core.TyperGroup):
+        original = cls.format_help
+        if getattr(original, "_vidstyle", False):
+            continue
+
+        def format_help(self, ctx, formatter, _original=original):
+            from .commands._helplayout import install
+
+            install()
+            return _original(self, ctx, formatter)
+
+        format_help._vidstyle = True
+        cls.format_help = format_help
+
+
 _register_commands()
 _arrange_help()
 _check_numbers()
 _literal_help(app)
 _flags_take_no_value()
+_help_fits_the_terminal()
 
 
 #: library parameter -> the command parameter that sets it, where the names differ

@@ -5,7 +5,7 @@ decoded frame indices here, once, so the page only ever deals in decoded indices
 Schemas read:
 
 * recognised labels (``vidstyle recognize``): ``{"video", "fps", "classes", "labels": [one per working
-  frame]}``; working frame ``k`` is decoded frame ``working_indices(timestamps, fps)[k]`` and covers the
+  frame], "confidence"?: [one per working frame]}``; working frame ``k`` is decoded frame ``working_indices(timestamps, fps)[k]`` and covers the
   decoded frames up to the next working frame;
 * poses: :mod:`vidstyle.formats.poses` (``points`` x = column, y = row in the video's pixels);
 * matches (issue 14): ``{"kind": "vidstyle.matches", "schema_version", "video", "frames": [{"frame",
@@ -55,8 +55,10 @@ def _match_video(doc_video: str | None, videos, path) -> Any:
 
 
 def read_labels_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
-    """(video id, {"classes", "spans": [{start, end, action}] in decoded frames, half-open}), read by the
-    owner module :func:`vidstyle.formats.recognised.read_recognised` (plain labels files load too)."""
+    """(video id, {"classes", "spans": [{start, end, action}] in decoded frames, half-open, and, when the
+    file has confidences, "starts": the first decoded frame of each working frame, "confidence": one per
+    working frame}), read by the owner module :func:`vidstyle.formats.recognised.read_recognised` (plain
+    labels files load too)."""
     from ..formats.recognised import read_recognised
 
     track = read_recognised(path)
@@ -75,7 +77,12 @@ def read_labels_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:
             spans[-1]["end"] = e
         else:
             spans.append({"start": s, "end": e, "action": lab})
-    return v.id, {"classes": classes, "spans": spans, "file": Path(path).name}
+    out = {"classes": classes, "spans": spans, "file": Path(path).name}
+    if track.confidence is not None:
+        # the page shows the confidence of the working frame holding the current decoded frame
+        out["starts"] = [int(x) for x in src]
+        out["confidence"] = [round(float(c), 3) for c in np.asarray(track.confidence, float)]
+    return v.id, out
 
 
 def read_poses_overlay(path: str | os.PathLike, videos) -> tuple[str, dict]:

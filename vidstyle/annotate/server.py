@@ -62,7 +62,8 @@ from .session import Conflict, Store, Video
 log = logging.getLogger(__name__)
 
 MAX_BODY = 16 << 20
-STATIC = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8"}
+STATIC = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8",
+          "icon.svg": "image/svg+xml"}
 CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
        "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
@@ -190,6 +191,10 @@ def create_app(session: Session) -> Starlette:
             return _err(404, "no such file")
         return Response(static[name], media_type=STATIC[name], headers={"X-Content-Type-Options": "nosniff", **nocache})
 
+    async def favicon(request: Request):  # the page declares its icon; this is for clients that ask anyway
+        return Response(static["icon.svg"], media_type=STATIC["icon.svg"],
+                        headers={"X-Content-Type-Options": "nosniff", **nocache})
+
     async def list_videos(request: Request):
         return JSONResponse([v.describe() for v in session.videos])
 
@@ -302,6 +307,7 @@ def create_app(session: Session) -> Starlette:
     routes = [
         Route("/", index, methods=["GET"]),
         Route("/static/{name}", static_file, methods=["GET"]),
+        Route("/favicon.ico", favicon, methods=["GET"]),
         Route("/api/videos", list_videos, methods=["GET"]),
         Route("/api/videos/{vid}/frames/{index}", frame, methods=["GET"]),
         Route("/api/videos/{vid}/timestamps", timestamps, methods=["GET"]),

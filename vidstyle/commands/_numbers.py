@@ -175,5 +175,10 @@ MAX_JOBS = 1024
 
 
 def jobs_option(default: int, *names: str, help: str) -> Any:
-    """The ``--jobs`` / ``-j`` option: 1..1024 workers, or -1 for all cores."""
+    """The ``--jobs`` / ``-j`` option: 1..1024 workers, or -1 for all cores.
+
+    Convention: ``-1`` (all cores) is the default wherever a command's work splits into independent
+    pieces (a pipeline runs one stage at a time, and one piece runs in-process anyway:
+    :func:`vidstyle.parallel.parallel_map`); a command that defaults to anything else says why in its
+    help (``build-graph``: its one process already runs a thread per core)."""
     return number(default, *(names or ("--jobs", "-j")), help=help, lo=1, hi=MAX_JOBS, also=(-1,))

@@ -1,7 +1,7 @@
 """``vidstyle annotate``: mark transition frames and action segments in the browser, frame-exact, and choose
 the performer ``vidstyle pose --annotations`` follows.
 
-    vidstyle annotate v1.mp4 v2.mp4 --annotations annotations.json [--labels v1.json] [--poses p.json]
+    vidstyle annotate v1.mp4 v2.mp4 --annotations annotations.json [--recognized v1.json] [--poses p.json]
         [--matches m.json] [--port 8765] [--no-browser]
 """
 
@@ -27,7 +27,11 @@ def annotate(
     annotations: Path = typer.Option(
         Path("annotations.json"), "--annotations", "-a",
         help="Annotations file to edit (created if absent; videos it holds that are not given are kept)."),
-    labels: list[Path] = typer.Option([], "--labels", help="Recognised labels JSON from `recognize` (repeatable)."),
+    recognized: list[Path] = typer.Option(
+        [], "--recognized",
+        help="Recognised labels JSON from `recognize` (repeatable): the label and confidence of the current "
+             "frame beside it, and a timeline row."),
+    labels: list[Path] = typer.Option([], "--labels", hidden=True, help="Old name of --recognized."),
     poses: list[Path] = typer.Option([], "--poses", help="poses.json from `pose` (repeatable)."),
     matches: list[Path] = typer.Option([], "--matches", help="matches.json from `match-pose` (repeatable)."),
     classes: str | None = typer.Option(
@@ -49,5 +53,5 @@ def annotate(
     from ..annotate.launch import annotate as serve_page
     from ..demo import CLASSES  # the page's classes when nothing else names any
 
-    serve_page(videos, annotations, labels=labels, poses=poses, matches=matches, classes=classes,
+    serve_page(videos, annotations, labels=[*recognized, *labels], poses=poses, matches=matches, classes=classes,
                default_classes=CLASSES, host=host, port=port, open_browser=not no_browser, max_body_mb=max_body_mb)

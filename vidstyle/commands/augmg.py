@@ -26,7 +26,7 @@ def _per_source_text(values: dict) -> list[str]:
     return [f"{s}={v}" if s != "*" else str(v) for s, v in values.items()]
 
 
-_JOBS = jobs_option(1, help="Parallel workers for projecting and indexing (-1 = all cores).")
+_JOBS = jobs_option(-1, help="Parallel workers for projecting and indexing (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
 

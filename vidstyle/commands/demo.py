@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
+from ._numbers import jobs_option
 
 log = logging.getLogger(__name__)
 
@@ -22,7 +23,7 @@ def register(app: typer.Typer) -> None:
 
 # options both dataset commands take
 _OVERWRITE = typer.Option(False, "--overwrite", help="Replace a non-empty --out (only once the new dataset is complete).")
-_JOBS = typer.Option(-1, "--jobs", "-j", help="Parallel workers (-1 = all cores).")
+_JOBS = jobs_option(-1, help="Parallel workers (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
 

@@ -20,7 +20,7 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(
             ..., "--out", "-o", help="Output directory; writes <video stem>.npz per video."
         ),
-        jobs: int = jobs_option(-1, help="Videos processed in parallel (-1: all cores)."),
+        jobs: int = jobs_option(-1, help="Videos processed in parallel (-1 = all cores)."),
         scheduler: str = typer.Option(
             None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): run the videos on that "
             "cluster instead of local workers; its workers must see the same paths.",

@@ -12,6 +12,7 @@ import typer
 from ..errors import InputError
 from ..motiongraph import defaults as D
 from ._evaluate import evaluate_app
+from ._numbers import jobs_option
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +52,7 @@ def build_graph(
     mirror: bool = typer.Option(D.MIRROR, "--mirror", help="Add the mirror image of every clip."),
     tile: int = typer.Option(D.TILE, "--tile", help="Tile size of the all-pairs pass."),
     dtype: str = typer.Option(D.DTYPE, "--dtype", help="GEMM precision: float32 (candidates refined in float64) or float64."),
-    jobs: int = typer.Option(D.N_JOBS, "--jobs", "-j", help="1: this process, all BLAS threads; N or -1: joblib workers."),
+    jobs: int = jobs_option(D.N_JOBS, help="1 (the default, unlike other commands): this process, one thread per core sharing one copy of the windows; N or -1 = all cores: joblib worker processes, each with its own copy."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
     seed: int = typer.Option(D.RANDOM_STATE, "--seed", help="Seed of the threshold sample."),
 ) -> None:

@@ -114,7 +114,7 @@ def train_pose(
     figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
     proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of rendering, negatives and classifiers."),
-    jobs: int = jobs_option(-1, help="Parallel workers (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """Train the pictorial-structures pose model (viewpoint-specific + generic tree priors, part
@@ -162,7 +162,7 @@ def pose(
     smooth: bool = typer.Option(False, "--smooth", help="One-Euro filter the keypoint tracks (jitter)."),
     overlay: Path | None = typer.Option(None, "--overlay", help="Also write every frame with its keypoints drawn "
                                         "(DIR/<frame>.jpg), to check the poses by eye."),
-    jobs: int = jobs_option(-1, help="Parallel workers (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
@@ -235,7 +235,7 @@ def evaluate_pose(
     figure_scales: str | None = typer.Option(None, "--figure-scales", help=_SCALE_HELP),
     proportions: float = typer.Option(0.0, "--proportions", help=_PROP_HELP),
     seed: int = typer.Option(0, "--seed", help="Seed of the held-out renders."),
-    jobs: int = jobs_option(-1, help="Parallel workers for rendering (-1: all cores)."),
+    jobs: int = jobs_option(-1, help="Parallel workers for rendering (-1 = all cores)."),
 ) -> None:
     """Strict PCP per part (Table 5 layout), PCK@0.2 and viewpoint confusion (Table 6 layout) on
     held-out renders for both backends; backend agreement and overlays on real footage. With

@@ -18,8 +18,9 @@ from ._numbers import jobs_option, number
 
 log = logging.getLogger(__name__)
 
-_SPLIT_HELP = ("unseen-performer | unseen-view | unseen-camera: sets A (vocabulary), B (classifier), V (validation) "
-               "and T (test) never share a performer or take; unseen-camera trains as unseen-performer.")
+_SPLIT_HELP = ("How --dataset's videos are divided: unseen-performer | unseen-view | unseen-camera. The videos the "
+               "vocabulary is learned on, the videos the classifier is trained on, the validation videos and the "
+               "test videos never share a performer or take; unseen-camera trains as unseen-performer.")
 
 
 def register(app: typer.Typer) -> None:
@@ -29,20 +30,23 @@ def register(app: typer.Typer) -> None:
 
 
 def vocabulary(
-    features: list[Path] = typer.Argument(None, help="Features .npz files of set A (or use --dataset)."),
+    features: list[Path] = typer.Argument(None, help="Features .npz files of the videos to learn the vocabulary on (or use --dataset)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output vocab.npz."),
     words: int = number(D.N_WORDS, "--words", lo=2, hi=100000, help="Number of words (thesis: 1000 of 500/1000/1500)."),
     method: str = typer.Option(D.VOCAB_METHOD, "--method", help="minibatch | hierarchical | kmeans."),
     branching: int = number(D.BRANCHING, "--branching", lo=2, hi=10000, help="Children per node of the hierarchical tree."),
     max_descriptors: int = number(D.MAX_DESCRIPTORS, "--max-descriptors", lo=1, help="Fit on at most this many (sampled)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: fit on set A of --split."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: learn on its vocabulary videos (chosen by --split)."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (sampling, k-means, split)."),
     jobs: int = jobs_option(-1, help="Parallel file loading (-1 = all cores)."),
 ) -> None:
-    """Cluster 3D SIFT descriptors of set A into visual words (k-means centres)."""
+    """Learn the visual words: cluster the 3D SIFT descriptors of the given videos (k-means centres).
+
+    Learn them on other videos than the ones the classifier is then trained on (`train-recognizer`
+    refuses training videos that built the vocabulary unless given --allow-overlap)."""
     from ..recognition.pipeline import train_vocabulary
 
     t0 = time.perf_counter()
@@ -59,21 +63,21 @@ def vocabulary(
 
 
 def train_recognizer(
-    features: list[Path] = typer.Argument(None, help="Features .npz files of set B (with --labels)."),
-    labels: list[Path] = typer.Option(None, "--labels", help="Labels JSON per FEATURES file, same order."),
+    features: list[Path] = typer.Argument(None, help="Features .npz files of the videos to train the classifier on (with --labels): not the ones the vocabulary was learned on."),
+    labels: list[Path] = typer.Option(None, "--labels", help="True action labels (JSON) per FEATURES file, same order."),
     annotations: list[Path] = typer.Option(
         None, "--annotations",
         help="Annotations file(s) from `vidstyle annotate`: train on the action segments of your own videos "
              "(with their FEATURES files, or --features-dir holding <video stem>.npz). Unlabelled frames are left out."),
-    vocab: Optional[Path] = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (set A); required with --features sift3d."),
-    features_kind: str = typer.Option("sift3d", "--features", help="sift3d (3D SIFT words from FEATURES files, the default) | pose (2D pose sequences: trains on the mocap takes of --dataset's training performers, sets A and B of --split, seen from --views virtual cameras)."),
+    vocab: Optional[Path] = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (learned on other videos); required with --features sift3d."),
+    features_kind: str = typer.Option("sift3d", "--features", help="sift3d (3D SIFT words from FEATURES files, the default) | pose (2D pose sequences: trains on the mocap takes of --dataset's training performers (the vocabulary and classifier videos of --split), seen from --views virtual cameras)."),
     views: int = number(8, "--views", lo=1, hi=360, help="--features pose: virtual cameras per mocap take (azimuth 0-360, elevation -10..45 deg, 2.5-6 body heights)."),
     noise_sigma: float = number(0.05, "--noise-sigma", lo=0, hi=10, help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
     outlier_rate: float = number(0.05, "--outlier-rate", lo=0, hi=1, help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
     dropout_rate: float = number(0.02, "--dropout-rate", lo=0, hi=1, help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on set B of --split."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on its classifier videos (chosen by --split)."),
     features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
@@ -87,14 +91,15 @@ def train_recognizer(
     c: float = number(D.C, "--C", lo=0, lo_open=True, hi=1e6, help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
     max_frames_per_class: int = number(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", lo=0, help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
     window: int = number(D.SMOOTHING_WINDOW, "--window", lo=1, hi=D.MAX_WINDOW, help="Smoothing window in frames (thesis 6)."),
-    smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
+    smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of the training videos; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
     emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
-    allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow set B files that built the vocabulary."),
+    allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow training videos the vocabulary was learned on."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
-    """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on set B."""
+    """Train the frame recognizer (histograms -> grouping -> PCA -> SVMs) on labelled videos other than the
+    ones the vocabulary was learned on."""
     from ..recognition.pipeline import train
     from ..recognition.recognizer import save_model
 
@@ -154,7 +159,7 @@ def recognize(
     smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi | duration (default: the model's)."),
     emission_weight: Optional[float] = number(None, "--emission-weight", integer=False, lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: the model's)."),
     fps: Optional[float] = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000, help="Frame rate to record (default: from the features, else 20)."),
-    jobs: int = jobs_option(1, help="Inputs recognised in parallel (-1: all cores; each worker loads the model once)."),
+    jobs: int = jobs_option(-1, help="Inputs recognised in parallel (-1 = all cores; each worker loads the model once)."),
     scheduler: Optional[str] = typer.Option(
         None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): recognise on that cluster; its workers must see the same paths."
     ),
@@ -210,7 +215,7 @@ def evaluate_recognition(
     coarse_context: int = number(D.COARSE_CONTEXT, "--coarse-context", lo=0, hi=D.MAX_CONTEXT, help="Multi-scale context: frames each side of a second histogram (0 = off)."),
     max_frames_per_class: int = number(D.MAX_FRAMES_PER_CLASS, "--max-frames-per-class", lo=0, help="SVM training frames per class (0 = all; default: chosen on validation performers)."),
     window: int = number(D.SMOOTHING_WINDOW, "--window", lo=1, hi=D.MAX_WINDOW, help="Smoothing window."),
-    smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of set B; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
+    smoothing: str = typer.Option(D.SMOOTHING, "--smoothing", help="duration (explicit-duration HMM: per-class run lengths of the training videos; default, chosen on validation performers) | viterbi (HMM over frame scores) | vote (thesis) | mean."),
     c: float = number(D.C, "--C", lo=0, lo_open=True, hi=1e6, help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
     emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
@@ -222,7 +227,8 @@ def evaluate_recognition(
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (split, vocabulary, sampling)."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
-    """Train vocabulary (set A) and recognizer (set B) on a split, test on held-out videos, write metrics.
+    """Learn a vocabulary and train a recognizer on a split's training videos (each on its own share), test on
+    held-out videos, write metrics.
 
     With --labels-dir, score label files already written by `vidstyle recognize` against the ground truth
     instead (no training): the test videos are the split recorded in --model, else the --split/--seed one."""

@@ -267,7 +267,7 @@ def train(
     if overlap and not allow_overlap:
         raise InputError(
             f"{vocab_file or 'vocabulary'}: {len(overlap)} training file(s) also built the vocabulary "
-            f"(e.g. {sorted(overlap)[0]}); sets A and B must be disjoint (or pass --allow-overlap)"
+            f"(e.g. {sorted(overlap)[0]}); train the classifier on other videos than the vocabulary's (or pass --allow-overlap)"
         )
     if not annotations:
         tracks = [read_labels(p) for p in labels]

@@ -457,7 +457,9 @@ function renderClasses() {
 function render() {
   if (!S.vid) return;
   renderInfo();
-  $("pending").textContent = S.pending === null ? "" : `segment from ${S.pending} (] ends it, action ${actionName()})`;
+  const pending = S.pending === null ? "" : `segment from ${S.pending}: ] ends it (${actionName()})`;
+  $("pending").textContent = pending; $("pending").title = pending;
+  renderRecognised();
   renderPerformer();
   const m = marks();
   const segs = $("segments"); segs.innerHTML = "";
@@ -487,6 +489,38 @@ function render() {
   renderCandidates(t);
   drawTimeline();
   drawOverlay();
+}
+
+// the last index k with sorted[k] <= x (-1 when x is before the first)
+function lastAtOrBefore(sorted, x, key) {
+  let lo = 0, hi = sorted.length - 1, k = -1;
+  while (lo <= hi) {
+    const mid = (lo + hi) >> 1;
+    if ((key ? key(sorted[mid]) : sorted[mid]) <= x) { k = mid; lo = mid + 1; } else hi = mid - 1;
+  }
+  return k;
+}
+
+// the recognised action (and its confidence, when the file has one) of the current frame, beside the frame
+function renderRecognised() {
+  const rec = (S.overlays[S.vid.id] || {}).recognized;
+  $("recognised-panel").hidden = !rec;
+  if (!rec) return;
+  const el = $("recognised");
+  const k = lastAtOrBefore(rec.spans, S.frame, (s) => s.start);
+  const span = k >= 0 && S.frame < rec.spans[k].end ? rec.spans[k] : null;
+  el.textContent = span ? span.action : "none (no recognised frame here)";
+  el.style.borderLeftColor = span ? color(span.action) : "transparent";
+  el.title = `from ${rec.file}`;
+  if (span && rec.confidence) {
+    const w = lastAtOrBefore(rec.starts, S.frame);
+    if (w >= 0) {
+      const c = document.createElement("span");
+      c.className = "confidence";
+      c.textContent = `confidence ${rec.confidence[w].toFixed(2)}`;
+      el.appendChild(c);
+    }
+  }
 }
 
 function renderPerformer() {
