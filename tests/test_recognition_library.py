@@ -136,5 +136,5 @@ def test_bad_window_is_one_flag_line_and_no_output(cli_run, tmp_path, capsys):
     assert main(["recognize", str(cli_run["features"]), "--model", str(cli_run["dir"] / "m.joblib"),
                  "--window", "0", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == "vidstyle: error: --window: must be >= 1, got 0"
+    assert err[-1] == "vidstyle: error: --window: must be an integer in 1..1000, got 0"
     assert not out.exists()
