@@ -12,6 +12,8 @@ results were made with).
 
 from __future__ import annotations
 
+from ..pose.defaults import MAX_CONTEXT as POSE_MAX_CONTEXT
+
 # --- chosen on the validation performers (pipelines/kickboxing/validation/augmg.json) --------------
 #: library segment through the reference point: fixed, nodes or adaptive
 SEGMENT = "adaptive"
@@ -60,8 +62,9 @@ SEGMENT_SCALE = 1.0
 NOISE = 0.05
 
 # --- bounds of the parameters (checked by the commands and the library; refused beyond them) ---------
-#: most video frames either side of a mark (``--context``; also less than the video's frame count)
-MAX_CONTEXT = 1000
+#: most video frames either side of a mark (``--context``; also less than the video's frame count): the
+#: pose stage's bound (the poses of a mark's neighbours come from ``vidstyle pose --context``)
+MAX_CONTEXT = POSE_MAX_CONTEXT
 #: most azimuths (``--views``: one per degree)
 MAX_VIEWS = 360
 #: most candidates per query / mark (``--k``)

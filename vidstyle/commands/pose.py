@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from ..augmg.defaults import MAX_CONTEXT
+from ..pose.defaults import MAX_CONTEXT
 from ._numbers import jobs_option, number
 
 from ..errors import InputError

@@ -29,3 +29,8 @@ def shipped_model_path():
     from importlib.resources import files
 
     return files("vidstyle.pose") / "weights" / SHIPPED_MODEL_NAME
+
+
+#: most video frames either side of a marked frame (``vidstyle pose --annotations --context``; also less
+#: than the video's frame count); AugMG's matching shares it (:data:`vidstyle.augmg.defaults.MAX_CONTEXT`)
+MAX_CONTEXT = 1000

@@ -263,7 +263,7 @@ def _marks_of(video, annotations, context: int):
     from ..formats.annotations import check_video, read_annotations
     from ..video import VideoReader
 
-    from ..augmg.defaults import MAX_CONTEXT
+    from .defaults import MAX_CONTEXT
 
     if not 0 <= context <= MAX_CONTEXT:
         raise ParameterError("context", f"must be in 0..{MAX_CONTEXT}, got {context}")
