@@ -335,8 +335,9 @@ def pose_table(items, root: Path) -> list[str]:
 
 #: what each committed AugMG metrics file is (the 2D sources' poses and the validation file of its thresholds)
 AUGMG_FILES = {
-    "augmg_seed0.json": "the pipeline's evaluate_augmg stage: pictorial structures = the pipeline's own pose model "
-                        "(demo renders only, 10 epochs); defaults and thresholds from `validation/augmg.json`",
+    "augmg_seed0.json": "the pipeline's evaluate_augmg stage: pictorial structures = the model shipped in the package "
+                        "(`scripts/train_default_pose.py`; poses at scales 1, 1.2, 1.4); defaults and thresholds from "
+                        "`validation/augmg.json`",
     "augmg_trainpose_seed0.json": "the same marks with pictorial structures = `vidstyle train-pose`'s default model "
                                   "(30 demo performers + 71 CMU clips x 16 azimuths, 20 epochs, 2-px heatmaps, test-time flip, unary "
                                   "weight 16; test poses at scales 1, 1.2, 1.4); matching defaults "

@@ -36,6 +36,9 @@ def test_matching_defaults_are_the_validated_ones(chosen):
 
     assert yaml.safe_load(PARAMS.read_text())["augmg"]["context"] == chosen["context"]
     assert D.POSE_SCALES == chosen.get("pose", {}).get("scales")
+    # the pipeline's pose_marks stage runs the shipped model with those settings
+    scales = yaml.safe_load(PARAMS.read_text())["augmg"]["pose_scales"]
+    assert scales == ("" if D.POSE_SCALES is None else "--scales " + ",".join(f"{x:g}" for x in D.POSE_SCALES))
     keys = ("segment", "context", "scores", "k", "foreshortening", "place", "anchor", "hold")
     best = [r for r in chosen["table"] if (r.get("pose", {}), *(r[x] for x in keys))
             == (chosen.get("pose", {}), *(chosen[x] for x in keys))]

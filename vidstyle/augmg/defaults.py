@@ -16,11 +16,11 @@ from ..pose.defaults import MAX_CONTEXT as POSE_MAX_CONTEXT
 
 # --- chosen on the validation performers (pipelines/kickboxing/validation/augmg.json) --------------
 #: library segment through the reference point: fixed, nodes or adaptive
-SEGMENT = "adaptive"
+SEGMENT = "fixed"
 #: video frames either side of a mark matched with it (temporal coherence)
 CONTEXT = 2
 #: weight bones by the pose's confidence scores
-SCORES = True
+SCORES = False
 #: also weight bones by their foreshortening
 FORESHORTENING = True
 #: placement of the library segment on the performer: first, both or drift
@@ -30,16 +30,16 @@ ANCHOR = "nodes"
 #: fraction of the transition, centred on the reference pose, that follows the segment with full weight
 HOLD = 0.2
 #: zoom factors of the pose stage's multi-scale inference (``vidstyle pose --scales``); None: one scale
-POSE_SCALES: list[float] | None = None
+POSE_SCALES: list[float] | None = [1.0, 1.2, 1.4]
 #: candidate reference points per query / mark (validation.json's ``k``)
 K = 10
 #: acceptance thresholds per 2D source (``model`` = pictorial structures, ``blazepose``, ``gt``,
 #: ``noisy``; a source not named has none): reject an enhancement whose match cost exceeds
 #: MAX_MATCH_COST, whose enhanced distance (mocap length units) exceeds MAX_ENH_COST, or whose reference
 #: pose lies less than MIN_GAIN (mm) from the plain transition's middle frame
-MAX_MATCH_COST: dict[str, float] = {"model": 0.526, "blazepose": 0.431}
-MAX_ENH_COST: dict[str, float] = {"model": 4.408}
-MIN_GAIN: dict[str, float] = {"model": 74.315, "gt": 123.566, "noisy": 95.722}
+MAX_MATCH_COST: dict[str, float] = {"blazepose": 0.637}
+MAX_ENH_COST: dict[str, float] = {"model": 4.833}
+MIN_GAIN: dict[str, float] = {"model": 83.322, "gt": 90.371, "noisy": 111.448}
 
 # --- fixed by design (not searched by the validation) ----------------------------------------------
 #: azimuths the library is projected at (360 / N_VIEWS apart)
