@@ -45,13 +45,6 @@ def test_the_file_keeps_its_mode(tmp_path, mode):
     assert os.stat(p).st_mode & 0o777 == mode and link.is_symlink()
 
 
-def test_a_new_file_gets_the_mode_open_gives(tmp_path):
-    write_json(tmp_path / "a.json", {"x": 1})
-    plain = tmp_path / "plain.txt"
-    plain.write_text("x")
-    assert os.stat(tmp_path / "a.json").st_mode & 0o777 == os.stat(plain).st_mode & 0o777
-
-
 def test_a_failed_write_leaves_no_temporary_and_the_old_file(tmp_path):
     p = tmp_path / "a.npz"
     write_npz(p, x=[1, 2])
