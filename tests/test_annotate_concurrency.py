@@ -15,7 +15,7 @@ from annotate_util import numbered_video, running
 from vidstyle.annotate.session import Conflict, Store, open_videos
 from vidstyle.formats.annotations import read_annotations, write_annotations
 
-TRIALS = 25
+TRIALS = 100  # the bar: no lost save in 100 concurrent trials
 
 
 @pytest.fixture(scope="module")
