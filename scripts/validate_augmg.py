@@ -15,7 +15,7 @@ perf0 takes decide the perf1 takes and vice versa), averaged over the two *estim
 (``model``, ``blazepose``); the best configuration's thresholds are then chosen on all validation
 rows. Nothing here reads a test performer.
 
-    vidstyle pose out/dataset/videos/p00_perf0_front.mp4 --backend ps --model out/models/pose.joblib \\
+    vidstyle pose out/dataset/videos/p00_perf0_front.mp4 --backend ps [--scales 1,1.2,1.4] \\
         --frames <key-2..key+2 of its styled transitions> --out VAL/ps/p00_perf0_front.poses.json
     (the same with --backend blazepose into VAL/blazepose; scripts/validate_augmg.py --print-frames
      DATASET VIDEO prints the --frames list)

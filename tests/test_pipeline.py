@@ -33,7 +33,6 @@ TINY = {
     "style": {"length": 10},
     "graph": {"clips": "out/dataset/mocap/p00_*.bvh"},
     "synthesize": {"performers": "p00"},
-    "pose": {"demo_performers": 1, "views_per_clip": 12},  # 12 azimuths: every view has frames
     "augmg": {"annotations": "annotations.json", "videos": "p03_perf0_front p04_perf0_front", "synthesize": "p03"},
 }
 
@@ -57,8 +56,11 @@ def _dvc(cwd: Path, *args: str, check: bool = True, timeout: float = 1200,
 
 
 def _setup(root: Path) -> Path:
-    work = root / "kickboxing"
-    work.mkdir()
+    # the repository's layout (pipelines/kickboxing beside the package): the stages depend on package
+    # files by ../../vidstyle/... (the shipped pose model, AugMG's validated defaults)
+    work = root / "pipelines" / "kickboxing"
+    work.mkdir(parents=True)
+    (root / "vidstyle").symlink_to(PIPELINE.parents[1] / "vidstyle", target_is_directory=True)
     shutil.copy(PIPELINE / "dvc.yaml", work / "dvc.yaml")
     params = yaml.safe_load((PIPELINE / "params.yaml").read_text())
     for section, values in TINY.items():

@@ -48,8 +48,11 @@ def test_detector_and_cnn_defaults_are_the_validated_ones(doc):
     assert {k: cnn[k] for k in keys} == {k: ch["cnn"].get(k, base.get(k)) for k in keys}
 
 
-def test_pipeline_trains_the_validated_detector(doc):
-    import yaml
+def test_the_shipped_model_has_the_validated_detector(doc):
+    """The pipeline trains no pose model: it runs the one shipped in the package, whose part detectors are
+    the kind the validation chose."""
+    from vidstyle.pose.defaults import shipped_model_path
+    from vidstyle.pose.estimator import load_model
 
-    params = yaml.safe_load((ROOT / "pipelines" / "kickboxing" / "params.yaml").read_text())
-    assert params["pose"]["detector"] == doc["chosen"]["detector"]
+    model, _header = load_model(str(shipped_model_path()))
+    assert model.detector == doc["chosen"]["detector"]

@@ -161,7 +161,6 @@ def test_pose_checks_raise_from_the_library_and_name_the_flag_in_the_cli(tmp_pat
 
     _model, path, video = tiny
     for call, param in ((lambda: estimate_video(video, "openpose", path), "backend"),
-                        (lambda: estimate_video(video, "ps", None), "model"),
                         (lambda: estimate_video(video, "blazepose", None, scales=[1.2]), "scales"),
                         (lambda: estimate_video(video, "ps", path, scales=[9.0]), "scales"),
                         (lambda: estimate_marks(video, tmp_path / "ann.json", "ps", path, context=-1), "context")):
