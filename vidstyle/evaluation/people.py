@@ -74,30 +74,15 @@ def run_view(video: str | Path, backend: str, tracked: bool, model_path=None) ->
 def follow_person(video: str | Path, pixel: tuple[float, float], estimator, params: dict | None = None) -> np.ndarray:
     """(F, 15, 3) poses of the person at ``pixel`` (the input video's pixels) of the first frame with people,
     followed through ``video`` by :class:`vidstyle.pose.people.PerformerTracker` (``params``: its settings)
-    on ``estimator`` (a :class:`vidstyle.pose.interfaces.PoseBackend`), frames read as ``vidstyle pose``
-    reads them (the backend's working height); NaN rows where the performer is missing."""
-    from ..pose.people import PerformerTracker
-    from ..pose.run import to_input_pixels, working_height
+    on ``estimator`` (a :class:`vidstyle.pose.interfaces.PoseBackend`), through ``vidstyle pose``'s own
+    path (:func:`vidstyle.pose.run.estimate_frames`); NaN rows where the performer is missing."""
+    from ..pose.run import estimate_frames
     from ..video import VideoReader
 
     with VideoReader(video) as probe:
-        in_size = (probe.info.width, probe.info.height)
-    h = working_height(estimator, in_size[1])
-    scale = h / in_size[1]
-    tracker = PerformerTracker(estimator, person=((pixel[0] + 0.5) * scale - 0.5, (pixel[1] + 0.5) * scale - 0.5),
-                               **(params or {}))
-    out = []
-    with VideoReader(video, height=None if h == in_size[1] else h) as reader:
-        for i in range(len(reader)):
-            frame = np.asarray(reader.frame(i))
-            t = tracker.step(frame, i)
-            if t.pose is None:
-                out.append(np.full((len(KEYPOINTS), 3), np.nan))
-            else:
-                pts = to_input_pixels(t.pose.points, (frame.shape[1], frame.shape[0]), in_size)
-                pts[:, 2] = np.clip(pts[:, 2], 0.0, 1.0)
-                out.append(pts)
-    return np.stack(out)
+        n = len(probe)
+    poses = estimate_frames(video, estimator, list(range(n)), True, person=pixel, tracker_params=params)
+    return np.stack([pf.points if pf.found else np.full((len(KEYPOINTS), 3), np.nan) for pf in poses])
 
 
 def follow_everyone(crowd_dir: str | Path, estimator, params: dict | None = None) -> dict:

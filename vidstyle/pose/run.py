@@ -52,38 +52,49 @@ def _make_estimator(backend: str, model_path: str | None) -> PoseBackend:
 
 
 def _run_chunk(chunk: _Chunk) -> list[PoseFrame]:
-    from ..video import VideoReader
-
     est = _make_estimator(chunk.backend, chunk.model_path)
     if chunk.scales != (1.0,):
         est.set_inference(scales=chunk.scales)
-    with VideoReader(chunk.video) as probe:
+    out = estimate_frames(chunk.video, est, chunk.frames, chunk.track, chunk.person, chunk.person_frame)
+    est.close()
+    return out
+
+
+def estimate_frames(video, est, frames: list[int], track: bool, person: tuple[float, float] | None = None,
+                    person_frame: int | None = None, tracker_params: dict | None = None) -> list[PoseFrame]:
+    """Poses of ``frames`` of ``video`` by the backend instance ``est``, read at its working height, in the
+    input video's pixels (scores clipped to 0..1): each frame alone, or (``track``) one performer followed
+    by :class:`vidstyle.pose.people.PerformerTracker` (``tracker_params``: its settings; ``person``: a
+    pixel of the input video, chosen at ``person_frame`` or the first frame with people). Frames without
+    a pose are :meth:`PoseFrame.none` with the reason."""
+    from ..video import VideoReader
+
+    with VideoReader(video) as probe:
         in_size = (probe.info.width, probe.info.height)
     h = working_height(est, in_size[1])
     out = []
     tracker = None
-    if chunk.track:
+    if track:
         from .people import PerformerTracker
 
-        person = None
-        if chunk.person is not None:  # the pixel is given in the input video's frame
+        chosen = None
+        if person is not None:  # the pixel is given in the input video's frame
             scale = h / in_size[1]
-            person = ((chunk.person[0] + 0.5) * scale - 0.5, (chunk.person[1] + 0.5) * scale - 0.5)
-        tracker = PerformerTracker(est, person=person)
-    with VideoReader(chunk.video, height=None if h == in_size[1] else h) as reader:
+            chosen = ((person[0] + 0.5) * scale - 0.5, (person[1] + 0.5) * scale - 0.5)
+        tracker = PerformerTracker(est, person=chosen, **(tracker_params or {}))
+    with VideoReader(video, height=None if h == in_size[1] else h) as reader:
         if tracker is not None:
-            tracked = tracker.follow(lambda i: np.asarray(reader.frame(i)), chunk.frames, chunk.person_frame)
+            tracked = tracker.follow(lambda i: np.asarray(reader.frame(i)), frames, person_frame)
             poses = (t.pose if t.pose is not None else PoseFrame.none(t.index, t.missing or "performer not found")
                      for t in tracked)
         else:
             bg = video_background(reader) if est.uses_background else None
-            poses = (est.estimate(np.asarray(reader.frame(i)), i, background=bg) for i in chunk.frames)
+            poses = (est.estimate(np.asarray(reader.frame(i)), i, background=bg) for i in frames)
         for pf in poses:
             if pf.found:
                 pf.points = to_input_pixels(pf.points, reader.size, in_size)
                 pf.points[:, 2] = np.clip(pf.points[:, 2], 0.0, 1.0)
             out.append(pf)
-    est.close()
     return out
 
 
