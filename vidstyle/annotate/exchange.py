@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from ..fileio import parse_json_bytes
 from ..formats import FormatError
 from ..formats.annotations import (
     SCHEMA_VERSION,
@@ -206,16 +207,6 @@ def _seconds(value: Any, field: str, duration: float) -> float:
     return t
 
 
-def _no_constants(name: str) -> Any:
-    raise ValueError(f"{name} is not a JSON number")
-
-
-def _json(data: bytes) -> Any:
-    """Strict JSON: UTF-8, and NaN / Infinity refused (``1e400`` parses as infinity and is refused where a
-    number is read)."""
-    return json.loads(data.decode("utf-8"), parse_constant=_no_constants)
-
-
 def _add_class(classes: ClassList, name: str) -> str:
     return classes.add(name)
 
@@ -263,7 +254,7 @@ def _ls_out(classes, target: Target) -> bytes:
 
 
 def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
-    doc = _json(data)
+    doc = parse_json_bytes(data, name)  # strict: NaN / Infinity refused; 1e400 refused where read
     tasks = doc if isinstance(doc, list) else [doc]
     if not tasks:
         raise FormatError(name, None, "no task")
@@ -296,7 +287,7 @@ def _ls_in(data: bytes, classes, target: Target, name) -> Marks:
             if r.get("from_name") == "transitions" or label == TRANSITION and "meta" in r:
                 if start != end:
                     raise ValueError(f"a transition spans frames {start}..{end}")
-                extra = json.loads(r["meta"]["text"][0], parse_constant=_no_constants)
+                extra = parse_json_bytes(str(r["meta"]["text"][0]).encode(), name)
                 t = _transition(start - 1, extra)
                 _add_class(classes, t.from_action)
                 _add_class(classes, t.to_action)
@@ -408,7 +399,7 @@ def _cvat_in(data: bytes, classes, target: Target, name) -> Marks:
             continue
         attrs = {a.get("name"): (a.text or "") for a in tag.findall("attribute")}
         extra = {k: attrs[k] for k in ("from_action", "to_action", "status") if k in attrs}
-        extra["candidates"] = json.loads(attrs.get("candidates") or "[]", parse_constant=_no_constants)
+        extra["candidates"] = parse_json_bytes((attrs.get("candidates") or "[]").encode(), name)
         t = _transition(_xml_int(tag.get("frame"), f"tag[{k}].frame") - start_frame, extra)
         _add_class(classes, t.from_action)
         _add_class(classes, t.to_action)
@@ -484,7 +475,7 @@ def _nearest(b: np.ndarray, t: float, lo: int, hi: int) -> int:
 
 
 def _via_in(data: bytes, classes, target: Target, name) -> Marks:
-    doc = _json(data)
+    doc = parse_json_bytes(data, name)  # strict: NaN / Infinity refused; 1e400 refused where read
     n = target.video.frames
     vs = doc.get("vidstyle", {})
     if "frames" in vs and _int(vs["frames"], "vidstyle.frames") != n:
@@ -516,7 +507,7 @@ def _via_in(data: bytes, classes, target: Target, name) -> Marks:
             status = status_opts.get(av.get("status", "0"), av.get("status", "accepted"))
             t = _transition(frame, {"from_action": av["from_action"], "to_action": av["to_action"],
                                     "status": status,
-                                    "candidates": json.loads(av.get("candidates") or "[]", parse_constant=_no_constants)})
+                                    "candidates": parse_json_bytes(str(av.get("candidates") or "[]").encode(), name)})
             _add_class(classes, t.from_action)
             _add_class(classes, t.to_action)
             trans.append(t)
