@@ -66,6 +66,7 @@ def _old(p, age=3600):
 
 def test_sweep_removes_only_stale_temporaries_of_the_named_outputs(tmp_path):
     stale = _old(tmp_path / ".p00_lowkick_front.k3j_x9a2.tmp.npz")
+    stale_pid = _old(tmp_path / ".p00_lowkick_front.4321-k3j_x9a3.tmp.npz")  # the writer's current names
     fresh = tmp_path / ".p00_lowkick_front.zzzzzzzz.tmp.npz"
     fresh.write_bytes(b"being written now")
     keep = [_old(tmp_path / ".other.abcdefgh.tmp.npz"),          # another output's
@@ -75,7 +76,7 @@ def test_sweep_removes_only_stale_temporaries_of_the_named_outputs(tmp_path):
             _old(tmp_path / "p00_lowkick_front.npz")]
     (tmp_path / ".p00_lowkick_front.dddddddd.tmp.npz").mkdir()  # a directory is never removed
     removed = fileio.sweep_temporaries(tmp_path, [tmp_path / "p00_lowkick_front.npz"], before=time.time() - 60)
-    assert removed == [stale] and not stale.exists() and fresh.exists()
+    assert sorted(removed) == sorted([stale, stale_pid]) and not stale.exists() and fresh.exists()
     assert all(p.exists() for p in keep) and (tmp_path / ".p00_lowkick_front.dddddddd.tmp.npz").is_dir()
     assert fileio.sweep_temporaries(tmp_path / "missing", ["a.npz"]) == []
 
@@ -110,3 +111,54 @@ def test_features_sweeps_a_killed_runs_partial_files_and_a_failed_run_leaves_no_
     other = _old(out / ".notes.q1w2e3r4.tmp.txt")
     assert main(["features", str(bad), "--out", str(out), "--jobs", "1"]) != 0
     assert not stale.exists() and other.exists() and out.is_dir()
+
+
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+
+    return int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                              text=True, check=True).stdout)
+
+
+def test_the_next_write_of_a_file_removes_a_dead_writers_temporary_and_only_that(tmp_path):
+    """A single-file output: what a killed writer left beside it (its pid no longer runs) goes at the next
+    write of the same file, however fresh; a live writer's temporary, another file's, and a name not of the
+    writer's pattern stay."""
+    dead = _dead_pid()
+    left = tmp_path / f".model.{dead}-ab_cd123.tmp.json"
+    left.write_text("{half")
+    live = tmp_path / f".model.{os.getpid()}-zzzzzzzz.tmp.json"
+    live.write_text("{being written")
+    keep = [tmp_path / f".other.{dead}-abcdefgh.tmp.json", tmp_path / f".model.{dead}-abcdefgh.tmp.npz",
+            tmp_path / f".model.{dead}-abc.tmp.json"]
+    for p in keep:
+        p.write_text("x")
+    write_json(tmp_path / "model.json", {"a": 1})
+    assert not left.exists() and live.exists() and all(p.exists() for p in keep)
+    assert (tmp_path / "model.json").read_text() == '{\n  "a": 1\n}\n'
+
+
+def test_kill_9_during_a_write_then_a_rerun_leaves_nothing_beside_the_file(tmp_path):
+    """The case of issue 33 item 4 for single-file outputs: a writer killed with SIGKILL inside
+    ``atomic_path`` leaves its temporary (nothing can remove it then); the next run that writes the same
+    file removes it."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "metrics.json"
+    code = ("import sys, time; from vidstyle.fileio import atomic_path\n"
+            "with atomic_path(sys.argv[1]) as t:\n"
+            "    t.write_text('{half'); print('ready', flush=True); time.sleep(60)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=10)
+    finally:
+        proc.kill()
+    hidden = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+    assert len(hidden) == 1 and hidden[0].startswith(f".metrics.{proc.pid}-") and not out.exists()
+    write_json(out, [1])
+    assert [p.name for p in tmp_path.iterdir()] == ["metrics.json"]

@@ -176,7 +176,7 @@ _help_fits_the_terminal()
 
 #: library parameter -> the command parameter that sets it, where the names differ
 _PARAM_ALIASES = {"k_range": "modes", "n_components": "components", "n_words": "words", "kind": "split",
-                  "method": "smoothing", "smoothing_window": "window"}
+                  "method": "smoothing", "smoothing_window": "window", "n_views": "views"}
 
 
 def _as_flags(error: VidstyleError, argv: list[str]) -> str:

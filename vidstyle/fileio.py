@@ -22,9 +22,11 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
 
-#: a writer's temporary file beside ``<stem><suffix>`` is ``.<stem>.<8 random characters>.tmp<suffix>``
-#: (:func:`tempfile.mkstemp`'s names)
-_TEMP = r"\.{stem}\.[a-z0-9_]{{8}}\.tmp{suffix}"
+#: a writer's temporary file beside ``<stem><suffix>`` is ``.<stem>.<pid>-<8 random characters>.tmp<suffix>``
+#: (:func:`tempfile.mkstemp`'s names, prefixed with the writing process's id so that a later write of the
+#: same file can tell a dead writer's leftover from a live one's work); staging directories and older
+#: temporaries have no ``<pid>-``
+_TEMP = r"\.{stem}\.(?:[0-9]+-)?[a-z0-9_]{{8}}\.tmp{suffix}"
 
 
 @contextlib.contextmanager
@@ -48,7 +50,9 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
             mode = os.stat(target).st_mode & 0o777
         except (FileNotFoundError, NotADirectoryError):
             mode = 0o666 & ~_umask()
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=f".tmp{suffix}", dir=target.parent)
+        sweep_dead_writers(target, suffix)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.{os.getpid()}-", suffix=f".tmp{suffix}",
+                                   dir=target.parent)
     except OSError as e:  # a parent that is a file, or cannot be made (/proc/nope), or not writable
         raise InputError(f"{path}: cannot write ({os_reason(e)})") from None
     os.close(fd)
@@ -116,6 +120,37 @@ def sweep_temporaries(out_dir: str | os.PathLike, names, before: float | None = 
         return m is not None and (m.group(1), m.group(2)) in wanted
 
     return _sweep(out_dir, match, before, dirs=False)
+
+
+def sweep_dead_writers(path: str | os.PathLike, suffix: str | None = None) -> list[Path]:
+    """Remove the temporaries :func:`atomic_path` left beside ``path`` (``.<stem>.<pid>-<8 chars>.tmp<suffix>``,
+    regular files only) whose writing process no longer exists; a live writer's file is left alone,
+    however old. Returns the removed paths."""
+    import re
+
+    path = Path(path)
+    suffix = path.suffix if suffix is None else suffix
+    mine = re.compile(rf"\.{re.escape(path.stem)}\.([0-9]+)-[a-z0-9_]{{8}}\.tmp{re.escape(suffix)}")
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(path.parent))
+    except (FileNotFoundError, NotADirectoryError):
+        return removed
+    for e in entries:
+        m = mine.fullmatch(e.name) if e.name.startswith(".") else None
+        if m is None or _process_alive(int(m.group(1))):
+            continue
+        try:
+            if e.is_file(follow_symlinks=False):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+        except FileNotFoundError:
+            pass
+    if removed:
+        import logging
+
+        logging.getLogger(__name__).info("%s: removed %d temporary file(s) a killed run left", path, len(removed))
+    return removed
 
 
 def sweep_staging(out: str | os.PathLike, before: float | None = None) -> list[Path]:

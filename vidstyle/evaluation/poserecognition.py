@@ -30,7 +30,7 @@ from ..formats.dataset import Dataset
 from ..formats.labels import read_labels
 from ..recognition.posefeatures import NECK, PELVIS, PoseTrack, track_from_poses
 from ..recognition.poserecognizer import PoseRecognizer
-from ..recognition.posetraining import KeypointNoise, dataset_motions, virtual_views
+from ..recognition.posetraining import KeypointNoise, check_training_memory, dataset_motions, virtual_views
 from ..recognition.splits import make_split
 from .recognition import score_videos
 
@@ -92,9 +92,11 @@ def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-perfor
     train_perf = sorted(set(split.vocab_performers) | set(split.train_performers))
     t0 = time.perf_counter()
     motions = dataset_motions(dataset, train_perf, dataset.fps, phases)
-    tracks, labels = virtual_views(motions, n_views, seed, noise)
     params = {"random_state": seed, "fps": dataset.fps, **(recognizer_params or {})}
-    rec = PoseRecognizer(**params).fit(tracks, labels, classes=dataset.classes or None)
+    rec = PoseRecognizer(**params)
+    check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
+    tracks, labels = virtual_views(motions, n_views, seed, noise)
+    rec.fit(tracks, labels, classes=dataset.classes or None)
     t_train = time.perf_counter() - t0
 
     from ..formats.poses import read_poses

@@ -186,6 +186,18 @@ def dataset_motions(dataset, performers: list[str], fps: float, phases=(0,)) -> 
     return out
 
 
+def check_training_memory(rec, n_frames: int) -> None:
+    """Refuse (:func:`vidstyle.budget.require`, naming ``--views``) a training set of ``n_frames`` projected
+    frames whose tracks and features would not fit in memory: per frame, the keypoints with their scores
+    and labels, and the float64 features (mirrored too when ``rec.mirror``) while they are concatenated."""
+    from ..budget import require
+
+    copies = 2 if rec.mirror else 1
+    per_frame = 15 * 3 * 8 + 64 + copies * rec.featurizer.dimension * 8 * 2
+    require(n_frames * per_frame, f"the pose training set ({n_frames} projected frames)", "views",
+            "fewer virtual views or training takes")
+
+
 def train_from_dataset(dataset, split: str = "unseen-performer", seed: int = 0, test_view: str | None = None,
                        n_views: int = 8, noise: KeypointNoise | None = None, params: dict | None = None):
     """``(PoseRecognizer, header extra)`` trained on the mocap takes of the training performers (sets A
@@ -199,8 +211,9 @@ def train_from_dataset(dataset, split: str = "unseen-performer", seed: int = 0, 
     sp = make_split(dataset, kind, seed=seed, test_view=test_view)
     performers = sorted(set(sp.vocab_performers) | set(sp.train_performers))
     motions = dataset_motions(dataset, performers, dataset.fps)
-    tracks, labels = virtual_views(motions, n_views, seed, noise)
     rec = PoseRecognizer(**{"random_state": seed, "fps": dataset.fps, **(params or {})})
+    check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
+    tracks, labels = virtual_views(motions, n_views, seed, noise)
     rec.fit(tracks, labels, classes=dataset.classes or None)
     training = {"performers": performers, "takes": [m.name for m in motions], "n_views": n_views,
                 "noise": noise.to_dict() if noise else None}
