@@ -260,16 +260,36 @@ def test_compiled_accumulation_is_bincount_to_the_last_bit(rng):
     Hp, Wp = H + 2 * R, W + 2 * R
     flat_off = ((offs[:, 0] * Hp + offs[:, 1]) * Wp + offs[:, 2]).astype(np.int64)
     size = (T + 2 * R) * Hp * Wp
-    m_all = rng.random(size) * (rng.random(size) < 0.7)
-    bins_all = rng.integers(0, sc.N_BINS, (size, 3))
-    w_all = rng.dirichlet(np.ones(3), size)
+    # compact voxels and the padded map to them (-1 outside), with unused rows too
+    n = size // 2
+    m = rng.random(n) * (rng.random(n) < 0.7)
+    bins = rng.integers(0, sc.N_BINS, (n, 3))
+    w = rng.dirichlet(np.ones(3), n)
+    slot = np.where(rng.random(size) < 0.8, rng.integers(0, n, size), -1).astype(np.int32)
     q = np.stack([rng.integers(0, T, 40), rng.integers(0, H, 40), rng.integers(0, W, 40)], axis=1)
     base = (((q[:, 0] + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)).astype(np.int64)
     got = np.zeros((len(base), sc.DIM))
-    sc._accumulate_kernel()(got, base, flat_off, gauss, sub, m_all, bins_all, w_all, sc.N_BINS)
+    sc._accumulate_kernel()(got, base, flat_off, gauss, sub, slot, m, bins, w, sc.N_BINS)
     want = np.zeros((len(base), sc.DIM))
-    sc._accumulate_numpy(want, base, flat_off, gauss, sub, m_all, bins_all, w_all, sc.N_BINS)
+    sc._accumulate_numpy(want, base, flat_off, gauss, sub, slot, m, bins, w, sc.N_BINS)
     assert np.array_equal(got, want) and got.sum() > 0
+
+
+def test_gradients_at_voxels_equal_the_whole_volume_gradients_to_the_bit(rng):
+    """histograms() computes gradients only where a point's cube reaches: the same values as
+    gradients() of the frame range (one-sided at its ends and at the image borders), bit for bit, on
+    every voxel, including ranges of one and two frames and one-pixel-wide images."""
+    for shape in [(9, 7, 8), (2, 5, 6), (1, 4, 4), (6, 1, 5), (5, 6, 2)]:
+        vol = rng.random(shape) * 255
+        T = shape[0]
+        for lo, hi in [(0, T), (min(1, T - 1), T), (0, max(T - 1, 1))]:
+            sub_vol = vol[lo:hi]
+            want = sc.gradients(sub_vol)
+            t, r, c = (a.reshape(-1) for a in np.meshgrid(np.arange(lo, hi), np.arange(shape[1]),
+                                                          np.arange(shape[2]), indexing="ij"))
+            got = sc.gradients_at(vol, t, r, c, lo, hi)
+            for g, w_ in zip(got, want):
+                assert g.tobytes() == w_.reshape(-1).tobytes(), (shape, lo, hi)
 
 
 def test_compiled_top3_is_the_numpy_reference(rng):

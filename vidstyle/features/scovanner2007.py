@@ -245,29 +245,55 @@ def _libm_pow(a: np.ndarray, p: float) -> np.ndarray:
     return _pow_kernel()(np.ascontiguousarray(a, dtype=np.float64), float(p))
 
 
-def _accumulate_loop(hist, base, flat_off, gauss, sub, m_all, bins_all, w_all, n_bins):
+def _accumulate_loop(hist, base, flat_off, gauss, sub, slot, m, bins, w, n_bins):
     # compiled by numba: hist[p, sub[n] * n_bins + bin_k] += (m * G) * w_k for every point p, sample n in
     # visiting order and k = 0, 1, 2 -- per histogram entry the same additions in the same order as
-    # np.bincount over the flattened (p, n, k) targets, without materialising them
+    # np.bincount over the flattened (p, n, k) targets, without materialising them. ``slot`` maps a padded
+    # voxel to its row of the compact m / bins / w (-1: outside the volume, which would add +0.0 and
+    # leave every sum unchanged, so it is skipped)
     for p in range(base.shape[0]):
         for n in range(flat_off.shape[0]):
-            j = base[p] + flat_off[n]
-            mg = m_all[j] * gauss[n]
+            j = slot[base[p] + flat_off[n]]
+            if j < 0:
+                continue
+            mg = m[j] * gauss[n]
             s = sub[n] * n_bins
             for k in range(3):
-                hist[p, s + bins_all[j, k]] += mg * w_all[j, k]
+                hist[p, s + bins[j, k]] += mg * w[j, k]
 
 
-def _accumulate_numpy(hist, base, flat_off, gauss, sub, m_all, bins_all, w_all, n_bins):
+def _accumulate_numpy(hist, base, flat_off, gauss, sub, slot, m, bins, w, n_bins):
     """The same as :func:`_accumulate_loop` with numpy: the (P, N, 3) contributions and targets, summed
     by ``np.bincount`` (which adds in input order); the reference of the compiled kernel."""
     P = len(base)
-    idx = base[:, None] + flat_off[None, :]  # (P, N) in visiting order
-    mg = m_all[idx] * gauss[None, :]  # m * G
-    contrib = mg[:, :, None] * w_all[idx]  # (m * G) * w_k
-    target = (np.arange(P)[:, None, None] * hist.shape[1] + sub[None, :, None] * n_bins) + bins_all[idx]
+    j = slot[base[:, None] + flat_off[None, :]]  # (P, N) rows in visiting order, -1 outside
+    inside = j >= 0
+    jj = np.where(inside, j, 0)
+    mg = np.where(inside, m[jj], 0.0) * gauss[None, :]  # m * G (+0.0 outside)
+    contrib = mg[:, :, None] * w[jj]  # (m * G) * w_k
+    target = (np.arange(P)[:, None, None] * hist.shape[1] + sub[None, :, None] * n_bins) + bins[jj]
     # samples outside the volume add (+0.0), which leaves every sum unchanged
     hist += np.bincount(target.reshape(-1), contrib.reshape(-1), minlength=hist.size).reshape(hist.shape)
+
+
+def gradients_at(vol: np.ndarray, t: np.ndarray, r: np.ndarray, c: np.ndarray, t_lo: int, t_hi: int):
+    """(g1, g2, g3) of :func:`gradients` at the voxels (t, r, c) of ``vol`` only, to the bit, where the
+    frame axis is taken as the sub-volume ``vol[t_lo:t_hi]`` (one-sided at its ends) and rows and columns
+    span the volume: per axis ``v[i+1] - v[i-1]``, and ``2 * (v[i+1] - v[i])`` on an end plane."""
+
+    def diff(i, n, lo_end, hi_end, at):
+        hi = np.minimum(i + 1, hi_end - 1)
+        lo = np.maximum(i - 1, lo_end)
+        d = vol[at(hi)] - vol[at(lo)]
+        if hi_end - lo_end < 2:
+            return np.zeros(len(i))
+        return np.where(hi - lo == 1, 2 * d, d)
+
+    T, H, W = vol.shape
+    g1 = diff(c, W, 0, W, lambda k: (t, r, k))
+    g2 = -diff(r, H, 0, H, lambda k: (t, k, c))
+    g3 = diff(t, T, t_lo, t_hi, lambda k: (k, r, c))
+    return g1, g2, g3
 
 
 @cache
@@ -393,31 +419,25 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
         f1 = int(frames[stop - 1]) + 1
         a, b = max(f0 - R, 0), min(f1 + R, T)  # frames sampled
         ga, gb = max(a - 1, 0), min(b + 1, T)  # frames their gradients read
-        g1, g2, g3 = gradients(vol[ga:gb])
-        # the extra frame on each side makes g3 central on frames a..b-1 unless they border the volume;
-        # the extra frames themselves (one-sided there, but not at a volume border) are dropped
-        g1, g2, g3 = (g[a - ga : a - ga + b - a] for g in (g1, g2, g3))
         sel = order[start:stop]
         q = pts[sel]
-        # only voxels inside some point's cube need a bin assignment
+        # only voxels inside some point's cube need a gradient and a bin assignment; the gradients are
+        # those of frames ga..gb-1 (the extra frame on each side makes g3 central on frames a..b-1 unless
+        # they border the volume)
         need = np.zeros((b - a, H, W), dtype=bool)
         need[q[:, 0] - a, q[:, 1], q[:, 2]] = True
         from scipy.ndimage import maximum_filter
 
         need = maximum_filter(need, size=2 * R + 1, mode="constant", cval=False)
         vox = np.flatnonzero(need)
-        m_all = np.zeros((b - a + 2 * R, Hp, Wp))
-        bins_all = np.zeros((b - a + 2 * R, Hp, Wp, 3), dtype=np.int64)
-        w_all = np.zeros((b - a + 2 * R, Hp, Wp, 3))
-        m, bins, wts = assign_bins(g1.reshape(-1)[vox], g2.reshape(-1)[vox], g3.reshape(-1)[vox])
         tt, rr, cc = np.unravel_index(vox, need.shape)
-        m_all[tt + R, rr + R, cc + R] = m
-        bins_all[tt + R, rr + R, cc + R] = bins
-        w_all[tt + R, rr + R, cc + R] = wts
-        m_all, bins_all, w_all = m_all.reshape(-1), bins_all.reshape(-1, 3), w_all.reshape(-1, 3)
+        g1, g2, g3 = gradients_at(vol, tt + a, rr, cc, ga, gb)
+        m, bins, wts = assign_bins(g1, g2, g3)
+        slot = np.full((b - a + 2 * R, Hp, Wp), -1, dtype=np.int32)
+        slot[tt + R, rr + R, cc + R] = np.arange(len(vox))
         base = ((q[:, 0] - a + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)
         hist = np.zeros((len(sel), DIM))
-        accumulate(hist, base.astype(np.int64), flat_off, gauss, sub, m_all, bins_all, w_all, N_BINS)
+        accumulate(hist, base.astype(np.int64), flat_off, gauss, sub, slot.reshape(-1), m, bins, wts, N_BINS)
         out[sel] = hist
         start = stop
     return out
