@@ -277,14 +277,15 @@ def _accumulate_numpy(hist, base, flat_off, gauss, sub, slot, m, bins, w, n_bins
 
 
 def gradients_at(vol: np.ndarray, t: np.ndarray, r: np.ndarray, c: np.ndarray, t_lo: int, t_hi: int):
-    """(g1, g2, g3) of :func:`gradients` at the voxels (t, r, c) of ``vol`` only, to the bit, where the
+    """(g1, g2, g3) of :func:`gradients` at the voxels (t, r, c) of ``vol`` (any real dtype; the values
+    read are converted to float64 first) only, to the bit, where the
     frame axis is taken as the sub-volume ``vol[t_lo:t_hi]`` (one-sided at its ends) and rows and columns
     span the volume: per axis ``v[i+1] - v[i-1]``, and ``2 * (v[i+1] - v[i])`` on an end plane."""
 
     def diff(i, n, lo_end, hi_end, at):
         hi = np.minimum(i + 1, hi_end - 1)
         lo = np.maximum(i - 1, lo_end)
-        d = vol[at(hi)] - vol[at(lo)]
+        d = vol[at(hi)].astype(np.float64) - vol[at(lo)].astype(np.float64)
         if hi_end - lo_end < 2:
             return np.zeros(len(i))
         return np.where(hi - lo == 1, 2 * d, d)
@@ -399,7 +400,9 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
     """The float64 640-bin histograms (before quantisation) of ``points`` (n, 3: frame, row, col)."""
     from .sift3d import check_points, check_volume
 
-    vol = np.asarray(check_volume(volume), dtype=np.float64)
+    # the volume keeps its dtype: gradients_at converts the voxels it reads to float64 (exactly, before
+    # any arithmetic), which spares a float64 copy of the whole window per call
+    vol = np.asarray(check_volume(volume))
     pts = check_points(vol, points)
     T, H, W = vol.shape
     out = np.zeros((len(pts), DIM), dtype=np.float64)
@@ -425,10 +428,8 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
         # those of frames ga..gb-1 (the extra frame on each side makes g3 central on frames a..b-1 unless
         # they border the volume)
         need = np.zeros((b - a, H, W), dtype=bool)
-        need[q[:, 0] - a, q[:, 1], q[:, 2]] = True
-        from scipy.ndimage import maximum_filter
-
-        need = maximum_filter(need, size=2 * R + 1, mode="constant", cval=False)
+        for t, r, c in (q - (a, 0, 0)).tolist():  # each point's cube, clipped to the volume
+            need[max(t - R, 0):t + R + 1, max(r - R, 0):r + R + 1, max(c - R, 0):c + R + 1] = True
         vox = np.flatnonzero(need)
         tt, rr, cc = np.unravel_index(vox, need.shape)
         g1, g2, g3 = gradients_at(vol, tt + a, rr, cc, ga, gb)
