@@ -292,6 +292,21 @@ def test_gradients_at_voxels_equal_the_whole_volume_gradients_to_the_bit(rng):
                 assert g.tobytes() == w_.reshape(-1).tobytes(), (shape, lo, hi)
 
 
+def test_compiled_bin_assignment_is_the_numpy_reference_to_the_bit(rng):
+    """assign_bins (one compiled pass) against assign_bins_numpy: magnitudes, bins and weights equal bit
+    for bit on random gradients, zero gradients, axis-aligned and cube-edge directions (ties of |u|),
+    huge and tiny magnitudes."""
+    g = rng.normal(size=(20000, 3)) * rng.choice([1e-300, 1e-3, 1.0, 255.0, 1e150], size=(20000, 1))
+    g[:50] = 0.0
+    special = np.array([[1, 0, 0], [0, -1, 0], [0, 0, 2], [1, 1, 0], [1, -1, 1], [-3, 3, -3], [0, 1, 1],
+                        [2, 0, -2], [1e-320, 0, 0]], dtype=np.float64)
+    g = np.vstack([g, special, -special])
+    got = sc.assign_bins(g[:, 0], g[:, 1], g[:, 2])
+    want = sc.assign_bins_numpy(g[:, 0], g[:, 1], g[:, 2])
+    for a, b in zip(got, want):
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+
+
 def test_compiled_top3_is_the_numpy_reference(rng):
     """The compiled top-3 selection (what assign_bins runs) against its numpy reference: the same bins
     and cosines to the last bit, with exact ties (repeated candidates) and padded rows (-1 entries,

@@ -348,11 +348,92 @@ def _top3_kernel():
     return _compiled(_top3_loop, _top3_numpy)
 
 
+def _assign_loop(g1, g2, g3, C, table, power, n, m, bins, wts):
+    # compiled by numba: assign_bins_numpy voxel by voxel, the same float64 operations in the same order
+    # (magnitude ((g1 g1 + g2 g2) + g3 g3) under sqrt, u = g / m, the cube-map cell, the exact cosines of
+    # the cell's candidate bins, three first maxima, d ** power through the C library's pow, weights
+    # p / ((p0 + p1) + p2)); no fast-math, no fused multiply-add
+    K = table.shape[1]
+    d = np.empty(K)
+    half_n = n / 2
+    for i in range(g1.shape[0]):
+        a, b, c = g1[i], g2[i], g3[i]
+        mi = np.sqrt(a * a + b * b + c * c)
+        m[i] = mi
+        if not (mi > 0):
+            bins[i, 0] = bins[i, 1] = bins[i, 2] = 0
+            wts[i, 0] = wts[i, 1] = wts[i, 2] = 0.0
+            continue
+        u1, u2, u3 = a / mi, b / mi, c / mi
+        # the cube-map cell (_cube_cell): the first axis of largest |u|, its sign, the other two
+        # coordinates over |major| in n cells of [-1, 1]
+        axis, major = 0, u1
+        if abs(u2) > abs(major):
+            axis, major = 1, u2
+        if abs(u3) > abs(major):
+            axis, major = 2, u3
+        sign = 1 if major < 0 else 0
+        if axis == 0:
+            p0, p1 = u2, u3
+        elif axis == 1:
+            p0, p1 = u1, u3
+        else:
+            p0, p1 = u1, u2
+        am = abs(major)
+        x = np.floor((p0 / am + 1) * half_n)
+        y = np.floor((p1 / am + 1) * half_n)
+        x = min(max(x, 0.0), n - 1.0)
+        y = min(max(y, 0.0), n - 1.0)
+        row = ((axis * 2 + sign) * n + int(x)) * n + int(y)
+        for k in range(K):
+            bk = table[row, k]
+            if bk >= 0:
+                d[k] = u1 * C[bk, 0] + u2 * C[bk, 1] + u3 * C[bk, 2]
+            else:
+                d[k] = -np.inf
+        total = 0.0
+        for k in range(3):
+            j = 0
+            for c2 in range(1, K):
+                if d[c2] > d[j]:
+                    j = c2
+            bk = table[row, j]
+            bins[i, k] = bk if bk >= 0 else 0
+            pk = d[j] ** power
+            wts[i, k] = pk
+            d[j] = -np.inf
+        total = (wts[i, 0] + wts[i, 1]) + wts[i, 2]
+        for k in range(3):
+            wts[i, k] = wts[i, k] / total
+
+
+@cache
+def _assign_kernel():
+    """The compiled :func:`_assign_loop`, or None without numba (then :func:`assign_bins_numpy` runs)."""
+    return _compiled(_assign_loop, None)
+
+
 def assign_bins(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per voxel (flat arrays): magnitude (V,), top-3 bins (V, 3) and their weights (V, 3).
 
-    Voxels with zero magnitude get bins 0 and weights 0.
+    Voxels with zero magnitude get bins 0 and weights 0. Runs the compiled kernel (one pass, no
+    (V, candidates) temporaries); :func:`assign_bins_numpy` is its reference, equal to the bit.
     """
+    kernel = _assign_kernel()
+    if kernel is None:  # pragma: no cover - numba is a dependency
+        return assign_bins_numpy(g1, g2, g3)
+    g1, g2, g3 = (np.ascontiguousarray(np.asarray(a, dtype=np.float64).reshape(-1)) for a in (g1, g2, g3))
+    V = g1.size
+    m = np.empty(V)
+    bins = np.empty((V, 3), dtype=np.int64)
+    wts = np.empty((V, 3), dtype=np.float64)
+    table, _ = _candidate_table()
+    kernel(g1, g2, g3, _bins(), table, float(POWER), CUBE_RES, m, bins, wts)
+    return m, bins, wts
+
+
+def assign_bins_numpy(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`assign_bins` in numpy with the compiled top-3 and pow kernels (the reference)."""
     g1, g2, g3 = (np.asarray(a, dtype=np.float64).reshape(-1) for a in (g1, g2, g3))
     V = g1.size
     m = np.sqrt(g1 * g1 + g2 * g2 + g3 * g3)
