@@ -504,7 +504,7 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
     first = _first([(p, d) for p, d in docs.get("vidstyle.metrics.style", [])
                     if "recognised" in (d.get("sources") or {})])
     if first:
-        p, d = first
+        _, d = first
         s = (d["sources"]["recognised"].get("summary") or {})
         acc = s.get("identification", {}).get("a", {}).get("accuracy_by_heldout_data")
         rows.append(f"| Demo: sequences generated in a performer's style (learned from recognised actions) attributed to that performer | {_pct(acc)} "
