@@ -20,7 +20,7 @@ def _rot_y(q: np.ndarray, theta: float) -> np.ndarray:
 
 def reference_pair(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float]:
     """Distance of two windows ((k, J, 3) each) by the textbook recipe, one pair at a time: theta from
-    the un-normalised sums (design.md), translation from the weighted means, then the weighted sum of
+    the un-normalised sums (docs/design.md), translation from the weighted means, then the weighted sum of
     squared distances evaluated directly on the transformed points."""
     k, J, _ = p.shape
     wn = np.tile(np.asarray(w, float), k)

@@ -86,3 +86,31 @@ def test_the_readme_shows_the_committed_results():
                           str(root / "pipelines" / "kickboxing" / "strikes"), "--readme", str(root / "README.md"),
                           "--check"], capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_headline_in_readme_tables_in_results_page(metrics, tmp_path):
+    """--readme updates the README's headline block and the full tables of docs/results.md beside it;
+    --check fails while either is stale."""
+    readme = tmp_path / "README.md"
+    (tmp_path / "docs").mkdir()
+    results = tmp_path / "docs" / "results.md"
+    readme.write_text("# T\n\n<!-- headline:begin -->\nold\n<!-- headline:end -->\n")
+    results.write_text("# Results\n\n<!-- results:begin -->\nold 99 %\n<!-- results:end -->\n")
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme), "--check"]) == 1
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme)]) == 0
+    head, full = readme.read_text(), results.read_text()
+    # the headline: the unseen-performer mean over seeds 0, 1, 2 (85.0 %) and its lowest seed, linked to the page
+    assert "85.0 % of frames on average over 3 random splits" in head and "(lowest 80.0 %)" in head
+    assert "](docs/results.md)" in head and "old" not in head
+    assert "85.0 ± 5.0 % (min 80.0)" in full and "old 99 %" not in full
+    assert rt.main(["--metrics", str(metrics), "--readme", str(readme), "--check"]) == 0
+
+
+def test_the_repository_keeps_tables_in_docs_and_a_headline_in_the_readme():
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text(encoding="utf-8")
+    results = (root / "docs" / "results.md").read_text(encoding="utf-8")
+    assert rt.HEAD_BEGIN in readme and rt.HEAD_END in readme and rt.BEGIN not in readme
+    assert rt.BEGIN in results and rt.END in results
+    head = readme[readme.index(rt.HEAD_BEGIN):readme.index(rt.HEAD_END)]
+    assert 3 <= sum(line.startswith("| ") for line in head.splitlines()) - 1 <= 8  # a few rows, not the tables

@@ -1,4 +1,5 @@
-"""Recognition metrics (evaluation.md) and the train-and-test run behind ``vidstyle evaluate recognition``.
+"""Recognition metrics (``docs/results.md``, terms) and the train-and-test run behind
+``vidstyle evaluate recognition``.
 
 - frame accuracy, raw and smoothed: fraction of test frames whose predicted class equals the truth;
 - video accuracy: for each *single-action* test video, the most frequent predicted label among the frames

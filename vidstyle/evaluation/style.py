@@ -3,7 +3,7 @@
 For every performer of a dataset manifest (``DIR/dataset.json``), the performance videos are split
 into training and held-out parts (by video when there are at least two, else by time: the last
 ``heldout_fraction`` of the events). A :class:`~vidstyle.style.artifact.Style` is learned on the
-training part, then (docs/evaluation.md, "style"):
+training part, then (``docs/design.md``, "Behaviour"; terms in ``docs/results.md``):
 
 * transition-matrix error: mean absolute difference between the learned and the true action
   transition matrix, for model (a), the bigram baseline and the transition implied by model (b);

@@ -13,7 +13,7 @@ with ``R_y(theta)`` the rotation about +Y that turns +Z towards +X (``x -> x cos
     D = S + S' + W (ybar - ybar')^2 - 2 sum w y~ y~' - 2 sqrt(A^2 + B^2),
 
 where ``S = sum w |p~|^2``. ``x0 = xbar - (cos xbar' + sin zbar')``, ``z0 = zbar - (-sin xbar' + cos zbar')``.
-(The design note's formula, written with un-normalised sums, is the same after expanding the centring.)
+(The formula in ``docs/design.md``, written with un-normalised sums, is the same after expanding the centring.)
 
 ``A``, ``B`` and ``sum w y~ y~'`` are inner products of per-window feature vectors of length ``k*J``
 (``sqrt(w) x~`` etc.), so all pairs of windows reduce to three matrix products (GEMMs). The distance

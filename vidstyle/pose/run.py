@@ -203,7 +203,7 @@ def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]
 def default_backend(model_path) -> str:
     """``vidstyle pose``'s backend when none is named: the pictorial structures when a pose model is
     given, else BlazePose (it needs no training and works on real people: multi-view PCK@0.2 on the
-    calibrated real views, see the README)."""
+    calibrated real views, see docs/results.md)."""
     return "ps" if model_path is not None else "blazepose"
 
 

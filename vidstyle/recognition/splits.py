@@ -1,4 +1,5 @@
-"""Vocabulary set A, classifier set B, validation set V and test set T (thesis 4.2; evaluation.md "Splits").
+"""Vocabulary set A, classifier set B, validation set V and test set T (thesis 4.2;
+``docs/results.md``, "Splits").
 
 Every split is made of *performers*: a seeded permutation of the dataset's performers is cut into four
 disjoint groups, test (``test_fraction``), validation (``val_fraction`` of all performers), vocabulary

@@ -1,5 +1,5 @@
 """Behaviour style (issue 5): frame labels -> action events -> HMMs of how a performer chains actions
--> new action sequences in that style. See ``docs`` design section "Behaviour (HMM)".
+-> new action sequences in that style. See ``docs/design.md``, section "Behaviour".
 
 The stage as library calls (what ``learn-style`` / ``generate`` run): :func:`style_params`, :func:`learn`,
 :func:`generate_sequence`, defaults in :mod:`vidstyle.style.defaults`; its evaluation protocol lives in
