@@ -175,3 +175,71 @@ def test_killed_dask_client_stops_its_running_tasks(tmp_path):
 
 def _running(dask_worker) -> int:
     return len(dask_worker.active_threads)
+
+
+# the call of the next test: module-level (Dask pickles it even in-process), its events shared in-process
+_STARTED, _GO, _FINISHED = threading.Event(), threading.Event(), threading.Event()
+_SEEN: list[BaseException] = []
+
+
+def _work_then_write(path):
+    from vidstyle.fileio import write_json
+
+    _STARTED.set()
+    _GO.wait(30)
+    try:
+        write_json(path, {"done": True})
+    except BaseException as e:  # what stopped it, for the test
+        _SEEN.append(e)
+        raise
+    finally:
+        _FINISHED.set()
+
+
+def test_an_output_finished_after_the_cancellation_is_not_written(tmp_path, monkeypatch):
+    """A Dask call that finishes its output between the cancellation (its client killed) and the watch's next
+    look: the write is stopped as it would land, not renamed into place (before: the probe of issue 33 saw
+    one such .npz appear after a kill -9 of ``features --scheduler``). The watch is made to look too late
+    here, so only the check at the rename can stop it."""
+    from dask import distributed
+
+    from vidstyle import parallel
+
+    monkeypatch.setattr(parallel, "WATCH_INTERVAL", 60.0)
+    out = tmp_path / "out.json"
+    for e in (_STARTED, _GO, _FINISHED):
+        e.clear()
+    _SEEN.clear()
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        fut = client.submit(parallel.dask_task, _work_then_write, out, pure=False)
+        assert _STARTED.wait(60)
+        key = fut.key
+        fut.cancel()
+        worker = next(iter(cluster.workers.values()))
+        t0 = time.monotonic()
+        while (ts := worker.state.tasks.get(key)) is not None and ts.state not in ("cancelled", "released",
+                                                                                    "forgotten"):
+            assert time.monotonic() - t0 < 30, ts.state
+            time.sleep(0.01)
+        _GO.set()
+        assert _FINISHED.wait(30)
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == []  # the temporary removed too
+    assert _SEEN and isinstance(_SEEN[0], parallel.TaskCancelled)
+
+
+def test_commit_check_is_per_thread_and_restored(tmp_path):
+    from vidstyle.fileio import commit_check, write_text
+
+    def refuse():
+        raise RuntimeError("stop")
+
+    with commit_check(refuse):
+        with pytest.raises(RuntimeError):
+            write_text(tmp_path / "a.txt", "x")
+        th = threading.Thread(target=write_text, args=(tmp_path / "b.txt", "y"))  # another thread: unchecked
+        th.start()
+        th.join()
+    write_text(tmp_path / "c.txt", "z")  # the check is gone after the block
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.txt", "c.txt"]

@@ -12,7 +12,8 @@ import json
 import os
 import sys
 import tempfile
-from collections.abc import Iterator
+import threading
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,6 +28,23 @@ if TYPE_CHECKING:  # pragma: no cover
 #: same file can tell a dead writer's leftover from a live one's work); staging directories and older
 #: temporaries have no ``<pid>-``
 _TEMP = r"\.{stem}\.(?:[0-9]+-)?[a-z0-9_]{{8}}\.tmp{suffix}"
+
+
+_commit = threading.local()
+
+
+@contextlib.contextmanager
+def commit_check(check: Callable[[], None]) -> Iterator[None]:
+    """While the block runs, every :func:`atomic_path` of this thread calls ``check()`` just before it renames
+    its finished temporary onto the destination; ``check`` raises to stop the write (the temporary is removed
+    and the destination left as it was). A Dask task uses it (:func:`vidstyle.parallel.dask_task`): an output
+    finished after the client was killed is not written."""
+    prev = getattr(_commit, "check", None)
+    _commit.check = check
+    try:
+        yield
+    finally:
+        _commit.check = prev
 
 
 @contextlib.contextmanager
@@ -60,6 +78,9 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     try:
         yield tmp_path
         os.chmod(tmp_path, mode)  # mkstemp makes the file owner-only (0600)
+        check = getattr(_commit, "check", None)
+        if check is not None:
+            check()
         os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -111,7 +111,10 @@ def dask_task(fn: Callable[..., R], *args) -> R:
     cancelled the task: a client killed with ``kill -9`` wants it no more, but Dask cannot stop a running
     call, which would go on computing and writing its outputs. A thread checks the task's state on this
     worker every :data:`WATCH_INTERVAL` seconds and, once it is cancelled, raises :class:`TaskCancelled`
-    in the task's thread at its next Python instruction. Outside a Dask worker it is just ``fn(*args)``."""
+    in the task's thread at its next Python instruction; and every :func:`~vidstyle.fileio.atomic_path` write
+    of the call checks the state once more before it renames its output into place, so an output finished
+    between the cancellation and the next look is not written either. Outside a Dask worker it is just
+    ``fn(*args)``."""
     try:
         from distributed import get_worker
         from distributed.worker import thread_state
@@ -119,20 +122,30 @@ def dask_task(fn: Callable[..., R], *args) -> R:
         worker, key = get_worker(), thread_state.key
     except (ImportError, ValueError, AttributeError):
         return fn(*args)
+    from .fileio import commit_check
+
     lock, done, tid = threading.Lock(), threading.Event(), threading.get_ident()
+
+    def cancelled() -> bool:
+        ts = worker.state.tasks.get(key)
+        return ts is None or ts.state in ("cancelled", "released", "forgotten")
 
     def watch() -> None:
         while not done.wait(WATCH_INTERVAL):
-            ts = worker.state.tasks.get(key)
-            if ts is None or ts.state in ("cancelled", "released", "forgotten"):
+            if cancelled():
                 with lock:
                     if not done.is_set():
                         _raise_in_thread(tid, TaskCancelled)
                 return
 
+    def before_rename() -> None:  # the watch looks every WATCH_INTERVAL; an output is checked as it lands
+        if cancelled():
+            raise TaskCancelled(f"task {key} was cancelled (its client is gone): its output is not written")
+
     threading.Thread(target=watch, name=f"vidstyle-cancel-watch-{key}", daemon=True).start()
     try:
-        return fn(*args)
+        with commit_check(before_rename):
+            return fn(*args)
     finally:
         with lock:
             done.set()
