@@ -135,7 +135,13 @@ def test_template_runs_both_methods_to_a_motion(run):
     assert motion2.n_frames > 30 and np.all(np.isfinite(motion2.rotations))
     assert (out / "report.html").is_file() and (out / "metrics" / "headline.json").is_file()
     # the example's small data is said to be small (warnings that teach), not passed silently
-    assert "learn-style" in res.stdout + res.stderr
+    said = " ".join((res.stdout + res.stderr).split())  # the log's line wrapping undone
+    assert "labelled training frames" in said and "needs about 100 per class" in said  # train-recognizer
+    assert "learn-style: only" in said and "action-to-action transitions" in said  # learn-style
+    # the summary of the run fits a terminal
+    text = subprocess.run([str(BIN / "vidstyle"), "report", "out", "--text"], cwd=work, env=_env(),
+                          capture_output=True, text=True, check=True).stdout
+    assert text.startswith("motion") and max(len(line) for line in text.splitlines()) <= 120
 
 
 @pytest.mark.slow
