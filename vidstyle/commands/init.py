@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import List
+from typing import Annotated
 
 import typer
 
@@ -18,16 +18,16 @@ def register(app: typer.Typer) -> None:
 
 
 def init(
-    directory: Path = typer.Argument(..., help="Directory to write dvc.yaml and params.yaml into (created)."),
-    videos: Path = typer.Option(..., "--videos", help="Folder of your videos."),
-    annotations: Path = typer.Option(..., "--annotations", "-a",
-                                     help="Annotations file of the videos (vidstyle annotate)."),
-    library: List[Path] = typer.Option(..., "--library", "-l",
-                                       help="Mocap clips: BVH files or folders (repeatable)."),
-    library_labels: Path = typer.Option(..., "--library-labels",
-                                        help="Labels of the clips: CSV file,label[,start,end] or CMU clips.csv."),
-    pattern: str = typer.Option("*.mp4", "--pattern", help="Which files of --videos (a shell pattern)."),
-    force: bool = typer.Option(False, "--force", help="Replace an existing dvc.yaml / params.yaml."),
+    directory: Annotated[Path, typer.Argument(help="Directory to write dvc.yaml and params.yaml into (created).")],
+    videos: Annotated[Path, typer.Option("--videos", help="Folder of your videos.")],
+    annotations: Annotated[Path, typer.Option(
+        "--annotations", "-a", help="Annotations file of the videos (vidstyle annotate).")],
+    library: Annotated[list[Path], typer.Option(
+        "--library", "-l", help="Mocap clips: BVH files or folders (repeatable).")],
+    library_labels: Annotated[Path, typer.Option(
+        "--library-labels", help="Labels of the clips: CSV file,label[,start,end] or CMU clips.csv.")],
+    pattern: Annotated[str, typer.Option("--pattern", help="Which files of --videos (a shell pattern).")] = "*.mp4",
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing dvc.yaml / params.yaml.")] = False,
 ) -> None:
     """Write the template pipeline (method 1 and method 2 end to end, docs/template.md) into DIRECTORY,
     its params.yaml naming your files; the classes and the videos with transition marks are read from

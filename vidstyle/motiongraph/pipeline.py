@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..formats.walk import parse_walk_labels, write_walk_labels
 from ..mocap import Motion, write_bvh
 from . import defaults
-from ..errors import InputError
 from .graph import Clip, MotionGraph, load_clips
 from .labels import UNLABELLED
 from .synthesis import Step, Walk, plan_walk, read_sequence, render_walk, walk_labels
