@@ -136,3 +136,26 @@ def test_steps_not_shown_say_why_and_what_helps(graph, caplog):
     assert step, msgs
     assert "Longer steps (synthesize --seconds" in step[0] and "--strict" in step[0]
     assert any(m.startswith("1 of 3 steps are mostly not shown") for m in msgs), msgs
+
+
+# ------------------------------------------------------------------------------------------ augment
+def test_augment_leaves_out_marks_of_videos_without_poses_with_a_warning(tmp_path, graph, caplog):
+    """A pipeline poses the videos it names; the marks of the other annotated videos are left out, saying
+    which and how to use them (before: the command failed on the first such mark)."""
+    from vidstyle.augmg import augment
+    from vidstyle.formats.annotations import Annotations, Transition, VideoAnnotations, write_annotations
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+
+    ann = tmp_path / "ann.json"
+    write_annotations(ann, Annotations(["run", "walk"], [
+        VideoAnnotations("v.mp4", "0" * 64, 100, 20.0, [Transition(10, "walk", "run", "discarded")]),
+        VideoAnnotations("w.mp4", "1" * 64, 100, 20.0, [Transition(12, "walk", "run", "accepted")])]))
+    poses = tmp_path / "v.poses.json"
+    pts = np.column_stack([np.arange(15.0), np.arange(15.0), np.ones(15)])
+    write_poses(poses, Poses("v.mp4", "blazepose", [PoseFrame(10, "front", pts)]))
+    with caplog.at_level("WARNING", logger="vidstyle.augmg"):
+        _g, inserted = augment(graph, ann, [tmp_path], poses=[poses], context=0)
+    assert inserted == []  # v's only mark is discarded: the plain graph stays
+    [msg] = _warnings(caplog)
+    assert msg.startswith("the transition marks of w are left out: no poses of it were given")
+    assert "--annotations" in msg and "--poses" in msg
