@@ -397,7 +397,7 @@ def plan_walk(
         prev = f", after {steps[first - 1].action!r}" if first else ""
         raise InputError(
             f"steps: step {first} ({steps[first].action!r}{prev}): the graph cannot perform {said}: "
-            f"{'; '.join(why)}. It can perform {', '.join(sorted(present))}"
+            f"{'; '.join(why)}. It can perform {', '.join(sorted(present - {'unlabelled'})) or 'nothing labelled'}"
         )
     acts = sorted({st.action for st in steps})
     act_id = {a: i for i, a in enumerate(acts)}
