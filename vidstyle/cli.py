@@ -73,8 +73,8 @@ def _register_commands() -> None:
 #: --help lists the commands in pipeline order, stages apart from the tools
 _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
           "synthesize", "train-pose", "pose", "match-pose", "augment", "annotate", "demo", "render", "evaluate",
-          "report", "timing", "mocap"]
-_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing"}
+          "report", "timing", "mocap", "init"]
+_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing", "init"}
 
 
 def _check_numbers() -> None:

@@ -305,6 +305,12 @@ def augment(graph, annotations: str | os.PathLike, library: Sequence[str | os.Pa
         by_video.setdefault(Path(vid).stem, {}).update({f.frame: f for f in frames})
     if not by_video and any(m["status"] == "accepted" for m in marks):
         raise ParameterError("poses", "give poses.json files of the marked frames, or pose_model with video")
+    unposed = sorted({m["video"] for m in marks if m["status"] == "accepted" and m["video"] not in by_video})
+    if unposed:  # poses of some videos only: augment with those (a pipeline poses the videos it names)
+        log.warning("the transition marks of %s are left out: no poses of %s were given (run vidstyle pose "
+                    "VIDEO --annotations %s and pass its poses.json with --poses to use them)",
+                    ", ".join(unposed), "it" if len(unposed) == 1 else "them", annotations)
+        marks = [m for m in marks if m["video"] not in unposed]
     if not isinstance(graph, MotionGraph):
         graph = MotionGraph.load(graph)
     fps = next((m["fps"] for m in marks), D.VIDEO_FPS)

@@ -31,7 +31,8 @@ def flag_names(mapping: dict[str, str]):
 
 
 _BUILD_FLAGS = {"window": "--window", "fps": "--fps", "mirror": "--mirror", "scheduler": "--scheduler", "clips": "CLIPS",
-                "dtype": "--dtype", "threshold_quantile": "--quantile", "threshold": "--threshold", "tile": "--tile"}
+                "dtype": "--dtype", "threshold_quantile": "--quantile", "threshold": "--threshold", "tile": "--tile",
+                "require_classes": "--require-classes"}
 _PLAN_FLAGS = {"steps": "--sequence", "graph": "--graph", "max_in_degree": "--max-in-degree"}
 
 
@@ -55,6 +56,7 @@ def build_graph(
     jobs: int = jobs_option(D.N_JOBS, help="1 (the default, unlike other commands): this process, one thread per core sharing one copy of the windows; N or -1 = all cores: joblib worker processes, each with its own copy."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
     seed: int = typer.Option(D.RANDOM_STATE, "--seed", help="Seed of the threshold sample."),
+    require_classes: str = typer.Option("", "--require-classes", help="Comma-separated actions the graph must have frames of (e.g. your annotations' classes): checked before the build, which is refused naming the missing ones."),
 ) -> None:
     """Build a motion graph from labelled clips (see vidstyle.formats.motiongraph for the .npz schema, version 2).
 
@@ -65,7 +67,7 @@ def build_graph(
     with flag_names(_BUILD_FLAGS):
         graph = build(clips, labels, window=window, fps=fps, threshold=threshold, threshold_quantile=quantile,
                       min_gap=min_gap, mirror=mirror, tile=tile, dtype=dtype, n_jobs=jobs, scheduler=scheduler,
-                      random_state=seed)
+                      random_state=seed, require_classes=require_classes.split(","))
     graph.save(out)
     st = graph.stats_
     log.info("wrote %s: %d frames, %d transitions in the component (%d frames), labels %s, %.1f s",

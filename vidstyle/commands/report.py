@@ -20,6 +20,10 @@ def report(
     metrics: Path = typer.Option(
         None, "--metrics", help="Also write the run's headline numbers here (flat JSON for `dvc metrics show`)."
     ),
+    text: bool = typer.Option(
+        False, "--text", help="Print the headline numbers as a few grouped lines (at most 120 columns) "
+                              "instead of writing the page."
+    ),
 ) -> None:
     """Write one self-contained HTML page: confusion matrix, recognised vs true timeline, learned vs true
     transition matrices, generated sequences, motion-graph statistics and the synthesized motion."""
@@ -27,6 +31,17 @@ def report(
     from ..formats.metrics import write_metrics
     from ..report.build import build_report, headline_metrics
 
+    if text:
+        from ..errors import InputError
+        from ..report.text import headline_text
+
+        if not run_dir.is_dir():
+            raise InputError(f"{run_dir}: run directory not found")
+        head = headline_metrics(run_dir)
+        if metrics is not None:
+            write_metrics(metrics, head)
+        typer.echo(headline_text(head) or f"{run_dir}: no metrics yet (out/metrics/*.json)")
+        return
     out = out or run_dir / "report.html"
     html = build_report(run_dir)
     if metrics is not None:

@@ -17,10 +17,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from ..errors import InputError
 from ..formats.walk import parse_walk_labels, write_walk_labels
 from ..mocap import Motion, write_bvh
 from . import defaults
-from .graph import MotionGraph, load_clips
+from .graph import Clip, MotionGraph, load_clips
+from .labels import UNLABELLED
 from .synthesis import Step, Walk, plan_walk, read_sequence, render_walk, walk_labels
 
 log = logging.getLogger(__name__)
@@ -41,15 +45,73 @@ def build_graph(
     n_jobs: int = defaults.N_JOBS,
     scheduler: str | None = None,
     random_state: int = defaults.RANDOM_STATE,
+    require_classes: Sequence[str] = (),
 ) -> MotionGraph:
     """Load labelled clips (BVH files or directories; labels: demo ``.labels.json``, CMU ``clips.csv`` or
     ``file,label[,start,end]`` CSV) and fit a :class:`MotionGraph`. The parameters are checked before
-    any clip is read (:class:`~vidstyle.errors.ParameterError`)."""
+    any clip is read (:class:`~vidstyle.errors.ParameterError`). ``require_classes``: actions the graph
+    must have frames of (the classes of your annotations or style): checked once the labels are read,
+    before the all-pairs pass (:func:`check_classes`)."""
     graph = MotionGraph(window=window, fps=fps, threshold=threshold, threshold_quantile=threshold_quantile,
                         min_gap=min_gap, mirror=mirror, tile=tile, dtype=dtype, n_jobs=n_jobs, scheduler=scheduler,
                         random_state=random_state)
     graph.check_params()
-    return graph.fit(load_clips(list(clips), list(labels)))
+    loaded = load_clips(list(clips), list(labels))
+    check_classes(loaded, require_classes, fps=fps, window=window)
+    graph.fit(loaded)
+    warn_unwalkable(graph)
+    return graph
+
+
+def warn_unwalkable(graph: MotionGraph) -> list[str]:
+    """Warn about (and return) the actions with frames in the graph but none in its walkable part (the
+    largest strongly connected component): synthesize cannot perform them."""
+    names = graph.label_names_
+    have = {names[i] for i in np.unique(graph.labels_)} - {UNLABELLED}
+    walkable = {names[i] for i in np.unique(graph.labels_[graph.scc_])} if graph.scc_.any() else set()
+    lost = sorted(have - walkable)
+    if lost:
+        log.warning("the graph has frames of %s but no transitions into them from the rest (none is in its "
+                    "walkable part, %d of %d frames), so synthesize cannot perform %s: raise --quantile or "
+                    "--threshold, or add clips that move between these actions",
+                    ", ".join(map(repr, lost)), int(graph.scc_.sum()), len(graph.labels_),
+                    "it" if len(lost) == 1 else "them")
+    return lost
+
+
+def library_seconds(clips: Sequence[Clip]) -> dict[str, float]:
+    """Seconds of motion per label in ``clips`` (unlabelled frames included under their label)."""
+    out: dict[str, float] = {}
+    for c in clips:
+        per_frame = 1.0 / float(c.motion.fps)
+        for label in c.labels:
+            out[label] = out.get(label, 0.0) + per_frame
+    return out
+
+
+def check_classes(clips: Sequence[Clip], required: Sequence[str], *, fps: float = defaults.FPS,
+                  window: int = defaults.WINDOW) -> None:
+    """Refuse (:class:`~vidstyle.errors.InputError`) a library without frames of one of the ``required``
+    actions, naming them and what the library has, before the expensive build; warn about an action with
+    fewer frames than one blend window (``window`` frames at ``fps``), which synthesis can hardly show."""
+    required = [c for c in dict.fromkeys(str(r).strip() for r in required) if c]
+    if not required:
+        return
+    have = library_seconds(clips)
+    known = sorted(k for k in have if k != UNLABELLED)
+    missing = [c for c in required if c not in have or c == UNLABELLED]
+    if missing:
+        raise InputError(
+            f"require_classes: the library has no frames labelled {', '.join(map(repr, missing))} "
+            f"(it has {', '.join(known) if known else 'no labelled frames'}), so synthesize could not perform "
+            f"{'it' if len(missing) == 1 else 'them'}: label library clips with those actions (--labels, a CSV "
+            "file,label[,start,end] of frames of the BVH files) or name your classes like the library's")
+    need = window / float(fps)
+    for c in required:
+        if have[c] < need:
+            log.warning("the library has only %.2f s of %r (%d frames at %g fps); a step of it needs at least "
+                        "one blend window, %d frames (%.2f s): label more library frames with %r",
+                        have[c], c, round(have[c] * fps), fps, window, need, c)
 
 
 @dataclass

@@ -376,15 +376,29 @@ def plan_walk(
         raise InputError("graph: the graph has no strongly connected component to walk")
     lab_scc = graph.labels_[graph.scc_]
     present = {names[i] for i in np.unique(lab_scc)}
-    prev = None
+    missing: dict[str, list[int]] = {}
     for s, step in enumerate(steps):
         if step.action not in present:
-            where = "has no clips labelled" if step.action not in names else "keeps no frames (after pruning) of"
-            raise InputError(
-                f"steps: step {s} ({step.action!r}{', after ' + repr(prev) if prev else ''}): the graph {where} "
-                f"{step.action!r}; it knows {sorted(present)}"
-            )
-        prev = step.action
+            missing.setdefault(step.action, []).append(s)
+    if missing:  # every action the graph cannot perform at once, before any planning
+        absent = [a for a in missing if a not in names]
+        pruned = [a for a in missing if a in names]
+        said = "; ".join(f"{a!r} (step{'s' if len(v) > 1 else ''} {', '.join(map(str, v[:8]))}"
+                         f"{', ...' if len(v) > 8 else ''})" for a, v in missing.items())
+        why = []
+        if absent:
+            why.append(f"the library it was built from has no frames labelled {', '.join(map(repr, absent))} "
+                       "(label library clips with them: build-graph --labels with a CSV file,label[,start,end], "
+                       "and --require-classes to check before the build)")
+        if pruned:
+            why.append(f"{', '.join(map(repr, pruned))} frames are not connected to the rest of the graph and were "
+                       "pruned (rebuild with a higher --quantile or --threshold, or add clips that move into them)")
+        first = min(v[0] for v in missing.values())
+        prev = f", after {steps[first - 1].action!r}" if first else ""
+        raise InputError(
+            f"steps: step {first} ({steps[first].action!r}{prev}): the graph cannot perform {said}: "
+            f"{'; '.join(why)}. It can perform {', '.join(sorted(present - {'unlabelled'})) or 'nothing labelled'}"
+        )
     acts = sorted({st.action for st in steps})
     act_id = {a: i for i, a in enumerate(acts)}
     req = np.concatenate([np.full(st.frames, act_id[st.action]) for st in steps])
@@ -479,7 +493,7 @@ def plan_walk(
 def _check_steps(graph: MotionGraph, walk: Walk, strict: bool) -> None:
     names = graph.label_names_
     got = [names[x] for x in graph.labels_[walk.frames]]
-    start = 0
+    start, short = 0, 0
     for s, step in enumerate(walk.steps):
         seg = got[start : start + step.frames]
         hit = sum(g == step.action for g in seg)
@@ -493,8 +507,19 @@ def _check_steps(graph: MotionGraph, walk: Walk, strict: bool) -> None:
         if hit < 0.5 * len(seg):
             # generated sequences have steps of a fraction of a second; a k-frame blend plus the approach
             # inside the clip may not fit, which is a fidelity loss, not an error (unless strict)
-            log.warning("step %d (%s, %d frames): only %d frames carry the label", s, step.action, len(seg), hit)
+            prev = walk.steps[s - 1].action if s else None
+            log.warning(
+                "step %d (%r, %d frames = %.2f s%s): the motion shows %r in only %d of them; the graph has no "
+                "path that reaches %r frames in time%s, so the step is spent in a transition or in the previous "
+                "action. Longer steps (synthesize --seconds, or durations in the sequence), library clips that "
+                "move %sinto %r, or a graph built with a higher --quantile help; --strict makes a step with none "
+                "an error", s, step.action, len(seg), len(seg) / float(graph.fps),
+                f", after {prev!r}" if prev else "", step.action, hit, step.action,
+                f" from {prev!r}" if prev else "", f"from {prev!r} " if prev else "", step.action)
+            short += 1
         start += step.frames
+    if short:
+        log.warning("%d of %d steps are mostly not shown as asked (the warnings above)", short, len(walk.steps))
 
 
 def render_walk(graph: MotionGraph, walk: Walk, foot_lock: bool = True, ease: int | None = None) -> Motion:

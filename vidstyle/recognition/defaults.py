@@ -54,3 +54,7 @@ RECOGNIZER_PARAMS = {
 MAX_CONTEXT = 1000
 #: largest smoothing window in frames (``--window``)
 MAX_WINDOW = 1000
+
+#: labelled frames per class below which training warns (at the 20 fps working rate, 5 s of the action:
+#: a few takes, the least from which the SVMs see more than one performance of it)
+MIN_FRAMES_PER_CLASS = 100

@@ -74,7 +74,8 @@ def crop_features(f: VideoFeatures, start: int, end: int) -> VideoFeatures:
         raise InputError(f"{f.path or f.video}: frames {start}..{end} outside 0..{f.n_frames}")
     keep = (f.frame_index >= start) & (f.frame_index < end)
     return VideoFeatures(f.descriptors[keep], f.frame_index[keep] - start, end - start,
-                         video=f"{f.video}[{start}:{end}]", path=f"{f.path}[{start}:{end}]", variant=f.variant)
+                         video=f"{f.video}[{start}:{end}]", path=f"{f.path}[{start}:{end}]", variant=f.variant,
+                         fps=f.fps)
 
 
 def features_path(features_dir: str | Path, video_id: str) -> Path:

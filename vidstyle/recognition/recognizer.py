@@ -210,6 +210,7 @@ class ActionRecognizer(FrameRecognizerMixin, BaseEstimator):
             [yi[a:b] for a, b in zip(bounds[:-1], bounds[1:])], len(self.classes_)
         )
 
+        warn_few_frames(y_original, self.classes_, float(getattr(videos[0], "fps", 0.0) or 0.0))
         self.fit_durations(y_original)
         Hs = self.histograms_many(videos)
         H = sp.vstack(Hs).tocsr()
@@ -342,3 +343,21 @@ def load_model(path: str | Path) -> tuple[ActionRecognizer, dict]:
 def read_header(path: str | Path) -> dict:
     """The header of a model file (the model is loaded too: the header alone is not trusted)."""
     return load_model(path)[1]
+
+
+def warn_few_frames(labels, classes, fps: float = 0.0, need: int | None = None) -> dict[str, int]:
+    """Warn (plainly: how many frames each thin class has and how many are needed) about classes with
+    fewer than ``need`` (default :data:`~.defaults.MIN_FRAMES_PER_CLASS`) labelled training frames, mirror
+    images not counted; returns those classes' counts."""
+    need = D.MIN_FRAMES_PER_CLASS if need is None else int(need)
+    counts = {str(c): 0 for c in classes}
+    for lab in labels:
+        for c in lab:
+            counts[str(c)] = counts.get(str(c), 0) + 1
+    few = {c: n for c, n in counts.items() if n < need}
+    for c, n in few.items():
+        secs = f" ({n / fps:.1f} s at {fps:g} fps)" if fps > 0 else ""
+        log.warning("class %r has only %d labelled training frames%s; the recognizer needs about %d per class "
+                    "(%s) to recognise it in new footage: label more of it, in several takes", c, n, secs, need,
+                    f"{need / fps:.0f} s" if fps > 0 else "several takes")
+    return few

@@ -152,6 +152,7 @@ class Style:
              "n_frames": s.meta.get("n_frames"), "n_events": len(s)}
             for s in sequences
         ]
+        warn_few_events(ints, A, model_b.n_modes_)
         log.info(
             "learned style from %d events in %d sequence(s): model (a) loglik %.1f, model (b) K=%d "
             "loglik %.1f, bigram loglik %.1f", int(counts.sum()), len(sequences), model_a.log_likelihood_,
@@ -325,3 +326,34 @@ def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None) ->
     if not out:
         raise InputError(f"{labels_dir}: no performer's recognised labels hold enough events to learn a style")
     return out
+
+
+def warn_few_events(sequences: Sequence[np.ndarray], n_actions: int, n_modes: int) -> list[str]:
+    """Warn, saying how many are needed and how many were given, when the events are too few for the
+    models being fitted: model (a) estimates ``n_actions x n_actions`` transition probabilities and needs
+    at least :data:`~.defaults.MIN_TRANSITIONS_PER_CELL` observed transitions per probability; model (b)
+    with ``n_modes`` modes has :meth:`ModeHMM.n_free_parameters` and needs
+    :data:`~.defaults.MIN_EVENTS_PER_PARAMETER` events per parameter. Returns the messages."""
+    from . import defaults as SD
+
+    n_events = int(sum(len(s) for s in sequences))
+    n_trans = int(sum(max(len(s) - 1, 0) for s in sequences))
+    msgs = []
+    need_a = SD.MIN_TRANSITIONS_PER_CELL * n_actions * n_actions
+    if n_trans < need_a:
+        msgs.append(
+            f"learn-style: only {n_trans} action-to-action transitions ({n_events} events in {len(sequences)} "
+            f"label file(s)) for {n_actions} actions; model (a) estimates {n_actions} x {n_actions} transition "
+            f"probabilities and needs at least {need_a} transitions (more is better): the style is mostly "
+            f"its smoothing prior. Give more labelled footage of this performer (about {need_a - n_trans} more "
+            "transitions), or fewer classes")
+    need_b = SD.MIN_EVENTS_PER_PARAMETER * ModeHMM.n_free_parameters(n_modes, n_actions)
+    if n_modes > 1 and n_events < need_b:
+        msgs.append(
+            f"learn-style: model (b) took {n_modes} behaviour modes from only {n_events} events; "
+            f"{n_modes} modes over {n_actions} actions have {ModeHMM.n_free_parameters(n_modes, n_actions)} "
+            f"free parameters and need at least {need_b} events: its modes are not to be trusted (--modes 1 "
+            "fits one mode; generate uses model (a) unless --model b)")
+    for m in msgs:
+        log.warning("%s", m)
+    return msgs

@@ -23,3 +23,7 @@ MODE_CRITERION = "heldout"                    # model (b): heldout | bic
 # generation
 GENERATE_LENGTH = 40                          # events per generated sequence
 MODEL = "a"                                   # a | b | bigram
+# data enough for the models (learn-style warns below): observed action transitions per transition
+# probability of model (a), and events per free parameter of model (b)'s chosen modes
+MIN_TRANSITIONS_PER_CELL = 1
+MIN_EVENTS_PER_PARAMETER = 1
