@@ -1,0 +1,44 @@
+"""docs/benchmarks.md's table is generated from the committed bench files (issue 31 item 4): the page is
+up to date with bench_results/, and the table carries each file's figures, cores and date."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "scripts" / "bench_table.py"
+
+
+def test_the_page_is_up_to_date_with_the_committed_bench_files():
+    p = subprocess.run([sys.executable, str(SCRIPT), "--doc", str(ROOT / "docs" / "benchmarks.md"), "--check"],
+                       capture_output=True, text=True, check=False)
+    assert p.returncode == 0, p.stderr
+
+
+def test_rows_carry_the_files_figures(tmp_path):
+    res = tmp_path / "bench_results"
+    res.mkdir()
+    (res / "render.json").write_text(json.dumps({
+        "machine": {"cores": 2}, "when": "2026-12-03T21:00:00", "goal_frames_per_s": 200.0,
+        "results": [{"size": "160x120", "stage": "render_motion", "motion": "walk", "frames_per_s": 1234.4},
+                    {"size": "640x480", "stage": "render_motion", "motion": "walk", "frames_per_s": 99.0}]}))
+    (res / "bench_augmg.json").write_text(json.dumps({
+        "machine": {"cores": 2}, "goal_ms_at_1M": 20.0,
+        "rows": [{"n": 1000000, "index": "brute force (numpy)", "query_ms": 900.0, "speedup": 1.0},
+                 {"n": 1000000, "index": "kd-tree", "query_ms": 25.5, "speedup": 35.3}]}))
+    out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
+                         check=True).stdout
+    rows = [line for line in out.splitlines() if line.startswith("| render") or line.startswith("| AugMG")]
+    assert len(rows) == 2
+    assert "1234 frames/s" in rows[0] and "| yes | 2 | 2026-12-03 |" in rows[0]
+    assert "25.50 ms" in rows[1] and "**no**" in rows[1] and "| ? |" in rows[1]  # no date in that file
+    doc = tmp_path / "b.md"
+    doc.write_text("x\n<!-- bench:begin -->\nold\n<!-- bench:end -->\ny\n")
+    assert subprocess.run([sys.executable, str(SCRIPT), "--results", str(res), "--doc", str(doc), "--check"],
+                          capture_output=True, check=False).returncode == 1
+    subprocess.run([sys.executable, str(SCRIPT), "--results", str(res), "--doc", str(doc)], check=True)
+    text = doc.read_text()
+    assert text.startswith("x\n<!-- bench:begin -->\n") and text.endswith("<!-- bench:end -->\ny\n") and "old" not in text
