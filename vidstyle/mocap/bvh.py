@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import VidstyleError
 from ..fileio import atomic_path
 from .motion import Motion
-from .quat import from_intrinsic_euler
+from .quat import intrinsic_euler_parts
 from .skeleton import ALL_CHANNELS, POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
@@ -341,10 +341,12 @@ def _motion_from_channels(skeleton: Skeleton, values: np.ndarray, fps: float) ->
             joints, columns = by_sequence.setdefault("".join(c[0] for c in rot), ([], []))
             joints.append(j)
             columns.append([cols[c] for c in rot])
-    # one batched conversion per rotation order (files usually have one or two orders)
+    # one batched conversion per rotation order (files usually have one or two orders), on contiguous
+    # (F, joints) arrays per axis: the numbers of from_intrinsic_euler, bit for bit
     for seq, (joints, columns) in by_sequence.items():
-        angles = values[:, np.array(columns)]  # (F, joints, len(seq))
-        quats[:, joints] = from_intrinsic_euler(seq, angles)
+        angles = np.ascontiguousarray(values[:, np.array(columns).T].transpose(1, 0, 2))  # (len(seq), F, joints)
+        for i, part in enumerate(intrinsic_euler_parts(seq, angles)):
+            quats[:, joints, i] = part
     return Motion(skeleton, quats, translations, fps)
 
 
