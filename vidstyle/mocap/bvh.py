@@ -277,6 +277,10 @@ def _parse_motion(lines: list[str], motion_line: int, skeleton: Skeleton, path) 
 
 _POW10 = np.array([10.0**k for k in range(23)])  # 10**0 .. 10**22: every one an exact double
 _MAX_DIGITS = 15  # an integer of at most 15 decimal digits is below 2**53: exact as an int64 and a double
+_CHAR_CLASS = np.full(256, 3, dtype=np.uint8)  # 0: separator (space, tab, newline), 1: digit, 2: point, 3: other
+_CHAR_CLASS[[32, 9, 10]] = 0
+_CHAR_CLASS[48:58] = 1
+_CHAR_CLASS[46] = 2
 
 
 def _decimal_values(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
@@ -295,11 +299,9 @@ def _decimal_values(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
         data = text.encode("ascii")
     except UnicodeEncodeError:
         return None
-    b = np.frombuffer(data, dtype=np.uint8)
-    if b.size == 0:
-        return None
-    ws = (b == 32) | (b == 9) | (b == 10)
-    edge = np.diff(ws.view(np.int8), prepend=np.int8(1), append=np.int8(1))  # -1: a token starts, +1: ends
+    b = np.frombuffer(data + b" ", dtype=np.uint8)  # a separator after the last token
+    cls = _CHAR_CLASS[b]
+    edge = np.diff((cls == 0).view(np.int8), prepend=np.int8(1))  # -1: a token starts, +1: it ends
     starts = np.flatnonzero(edge == -1)
     ends = np.flatnonzero(edge == 1)
     n = starts.size
@@ -311,32 +313,33 @@ def _decimal_values(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
     # tokens before each line end: n_cols per line, so every line holds exactly n_cols
     if n_rows > 1 and not np.array_equal(np.searchsorted(starts, line_ends), np.arange(1, n_rows) * n_cols):
         return None
-    lengths = ends - starts
-    if int(lengths.max()) > _MAX_DIGITS + 2:  # sign + digits + point
-        return None
     c = b[starts]
     neg = c == 45  # '-'
-    pos = starts + (neg | (c == 43))  # past a sign
+    signed = neg | (c == 43)  # '+'
+    if np.count_nonzero(cls == 3) != np.count_nonzero(signed):
+        return None  # a character other than digit, point or separator, or a sign inside a token
+    pos = starts + signed
+    width = int((ends - pos).max())
+    if width > _MAX_DIGITS + 1:  # digits + point
+        return None
     mant = np.zeros(n, dtype=np.int64)
-    digits = np.zeros(n, dtype=np.int64)
-    frac = np.zeros(n, dtype=np.int64)
+    digits = np.zeros(n, dtype=np.uint8)
+    frac = np.zeros(n, dtype=np.uint8)
     point = np.zeros(n, dtype=bool)
-    for _ in range(int((ends - pos).max())):  # one character of every token per step
-        active = pos < ends
-        c = b[np.where(active, pos, 0)]
-        d = c - np.uint8(48)
-        is_digit = active & (d < 10)
-        is_point = active & (c == 46)  # '.'
-        if not np.array_equal(is_digit | is_point, active) or (is_point & point).any():
-            return None  # a character that is neither digit nor point, or a second point
-        mant = np.where(is_digit, mant * 10 + d, mant)
+    for _ in range(width):  # one character of every token per step
+        k = cls[pos]  # a finished token stays on the separator after it (class 0)
+        is_digit = k == 1
+        is_point = k == 2
+        if (is_point & point).any():
+            return None  # a second point
+        mant = np.where(is_digit, mant * 10 + (b[pos] - np.uint8(48)), mant)
         digits += is_digit
         frac += is_digit & point
         point |= is_point
-        pos += 1
-    if not digits.all() or int(digits.max()) > _MAX_DIGITS:
+        pos += k != 0
+    if not np.array_equal(pos, ends) or not digits.all() or int(digits.max()) > _MAX_DIGITS:
         return None
-    values = mant.astype(np.float64) / _POW10[frac]
+    values = mant.astype(np.float64) / _POW10[frac]  # both exact: the division rounds once, as strtod does
     np.negative(values, out=values, where=neg)  # "-0" and "-0.000" are -0.0, as strtod reads them
     return values.reshape(n_rows, n_cols)
 
