@@ -267,3 +267,54 @@ def test_fuzzed_files_raise_only_bvherror(muts):
     assert isinstance(m, Motion)
     assert np.isfinite(m.rotations).all() and np.isfinite(m.translations).all()
     global_positions(m)
+
+
+# ------------------------------------------------------------------ the MOTION block's fast path
+def _loadtxt(text: str) -> np.ndarray:
+    import io
+
+    return np.loadtxt(io.StringIO(text), dtype=np.float64, ndmin=2, comments=None)
+
+
+_DECIMAL = st.builds(
+    lambda sign, whole, point, frac: sign + whole + point + frac,
+    st.sampled_from(["", "-", "+"]), st.text("0123456789", max_size=7), st.sampled_from(["", "."]),
+    st.text("0123456789", max_size=8),
+).filter(lambda t: any(ch.isdigit() for ch in t))  # "5.", ".5", "-0", "007": all plain decimals
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(1, 4), st.integers(1, 5), st.data())
+def test_decimal_fast_path_gives_loadtxt_values_bit_for_bit(rows, cols, data):
+    from vidstyle.mocap.bvh import _decimal_values
+
+    toks = [[data.draw(_DECIMAL) for _ in range(cols)] for _ in range(rows)]
+    seps = data.draw(st.sampled_from([" ", "\t", "  ", " \t "]))
+    text = "\n".join(data.draw(st.sampled_from(["", " ", "\t"])) + seps.join(r) + data.draw(st.sampled_from(["", " "]))
+                     for r in toks)
+    ours = _decimal_values(text, rows, cols)
+    ref = _loadtxt(text)
+    assert ours is not None and ours.shape == ref.shape
+    assert ours.tobytes() == ref.tobytes()  # same bits, signed zeros included
+
+
+def test_decimal_fast_path_values_over_the_whole_double_range_of_plain_decimals(rng):
+    from vidstyle.mocap.bvh import _decimal_values
+
+    vals = np.concatenate([rng.uniform(-1e3, 1e3, 500), rng.uniform(-1, 1, 500) * 10.0 ** rng.integers(-9, 9, 500)])
+    for fmt in ("%.6f", "%.4f", "%.9f", "%.15g", "%.1f"):
+        text = "\n".join(" ".join(fmt % v for v in row) for row in vals.reshape(100, 10))
+        ours = _decimal_values(text, 100, 10)
+        if ours is None:  # e.g. %.15g wrote an exponent or > 15 digits: loadtxt's job
+            continue
+        assert ours.tobytes() == _loadtxt(text).tobytes()
+
+
+@pytest.mark.parametrize("text", ["1 2 3-", "1 2 1.2.3", "1 2 -", "1 2 .", "1 2 --1", "1 2 1e5", "1 2 nan",
+                                  "1 2 inf", "1 2 0x1", "1 2 1,5", "1 2 3 4", "1 2", "1 2 3\n4 5", "1 2 3\n\n4 5 6",
+                                  "1 2 1234567890123456", "1 2 \u00b9", "1 2 3\x0b"])
+def test_decimal_fast_path_leaves_everything_else_to_loadtxt(text):
+    from vidstyle.mocap.bvh import _decimal_values
+
+    rows = 2 if "\n" in text else 1
+    assert _decimal_values(text, rows, 3) is None

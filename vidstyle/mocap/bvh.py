@@ -13,8 +13,9 @@ their frames here too (assimp instead stops after ``Frames:`` lines and drops th
 than the header promises is an error (a truncated file).
 
 Every problem with the file raises :class:`BVHError` naming the file and line. The MOTION block is
-parsed with ``numpy.loadtxt`` (C speed); only when that fails is it rescanned line by line to name the
-offending line precisely.
+parsed by a vectorised reader of plain decimals (``_decimal_values``: the exact values strtod gives,
+about twice as fast as loadtxt), else with ``numpy.loadtxt`` (C speed); only when that fails too is it
+rescanned line by line to name the offending line precisely.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import VidstyleError
 from ..fileio import atomic_path
 from .motion import Motion
-from .quat import from_intrinsic_euler
+from .quat import intrinsic_euler_parts
 from .skeleton import ALL_CHANNELS, POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
@@ -274,6 +275,75 @@ def _parse_motion(lines: list[str], motion_line: int, skeleton: Skeleton, path) 
     return _motion_from_channels(skeleton, values, fps)
 
 
+_POW10 = np.array([10.0**k for k in range(23)])  # 10**0 .. 10**22: every one an exact double
+_MAX_DIGITS = 15  # an integer of at most 15 decimal digits is below 2**53: exact as an int64 and a double
+_CHAR_CLASS = np.full(256, 3, dtype=np.uint8)  # 0: separator (space, tab, newline), 1: digit, 2: point, 3: other
+_CHAR_CLASS[[32, 9, 10]] = 0
+_CHAR_CLASS[48:58] = 1
+_CHAR_CLASS[46] = 2
+
+
+def _decimal_values(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
+    """``(n_rows, n_cols)`` values of ``text`` (lines of plain decimals), or None to leave it to loadtxt.
+
+    The fast path of the MOTION block, vectorised over all numbers at once. It takes only what it can
+    read exactly: ASCII lines (none blank) of ``n_cols`` space / tab separated tokens, each
+    ``[+-]?`` digits with at most one ``.``, at least 1 and at most 15 digits. Such a number is the
+    integer m of its digits over 10**k (k digits after the point); m < 2**53 and 10**k (k <= 22) are
+    exact doubles, so ``m / 10**k`` rounds once, to the nearest double: the value strtod (loadtxt,
+    float()) gives, bit for bit (Clinger's fast path). Anything else (exponents, nan/inf, more digits,
+    other whitespace, malformed tokens, wrong counts) returns None, and loadtxt and the line-by-line
+    check decide as before.
+    """
+    try:
+        data = text.encode("ascii")
+    except UnicodeEncodeError:
+        return None
+    b = np.frombuffer(data + b" ", dtype=np.uint8)  # a separator after the last token
+    cls = _CHAR_CLASS[b]
+    edge = np.diff((cls == 0).view(np.int8), prepend=np.int8(1))  # -1: a token starts, +1: it ends
+    starts = np.flatnonzero(edge == -1)
+    ends = np.flatnonzero(edge == 1)
+    n = starts.size
+    if n != n_rows * n_cols:
+        return None
+    line_ends = np.flatnonzero(b == 10)
+    if line_ends.size != n_rows - 1:
+        return None
+    # tokens before each line end: n_cols per line, so every line holds exactly n_cols
+    if n_rows > 1 and not np.array_equal(np.searchsorted(starts, line_ends), np.arange(1, n_rows) * n_cols):
+        return None
+    c = b[starts]
+    neg = c == 45  # '-'
+    signed = neg | (c == 43)  # '+'
+    if np.count_nonzero(cls == 3) != np.count_nonzero(signed):
+        return None  # a character other than digit, point or separator, or a sign inside a token
+    pos = starts + signed
+    width = int((ends - pos).max())
+    if width > _MAX_DIGITS + 1:  # digits + point
+        return None
+    mant = np.zeros(n, dtype=np.int64)
+    digits = np.zeros(n, dtype=np.uint8)
+    frac = np.zeros(n, dtype=np.uint8)
+    point = np.zeros(n, dtype=bool)
+    for _ in range(width):  # one character of every token per step
+        k = cls[pos]  # a finished token stays on the separator after it (class 0)
+        is_digit = k == 1
+        is_point = k == 2
+        if (is_point & point).any():
+            return None  # a second point
+        mant = np.where(is_digit, mant * 10 + (b[pos] - np.uint8(48)), mant)
+        digits += is_digit
+        frac += is_digit & point
+        point |= is_point
+        pos += k != 0
+    if not np.array_equal(pos, ends) or not digits.all() or int(digits.max()) > _MAX_DIGITS:
+        return None
+    values = mant.astype(np.float64) / _POW10[frac]  # both exact: the division rounds once, as strtod does
+    np.negative(values, out=values, where=neg)  # "-0" and "-0.000" are -0.0, as strtod reads them
+    return values.reshape(n_rows, n_cols)
+
+
 def _parse_values(data_lines: list[str], first_line: int, n_frames: int, n_channels: int, path) -> np.ndarray:
     """(n_frames, n_channels) float array; ``first_line`` is the 0-based index of data_lines[0]."""
     body = [ln for ln in data_lines if ln.strip()]
@@ -290,6 +360,9 @@ def _parse_values(data_lines: list[str], first_line: int, n_frames: int, n_chann
             raise BVHError(path, first_line + 1, "frame values given but the hierarchy has no channels")
         return np.zeros((n_frames, 0))
     if len(body) == n_frames:
+        values = _decimal_values("\n".join(body), n_frames, n_channels)
+        if values is not None:
+            return values
         try:
             values = np.loadtxt(io.StringIO("\n".join(body)), dtype=np.float64, ndmin=2, comments=None)
         except ValueError:
@@ -341,10 +414,12 @@ def _motion_from_channels(skeleton: Skeleton, values: np.ndarray, fps: float) ->
             joints, columns = by_sequence.setdefault("".join(c[0] for c in rot), ([], []))
             joints.append(j)
             columns.append([cols[c] for c in rot])
-    # one batched conversion per rotation order (files usually have one or two orders)
+    # one batched conversion per rotation order (files usually have one or two orders), on contiguous
+    # (F, joints) arrays per axis: the numbers of from_intrinsic_euler, bit for bit
     for seq, (joints, columns) in by_sequence.items():
-        angles = values[:, np.array(columns)]  # (F, joints, len(seq))
-        quats[:, joints] = from_intrinsic_euler(seq, angles)
+        angles = np.ascontiguousarray(values[:, np.array(columns).T].transpose(1, 0, 2))  # (len(seq), F, joints)
+        for i, part in enumerate(intrinsic_euler_parts(seq, angles)):
+            quats[:, joints, i] = part
     return Motion(skeleton, quats, translations, fps)
 
 

@@ -54,7 +54,10 @@ class Motion:
             translations[:, 0] = root_positions
         if not fps > 0:
             raise ValueError(f"fps must be positive, got {fps}")
-        norms = np.linalg.norm(rotations, axis=-1, keepdims=True)
+        # np.linalg.norm(rotations, axis=-1, keepdims=True) to the bit (its reduction over the 4 components
+        # adds them in order), without a reduction over a length-4 axis
+        x, y, z, w = (rotations[..., k] for k in range(4))
+        norms = np.sqrt(x * x + y * y + z * z + w * w)[..., None]
         if F and not np.all(norms > 0):
             raise ValueError("rotations contain a zero quaternion")
         self.skeleton = skeleton
