@@ -201,7 +201,7 @@ def test_compiled_tail_and_candidates_equal_numpy_reference(rng, dtype):
         # more candidates than the output arrays hold: counted, the first ones written
         kernel = dist._candidates_kernel()
         out_a, out_b = np.zeros(2, np.int64), np.zeros(2, np.int64)
-        below, n_cand = kernel(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, np.inf, out_a, out_b)
+        _, n_cand = kernel(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, np.inf, out_a, out_b)
         assert n_cand > 2 and np.array_equal(out_a, want[0][:2]) and np.array_equal(out_b, want[1][:2])
 
 

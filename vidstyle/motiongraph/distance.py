@@ -400,7 +400,7 @@ def _candidates_numpy(D, r0, r1, c0, c1, er0, ec0, clip, min_gap, threshold_sq):
     return ga, gb, n_below
 
 
-def _candidates(D, r0, r1, c0, c1, er0, ec0, clip, min_gap, threshold_sq, work: "_Workspace"):
+def _candidates(D, r0, r1, c0, c1, er0, ec0, clip, min_gap, threshold_sq, work: _Workspace):
     """:func:`_candidates_loop` compiled, or :func:`_candidates_numpy` without numba."""
     kernel = _candidates_kernel()
     if kernel is None:
@@ -429,7 +429,7 @@ def compute_tile(
     dtype=np.float32,
     return_matrix: bool = False,
     features=None,
-    work: "_Workspace | None" = None,
+    work: _Workspace | None = None,
 ):
     """Candidates of the block rows r0..r1-1 x columns c0..c1-1 (requires c0 >= r0). See :class:`TileResult`.
 
@@ -446,7 +446,7 @@ def compute_tile(
     er0, er1 = max(r0 - 1, 0), min(r1 + 1, Nw)
     ec0, ec1 = max(c0 - 1, 0), min(c1 + 1, Nw)
     if features is None:
-        features = lambda lo, hi: _block_features(ws, lo, hi, dtype)  # noqa: E731
+        features = lambda lo, hi: _block_features(ws, lo, hi, dtype)
     if work is None:
         work = _thread_workspace()
     rows = features(er0, er1)
@@ -473,7 +473,7 @@ def compute_tile(
 _local = threading.local()
 
 
-def _thread_workspace() -> "_Workspace":
+def _thread_workspace() -> _Workspace:
     """This thread's buffers (the joblib and Dask workers' tiles, and calls outside a pass)."""
     work = getattr(_local, "work", None)
     if work is None:
@@ -547,7 +547,7 @@ def _tile_order(blocks: list[tuple[int, int, int, int]], tile: int) -> list[tupl
     the group's rows, so a group's row features and one column's features serve every tile of the
     group (block features are computed about ``n_blocks^2 / (2 TILE_GROUP)`` times instead of twice a tile).
     The candidates are merged by pair index, so the order does not change the result."""
-    key = lambda b: (b[0] // tile // TILE_GROUP, b[2], b[0])  # noqa: E731
+    key = lambda b: (b[0] // tile // TILE_GROUP, b[2], b[0])
     return sorted(blocks, key=key)
 
 
