@@ -156,3 +156,71 @@ def test_joint_weights_favour_the_trunk():
     w = joint_weights(parents)
     assert w[0] == w.max() and w[3] == w[6] == w.min() == 1.0
     assert w[7] > w[8] > w[9] > w[10]
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_compiled_tail_and_candidates_equal_numpy_reference(rng, dtype):
+    """The numba kernels of the tile's element-wise tail and candidate scan against the numpy code they
+    replace (kept as the reference), bit for bit: on a real tile and on rounded random values full of
+    exact ties, with thresholds given as a Python float (rounded to the tile's dtype) and as float64."""
+    from vidstyle.motiongraph import distance as dist
+
+    if dist._candidates_kernel() is None:
+        pytest.skip("numba is absent")
+    ws = _windows(rng, n_clips=4, frames=60)
+    n, m = 50, 70
+    for A0, B0, Y0 in [
+        tuple(rng.normal(size=(n, m)).astype(dtype) * 30 for _ in range(3)),
+        tuple(np.round(rng.normal(size=(n, m)) * 4).astype(dtype) for _ in range(3)),
+    ]:
+        yr, yc = (rng.normal(size=s).astype(dtype) for s in (n, m))
+        Sr, Sc = (rng.uniform(0, 1e4, size=s).astype(dtype) for s in (n, m))
+        outs = []
+        for tail1, tail2 in [(dist._tail1(), dist._tail2()), (dist._tail1_numpy, dist._tail2_numpy)]:
+            A, B, Y = A0.copy(), B0.copy(), Y0.copy()
+            tail1(A, B)
+            tail2(A, Y, yr, yc, Sr, Sc, dtype(-2.0), dtype(ws.total_weight))
+            assert A.dtype == dtype
+            outs.append(A)
+        assert np.array_equal(outs[0], outs[1])
+        D = np.round(outs[0] / 2e3).astype(dtype)  # many exact ties between neighbours
+        r0, c0 = 20, 60
+        for thr in [float(np.quantile(D, 0.3)) + 1e-9, np.float64(np.quantile(D, 0.3)) + 1e-9, np.inf]:
+            got = dist._candidates(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, thr,
+                                   dist._Workspace())
+            want = dist._candidates_numpy(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, thr)
+            assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]) and got[2] == want[2]
+            assert len(want[0]) > 0
+        # a threshold just above a tile value that rounds onto it in float32: not below in a float32 tile
+        v = float(D[5, 40])
+        for thr in (np.nextafter(v, np.inf), np.float64(np.nextafter(v, np.inf))):
+            got = dist._candidates(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, thr,
+                                   dist._Workspace())
+            want = dist._candidates_numpy(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, thr)
+            assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]) and got[2] == want[2]
+        # more candidates than the output arrays hold: counted, the first ones written
+        kernel = dist._candidates_kernel()
+        out_a, out_b = np.zeros(2, np.int64), np.zeros(2, np.int64)
+        _, n_cand = kernel(D, r0, r0 + n - 2, c0, c0 + m - 2, r0 - 1, c0 - 1, ws.clip, 2 * K, np.inf, out_a, out_b)
+        assert n_cand > 2 and np.array_equal(out_a, want[0][:2]) and np.array_equal(out_b, want[1][:2])
+
+
+def test_tile_buffers_reused_and_features_cached_give_the_same_tiles(rng):
+    """compute_tile with one workspace and a shared feature cache, tiles in the pass's order, against
+    fresh buffers and features per tile."""
+    from vidstyle.motiongraph import distance as dist
+
+    ws = _windows(rng)
+    thr = float(np.quantile(distance_matrix(ws, np.float32), 0.2))
+    tile = 16
+    blocks = dist._tile_order(dist.tile_ranges(ws.n_windows, tile), tile)
+    assert sorted(blocks) == sorted(dist.tile_ranges(ws.n_windows, tile))
+    cache, work = dist._FeatureCache(ws, np.float32, capacity=3), dist._Workspace()
+    for b in blocks:
+        r1, D1 = compute_tile(ws, *b, thr, 2 * K, features=cache, work=work, return_matrix=True)
+        r2 = compute_tile(ws, *b, thr, 2 * K, work=dist._Workspace())
+        r3 = compute_tile(ws, *b, thr, 2 * K, features=cache, work=work)
+        for name in ("a", "b", "D", "theta", "x0", "z0", "n_below", "n_pairs"):
+            assert np.array_equal(getattr(r1, name), getattr(r2, name))
+            assert np.array_equal(getattr(r3, name), getattr(r2, name))
+        assert not np.shares_memory(D1, work.get("A", (1,), np.float32))

@@ -76,7 +76,7 @@ from ..errors import FormatError, InputError, ParameterError
 from ..formats.motiongraph import MotionGraphRecord, read_graph, write_graph
 from ..mocap import Motion, Skeleton, global_positions
 from . import defaults
-from .distance import WindowSet, align_windows, all_pair_candidates, joint_weights, sample_distances
+from .distance import TILE_GROUP, WindowSet, align_windows, all_pair_candidates, joint_weights, sample_distances
 from .labels import UNLABELLED, LabelBook, resample_labels
 
 log = logging.getLogger(__name__)
@@ -258,7 +258,10 @@ class MotionGraph:
         on CMU clips: peak RSS growth 305 MB for 15k frames and 643 MB for 29.5k frames, 31 joints, tile
         2048, two threads, about 700 bytes per joint-frame at the margin); per tile worker, the distance
         tile and its in-place buffers (``tile^2``) and the features of a row and a column block (``tile x 3
-        x window x joints``). This gives 512 and 799 MB for those two builds."""
+        x window x joints``); in-process, the block features the tile threads share (``TILE_GROUP +
+        threads + 1`` blocks of ``tile x 5 x window x joints`` GEMM operands, about 90 MB at tile 2048 and
+        31 joints; the 29.5k build then measured 797 MB of peak RSS growth). This gives 595 and 884 MB for
+        those two builds."""
         import os
 
         k = int(self.window if window is None else window)
@@ -267,7 +270,8 @@ class MotionGraph:
         tile = int(self.tile)
         per_frame = n_joints * 640 + 1024
         per_worker = tile * tile * 4 * 3 + 2 * 2 * tile * 3 * k * n_joints * 8
-        return int(n_frames * per_frame + workers * per_worker)
+        shared = 0 if self.scheduler or self.n_jobs != 1 else (TILE_GROUP + workers + 1) * tile * 5 * k * n_joints * 4
+        return int(n_frames * per_frame + workers * per_worker + shared)
 
     def _check_memory(self, n_frames: int, n_joints: int, k: int) -> None:
         from ..budget import require
