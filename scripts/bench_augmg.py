@@ -89,7 +89,7 @@ def main(library: str, sizes=(10_000, 100_000, 1_000_000), k: int = 10) -> None:
         {"machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(), "threads": 1},
          "k": k, "features": int(base.shape[1]), "library": library,
          "runs": "median of 7 (indexes) / 5 (brute) after a warm-up", "queries": 32,
-         "rows": rows, "goal_ms_at_1M": 20.0}, indent=2))
+         "rows": rows, "goal_ms_at_1M": 20.0, "when": time.strftime("%Y-%m-%dT%H:%M:%S")}, indent=2))
 
 
 if __name__ == "__main__":

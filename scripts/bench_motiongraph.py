@@ -238,7 +238,7 @@ def main() -> None:
           "(larger N: reference extrapolated as N^2)")
     print(f"synthesis: {synth['output_s']:.1f} s of motion in {synth['median_s'] * 1000:.0f} ms = {synth['x_real_time']:.0f}x real time "
           f"(graph {synth['graph_frames']} frames, {synth['transitions']} transitions)")
-    res = {"machine": machine, "gemm_peak_flops": peak, "window": K, "jobs": args.jobs, "tile": args.tile, "rows": rows,
+    res = {"machine": machine, "when": time.strftime("%Y-%m-%dT%H:%M:%S"), "gemm_peak_flops": peak, "window": K, "jobs": args.jobs, "tile": args.tile, "rows": rows,
            "reference": ref, "speedup_1k": speedup, "synthesis": synth}
     path = ROOT / "bench_results" / "motiongraph.json"
     path.parent.mkdir(exist_ok=True)

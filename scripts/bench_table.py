@@ -55,7 +55,7 @@ def augmg(d: dict) -> list[tuple]:
     rows = []
     top = max(r["n"] for r in d["rows"])
     for r in d["rows"]:
-        if r["n"] == top and r["index"] != "brute force (numpy)":
+        if r["n"] == top and r["index"].endswith(" bal"):  # the index vidstyle ships (augmg.index._build_tree)
             rows.append((f"AugMG query, {r['n']:,} library frames, one core ({r['index']})",
                          f"{r['query_ms']:.2f} ms ({r['speedup']:.0f}x brute force)",
                          f"<= {d['goal_ms_at_1M']:g} ms at 1M", _met(r["query_ms"] <= d["goal_ms_at_1M"])))
@@ -75,26 +75,27 @@ def bvh(d: dict) -> list[tuple]:
     ratio = d.get("ratio_vs_pybvh")
     if ratio is None:
         return []
-    goal = d.get("goal_ratio", 0.7)
+    goal = d.get("goal_ratio_vs_pybvh", 0.7)
     return [("BVH parse + FK of the 86 CMU clips, one core, time against pybvh 0.9 (same run)",
              f"{ratio:.2f}x pybvh's time", f"<= {goal:g}x", _met(ratio <= goal))]
 
 
 def motiongraph(d: dict) -> list[tuple]:
     rows = []
-    for r in d.get("distance", []):
-        if "frames" not in r or "median_s" not in r:
+    for r in d.get("rows", []):
+        frac = r.get("fraction_of_gemm_peak")
+        if frac is None or r["frames"] < 10_000:  # 1k frames: too small a problem for the GEMM-rate goal
             continue
-        frac = r.get("fraction_of_gemm")
-        fig = f"{r['median_s']:.1f} s" + (f", {100 * frac:.0f} % of the GEMM rate" if frac is not None else "")
-        goal = ">= 60 % of the GEMM rate" if frac is not None else ""
-        rows.append((f"exact motion graph, all pairs, {r['frames']:,} frames", fig, goal,
-                     _met(frac >= 0.6) if frac is not None else "n/a"))
+        fig = (f"{r['median_s']:.1f} s, {r['gflops']:.0f} GFLOP/s = {100 * frac:.0f} % of the same run's GEMM rate"
+               + (f" ({100 * r['fraction_of_gemm_cpu']:.0f} % by CPU time)" if r.get("fraction_of_gemm_cpu") else ""))
+        goal = ">= 60 % of the GEMM rate" + (", <= 180 s" if r["frames"] >= 100_000 else "")
+        ok = frac >= 0.6 and (r["median_s"] <= 180 if r["frames"] >= 100_000 else True)
+        rows.append((f"exact motion graph, all pairs, {r['frames']:,} frames", fig, goal, _met(ok)))
     return rows
 
 
 #: bench file stem -> adapter
-ADAPTERS = {"render": render, "bench_augmg": augmg, "bench_video": video, "bench_bvh": bvh, "motiongraph": motiongraph}
+ADAPTERS = {"render": render, "bench_augmg": augmg, "bench_video": video, "bvh": bvh, "motiongraph": motiongraph}
 
 
 def table(results: Path) -> str:

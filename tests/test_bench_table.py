@@ -28,7 +28,7 @@ def test_rows_carry_the_files_figures(tmp_path):
     (res / "bench_augmg.json").write_text(json.dumps({
         "machine": {"cores": 2}, "goal_ms_at_1M": 20.0,
         "rows": [{"n": 1000000, "index": "brute force (numpy)", "query_ms": 900.0, "speedup": 1.0},
-                 {"n": 1000000, "index": "kd-tree", "query_ms": 25.5, "speedup": 35.3}]}))
+                 {"n": 1000000, "index": "kd-tree 28-d leaf 16 bal", "query_ms": 25.5, "speedup": 35.3}]}))
     out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
                          check=True).stdout
     rows = [line for line in out.splitlines() if line.startswith("| render") or line.startswith("| AugMG")]
