@@ -46,6 +46,11 @@ def timeit(fn: Callable[[], object], runs: int = 5, warmup: int = 1) -> dict:
 
 
 def write_results(name: str, payload: dict) -> Path:
+    """Write ``bench_results/<name>.json``, stamped with the date and time of the run (``when``) unless the
+    payload has one (scripts/bench_table.py shows it)."""
+    import time
+
+    payload = {"when": time.strftime("%Y-%m-%dT%H:%M:%S"), **payload}
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(payload, indent=2) + "\n")

@@ -225,7 +225,7 @@ def stage_times(records: list[RunRecord], stages: list[str] | None = None, *, re
            "run_wall_seconds": None if since is None else max(now - since, 0.0),
            "stages_wall_seconds": sum(r["wall_seconds"] or 0.0 for r in rows if r["stage"] != OUTSIDE),
            "cpu_seconds": sum(r["cpu_seconds"] or 0.0 for r in rows),
-           "unreadable_records": int(unreadable), "stages": rows}
+           "unreadable_records": int(unreadable), "cores": os.cpu_count(), "stages": rows}
     return parse_metrics(doc, None, TIMING)
 
 

@@ -294,6 +294,8 @@ def _timing(f: Fields) -> None:
     f.number("stages_wall_seconds", min=0)
     f.number("cpu_seconds", min=0)
     f.int("unreadable_records", min=0)
+    if f.obj.get("cores") is not None:  # the machine's core count (written since 2026-12; optional)
+        f.int("cores", min=1)
     seen = set()
     for i, row in enumerate(f.list("stages")):
         s = Fields(row, f.path, f"stages[{i}]")
