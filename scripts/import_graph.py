@@ -27,7 +27,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "vidstyle"
-BASE = frozenset({"budget", "errors", "fileio", "lazy", "logutil", "parallel"})
+BASE = frozenset({"budget", "compiled", "errors", "fileio", "lazy", "logutil", "parallel"})
 FORMATS_MAY_IMPORT = BASE - {"parallel"}
 EDGE = frozenset({"demo", "evaluation", "commands", "cli", "__main__"})
 

@@ -224,13 +224,10 @@ def _libm_pow_loop(a, p):  # compiled by numba: a[i] ** p with a float exponent 
 
 
 def _compiled(loop, fallback):
-    """``loop`` compiled by numba (cached per installation, no fast-math, so every operation rounds as
-    numpy's and the C library's do), or ``fallback`` (its numpy / Python reference) without numba."""
-    try:
-        from numba import njit
-    except ImportError:  # pragma: no cover
-        return fallback
-    return njit(cache=True, nogil=True)(loop)
+    """``loop`` compiled (:func:`vidstyle.compiled.compile_kernel`), or ``fallback`` without numba."""
+    from ..compiled import compile_kernel
+
+    return compile_kernel(loop, fallback)
 
 
 @cache

@@ -482,13 +482,10 @@ def _thread_workspace() -> _Workspace:
 
 
 def _compiled(loop):
-    """``loop`` compiled by numba (cached per installation, no fast-math, so every operation rounds as
-    numpy's do), or None without numba."""
-    try:
-        from numba import njit
-    except ImportError:  # pragma: no cover
-        return None
-    return njit(cache=True, nogil=True)(loop)
+    """``loop`` compiled (:func:`vidstyle.compiled.compile_kernel`), or None without numba."""
+    from ..compiled import compile_kernel
+
+    return compile_kernel(loop)
 
 
 @cache

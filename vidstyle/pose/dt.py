@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..compiled import compile_kernel
+
 BIG = 1e12  # stands for +inf in cost maps (the envelope arithmetic needs finite numbers)
 
 
@@ -61,13 +63,9 @@ def _minplus_rows(D, pen, E, best):  # pragma: no cover - compiled by numba (tes
             best[i, m] = b
 
 
-try:  # the inner loops compiled (numba); the same Python functions run without it
-    from numba import njit
-
-    _envelope_rows = njit(cache=True, nogil=True)(_envelope_rows)
-    _minplus_rows = njit(cache=True, nogil=True)(_minplus_rows)
-except ImportError:  # pragma: no cover
-    pass
+# the inner loops compiled (vidstyle.compiled); the same Python functions run without numba
+_envelope_rows = compile_kernel(_envelope_rows, _envelope_rows)
+_minplus_rows = compile_kernel(_minplus_rows, _minplus_rows)
 
 
 def dt1d(f: np.ndarray, w: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -153,14 +153,11 @@ _KERNEL: list = []
 
 
 def _draw_kernel():
-    """:func:`_draw_loop` compiled by numba (cached per installation), or None without numba."""
+    """:func:`_draw_loop` compiled (:func:`vidstyle.compiled.compile_kernel`), or None without numba."""
     if not _KERNEL:
-        try:
-            from numba import njit
-        except ImportError:  # pragma: no cover
-            _KERNEL.append(None)
-        else:
-            _KERNEL.append(njit(cache=True, nogil=True)(_draw_loop))
+        from ..compiled import compile_kernel
+
+        _KERNEL.append(compile_kernel(_draw_loop))
     return _KERNEL[0]
 
 
