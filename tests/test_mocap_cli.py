@@ -77,7 +77,7 @@ def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
     stages = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
               "synthesize", "train-pose", "pose", "match-pose", "augment"]
     assert listed[: len(stages)] == stages
-    assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "timing", "mocap"}
+    assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "timing", "mocap", "init"}
     for command in listed:  # every listed command answers --help
         assert main([command, "--help"]) == 0
 

@@ -19,23 +19,46 @@ sys.modules["probe_reliability"] = probe
 spec.loader.exec_module(probe)
 
 
+def _in_small_process(code: str, tmp_path: Path) -> dict:
+    """Run ``code`` (which sets ``out``, a JSON-able dict) in a fresh interpreter with the probe imported:
+    a child's peak RSS (``wait4``'s ``ru_maxrss``) counts the image it was forked from, and a pytest worker
+    is large, whereas the probe runs as a small script of its own."""
+    import subprocess
+
+    prog = ("import importlib.util, json, sys\n"
+            f"spec = importlib.util.spec_from_file_location('probe_reliability', {str(ROOT / 'scripts' / 'probe_reliability.py')!r})\n"
+            "probe = importlib.util.module_from_spec(spec); sys.modules['probe_reliability'] = probe\n"
+            "spec.loader.exec_module(probe)\n"
+            "from pathlib import Path\n"
+            f"tmp_path = Path({str(tmp_path)!r})\n" + code + "\nprint(json.dumps(out, default=str))\n")
+    p = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True, check=True, cwd=ROOT)
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
 def test_a_refused_bad_number_is_clean_and_a_run_that_works_is_not(tmp_path):
-    bad = probe.CliCase("match-pose --views 100000", 1,
-                        ["match-pose", str(tmp_path / "no.json"), "-l", str(tmp_path / "nolib"), "-o", "{d}/m.json",
-                         "--views", "100000"], "--views", "8 GB", ["m.json"])
-    r = probe.run_cli_case(bad, tmp_path / "work", timeout=60)
-    assert r.clean, r
-    assert r.result == "exit 2" and r.detail.startswith("vidstyle: error: --views") and r.file_state == "output absent"
-    assert 0 < r.seconds < 60 and 10 < r.peak_mb < 1024
+    code = """
+import dataclasses
+bad = probe.CliCase("match-pose --views 100000", 1,
+                    ["match-pose", str(tmp_path / "no.json"), "-l", str(tmp_path / "nolib"), "-o", "{d}/m.json",
+                     "--views", "100000"], "--views", "8 GB", ["m.json"])
+fine = probe.CliCase("--version", 1, ["--version"], "--views", "", [])
+wrote = probe.CliCase("mocap info", 7, ["demo", "make-library", "-o", "{d}/lib", "--performers", "1",
+                                        "--action-seconds", "2", "--jobs", "1"], None, "", ["lib"])
+out = {"bad": dataclasses.asdict(probe.run_cli_case(bad, tmp_path / "work", timeout=60)),
+       "fine": dataclasses.asdict(probe.run_cli_case(fine, tmp_path / "work", timeout=60)),
+       "wrote": dataclasses.asdict(probe.run_cli_case(wrote, tmp_path / "work", timeout=120))}
+"""
+    res = _in_small_process(code, tmp_path)
+    r = res["bad"]
+    assert r["clean"], r
+    assert r["result"] == "exit 2" and r["detail"].startswith("vidstyle: error: --views") and r["file_state"] == "output absent"
+    assert 0 < r["seconds"] < 60 and 10 < r["peak_mb"] < 1024
     # exit 0 (and an error line that does not name the flag) is not clean: the judge is not vacuous
-    fine = probe.CliCase("--version", 1, ["--version"], "--views", "", [])
-    r = probe.run_cli_case(fine, tmp_path / "work", timeout=60)
-    assert not r.clean and "exit 0" in r.detail
+    r = res["fine"]
+    assert not r["clean"] and "exit 0" in r["detail"]
     # an output written is not clean either
-    wrote = probe.CliCase("mocap info", 7, ["demo", "make-library", "-o", "{d}/lib", "--performers", "1",
-                                            "--action-seconds", "2", "--jobs", "1"], None, "", ["lib"])
-    r = probe.run_cli_case(wrote, tmp_path / "work", timeout=120)
-    assert not r.clean and "output written" in r.detail and r.file_state.startswith("written: lib")
+    r = res["wrote"]
+    assert not r["clean"] and "output written" in r["detail"] and r["file_state"].startswith("written: lib")
 
 
 def test_a_timeout_is_reported_and_the_child_killed(tmp_path):
@@ -44,12 +67,11 @@ def test_a_timeout_is_reported_and_the_child_killed(tmp_path):
 
 
 def test_the_address_space_limit_applies_to_the_child(tmp_path):
-    old = probe.LIMIT_BYTES
-    probe.LIMIT_BYTES = 512 << 20
-    try:
-        r = probe.run_measured([sys.executable, "-c", "b = bytearray(1 << 30)"], tmp_path, timeout=30)
-    finally:
-        probe.LIMIT_BYTES = old
+    code = """
+probe.LIMIT_BYTES = 512 << 20
+out = probe.run_measured([sys.executable, "-c", "b = bytearray(1 << 30)"], tmp_path, timeout=30)
+"""
+    r = _in_small_process(code, tmp_path)
     assert r["code"] == 1 and "MemoryError" in r["stderr"] and r["peak_mb"] < 512
 
 
