@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import threading
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -265,6 +266,13 @@ def npz_scalar(z: dict, path, key: str, kind: str, required: bool = True):
     return str(v)
 
 
+#: Serialises np.load's .npy header parsing across threads: numpy parses each header with
+#: ``ast.literal_eval``, and CPython 3.11's AST construction is not thread-safe (python/cpython#106905:
+#: a spurious "SystemError: AST constructor recursion depth mismatch" when threads parse at once, seen
+#: in CI when the recognizer loads features files on joblib threads). Held while a file's arrays are read.
+NPZ_LOCK = threading.Lock()
+
+
 def load_npz(path, what: str) -> dict:
     """Every array of the ``.npz`` file ``path`` (``what``: the artifact, for messages), read without
     pickles; any damaged, missing or non-archive file is a :class:`FormatError` naming it."""
@@ -277,7 +285,7 @@ def load_npz(path, what: str) -> dict:
     if not path.is_file():
         raise FormatError(path, None, f"{what} file not found")
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with NPZ_LOCK, np.load(path, allow_pickle=False) as z:
             if not hasattr(z, "files"):
                 raise FormatError(path, None, f"not a {what} .npz (a single array, not an archive)")
             return {k: z[k] for k in z.files}

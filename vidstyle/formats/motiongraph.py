@@ -67,7 +67,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import write_npz
-from ._base import FormatError
+from ._base import NPZ_LOCK, FormatError
 
 KIND = "vidstyle.motiongraph"
 SCHEMA_VERSION = 2
@@ -215,7 +215,7 @@ def _load_arrays(path: Path) -> dict[str, np.ndarray]:
     if not path.exists():
         raise FormatError(path, None, "graph file not found")
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with NPZ_LOCK, np.load(path, allow_pickle=False) as z:
             out = {}
             for key in z.files:
                 out[key] = z[key]

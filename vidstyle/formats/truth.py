@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import atomic_path
-from ._base import FormatError, check_array
+from ._base import NPZ_LOCK, FormatError, check_array
 
 KIND = "vidstyle.render_truth"
 SCHEMA_VERSION = 2
@@ -163,7 +163,7 @@ def read_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     if path.is_dir():
         raise FormatError(path, None, "is a directory, not a file")
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with NPZ_LOCK, np.load(path, allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise FormatError(path, None, "file not found") from None
