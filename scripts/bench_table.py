@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT / "scripts"), str(ROOT)]
 BEGIN, END = "<!-- bench:begin -->", "<!-- bench:end -->"
 
 
@@ -100,7 +99,7 @@ def demo_timing(d: dict) -> list[tuple]:
 
     slow = sorted(d["stages"], key=lambda r: -r["wall_seconds"])[:3]
     top = ", ".join(f"{r['stage']} {r['wall_seconds']:.0f} s" for r in slow)
-    when = datetime.datetime.fromtimestamp(d["started"], datetime.timezone.utc).strftime("%Y-%m-%d")
+    when = datetime.datetime.fromtimestamp(d["started"], datetime.UTC).strftime("%Y-%m-%d")
     d.setdefault("when", when)
     return [("`make demo`'s pipeline (`dvc repro`) on a fresh clone",
              f"{d['run_wall_seconds']:.0f} s wall, {d['cpu_seconds']:.0f} s CPU (slowest: {top})", "<= 390 s",
@@ -138,23 +137,21 @@ def main(argv: list[str] | None = None) -> int:
     if args.doc is None:
         sys.stdout.write(body)
         return 0
+    from readme_tables import splice  # the results tables' marker splice (same directory)
+
+    from vidstyle.fileio import write_text
+
     text = args.doc.read_text(encoding="utf-8")
-    if BEGIN not in text or END not in text:
+    new = splice(text, body, BEGIN, END)
+    if new is None:
         raise SystemExit(f"bench_table: {args.doc} has no {BEGIN} ... {END} block")
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    new = f"{head}{BEGIN}\n{body}{END}{tail}"
     if args.check:
         if new != text:
             print(f"{args.doc} is not up to date: run python scripts/bench_table.py --doc {args.doc}", file=sys.stderr)
             return 1
         return 0
-    fd, tmp = tempfile.mkstemp(dir=args.doc.parent, prefix=f".{args.doc.name}.", suffix=".tmp")
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        f.write(new)
-    os.replace(tmp, args.doc)
+    write_text(args.doc, new)
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())
