@@ -11,7 +11,10 @@ import pytest
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
+from vidstyle.formats.keypoints import KEYPOINTS
 from vidstyle.reconstruct import metrics as M
+
+KP = {k: i for i, k in enumerate(KEYPOINTS)}
 
 # a standing performer in mm, +Y up, facing +Z, left = +X, ankles 80 mm above the floor at Y = 0
 STAND = np.array([
@@ -72,7 +75,7 @@ def test_yaw_alignment_matches_a_fine_grid_search():
     rng = np.random.default_rng(2)
     true = _sequence(F=20, seed=3)
     pred = true @ _ry(-2.2).T + rng.normal(scale=150.0, size=true.shape) + [50.0, 0.0, 80.0]
-    _, yaw, d = M.align_sequence(pred, true)
+    _, yaw, _ = M.align_sequence(pred, true)
 
     def cost(theta):
         r = pred @ _ry(theta).T
@@ -93,7 +96,7 @@ def test_constant_offset_on_one_keypoint_by_hand():
     true = _sequence(seed=4)
     theta, shift = -1.1, np.array([300.0, 0.0, 200.0])
     pred = true.copy()
-    pred[:, M._KP["left_wrist"], 1] += 60.0  # 60 mm up on one of 15 keypoints: 4 mm on average
+    pred[:, KP["left_wrist"], 1] += 60.0  # 60 mm up on one of 15 keypoints: 4 mm on average
     pred = pred @ _ry(theta).T + shift
     assert M.mpjpe(pred, true) == pytest.approx(4.0, abs=1e-8)
     assert M.mpjpe_root_relative(pred, true) == pytest.approx(4.0, abs=1e-8)
@@ -138,7 +141,7 @@ def test_procrustes_is_optimal_against_explicit_minimisation():
     for f in range(3):
         p, q = pred[f], true[f]
 
-        def cost(x):
+        def cost(x, p=p, q=q):
             R = Rotation.from_rotvec(x[:3]).as_matrix()
             return float(((math.exp(x[3]) * p @ R.T + x[4:] - q) ** 2).sum())
 
@@ -174,12 +177,12 @@ def _feet_sequence(v: float, F: int = 40) -> np.ndarray:
     """Left foot on the floor sliding along +X at ``v`` mm/frame for frames 0-19, then lifted to 300 mm
     (and moving fast); the right leg raised throughout."""
     pts = np.repeat(STAND[None], F, axis=0)
-    la, ra = M._KP["left_ankle"], M._KP["right_ankle"]
+    la, ra = KP["left_ankle"], KP["right_ankle"]
     pts[:, la, 0] += v * np.arange(F)
     pts[20:, la, 1] = 300.0
     pts[20:, la, 0] += 40.0 * np.arange(F - 20)
     pts[:, ra, 1] = 400.0
-    pts[:, M._KP["right_knee"], 1] = 650.0
+    pts[:, KP["right_knee"], 1] = 650.0
     return pts
 
 

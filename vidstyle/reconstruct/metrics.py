@@ -406,7 +406,7 @@ def summarise(pred: np.ndarray, true: np.ndarray, fps: float, up: int = 1) -> di
         return float(s[n].mean()) if n.any() else None
 
     return {
-        "frames": int(len(p)),
+        "frames": len(p),
         "valid_frames": int(ok.sum()),
         "excluded_frames": int((~ok).sum()),
         "mpjpe_mm": _num(_mean_error(aligned, t, ok)),
