@@ -1,0 +1,532 @@
+"""Whole video to 3D motion (Tautges 2012, chapter 3, with the performer's 2D keypoints as the control
+signal): :class:`Reconstructor`.
+
+For every video frame ``t`` with a pose (an :class:`Observation`: 15 keypoints, their confidences, and
+the camera's azimuth about the performer when the pose stage estimated it):
+
+1. **kNN** (:meth:`Reconstructor.neighbours`): the frame's bone-direction features
+   (:func:`vidstyle.augmg.projection.angle_features`) against the library projected at the views
+   nearest the frame's azimuth (``spread`` neighbouring views either side; every view when the azimuth
+   is unknown or ``use_azimuth`` is off): the ``k`` nearest indexed library frames over those views,
+   each at its best view (the kd-trees of :class:`vidstyle.augmg.index.PoseIndex`, AugMG's matcher).
+2. **Temporal coherence** (``method="olng"``): the online lazy neighbourhood graph over a window of
+   ``window_s`` seconds (:func:`.olng.olng_costs`); each node's cost becomes the cost of the best
+   coherent path ending there. ``method="nn"`` skips this (per-frame nearest neighbours: the baseline).
+3. **Blend** (Tautges eq. 3.3): the ``n_blend`` nodes of least cost, weighted
+   ``w_i = (max C - c_i) / sum_j (max C - c_j)``; the pose is the weighted mean of their local joint
+   rotations (quaternions aligned to the best node's hemisphere, normalised), the root's facing-relative
+   rotation and height likewise, and the azimuth the weighted circular mean of their views.
+4. **Viewpoint refinement**: the projected views come in steps of ``360 / n_views`` degrees; the
+   azimuth is refined to the one (within half a step either way of the blended one, 1-degree grid) whose
+   orthographic projection of the blended pose fits the observed keypoints best after a
+   confidence-weighted scale and translation fit.
+5. **Time**: frames without a pose are bridged from their neighbours (quaternions interpolated
+   linearly between the nearest frames with a pose, then normalised; before the first and after the
+   last, held), and rotations, azimuths and heights are smoothed with a Gaussian of ``smooth_frames``
+   frames (quaternions kept in one hemisphere over time first).
+6. **Camera and root path** (:mod:`.camera`): a static pinhole camera at the origin, pitched down by
+   ``elevation_deg`` (default: the library's projection elevation) with intrinsics from ``focal_px``
+   (else :func:`.camera.default_intrinsics`). The world has +Y up and the camera looking along +Z
+   (horizontally); the character faces ``pi - azimuth`` (radians about +Y, 0 = +Z). The root's
+   position in the camera frame is the translation that best reprojects the posed keypoints onto the
+   observed ones (:func:`.camera.fit_translations`), smoothed over ``root_smooth_frames``; its height is
+   the blended library height (the camera's distance to the performer is the least certain quantity,
+   so the height, which the library knows well, does not come from it).
+7. **Foot contacts**: a foot is planted where the weighted vote of the blended nodes' contacts
+   (:attr:`.library.ReconstructionLibrary.contacts_`) is at least a half. With ``foot_lock``, the root
+   is moved horizontally so a planted foot stays where it was planted (both planted: the mean of the
+   two corrections), and the accumulated correction relaxes back to the camera's root path with a time
+   constant of ``relax_s`` seconds (so a long take does not drift away from what the camera saw).
+
+The result (:class:`Reconstruction`) is a :class:`vidstyle.mocap.motion.Motion` on the library's skeleton
+at the video's frame rate (library length units), with per-frame keypoints, labels from the matched library
+frames, and the chosen neighbours for inspection.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+from .library import ReconstructionLibrary
+
+log = logging.getLogger(__name__)
+
+#: a frame is observed when at least this many keypoints have a finite position and a score above MIN_SCORE
+MIN_KEYPOINTS = 8
+MIN_SCORE = 0.2
+METHODS = ("olng", "nn")
+
+
+@dataclass
+class Observation:
+    """A video's 2D poses: ``xy`` (T, 15, 2) pixels (x = column, y = row), NaN where unknown; ``scores``
+    (T, 15) confidences in [0, 1]; ``azimuth`` (T,) degrees of the camera about the performer (0 = the
+    performer faces the camera, +90 = the camera at their left), NaN where unknown; ``fps``; ``size``
+    (width, height) in pixels."""
+
+    xy: np.ndarray
+    scores: np.ndarray
+    azimuth: np.ndarray
+    fps: float
+    size: tuple[int, int]
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        self.xy = np.asarray(self.xy, dtype=np.float64)
+        T = len(self.xy)
+        if self.xy.ndim != 3 or self.xy.shape[1:] != (15, 2):
+            raise ValueError(f"xy must be (T, 15, 2), got {self.xy.shape}")
+        self.scores = np.nan_to_num(np.asarray(self.scores, dtype=np.float64), nan=0.0)
+        self.azimuth = np.asarray(self.azimuth, dtype=np.float64)
+        if self.scores.shape != (T, 15) or self.azimuth.shape != (T,):
+            raise ValueError(f"scores (T, 15) and azimuth (T,) must match xy's {T} frames, got "
+                             f"{self.scores.shape} and {self.azimuth.shape}")
+        if not (self.fps > 0 and math.isfinite(self.fps)):
+            raise ValueError(f"fps must be a finite number > 0, got {self.fps}")
+        self.scores = np.where(np.all(np.isfinite(self.xy), axis=-1), np.clip(self.scores, 0.0, 1.0), 0.0)
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.xy)
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(T,) frames with enough confident keypoints to match."""
+        return (self.scores > MIN_SCORE).sum(axis=1) >= MIN_KEYPOINTS
+
+    @classmethod
+    def from_poses(cls, poses, fps: float, size: tuple[int, int], n_frames: int | None = None) -> Observation:
+        """From a :class:`vidstyle.formats.poses.Poses` whose frames are decoded frames at ``fps`` (frames
+        absent from the file or without a pose are unknown)."""
+        last = max((f.frame for f in poses.frames), default=-1)
+        T = int(n_frames) if n_frames is not None else last + 1
+        xy = np.full((T, 15, 2), np.nan)
+        scores = np.zeros((T, 15))
+        az = np.full(T, np.nan)
+        for f in poses.frames:
+            if not f.found or f.frame >= T:
+                continue
+            xy[f.frame] = f.xy
+            scores[f.frame] = f.scores
+            if f.azimuth is not None:
+                az[f.frame] = float(f.azimuth)
+            else:
+                try:
+                    from ..render.camera import parse_view
+
+                    az[f.frame] = parse_view(str(f.viewpoint))
+                except ValueError:
+                    pass
+        return cls(xy, scores, az, float(fps), (int(size[0]), int(size[1])), str(poses.video))
+
+
+@dataclass
+class Reconstruction:
+    """What :meth:`Reconstructor.reconstruct` found (module docstring): ``motion`` (library skeleton,
+    world +Y up, the camera at the origin looking along +Z), ``points`` (T, 15, 3) its keypoints,
+    ``observed`` (T,) frames that had a pose, ``azimuth`` (T,) degrees, ``neighbours`` / ``weights``
+    (T, n_blend) indexed library frames and their blend weights (-1 / 0 where unused), ``labels`` (T,),
+    ``contacts`` (T, 2) planted left / right foot, ``K`` the camera intrinsics, ``elevation_deg``."""
+
+    motion: object
+    points: np.ndarray
+    observed: np.ndarray
+    azimuth: np.ndarray
+    neighbours: np.ndarray
+    weights: np.ndarray
+    labels: np.ndarray
+    contacts: np.ndarray
+    K: np.ndarray
+    elevation_deg: float
+    params: dict = field(default_factory=dict)
+
+
+def _gaussian(x: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian smoothing along axis 0 (edges: nearest)."""
+    if sigma <= 0 or len(x) < 2:
+        return x
+    from scipy.ndimage import gaussian_filter1d
+
+    return gaussian_filter1d(x, sigma, axis=0, mode="nearest")
+
+
+def _fill_gaps(x: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """``x`` (T, ...) with rows where ``ok`` is false linearly interpolated from the nearest good rows
+    (held before the first and after the last)."""
+    if ok.all() or not ok.any():
+        return x
+    t = np.arange(len(x))
+    good = np.flatnonzero(ok)
+    flat = x.reshape(len(x), -1)
+    out = np.empty_like(flat)
+    for c in range(flat.shape[1]):
+        out[:, c] = np.interp(t, good, flat[good, c])
+    return out.reshape(x.shape)
+
+
+def _hemisphere_continuous(q: np.ndarray) -> np.ndarray:
+    """Quaternions (T, J, 4) with signs flipped so consecutive frames are in one hemisphere."""
+    q = q.copy()
+    for t in range(1, len(q)):
+        flip = np.sum(q[t] * q[t - 1], axis=-1) < 0
+        q[t, flip] *= -1
+    return q
+
+
+def _similarity_residual(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Weighted least-squares fit ``obs ~ s * model + c`` per leading index: the residual over the
+    observation's weighted spread. ``model`` (..., 15, 2), ``obs`` (..., 15, 2), ``w`` (..., 15)."""
+    sw = np.maximum(w.sum(-1, keepdims=True), 1e-12)
+    mm = (w[..., None] * model).sum(-2, keepdims=True) / sw[..., None]
+    om = (w[..., None] * obs).sum(-2, keepdims=True) / sw[..., None]
+    dm, do = model - mm, obs - om
+    s = (w * (dm * do).sum(-1)).sum(-1) / np.maximum((w * (dm * dm).sum(-1)).sum(-1), 1e-12)
+    r = do - s[..., None, None] * dm
+    return (w * (r * r).sum(-1)).sum(-1) / np.maximum((w * (do * do).sum(-1)).sum(-1), 1e-12)
+
+
+def _yaw_rotation(theta: np.ndarray) -> np.ndarray:
+    """(T, 3, 3) rotations about +Y by ``theta`` (radians): +Z turns towards +X."""
+    c, s = np.cos(theta), np.sin(theta)
+    R = np.zeros(theta.shape + (3, 3))
+    R[..., 0, 0], R[..., 0, 2] = c, s
+    R[..., 1, 1] = 1.0
+    R[..., 2, 0], R[..., 2, 2] = -s, c
+    return R
+
+
+def camera_rotation(elevation_deg: float) -> np.ndarray:
+    """(3, 3) world-to-camera rotation of the reconstruction's camera: at the origin, looking along +Z
+    pitched down by ``elevation_deg`` (rows: image right, image down, viewing direction)."""
+    from ..render.camera import look_at_rotation
+
+    e = math.radians(elevation_deg)
+    return look_at_rotation(np.zeros(3), np.array([0.0, -math.sin(e), math.cos(e)]))
+
+
+class Reconstructor:
+    """Video 2D poses -> 3D motion by coherent search of a mocap library (module docstring).
+
+    Parameters: ``k`` neighbours per frame; ``window_s`` the OLNG window (Tautges: about half a second);
+    ``n_blend`` nodes blended; ``method`` ``"olng"`` or ``"nn"``; ``use_azimuth`` / ``spread`` the views
+    searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
+    camera's root path; ``foot_lock`` and ``relax_s``; ``focal_px`` (None: the default intrinsics);
+    ``elevation_deg`` of the camera (None: the library's); ``n_views``, ``library_elevation_deg`` and
+    ``target_fps`` of the library index (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
+
+    def __init__(self, k: int = 32, window_s: float = 0.5, n_blend: int = 8, method: str = "olng",
+                 use_azimuth: bool = True, spread: int = 1, smooth_frames: float = 1.0,
+                 root_smooth_frames: float = 3.0, foot_lock: bool = True, relax_s: float = 2.0,
+                 focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
+                 library_elevation_deg: float = 10.0, target_fps: float = 20.0, jobs: int = 1,
+                 scheduler: str | None = None) -> None:
+        self.k = k
+        self.window_s = window_s
+        self.n_blend = n_blend
+        self.method = method
+        self.use_azimuth = use_azimuth
+        self.spread = spread
+        self.smooth_frames = smooth_frames
+        self.root_smooth_frames = root_smooth_frames
+        self.foot_lock = foot_lock
+        self.relax_s = relax_s
+        self.focal_px = focal_px
+        self.elevation_deg = elevation_deg
+        self.n_views = n_views
+        self.library_elevation_deg = library_elevation_deg
+        self.target_fps = target_fps
+        self.jobs = jobs
+        self.scheduler = scheduler
+
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in (
+            "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
+            "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps")}
+
+    def set_params(self, **params) -> Reconstructor:
+        for k, v in params.items():
+            if k not in self.get_params() and k not in ("jobs", "scheduler"):
+                raise ValueError(f"unknown parameter {k!r}")
+            setattr(self, k, v)
+        return self
+
+    def check_params(self) -> None:
+        """:class:`~vidstyle.errors.ParameterError` for a value a parameter cannot take (before any work)."""
+        if not 1 <= int(self.k) <= 1000:
+            raise ParameterError("k", f"must be in 1..1000, got {self.k}")
+        if not 1 <= int(self.n_blend) <= int(self.k):
+            raise ParameterError("n_blend", f"must be in 1..k ({self.k}), got {self.n_blend}")
+        if self.method not in METHODS:
+            raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for name in ("window_s", "smooth_frames", "root_smooth_frames", "relax_s"):
+            v = float(getattr(self, name))
+            if not (v >= 0 and math.isfinite(v)):
+                raise ParameterError(name, f"must be a finite number >= 0, got {v}")
+        if not 0 <= int(self.spread) <= self.n_views // 2:
+            raise ParameterError("spread", f"must be in 0..{self.n_views // 2}, got {self.spread}")
+        if self.focal_px is not None and not (self.focal_px > 0 and math.isfinite(self.focal_px)):
+            raise ParameterError("focal_px", f"must be a finite number > 0, got {self.focal_px}")
+        if self.elevation_deg is not None and not -80 <= self.elevation_deg <= 80:
+            raise ParameterError("elevation_deg", f"must be in -80..80 degrees, got {self.elevation_deg}")
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, clips, skeleton=None) -> Reconstructor:
+        """Index the library clips (BVH files or directories); ``skeleton``: the output skeleton."""
+        self.check_params()
+        self.library_ = ReconstructionLibrary(self.n_views, self.library_elevation_deg, self.target_fps,
+                                              self.jobs, self.scheduler).fit(clips, skeleton=skeleton)
+        return self
+
+    def fit_library(self, library: ReconstructionLibrary) -> Reconstructor:
+        """Use an already fitted library (several reconstructions share one index)."""
+        self.check_params()
+        self.library_ = library
+        return self
+
+    # ------------------------------------------------------------------ steps
+    def neighbours(self, obs: Observation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Step 1: ``(ids, costs, views)`` each (T, k): indexed library frames, feature distances and view
+        numbers, best first; -1 / inf / -1 where a frame has fewer candidates (no pose: all)."""
+        from ..augmg.projection import angle_features
+
+        index = self.library_.index_
+        T, V = obs.n_frames, index.n_views
+        k = min(int(self.k), index.n_frames)
+        valid = obs.valid
+        feats = angle_features(np.where(np.isfinite(obs.xy), obs.xy, np.nan)).astype(np.float32)
+        feats = np.nan_to_num(feats)
+        want = np.zeros((T, V), dtype=bool)
+        known = np.isfinite(obs.azimuth) & bool(self.use_azimuth)
+        want[~known] = True
+        if known.any():
+            step = 360.0 / V
+            near = np.round((obs.azimuth[known] % 360.0) / step).astype(int)
+            rows = np.flatnonzero(known)
+            for d in range(-int(self.spread), int(self.spread) + 1):
+                want[rows, (near + d) % V] = True
+        want &= valid[:, None]
+        ids = np.full((T, V * k), -1, dtype=np.int64)
+        cost = np.full((T, V * k), np.inf)
+        view = np.full((T, V * k), -1, dtype=np.int64)
+        for v in range(V):
+            rows = np.flatnonzero(want[:, v])
+            if rows.size == 0:
+                continue
+            d, i = index.trees_[v].query(feats[rows], k=k)
+            ids[rows, v * k:(v + 1) * k] = np.asarray(i).reshape(len(rows), k)
+            cost[rows, v * k:(v + 1) * k] = np.asarray(d).reshape(len(rows), k)
+            view[rows, v * k:(v + 1) * k] = v
+        # each library frame once per video frame, at its best view
+        order = np.argsort(cost, axis=1, kind="stable")
+        ids, cost, view = (np.take_along_axis(a, order, 1) for a in (ids, cost, view))
+        key = np.where(ids >= 0, np.arange(T)[:, None] * (index.n_frames + 1) + ids, -1).ravel()
+        _, first = np.unique(key, return_index=True)
+        keep = np.zeros(key.size, dtype=bool)
+        keep[first] = True
+        keep &= key >= 0
+        cost = np.where(keep.reshape(T, -1), cost, np.inf)
+        order = np.argsort(cost, axis=1, kind="stable")[:, :k]
+        ids, cost, view = (np.take_along_axis(a, order, 1) for a in (ids, cost, view))
+        bad = ~np.isfinite(cost)
+        ids[bad], view[bad] = -1, -1
+        return ids, cost, view
+
+    def coherent_costs(self, ids: np.ndarray, cost: np.ndarray, fps: float) -> np.ndarray:
+        """Step 2: (T, k) cost of every node (the OLNG best-path cost; the plain cost for ``method="nn"``),
+        inf where there is no node."""
+        from .olng import olng_costs
+
+        if self.method == "nn":
+            return cost.copy()
+        T, k = ids.shape
+        index = self.library_.index_
+        node = ids >= 0
+        # stand-ins for missing nodes: a clip of their own (never continued), the row's worst cost
+        row_max = np.where(node, cost, -np.inf).max(axis=1)
+        row_max = np.where(np.isfinite(row_max), row_max, 0.0)
+        fake_clip = -1 - (np.arange(T)[:, None] * k + np.arange(k)[None, :])
+        clip = np.where(node, index.clip_[np.maximum(ids, 0)], fake_clip)
+        c = np.where(node, cost, row_max[:, None])
+        window = max(2, int(round(float(self.window_s) * fps)))
+        total, _ = olng_costs(np.where(node, ids, 0), clip, c, window)
+        return np.where(node, total, np.inf)
+
+    def blend_weights(self, ids: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step 3: ``(chosen, weights)`` each (T, n_blend): the nodes of least cost and Tautges' weights
+        (eq. 3.3; all equal when their costs are); -1 / 0 where a frame has fewer nodes."""
+        n = min(int(self.n_blend), ids.shape[1])
+        order = np.argsort(total, axis=1, kind="stable")[:, :n]
+        chosen = np.take_along_axis(ids, order, 1)
+        c = np.take_along_axis(total, order, 1)
+        ok = np.isfinite(c) & (chosen >= 0)
+        cmax = np.where(ok, c, -np.inf).max(axis=1, keepdims=True)
+        w = np.where(ok, cmax - c, 0.0)
+        s = w.sum(axis=1, keepdims=True)
+        flat = (s <= 1e-12) & ok.any(axis=1, keepdims=True)
+        w = np.where(flat, ok.astype(float), w)
+        s = w.sum(axis=1, keepdims=True)
+        w = np.where(s > 0, w / np.where(s > 0, s, 1.0), 0.0)
+        chosen = np.where(ok, chosen, -1)
+        return chosen, w
+
+    # ------------------------------------------------------------------ reconstruct
+    def reconstruct(self, obs: Observation) -> Reconstruction:
+        """The 3D motion of ``obs`` (module docstring)."""
+        from ..mocap.motion import Motion
+        from ..mocap.placement import yaw_quat
+        from ..mocap.quat import qmul
+        from . import camera as cam
+
+        if not hasattr(self, "library_"):
+            raise RuntimeError("Reconstructor: fit() first")
+        self.check_params()
+        lib = self.library_
+        index = lib.index_
+        T = obs.n_frames
+        observed = obs.valid
+        if not observed.any():
+            raise InputError(f"{obs.source or 'poses'}: no frame has a pose to reconstruct from")
+        ids, cost, view = self.neighbours(obs)
+        total = self.coherent_costs(ids, cost, obs.fps)
+        chosen, w = self.blend_weights(ids, total)
+        # node views, aligned with the chosen nodes
+        pos_in_row = np.argsort(total, axis=1, kind="stable")[:, :chosen.shape[1]]
+        node_view = np.take_along_axis(view, pos_in_row, 1)
+        use = chosen >= 0
+        safe = np.maximum(chosen, 0)
+
+        # blended pose (local rotations, root facing-relative), root height and azimuth
+        q = lib.rotations_[safe].astype(np.float64)  # (T, n, J, 4)
+        sign = np.where(np.sum(q * q[:, :1], axis=-1, keepdims=True) < 0, -1.0, 1.0)
+        qb = np.sum(w[:, :, None, None] * sign * q, axis=1)
+        norm = np.linalg.norm(qb, axis=-1, keepdims=True)
+        qb = np.where(norm > 1e-9, qb / np.maximum(norm, 1e-12), np.array([0.0, 0.0, 0.0, 1.0]))
+        height = np.sum(w * lib.root_height_[safe], axis=1)
+        az_nodes = np.radians(index.views_[np.maximum(node_view, 0)])
+        az = np.degrees(np.arctan2(np.sum(w * np.sin(az_nodes), 1), np.sum(w * np.cos(az_nodes), 1)))
+        contact_vote = np.sum(w[:, :, None] * lib.contacts_[safe], axis=1)
+        labels = self._vote_labels(chosen, w)
+
+        # bridge frames without a pose, then smooth in time
+        ok = observed & use.any(axis=1)
+        qb = _hemisphere_continuous(_fill_gaps(_hemisphere_continuous(qb), ok))
+        qb = _gaussian(qb, float(self.smooth_frames))
+        qb /= np.linalg.norm(qb, axis=-1, keepdims=True)
+        height = _gaussian(_fill_gaps(height, ok), float(self.smooth_frames))
+        contact_vote = _fill_gaps(contact_vote, ok)
+
+        skeleton = lib.skeleton_
+        pose = Motion(skeleton, qb, fps=obs.fps, root_positions=np.column_stack([np.zeros(T), height, np.zeros(T)]))
+        local_pts = self._keypoints(pose)  # (T, 15, 3) facing +Z (up to the blended root's residual yaw)
+
+        elevation = float(index.elevation_deg if self.elevation_deg is None else self.elevation_deg)
+        az = self._refine_azimuth(local_pts, obs, az, ok, elevation)
+        az = np.degrees(np.unwrap(np.radians(_fill_gaps(np.degrees(np.unwrap(np.radians(az))), ok))))
+        az = _gaussian(az, float(self.smooth_frames))
+
+        # world orientation: the character faces pi - azimuth
+        facing = math.pi - np.radians(az)
+        root_q = qmul(yaw_quat(facing), qb[:, 0])
+        qw = qb.copy()
+        qw[:, 0] = root_q
+        posed = Motion(skeleton, qw, fps=obs.fps, root_positions=np.zeros((T, 3)))
+        rel = self._keypoints(posed)  # (T, 15, 3) world axes, relative to the root joint
+        Rc = camera_rotation(elevation)
+        W, H = obs.size
+        K = cam.default_intrinsics(W, H) if self.focal_px is None else np.array(
+            [[self.focal_px, 0, W / 2.0], [0, self.focal_px, H / 2.0], [0, 0, 1.0]])
+        rel_cam = rel @ Rc.T
+        wts = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0)
+        t_cam = cam.fit_translations(rel_cam, obs.xy, wts, K)  # (T, 3) root in camera coordinates
+        t_ok = ok & np.all(np.isfinite(t_cam), axis=1)
+        if not t_ok.any():
+            raise InputError(f"{obs.source or 'poses'}: no frame's keypoints fix the camera")
+        root = _fill_gaps(np.where(t_ok[:, None], t_cam, 0.0), t_ok) @ Rc  # camera -> world
+        root = _gaussian(root, float(self.root_smooth_frames))
+        root[:, 1] = height
+        contacts = contact_vote >= 0.5
+        if self.foot_lock:
+            root = self._lock_feet(root, rel, contacts, obs.fps)
+        motion = Motion(skeleton, qw, fps=obs.fps, root_positions=root)
+        points = rel + root[:, None, :]
+        return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation,
+                              {**self.get_params(), "stride": int(lib.stride_), "library_frames": lib.n_frames})
+
+    # ------------------------------------------------------------------ helpers
+    def _keypoints(self, motion) -> np.ndarray:
+        from ..mocap.keypoints import keypoint_positions
+
+        return keypoint_positions(motion)
+
+    def _vote_labels(self, chosen: np.ndarray, w: np.ndarray) -> np.ndarray:
+        lab = self.library_.labels_[np.maximum(chosen, 0)]
+        out = np.full(len(chosen), "", dtype=object)
+        for t in range(len(chosen)):
+            score: dict[str, float] = {}
+            for name, wt, c in zip(lab[t], w[t], chosen[t]):
+                if c >= 0 and name:
+                    score[name] = score.get(name, 0.0) + float(wt)
+            if score:
+                out[t] = max(score, key=score.get)
+        return out
+
+    def _refine_azimuth(self, pts: np.ndarray, obs: Observation, az: np.ndarray, ok: np.ndarray,
+                        elevation: float) -> np.ndarray:
+        """Step 4: per observed frame the azimuth (1-degree grid within half a view step of ``az``) whose
+        orthographic projection of the facing-normalised pose ``pts`` fits the keypoints best."""
+        from ..augmg.projection import facing_normalised, facing_of_keypoints, view_rotation
+
+        half = 180.0 / self.library_.index_.n_views
+        grid = np.arange(-math.floor(half), math.floor(half) + 1, 1.0)
+        norm = facing_normalised(pts, facing_of_keypoints(pts))
+        out = az.copy()
+        rows = np.flatnonzero(ok)
+        if rows.size == 0 or grid.size < 2:
+            return out
+        wts = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0)
+        best_res = np.full(rows.size, np.inf)
+        best = az[rows].copy()
+        for g in grid:
+            cand = az[rows] + g
+            R = np.stack([view_rotation(float(a), elevation) for a in cand])  # (n, 3, 3)
+            proj = np.einsum("nij,nkj->nki", R, norm[rows])[..., :2]
+            res = _similarity_residual(proj, obs.xy[rows], wts[rows])
+            better = res < best_res
+            best_res = np.where(better, res, best_res)
+            best = np.where(better, cand, best)
+        out[rows] = best
+        return out
+
+    def _lock_feet(self, root: np.ndarray, rel: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
+        """Step 7: the root moved horizontally so planted ankles stay put; the difference to the camera's
+        root path ``root`` is then low-passed (Gaussian, sigma ``relax_s`` seconds) and added back, so the
+        path follows the camera in the long run and the feet in the short."""
+        from ..augmg.keypoints import KP
+
+        ankles = rel[:, [KP["left_ankle"], KP["right_ankle"]]][:, :, [0, 2]]  # (T, 2, 2) horizontal
+        locked = root.copy()
+        offset = np.zeros(2)
+        anchor = np.full((2, 2), np.nan)
+        for t in range(len(root)):
+            base = root[t, [0, 2]]
+            corr = []
+            for f in range(2):
+                if not contacts[t, f]:
+                    anchor[f] = np.nan
+                    continue
+                here = base + offset + ankles[t, f]
+                if np.isnan(anchor[f, 0]):
+                    anchor[f] = here
+                corr.append(anchor[f] - here)
+            if corr:
+                offset = offset + np.mean(corr, axis=0)
+            locked[t, [0, 2]] = base + offset
+        drift = _gaussian(root - locked, float(self.relax_s) * fps)
+        out = locked + drift
+        out[:, 1] = root[:, 1]
+        return out

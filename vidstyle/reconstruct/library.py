@@ -1,0 +1,153 @@
+"""The mocap library a reconstruction searches: every clip on one skeleton, indexed for 2D kNN.
+
+:class:`ReconstructionLibrary` (scikit-learn style: parameters in ``__init__``, :meth:`fit` learns) reads
+mocap clips, puts them on one reference skeleton (:func:`vidstyle.mocap.retarget.retarget`: rotations kept,
+root path scaled by the leg-length ratio; the reference is the first clip's skeleton unless one is given),
+and keeps, for every ``stride``-th frame (an *indexed frame*, the unit of the kNN search):
+
+- ``rotations_`` (N, J, 4) float32: the local joint rotations (x, y, z, w), the root's with its *yaw
+  removed* (rotated by minus the character's facing, so every indexed pose faces +Z),
+- ``root_height_`` (N,): the root joint's height above the floor (Y; library units),
+- ``points_`` (N, 15, 3) float32: the body keypoints facing-normalised (:func:`..augmg.projection.
+  facing_normalised`: facing +Z, pelvis above the origin), what a reconstruction is compared with,
+- ``contacts_`` (N, 2) bool: left / right ankle planted (:func:`.metrics.foot_contacts` on the clip),
+- ``labels_`` (N,) str: the clip's per-frame action label where the clip has a ``.labels.json``
+  sidecar (:mod:`vidstyle.formats.labels`), else ``""``,
+
+aligned with the 2D index :attr:`index_` (:class:`vidstyle.augmg.index.PoseIndex`, the one matcher AugMG
+uses too: every indexed frame projected at ``n_views`` azimuths, one kd-tree per azimuth).
+
+The stride is chosen so the indexed frames come at about the video's rate (``target_fps``): the lazy
+neighbourhood graph's steps (:mod:`.olng`) assume library and video advance at rates within a factor 2.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+
+log = logging.getLogger(__name__)
+
+
+def _clip_files(paths: Sequence[str | os.PathLike]) -> list[Path]:
+    files: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            files += sorted(p.rglob("*.bvh"))
+        elif p.is_file():
+            files.append(p)
+        else:
+            raise InputError(f"{p}: no such clip file or directory")
+    if not files:
+        raise InputError("--library: no .bvh clips")
+    return files
+
+
+def _clip_labels(path: Path, n_frames: int, fps: float) -> np.ndarray:
+    """(F,) per-frame labels of a clip from its ``<stem>.labels.json`` sidecar; ``""`` without one."""
+    side = path.with_suffix("").with_suffix(".labels.json")
+    out = np.full(n_frames, "", dtype=object)
+    if not side.is_file():
+        return out
+    from ..formats.labels import read_labels
+
+    try:
+        labels = read_labels(side)
+    except Exception as e:  # a broken sidecar costs the labels, not the reconstruction
+        log.warning("%s: labels not used (%s)", side, e)
+        return out
+    src = np.asarray(labels.labels, dtype=object)
+    if len(src):
+        at = np.clip(np.round(np.arange(n_frames) / fps * labels.fps).astype(int), 0, len(src) - 1)
+        out[:] = src[at]
+    return out
+
+
+class ReconstructionLibrary:
+    """Library clips on one skeleton with their 2D index (module docstring). Parameters: ``n_views``
+    azimuths and ``elevation_deg`` of the projection, ``target_fps`` (the indexed frames' approximate rate),
+    ``jobs`` / ``scheduler`` for the projection."""
+
+    def __init__(self, n_views: int = 12, elevation_deg: float = 10.0, target_fps: float = 20.0, jobs: int = 1,
+                 scheduler: str | None = None) -> None:
+        self.n_views = n_views
+        self.elevation_deg = elevation_deg
+        self.target_fps = target_fps
+        self.jobs = jobs
+        self.scheduler = scheduler
+
+    def get_params(self) -> dict:
+        return {"n_views": self.n_views, "elevation_deg": self.elevation_deg, "target_fps": self.target_fps}
+
+    def fit(self, clips: Sequence[str | os.PathLike], skeleton=None) -> ReconstructionLibrary:
+        """Read BVH ``clips`` (files or directories) and index them; ``skeleton`` (a
+        :class:`vidstyle.mocap.skeleton.Skeleton`) is the output skeleton (default: the first clip's)."""
+        from ..mocap import read_bvh
+
+        files = _clip_files(clips)
+        motions = [read_bvh(f) for f in files]
+        return self.fit_motions(motions, [str(f) for f in files], skeleton=skeleton)
+
+    def fit_motions(self, motions, paths: Sequence[str], skeleton=None) -> ReconstructionLibrary:
+        """:meth:`fit` from motions already read (``paths`` name them)."""
+        from ..augmg.index import LibraryClip, PoseIndex
+        from ..augmg.projection import facing_normalised, facing_of_keypoints
+        from ..mocap.keypoints import keypoint_positions
+        from ..mocap.kinematics import forward_kinematics
+        from ..mocap.placement import yaw_quat
+        from ..mocap.quat import qmul
+        from ..mocap.retarget import retarget
+        from ..motiongraph.graph import has_tpose_first_frame
+        from .metrics import foot_contacts
+
+        if not 1 <= self.n_views <= 360:
+            raise ParameterError("n_views", f"must be in 1..360, got {self.n_views}")
+        if not (self.target_fps > 0 and np.isfinite(self.target_fps)):
+            raise ParameterError("target_fps", f"must be a finite number > 0, got {self.target_fps}")
+        if not motions:
+            raise InputError("--library: no clips")
+        reference = skeleton if skeleton is not None else motions[0].skeleton
+        fps = np.array([m.fps for m in motions])
+        self.stride_ = max(1, int(round(float(np.median(fps)) / self.target_fps)))
+        self.skeleton_ = reference
+        rots, heights, points, contacts, labels, lib_clips = [], [], [], [], [], []
+        for path, motion in zip(paths, motions):
+            m, _ = retarget(motion, reference, source=path)
+            first = 1 if has_tpose_first_frame(m) else 0
+            pos, mats = forward_kinematics(m)
+            pts = keypoint_positions(m, positions=pos, matrices=mats)
+            pts[:first] = pts[first:first + 1]  # never match a calibration T-pose
+            facing = facing_of_keypoints(pts)
+            q = m.rotations.copy()
+            q[:, 0] = qmul(yaw_quat(-facing), q[:, 0])
+            q[:first] = q[first:first + 1]
+            sel = slice(None, None, self.stride_)
+            rots.append(q[sel].astype(np.float32))
+            heights.append(m.root_positions[sel, 1].copy())
+            points.append(facing_normalised(pts, facing)[sel].astype(np.float32))
+            contacts.append(foot_contacts(pts, m.fps)[sel])
+            labels.append(_clip_labels(Path(path), m.n_frames, m.fps)[sel])
+            lib_clips.append(LibraryClip(path, pts, m.fps))
+        self.index_ = PoseIndex(n_views=self.n_views, elevation_deg=self.elevation_deg, stride=self.stride_,
+                                jobs=self.jobs, scheduler=self.scheduler).fit(lib_clips)
+        self.rotations_ = np.concatenate(rots)
+        self.root_height_ = np.concatenate(heights)
+        self.points_ = np.concatenate(points)
+        self.contacts_ = np.concatenate(contacts)
+        self.labels_ = np.concatenate(labels)
+        self.paths_ = list(paths)
+        if len(self.rotations_) != self.index_.n_frames:  # both take every stride-th frame of every clip
+            raise AssertionError("library arrays and index disagree")
+        log.info("library: %d clips, %d indexed frames (every %d-th), %d views", len(paths), len(self.rotations_),
+                 self.stride_, self.n_views)
+        return self
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.rotations_)
