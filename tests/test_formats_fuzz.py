@@ -21,6 +21,7 @@ from vidstyle.formats.labels import FrameLabels, parse_labels, read_labels, writ
 from vidstyle.formats.library import parse_library, read_library, write_library
 from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
+from vidstyle.formats.reconstruction import parse_reconstruction, read_reconstruction, write_reconstruction
 from vidstyle.formats.runrecord import parse_run_record, read_run_record, write_run_record
 from vidstyle.formats.sequence import ActionSequence, parse_sequence, read_sequence, write_sequence
 from vidstyle.formats.style import StyleRecord, parse_style, read_style, style_to_dict, write_style
@@ -53,6 +54,17 @@ def _dataset_doc() -> dict:
     return {"kind": "vidstyle.dataset", "schema_version": 2, "seed": 0, "fps": 20, "actions": ["Jab", "Hook"],
             "classes": CLASSES, "performers": [{"id": "p00", "chain": chain}, {"id": "p01", "chain": chain}],
             "videos": videos}
+
+
+def _reconstruction_doc() -> dict:
+    frames = [{"frame": i, "observed": i != 1, "azimuth_deg": 10.0 * i, "label": "Jab" if i else "",
+               "contacts": [True, i == 2],
+               "neighbours": [] if i == 1 else [{"clip": 0, "frame": 3 + i, "weight": 0.75},
+                                                {"clip": 1, "frame": 9, "weight": 0.25}]} for i in range(3)]
+    return {"kind": "vidstyle.reconstruction", "schema_version": 1, "video": "v.mp4", "poses": "v.poses.json",
+            "bvh": "v.bvh", "fps": 20.0, "size": [160, 120], "library": ["a.bvh", "b.bvh"], "params": {"k": 32},
+            "camera": {"K": [[150.0, 0.0, 79.5], [0.0, 150.0, 59.5], [0.0, 0.0, 1.0]], "elevation_deg": 10.0,
+                       "height": 20.0}, "frames": frames}
 
 
 def _walk_doc() -> dict:
@@ -116,6 +128,11 @@ METRICS = {
                                       "transition_augmg_mm": 84.7, "recall_at_1": 0.76, "recall_at_10": 1.0,
                                       "transition_reduction_ci95": [0.41, 0.58]}},
               "headline": {"augmg.transition_error_augmg": 84.7}},
+    "reconstruct": {"kind": "vidstyle.metrics.reconstruct", "schema_version": 1, "seed": 0,
+                    "runs": [{"data": "demo:p02", "source": "ps", "method": "olng", "skeleton": "library", "frames": 200,
+                              "mpjpe_mm": 120.0, "mpjpe_root_relative_mm": 98.0, "pa_mpjpe_mm": 51.0,
+                              "acceleration_error_mm_per_frame2": 12.0, "foot_skate_mm_per_frame": None}],
+                    "params": {"k": 32}, "headline": {"reconstruct": {"mpjpe_mm": 98.0}}},
     "headline": {"kind": "vidstyle.metrics.headline", "schema_version": 1, "seed": 0,
                  "recognition": {"frame_accuracy_raw": 0.5, "video_accuracy": None},
                  "style": {"transition_mae_truth": 0.05}, "motion": {"label_fidelity": 0.8}},
@@ -239,6 +256,7 @@ READERS = {
     "walk": (parse_walk_labels, write_walk_labels, read_walk_labels, _walk_doc),
     "library": (parse_library, write_library, read_library, _library_doc),
     "run_record": (parse_run_record, write_run_record, read_run_record, _run_record_doc),
+    "reconstruction": (parse_reconstruction, write_reconstruction, read_reconstruction, _reconstruction_doc),
     **{f"metrics_{k}": (parse_metrics, write_metrics, read_metrics, (lambda d=d: d)) for k, d in METRICS.items()},
 }
 

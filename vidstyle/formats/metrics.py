@@ -36,8 +36,12 @@ computed, e.g. video accuracy without single-action test videos):
 * ``vidstyle.metrics.people`` (``vidstyle evaluate people``): ``views`` a list; ``modes`` an object per
   mode (``naive``, ``tracked``) with ``identity_switches_per_100_frames`` >= 0, ``pck@0.2`` and
   ``multiview_pck@0.2`` in [0, 1] or null and ``per_view`` an object; ``params`` an object.
+* ``vidstyle.metrics.reconstruct`` (``vidstyle evaluate reconstruct``): ``runs`` a non-empty list, each
+  with ``data``, ``source``, ``method`` and ``skeleton`` strings, ``frames`` >= 0, and ``mpjpe_mm``,
+  ``mpjpe_root_relative_mm``, ``pa_mpjpe_mm``, ``acceleration_error_mm_per_frame2``,
+  ``foot_skate_mm_per_frame`` each >= 0 or null; ``params`` and ``headline`` objects.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
-  flat objects of numbers or null.
+  flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
   a string; ``recorded`` a boolean (the records directory existed); ``dvc_file`` a string or null;
   ``started`` / ``finished`` Unix seconds or null (both null, or ``finished`` >= ``started``);
@@ -74,7 +78,8 @@ POSE = "vidstyle.metrics.pose"
 MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
 PEOPLE = "vidstyle.metrics.people"
 TIMING = "vidstyle.metrics.timing"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING)
+RECONSTRUCT = "vidstyle.metrics.reconstruct"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -162,8 +167,27 @@ def _motion(f: Fields) -> None:
 def _headline(f: Fields) -> None:
     for key in ("recognition", "style", "motion"):
         _numbers_or_null(f, key)
-    if f.obj.get("augmg") is not None:
-        _numbers_or_null(f, "augmg")
+    for key in ("augmg", "reconstruct"):
+        if f.obj.get(key) is not None:
+            _numbers_or_null(f, key)
+
+
+#: the figures of every run of a reconstruct metrics file (>= 0 or null)
+RECONSTRUCT_FIGURES = ("mpjpe_mm", "mpjpe_root_relative_mm", "pa_mpjpe_mm", "acceleration_error_mm_per_frame2",
+                       "foot_skate_mm_per_frame")
+
+
+def _reconstruct(f: Fields) -> None:
+    runs = f.list("runs", min_len=1)
+    for i, raw in enumerate(runs):
+        r = Fields(raw, f.path, f"runs[{i}]")
+        for key in ("data", "source", "method", "skeleton"):
+            r.str(key, nonempty=True)
+        r.int("frames", min=0)
+        for key in RECONSTRUCT_FIGURES:
+            _opt_number(r, key, 0, None)
+    f.sub("params")
+    f.sub("headline")
 
 
 def _augmg(f: Fields) -> None:
@@ -316,7 +340,8 @@ def _timing(f: Fields) -> None:
 
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
-           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing}
+           STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
+           RECONSTRUCT: _reconstruct}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -358,6 +383,7 @@ __all__ = [
     "MULTIVIEW_POSE",
     "PEOPLE",
     "POSE",
+    "RECONSTRUCT",
     "RECOGNITION",
     "STRIKES",
     "STYLE",

@@ -27,7 +27,9 @@ the camera's azimuth about the performer when the pose stage estimated it):
 6. **Camera and root path** (:mod:`.camera`): a static pinhole camera at the origin, pitched down by
    ``elevation_deg`` (default: the library's projection elevation) with intrinsics from ``focal_px``
    (else :func:`.camera.default_intrinsics`). The world has +Y up and the camera looking along +Z
-   (horizontally); the character faces ``pi - azimuth`` (radians about +Y, 0 = +Z). The root's
+   (pitched down by the elevation); the character faces ``pi - azimuth`` (radians about +Y, 0 = +Z),
+   turned by its angle off the optical axis once its place is known (the azimuth is about the line of
+   sight to the performer). The root's
    position in the camera frame is the translation that best reprojects the posed keypoints onto the
    observed ones (:func:`.camera.fit_translations`), smoothed over ``root_smooth_frames``; its height is
    the blended library height (the camera's distance to the performer is the least certain quantity,
@@ -35,8 +37,8 @@ the camera's azimuth about the performer when the pose stage estimated it):
 7. **Foot contacts**: a foot is planted where the weighted vote of the blended nodes' contacts
    (:attr:`.library.ReconstructionLibrary.contacts_`) is at least a half. With ``foot_lock``, the root
    is moved horizontally so a planted foot stays where it was planted (both planted: the mean of the
-   two corrections), and the accumulated correction relaxes back to the camera's root path with a time
-   constant of ``relax_s`` seconds (so a long take does not drift away from what the camera saw).
+   two corrections); the difference between that path and the camera's is low-passed (Gaussian, sigma
+   ``relax_s`` seconds) and added back, so a long take does not drift away from what the camera saw.
 
 The result (:class:`Reconstruction`) is a :class:`vidstyle.mocap.motion.Motion` on the library's skeleton
 at the video's frame rate (library length units), with per-frame keypoints, labels from the matched library
@@ -131,7 +133,8 @@ class Reconstruction:
     world +Y up, the camera at the origin looking along +Z), ``points`` (T, 15, 3) its keypoints,
     ``observed`` (T,) frames that had a pose, ``azimuth`` (T,) degrees, ``neighbours`` / ``weights``
     (T, n_blend) indexed library frames and their blend weights (-1 / 0 where unused), ``labels`` (T,),
-    ``contacts`` (T, 2) planted left / right foot, ``K`` the camera intrinsics, ``elevation_deg``."""
+    ``contacts`` (T, 2) planted left / right foot, ``K`` the camera intrinsics, ``elevation_deg`` its pitch
+    and ``camera_height`` its height above the floor (the camera is at ``(0, camera_height, 0)``)."""
 
     motion: object
     points: np.ndarray
@@ -143,7 +146,12 @@ class Reconstruction:
     contacts: np.ndarray
     K: np.ndarray
     elevation_deg: float
+    camera_height: float
     params: dict = field(default_factory=dict)
+
+    def camera_points(self) -> np.ndarray:
+        """(T, 15, 3) the keypoints in camera coordinates (x right, y down, z forward)."""
+        return (self.points - np.array([0.0, self.camera_height, 0.0])) @ camera_rotation(self.elevation_deg).T
 
 
 def _gaussian(x: np.ndarray, sigma: float) -> np.ndarray:
@@ -430,31 +438,34 @@ class Reconstructor:
         az = _gaussian(az, float(self.smooth_frames))
 
         # world orientation: the character faces pi - azimuth
-        facing = math.pi - np.radians(az)
-        root_q = qmul(yaw_quat(facing), qb[:, 0])
-        qw = qb.copy()
-        qw[:, 0] = root_q
-        posed = Motion(skeleton, qw, fps=obs.fps, root_positions=np.zeros((T, 3)))
-        rel = self._keypoints(posed)  # (T, 15, 3) world axes, relative to the root joint
         Rc = camera_rotation(elevation)
         W, H = obs.size
-        K = cam.default_intrinsics(W, H) if self.focal_px is None else np.array(
-            [[self.focal_px, 0, W / 2.0], [0, self.focal_px, H / 2.0], [0, 0, 1.0]])
-        rel_cam = rel @ Rc.T
+        K = cam.default_intrinsics(W, H) if self.focal_px is None else cam.intrinsics_for_focal(W, H, self.focal_px)
         wts = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0)
-        t_cam = cam.fit_translations(rel_cam, obs.xy, wts, K)  # (T, 3) root in camera coordinates
-        t_ok = ok & np.all(np.isfinite(t_cam), axis=1)
-        if not t_ok.any():
-            raise InputError(f"{obs.source or 'poses'}: no frame's keypoints fix the camera")
-        root = _fill_gaps(np.where(t_ok[:, None], t_cam, 0.0), t_ok) @ Rc  # camera -> world
-        root = _gaussian(root, float(self.root_smooth_frames))
+        off_axis = np.zeros(T)
+        for _ in range(2):  # the second pass turns the facing by the performer's angle off the optical axis
+            facing = math.pi - np.radians(az) + off_axis
+            qw = qb.copy()
+            qw[:, 0] = qmul(yaw_quat(facing), qb[:, 0])
+            posed = Motion(skeleton, qw, fps=obs.fps, root_positions=np.zeros((T, 3)))
+            rel = self._keypoints(posed)  # (T, 15, 3) world axes, relative to the root joint
+            t_cam = cam.fit_translations(rel @ Rc.T, obs.xy, wts, K)  # (T, 3) root in camera coordinates
+            t_ok = ok & np.all(np.isfinite(t_cam), axis=1)
+            if not t_ok.any():
+                raise InputError(f"{obs.source or 'poses'}: no frame's keypoints fix the camera")
+            root = _fill_gaps(np.where(t_ok[:, None], t_cam, 0.0), t_ok) @ Rc  # camera -> world, camera at 0
+            root = _gaussian(root, float(self.root_smooth_frames))
+            off_axis = np.angle(np.exp(1j * (np.arctan2(-root[:, 0], -root[:, 2]) - math.pi)))
+        # the floor: the library knows the root's height above its floor, so the camera stands at the
+        # median of (that height - the root's height relative to the camera) above it
+        cam_height = float(np.median((height - root[:, 1])[t_ok]))
         root[:, 1] = height
         contacts = contact_vote >= 0.5
         if self.foot_lock:
             root = self._lock_feet(root, rel, contacts, obs.fps)
         motion = Motion(skeleton, qw, fps=obs.fps, root_positions=root)
         points = rel + root[:, None, :]
-        return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation,
+        return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
                               {**self.get_params(), "stride": int(lib.stride_), "library_frames": lib.n_frames})
 
     # ------------------------------------------------------------------ helpers

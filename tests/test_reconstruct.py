@@ -1,0 +1,152 @@
+"""``vidstyle reconstruct``: a library clip filmed by a known camera comes back as itself (pose, facing,
+place), missing frames are bridged, the files written read back (our reader and an independent BVH
+reader), and the evaluation scores the true motion better than a wrong one."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from vidstyle.augmg.keypoints import KP
+from vidstyle.cli import app
+from vidstyle.mocap import read_bvh
+from vidstyle.mocap.keypoints import keypoint_positions
+from vidstyle.mocap.placement import yaw_quat
+from vidstyle.mocap.quat import qmul
+from vidstyle.reconstruct import metrics as M
+from vidstyle.reconstruct.camera import default_intrinsics, project
+from vidstyle.reconstruct.core import Observation, Reconstructor, camera_rotation
+
+W, H, FPS = 320, 240, 20.0
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    from vidstyle.demo.library import LibraryParams, make_library
+
+    out = tmp_path_factory.mktemp("lib") / "lib"
+    make_library(out, LibraryParams(performers=2, action_seconds=3.0), jobs=1)
+    return out / "clips"
+
+
+def _filmed(clip: Path, yaw: float, place: np.ndarray, elevation: float = 10.0, cam_height: float = 20.0):
+    """A library clip turned by ``yaw`` and moved to ``place`` (floor), filmed at 20 fps by the
+    reconstruction's camera model: (true world keypoints (T, 15, 3), 2D (T, 15, 2), azimuth (T,))."""
+    from vidstyle.augmg.projection import facing_of_keypoints, relative_azimuth
+    from vidstyle.mocap.motion import Motion
+
+    m = read_bvh(clip)
+    step = int(round(m.fps / FPS))
+    q = m.rotations[::step].copy()
+    q[:, 0] = qmul(yaw_quat(np.full(len(q), yaw)), q[:, 0])
+    c, s = math.cos(yaw), math.sin(yaw)
+    r = m.root_positions[::step]
+    root = np.column_stack([c * r[:, 0] + s * r[:, 2], r[:, 1], -s * r[:, 0] + c * r[:, 2]])
+    root[:, [0, 2]] += place - root[0, [0, 2]]
+    pts = keypoint_positions(Motion(m.skeleton, q, fps=FPS, root_positions=root))
+    cam = np.array([0.0, cam_height, 0.0])
+    uv = project((pts - cam) @ camera_rotation(elevation).T, default_intrinsics(W, H))
+    az = relative_azimuth(cam, pts[:, KP["pelvis"]], facing_of_keypoints(pts))
+    return pts, uv, az
+
+
+def test_a_library_clip_filmed_by_the_model_camera_comes_back_as_itself(library):
+    clip = sorted(library.glob("*jab*.bvh"))[0]
+    own = sorted(library.glob(clip.name.split("_")[0] + "_*.bvh"))  # the clip's performer only: one body
+    pts, uv, az = _filmed(clip, yaw=2.5, place=np.array([3.0, 70.0]))
+    obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    # views 5 degrees apart: the true frame is in the index at about the true viewpoint
+    rec = Reconstructor(n_blend=1, foot_lock=False, smooth_frames=0, root_smooth_frames=0, n_views=72).fit(own).reconstruct(obs)
+    # the pose: every frame is a library frame of that body; what remains is the perspective camera against
+    # the orthographic index and guard poses of other clips that look the same in 2D
+    assert M.mpjpe_root_relative(rec.points, pts) < 0.3  # library units (1.7 cm)
+    # facing and place in the world, without any alignment: the camera model is the truth's
+    err = np.linalg.norm(rec.points - pts, axis=-1).mean()
+    assert err < 1.0, err  # < 6 cm at 4 m from the camera (depth from a 320 px image)
+    assert abs(rec.camera_height - 20.0) < 1.0
+    az_err = np.abs(((rec.azimuth - az + 180) % 360) - 180)
+    assert np.median(az_err) < 3.0 and az_err.max() < 8.0, az_err
+
+
+def test_missing_frames_are_bridged_and_blending_stays_close(library):
+    clip = sorted(library.glob("*hook*.bvh"))[0]
+    pts, uv, az = _filmed(clip, yaw=-1.0, place=np.array([-5.0, 80.0]))
+    scores = np.ones(uv.shape[:2])
+    uv = uv.copy()
+    uv[20:26] = np.nan  # six frames without a pose
+    scores[20:26] = 0.0
+    obs = Observation(uv, scores, np.full(len(uv), np.nan), FPS, (W, H))  # azimuth unknown: every view
+    rec = Reconstructor().fit([library]).reconstruct(obs)
+    assert not rec.observed[20:26].any() and rec.observed[:20].all()
+    assert np.all(np.isfinite(rec.points))
+    e = np.linalg.norm((rec.points - rec.points[:, KP["pelvis"]][:, None])
+                       - (pts - pts[:, KP["pelvis"]][:, None]), axis=-1).mean(axis=1)
+    assert e[rec.observed].mean() < 1.5  # blended, smoothed: < 9 cm per keypoint
+    assert e[20:26].mean() < 3.0  # bridged frames stay near the truth
+    assert rec.neighbours[20:26].max() == -1 and rec.neighbours[rec.observed].max() >= 0
+
+
+def test_olng_is_never_worse_than_its_nearest_neighbours_on_noisy_2d(library):
+    clip = sorted(library.glob("*uppercut*.bvh"))[0]
+    pts, uv, az = _filmed(clip, yaw=0.3, place=np.array([0.0, 60.0]))
+    rng = np.random.default_rng(0)
+    torso = np.linalg.norm(uv[:, KP["neck"]] - uv[:, KP["pelvis"]], axis=-1).mean()
+    noisy = uv + rng.normal(0, 0.15 * torso, uv.shape)
+    obs = Observation(noisy, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    base = Reconstructor(foot_lock=False).fit([library])
+    e = {m: M.mpjpe_root_relative(base.set_params(method=m).reconstruct(obs).points, pts) for m in ("nn", "olng")}
+    assert e["olng"] <= e["nn"] * 1.05, e
+
+
+def test_cli_writes_bvh_record_labels_and_preview_that_read_back(tmp_path, library):
+    from vidstyle.formats.labels import read_labels
+    from vidstyle.formats.reconstruction import read_reconstruction
+
+    clip = sorted(library.glob("*jab*.bvh"))[0]
+    pts, uv, az = _filmed(clip, yaw=3.0, place=np.array([0.0, 70.0]))
+    frames = [{"frame": i, "viewpoint": "unknown", "azimuth": float(az[i]),
+               "viewpoint_scores": {"front": 1.0}, "points": [[float(x), float(y), 1.0] for x, y in uv[i]]}
+              for i in range(len(uv))]
+    poses = tmp_path / "clip.poses.json"
+    from vidstyle.formats.keypoints import KEYPOINTS
+
+    poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 2, "video": "clip.mp4", "backend": "ps",
+                                 "keypoints": list(KEYPOINTS), "frames": frames}))
+    out = tmp_path / "motion.bvh"
+    res = CliRunner().invoke(app, ["reconstruct", "--poses", str(poses), "--library", str(library), "--out", str(out),
+                                   "--record", str(tmp_path / "rec.json"), "--labels", str(tmp_path / "rec.labels.json"),
+                                   "--fps", str(FPS), "--size", f"{W},{H}", "--preview", str(tmp_path / "p.mp4")])
+    assert res.exit_code == 0, res.output
+    m = read_bvh(out)
+    assert m.n_frames == len(uv) and m.fps == pytest.approx(FPS)
+    rec = read_reconstruction(tmp_path / "rec.json")
+    assert len(rec.frames) == len(uv) and all(f.observed for f in rec.frames)
+    assert all(abs(sum(n.weight for n in f.neighbours) - 1) < 1e-6 for f in rec.frames)
+    assert {Path(rec.library[n.clip]).name for f in rec.frames for n in f.neighbours[:1]} >= {clip.name}
+    labels = read_labels(tmp_path / "rec.labels.json")
+    assert len(labels.labels) == len(uv) and "Jab" in labels.labels
+    assert (tmp_path / "p.mp4").stat().st_size > 0
+    # an independent reader (the `bvh` package) opens the file with every frame and channel
+    bvh = pytest.importorskip("bvh")
+    with open(out) as f:
+        doc = bvh.Bvh(f.read())
+    assert doc.nframes == len(uv)
+    assert len(doc.frames[0]) == sum(len(c) for c in m.skeleton.channels)
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--k", "0"], "--k"), (["--blend", "40", "--k", "32"], "--blend"), (["--method", "magic"], "--method"),
+    (["--window", "-1"], "--window"), (["--focal", "0"], "--focal")])
+def test_bad_parameters_exit_2_naming_the_flag_before_any_work(tmp_path, args, flag, capsys):
+    from vidstyle.cli import main
+
+    status = main(["reconstruct", "--poses", str(tmp_path / "none.json"), "--library", str(tmp_path),
+                   "--fps", "20", "--size", "320,240", "--out", str(tmp_path / "o.bvh"), *args])
+    assert status == 2
+    assert flag in capsys.readouterr().err
+    assert not (tmp_path / "o.bvh").exists()

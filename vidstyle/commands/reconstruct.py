@@ -1,0 +1,164 @@
+"""``vidstyle reconstruct`` (a video's performer as 3D motion, BVH) and ``vidstyle evaluate reconstruct``."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from ..errors import InputError
+from ._evaluate import evaluate_app
+from ._numbers import jobs_option, number
+
+log = logging.getLogger(__name__)
+
+_METHOD_HELP = ("olng: the online lazy neighbourhood graph keeps temporally coherent library paths (Tautges); "
+                "nn: every frame's nearest library frames alone (the baseline).")
+
+
+def _frames(text: Optional[str]) -> Optional[list[int]]:
+    """``"0-199"`` or ``"0,5,9"`` -> frame list."""
+    if text is None:
+        return None
+    out: list[int] = []
+    for part in text.split(","):
+        part = part.strip()
+        try:
+            if "-" in part:
+                a, b = (int(x) for x in part.split("-", 1))
+                if b < a:
+                    raise ValueError
+                out.extend(range(a, b + 1))
+            else:
+                out.append(int(part))
+        except ValueError:
+            raise InputError(f"--frames: {part!r} is not a frame index or a range A-B") from None
+    if not out or min(out) < 0:
+        raise InputError("--frames: give frame indices >= 0")
+    return sorted(set(out))
+
+
+def register(app: typer.Typer) -> None:
+    app.command("reconstruct")(reconstruct)
+
+
+def reconstruct(
+    video: Optional[Path] = typer.Argument(None, help="Input video (its frame rate and size; poses are estimated "
+                                           "in it unless --poses)."),
+    library: List[Path] = typer.Option(..., "--library", "-l", help="Mocap clips (BVH files or directories) to "
+                                       "search; repeatable. All on one joint layout."),
+    out: Path = typer.Option(..., "--out", "-o", help="BVH to write (the library's skeleton and length unit; +Y "
+                             "up, the camera at the origin looking along +Z)."),
+    poses: Optional[Path] = typer.Option(None, "--poses", "-p", help="poses.json of the video (vidstyle pose) "
+                                         "instead of estimating them here."),
+    backend: Optional[str] = typer.Option(None, "--backend", help="Pose backend when estimating (as vidstyle "
+                                          "pose: ps or blazepose)."),
+    model: Optional[Path] = typer.Option(None, "--model", "-m", help="Pose model of --backend ps."),
+    frames: Optional[str] = typer.Option(None, "--frames", help="Frames to reconstruct: A-B or a comma list "
+                                         "(default: all)."),
+    skeleton: Optional[Path] = typer.Option(None, "--skeleton", help="BVH whose skeleton the motion is put on "
+                                            "(same joint layout as the library; default: the first clip's)."),
+    record: Optional[Path] = typer.Option(None, "--record", help="Also write reconstruction.json: per frame the "
+                                          "blended library frames and weights, azimuth, label, foot contacts."),
+    labels: Optional[Path] = typer.Option(None, "--labels", help="Also write per-frame action labels of the "
+                                          "matched library frames (needs <clip>.labels.json beside the clips)."),
+    preview: Optional[Path] = typer.Option(None, "--preview", help="Also write a side-by-side video (.mp4): the "
+                                           "frames with the reconstruction projected over them, and a side view."),
+    method: str = typer.Option("olng", "--method", help=_METHOD_HELP),
+    k: int = number(32, "--k", lo=1, hi=1000, help="Library neighbours per frame."),
+    blend: int = number(8, "--blend", lo=1, hi=1000, help="Neighbours blended into a frame's pose (at most --k)."),
+    window: float = number(0.5, "--window", lo=0, hi=10, help="OLNG window in seconds (Tautges: about 0.5)."),
+    views: int = number(12, "--views", lo=1, hi=360, help="Azimuths the library is projected at."),
+    focal: Optional[float] = number(None, "--focal", integer=False, lo=0, lo_open=True,
+                                    help="Focal length in pixels (default: a 60-degree lens across the longer side)."),
+    elevation: Optional[float] = number(None, "--elevation", integer=False, lo=-80, hi=80,
+                                        help="Camera pitch in degrees, down positive (default: the library "
+                                        "projection's, 10)."),
+    foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Keep planted feet in place."),
+    fps: Optional[float] = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
+                                  help="Frame rate of the poses' frames when there is no VIDEO."),
+    size: Optional[str] = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
+    jobs: int = jobs_option(-1, help="Parallel workers for the pose estimate and the library index (-1 = all cores)."),
+) -> None:
+    """The performer of a video as 3D motion (BVH): each frame's 2D pose matched against the mocap library
+    projected at the frame's viewpoint, temporally coherent neighbours kept (Tautges' lazy neighbourhood
+    graph) and blended, the root placed by a pinhole camera fit, planted feet locked."""
+    from ..reconstruct.run import reconstruct_video
+
+    if video is None and poses is None:
+        raise InputError("reconstruct: give VIDEO, --poses, or both")
+    if blend > k:
+        raise InputError(f"--blend: must be at most --k ({k}), got {blend}")
+    wh = None
+    if size is not None:
+        try:
+            wh = tuple(int(v) for v in size.split(","))
+        except ValueError:
+            wh = ()
+        if len(wh) != 2 or min(wh) < 1:
+            raise InputError(f"--size: expected W,H (two integers >= 1), got {size!r}")
+    if video is None and (fps is None or wh is None):
+        raise InputError("reconstruct: without VIDEO, give --fps and --size (the poses' frame rate and image size)")
+    reconstruct_video(video, library, out, poses=poses, backend=backend, model=model, frames=_frames(frames),
+                      fps=fps, size=wh,
+                      skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
+                      k=k, n_blend=blend, window_s=window, n_views=views, focal_px=focal, elevation_deg=elevation,
+                      foot_lock=foot_lock)
+
+
+@evaluate_app.command("reconstruct")
+def evaluate_reconstruct(
+    dataset: Path = typer.Option(..., "--dataset", "-d", help="Demo dataset directory (renders with their true "
+                                 "3D motion)."),
+    library: List[Path] = typer.Option(..., "--library", "-l", help="Library clips or directories (repeatable)."),
+    out: Path = typer.Option(Path("metrics/reconstruct.json"), "--out", "-o", help="Metrics JSON."),
+    video: List[str] = typer.Option([], "--video", help="Video ids to reconstruct (repeatable; default: one "
+                                    "performance of every test performer)."),
+    poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of <video id>.poses.json (vidstyle "
+                                         "pose): an estimated 2D source named by its backend; repeatable."),
+    method: List[str] = typer.Option(["nn", "olng"], "--method", help="Methods to score (repeatable). " + _METHOD_HELP),
+    max_frames: Optional[int] = number(None, "--max-frames", lo=1, hi=10**7, help="Score the first frames of "
+                                       "each video only."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the split that names the test performers."),
+    unit_mm: Optional[float] = number(None, "--unit-mm", integer=False, lo=0, lo_open=True,
+                                      help="Millimetres per mocap length unit (default: the dataset's)."),
+    headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge reconstruct.* keys into this "
+                                            "headline JSON."),
+    jobs: int = jobs_option(-1, help="Parallel workers for the library index (-1 = all cores)."),
+) -> None:
+    """Root-relative / aligned / PA-MPJPE, acceleration error and foot skate of reconstructions of held-out
+    renders against their true 3D motion, per 2D source (true 2D, each --poses-dir), method and skeleton
+    (the library's, or the performer's own)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from ..evaluation.reconstruct import evaluate
+    from ..fileio import read_json, write_json
+    from ..formats.metrics import RECONSTRUCT, write_metrics
+
+    metrics = evaluate(dataset, library, videos=video or None, poses_dirs=poses_dir, methods=method,
+                       max_frames=max_frames, seed=seed, unit_mm=unit_mm, jobs=jobs)
+    write_metrics(out, metrics, kind=RECONSTRUCT)
+    if headline is not None:
+        head = read_json(headline) if headline.is_file() else {}
+        head.update(metrics["headline"])
+        write_json(headline, head)
+    table = Table(title=f"Reconstruction of {len(metrics['videos'])} held-out videos "
+                        f"({metrics['params']['library_frames']} indexed library frames)")
+    for col in ("2D source", "method", "skeleton", "frames", "root-rel. MPJPE mm", "MPJPE mm", "PA-MPJPE mm",
+                "accel. mm/f^2", "foot skate mm/f"):
+        table.add_column(col)
+
+    def f(x):
+        return "-" if x is None else f"{x:.1f}"
+
+    for r in metrics["runs"]:
+        if r["data"] != "demo test performers":
+            continue
+        table.add_row(r["source"], r["method"], r["skeleton"], str(r["frames"]), f(r["mpjpe_root_relative_mm"]),
+                      f(r["mpjpe_mm"]), f(r["pa_mpjpe_mm"]), f(r["acceleration_error_mm_per_frame2"]),
+                      f(r["foot_skate_mm_per_frame"]))
+    Console(width=150).print(table)
+    log.info("wrote %s", out)

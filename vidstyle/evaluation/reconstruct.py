@@ -1,0 +1,226 @@
+"""``vidstyle evaluate reconstruct``: 3D motion from video against the true 3D motion.
+
+Data: the demo dataset's held-out renders, whose true 3D motion is the BVH each video was rendered from
+(``truth.npz`` maps every video frame to a time of that take). By default one performance video of each
+*test* performer of the ``unseen-performer`` split (:mod:`vidstyle.recognition.splits`), never the
+performers the library (``vidstyle demo make-library``) was made from; ``max_frames`` keeps the first
+frames of each.
+
+Sources of the 2D keypoints: ``true2d`` (the truth projected through the render camera, with the true
+azimuth) and, per ``poses_dirs`` entry, the pose stage's estimate (``<dir>/<video id>.poses.json``, named
+by its backend). Methods: the reconstructor's ``method`` values (per-frame nearest neighbours ``nn``,
+the lazy neighbourhood graph ``olng``). Skeletons: ``library`` (the output skeleton is the library's:
+the performer's body is unknown, as for a user's video) and ``performer`` (the take's own skeleton given
+as ``--skeleton``: the error of the motion alone, without the body-size difference). When the estimated
+poses carry BlazePose's 3D world landmarks, they are scored too (method ``blazepose-world``: the offline
+peer), turned into the reconstruction's world with the same assumed camera pitch.
+
+Figures (:mod:`vidstyle.reconstruct.metrics`, mm): MPJPE after one yaw and floor translation per
+sequence, root-relative MPJPE (pelvis subtracted per frame, one yaw per sequence), PA-MPJPE, acceleration
+error (mm/frame^2) and foot skate (mm per frame of planted-foot slide, planted where the *true* foot is).
+Frames without a pose are reconstructed (bridged) and scored like the others. Pooled rows weight every
+video by its frames.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+SKELETONS = ("library", "performer")
+
+
+def _truth(dataset, video_id: str, n_frames: int | None):
+    """(true 3D keypoints (T, 15, 3) mocap units, true 2D (T, 15, 2), true azimuth (T,), size, fps, bvh path)."""
+    from ..augmg.projection import facing_of_keypoints, relative_azimuth
+    from ..formats.truth import read_truth
+    from ..mocap import read_bvh
+    from ..mocap.keypoints import keypoint_positions
+    from ..render.camera import Camera
+
+    v = dataset.by_id()[video_id]
+    truth = read_truth(dataset.root / v.raw["truth"])
+    bvh = dataset.root / v.raw["bvh"]
+    motion = read_bvh(bvh)
+    T = len(truth.source_time) if n_frames is None else min(int(n_frames), len(truth.source_time))
+    idx = np.clip(np.round(truth.source_time[:T] * motion.fps).astype(int), 0, motion.n_frames - 1)
+    pts = keypoint_positions(motion)[idx]
+    size = (int(truth.size[0]), int(truth.size[1]))
+    cam = Camera(truth.K, truth.R, truth.t, size=size)
+    uv, _ = cam.project(pts)
+    centre = -np.asarray(truth.R).T @ np.asarray(truth.t)
+    az = relative_azimuth(centre, pts[:, 2], facing_of_keypoints(pts))
+    return pts, np.asarray(uv, dtype=np.float64), az, size, float(truth.fps), bvh
+
+
+def default_videos(dataset, seed: int = 0) -> list[str]:
+    """The first performance video of every test performer of the ``unseen-performer`` split."""
+    from ..recognition.splits import make_split
+
+    split = make_split(dataset, "unseen-performer", seed=seed)
+    test = set(split.test)
+    out = []
+    for p in sorted(split.test_performers):
+        perf = sorted(v.id for v in dataset.videos if v.performer == p and v.kind == "performance" and v.id in test)
+        if perf:
+            out.append(perf[0])
+    if not out:
+        raise InputError(f"{dataset.root}: no performance video of a test performer to reconstruct")
+    return out
+
+
+def blazepose_world_points(poses, n_frames: int, elevation_deg: float) -> np.ndarray | None:
+    """(T, 15, 3) BlazePose world landmarks (mm) in the reconstruction's world (+Y up, camera pitched by
+    ``elevation_deg``), NaN where a frame has none; None when the file has no world landmarks."""
+    from ..reconstruct.core import camera_rotation
+
+    out = np.full((n_frames, 15, 3), np.nan)
+    found = False
+    for f in poses.frames:
+        world = getattr(f, "world", None)
+        if world is None or not f.found or f.frame >= n_frames:
+            continue
+        out[f.frame] = np.asarray(world, dtype=np.float64) * 1000.0  # metres, camera axes
+        found = True
+    if not found:
+        return None
+    return out @ camera_rotation(elevation_deg)  # camera -> world (rows of Rc are the camera axes)
+
+
+def _figures(pred_mm: np.ndarray, true_mm: np.ndarray, fps: float) -> dict[str, Any]:
+    from ..reconstruct import metrics as M
+
+    ok = M.valid_frames(pred_mm, true_mm)
+    contacts = M.foot_contacts(true_mm, fps)
+    out = {"frames": int(ok.sum()),
+           "mpjpe_mm": M.mpjpe(pred_mm, true_mm),
+           "mpjpe_root_relative_mm": M.mpjpe_root_relative(pred_mm, true_mm),
+           "pa_mpjpe_mm": M.pa_mpjpe(pred_mm, true_mm),
+           "acceleration_error_mm_per_frame2": M.acceleration_error(pred_mm, true_mm),
+           "foot_skate_mm_per_frame": M.foot_skate(pred_mm, contacts=contacts)}
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
+
+
+def _pool(rows: list[dict]) -> dict[str, Any]:
+    from ..formats.metrics import RECONSTRUCT_FIGURES
+
+    out: dict[str, Any] = {"frames": int(sum(r["frames"] for r in rows))}
+    for key in RECONSTRUCT_FIGURES:
+        pairs = [(r[key], r["frames"]) for r in rows if r.get(key) is not None and r["frames"] > 0]
+        n = sum(w for _, w in pairs)
+        out[key] = float(sum(v * w for v, w in pairs) / n) if n else None
+    return out
+
+
+def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike], videos: Sequence[str] | None = None,
+             poses_dirs: Sequence[str | os.PathLike] = (), methods: Sequence[str] = ("nn", "olng"),
+             skeletons: Sequence[str] = SKELETONS, max_frames: int | None = None, seed: int = 0,
+             unit_mm: float | None = None, jobs: int = 1, **params) -> dict[str, Any]:
+    """The reconstruct metrics document (module docstring). ``params``: :class:`Reconstructor` parameters."""
+    from ..evaluation.augmg import mocap_unit_mm
+    from ..formats.dataset import read_dataset
+    from ..formats.poses import read_poses
+    from ..mocap import read_bvh
+    from ..reconstruct.core import METHODS, Observation, Reconstructor
+    from ..reconstruct.library import ReconstructionLibrary
+
+    for m in methods:
+        if m not in METHODS:
+            raise InputError(f"--method: {m!r} is not one of {', '.join(METHODS)}")
+    for s in skeletons:
+        if s not in SKELETONS:
+            raise InputError(f"--skeleton-kind: {s!r} is not one of {', '.join(SKELETONS)}")
+    Reconstructor(**params).check_params()
+    dataset = read_dataset(dataset_dir)
+    mm = mocap_unit_mm(dict(dataset.extra), dataset_dir) if unit_mm is None else float(unit_mm)
+    videos = list(videos) if videos else default_videos(dataset, seed)
+    known = dataset.by_id()
+    for v in videos:
+        if v not in known:
+            raise InputError(f"{dataset_dir}: no video {v!r}")
+    base = Reconstructor(jobs=jobs, **params)
+    base.check_params()
+    fps0 = float(dataset.fps)
+    lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, jobs).fit(library)
+    runs: list[dict] = []
+    for vid in videos:
+        true_pts, uv, az, size, fps, bvh = _truth(dataset, vid, max_frames)
+        T = len(true_pts)
+        true_mm = true_pts * mm
+        sources = {"true2d": Observation(uv, np.ones((T, 15)), az, fps, size, source=f"{vid} (true 2D)")}
+        world = {}
+        for d in poses_dirs:
+            path = Path(d) / f"{vid}.poses.json"
+            if not path.is_file():
+                raise InputError(f"{path}: no poses for video {vid} (run vidstyle pose on it)")
+            doc = read_poses(path)
+            name = str(doc.backend)
+            sources[name] = Observation.from_poses(doc, fps, size, T)
+            w = blazepose_world_points(doc, T, base.elevation_deg if base.elevation_deg is not None
+                                       else base.library_elevation_deg)
+            if w is not None:
+                world[name] = w
+        performer_lib = None
+        for skel in skeletons:
+            if skel == "library":
+                use = lib
+            else:
+                if performer_lib is None:
+                    performer_lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, jobs).fit(
+                        library, skeleton=read_bvh(bvh).skeleton)
+                use = performer_lib
+            rec = Reconstructor(jobs=jobs, **params).fit_library(use)
+            for src, obs in sources.items():
+                for method in methods:
+                    rec.set_params(method=method)
+                    t0 = time.perf_counter()
+                    out = rec.reconstruct(obs)
+                    seconds = time.perf_counter() - t0
+                    row = {"data": f"demo:{vid}", "source": src, "method": method, "skeleton": skel,
+                           **_figures(out.points * mm, true_mm, fps),
+                           "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
+                    runs.append(row)
+                    log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
+                             row["mpjpe_root_relative_mm"] or float("nan"), row["pa_mpjpe_mm"] or float("nan"))
+        for src, w in world.items():
+            row = {"data": f"demo:{vid}", "source": src, "method": "blazepose-world", "skeleton": "blazepose",
+                   **_figures(w, true_mm, fps)}
+            runs.append(row)
+    pooled = []
+    keys = sorted({(r["source"], r["method"], r["skeleton"]) for r in runs})
+    for src, method, skel in keys:
+        rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == (src, method, skel)]
+        pooled.append({"data": "demo test performers", "source": src, "method": method, "skeleton": skel,
+                       **_pool(rows)})
+    estimated = [s for s in ("ps", "blazepose") if any(r["source"] == s for r in pooled)]
+    headline: dict[str, Any] = {}
+
+    def pick(src, method, skel, key="mpjpe_root_relative_mm"):
+        for r in pooled:
+            if (r["source"], r["method"], r["skeleton"]) == (src, method, skel):
+                return r[key]
+        return None
+
+    best = "olng" if "olng" in methods else methods[0]
+    if estimated:
+        headline["mpjpe_mm"] = pick(estimated[0], best, "library")
+        headline["mpjpe_source"] = estimated[0]
+        headline["pa_mpjpe_mm"] = pick(estimated[0], best, "library", "pa_mpjpe_mm")
+        headline["mpjpe_performer_skeleton_mm"] = pick(estimated[0], best, "performer")
+    headline["mpjpe_true2d_mm"] = pick("true2d", best, "library")
+    return {"runs": pooled + runs, "videos": videos,
+            "params": {**base.get_params(), "methods": list(methods), "skeletons": list(skeletons),
+                       "max_frames": max_frames, "library": [str(p) for p in library], "library_frames": lib.n_frames,
+                       "unit_mm": mm},
+            "headline": {"reconstruct": headline}, "seed": seed}
