@@ -19,6 +19,7 @@ from vidstyle.reconstruct.subsequence import (
     segment_bounds,
     skip_factors,
     ssg_shortest_path,
+    subsequence_dtw,
     subsequence_reconstruct,
     warping_positions,
     window_bounds,
@@ -277,6 +278,17 @@ def test_compiled_and_reference_agree_exactly():
     for m in np.flatnonzero(np.isfinite(D1[-1])):
         p1, p2 = warping_positions(S1, m, compiled=True), warping_positions(S2, m, compiled=False)
         assert np.array_equal(p1, p2)
+    # the fused kernel (local costs computed inside the DP) against cost matrix + numpy DP, weighted,
+    # with missing rows, float32 library
+    q = rng.normal(size=(15, 12))
+    q[5] = F[60]  # an exact match: distances near 0, where max(., 0) matters
+    w = rng.random(15) * (rng.random(15) > 0.3)
+    F32 = F.astype(np.float32)
+    D1, S1 = subsequence_dtw(q, F32, first, w, compiled=True)
+    D2, S2 = subsequence_dtw(q, F32, first, w, compiled=False)
+    assert np.array_equal(D1, D2) and np.array_equal(S1, S2)
+    D3, S3 = accumulated_cost(cost_matrix(q, F32, w), first, skip_factors(w), compiled=False)
+    assert np.array_equal(D1, D3) and np.array_equal(S1, S3)
     Fv, clipv, P, q, _ = _spliced(12)
     T = len(q)
     valid = rng.random(T) > 0.2
@@ -317,3 +329,14 @@ def test_too_short_clips_raise():
     with pytest.raises(ValueError, match="shorter"):
         subsequence_reconstruct(np.zeros((15, 6)), np.ones(15, bool), np.zeros(15, int), np.zeros((1, 30, 6)),
                                 np.arange(30) // 3, np.zeros((30, 15, 3)))
+
+
+def test_a_gap_longer_than_a_window_still_reconstructs():
+    F, clip, P, q, truth = _spliced(9)
+    T = len(q)
+    valid = np.ones(T, bool)
+    valid[45:65] = False  # windows [45, 60) and part of its neighbours see nothing
+    out = subsequence_reconstruct(q, valid, np.ones(T, int), F, clip, P)
+    assert out.ids.shape == (T, 2) and np.all((out.ids >= 0) & (out.ids < len(clip)))
+    assert np.all((out.alpha >= 0) & (out.alpha <= 1)) and np.isfinite(out.cost)
+    assert np.array_equal(out.ids[:27, 0], truth[:27])  # the frames before the seam's windows

@@ -32,11 +32,12 @@ to the earlier one in that list. The factor 2 of the (2, 1) step stands in for t
 cost; with weights it is ``(w_{n-1} + w_n) d(n, m)`` (the skipped frame's weight at the landing
 frame's distance; 2 C(n, m) when the weights are equal, so eq. 4.2 exactly without weights), and the
 step may not land on a weight-0 frame after skipping a weighted one (that would skip a real frame for
-free next to a missing one; :func:`skip_factors`). The ``k`` best subsequences are retrieved by their end cost
-``D(L-1, m)`` as Müller (Information Retrieval for Music and Motion, 4.4) does: repeatedly the least
-end, skipping ends within ``exclusion`` frames (default ``window // 2``) of an already retrieved end of
-the same clip; each is backtracked through the steps that produced D (so through the weights) to its
-warping path. The DP and the backtracking run in numba (:func:`vidstyle.compiled.compile_kernel`);
+free next to a missing one; :func:`skip_factors`). The ``k`` best subsequences are retrieved by their
+end cost ``D(L-1, m)`` as Müller (Information Retrieval for Music and Motion, 4.4) does: repeatedly the
+least end, skipping ends within ``exclusion`` frames (default ``window // 2``) of an already retrieved
+end of the same clip; each is backtracked through the steps that produced D (so through the weights)
+to its warping path. The DP (with the local costs computed inside it from the GEMM's products) and
+the backtracking run in numba (:func:`vidstyle.compiled.compile_kernel`); :func:`subsequence_dtw`,
 :func:`accumulated_cost` and :func:`warping_positions` with ``compiled=False`` are the numpy / Python
 references, equal to them bit for bit.
 
@@ -156,24 +157,34 @@ def cost_matrix(query: np.ndarray, library: np.ndarray, weights: np.ndarray | No
                 library_sq: np.ndarray | None = None, chunk: int = 65536) -> np.ndarray:
     """(L, N) float64 ``C(n, m) = w_n ||query[n] - library[m]||``: ``query`` (L, D), ``library`` (N, D)
     (any float dtype; taken to float64 a chunk of ``chunk`` rows at a time for the GEMM), ``weights``
-    (L,) (None: 1), ``library_sq`` (N,) the library's squared norms if already known."""
+    (L,) (None: 1), ``library_sq`` (N,) the library's squared norms if already known. Computed as
+    ``sqrt(max((|q|^2 + |f|^2) - 2 q.f, 0)) w``, the same operations :func:`subsequence_dtw`'s kernel
+    does cell by cell."""
     q = np.asarray(query, dtype=np.float64)
     if q.ndim != 2 or library.ndim != 2 or library.shape[1] != q.shape[1]:
         raise ValueError(f"query (L, D) and library (N, D) must agree, got {q.shape} and {library.shape}")
-    L, N = len(q), len(library)
     if library_sq is None:
         library_sq = squared_norms(library, chunk)
-    out = np.empty((L, N))
+    w = np.ones(len(q)) if weights is None else np.asarray(weights, dtype=np.float64)
+    return _cost_from_gram(_gram(q, library, chunk), (q * q).sum(axis=1), library_sq, w)
+
+
+def _gram(q: np.ndarray, library: np.ndarray, chunk: int = 65536) -> np.ndarray:
+    """(N, L) float64 ``library @ q.T`` by float64 GEMMs over chunks of ``chunk`` library rows."""
+    N = len(library)
+    G = np.empty((N, len(q)))
+    qt = np.ascontiguousarray(q.T)
     for s in range(0, N, chunk):
         e = min(N, s + chunk)
-        out[:, s:e] = (np.asarray(library[s:e], dtype=np.float64) @ q.T).T
-    out *= -2.0
-    out += (q * q).sum(axis=1)[:, None]
-    out += library_sq[None, :]
+        np.matmul(np.asarray(library[s:e], dtype=np.float64), qt, out=G[s:e])
+    return G
+
+
+def _cost_from_gram(G: np.ndarray, q2: np.ndarray, f2: np.ndarray, w: np.ndarray) -> np.ndarray:
+    out = (q2[:, None] + f2[None, :]) - 2.0 * G.T
     np.maximum(out, 0.0, out=out)
     np.sqrt(out, out=out)
-    if weights is not None:
-        out *= np.asarray(weights, dtype=np.float64)[:, None]
+    out *= w[:, None]
     return out
 
 
@@ -245,6 +256,42 @@ def _accumulate_loop(C, first, skip, D, S):  # compiled by numba: _accumulate_nu
             S[n, m] = step
 
 
+def _accumulate_gram_numpy(G, q2, f2, w, first, skip, D, S):
+    _accumulate_numpy(_cost_from_gram(G, q2, f2, w), first, skip, D, S)
+
+
+def _accumulate_gram_loop(G, q2, f2, w, first, skip, D, S):  # compiled by numba: _accumulate_gram_numpy
+    # the local cost computed cell by cell from the Gram matrix G (N, L) (library-major, so a column of
+    # C is one contiguous row of G), column by column: column m needs columns m-1 and m-2 only (D and
+    # S are best column-major)
+    N, L = G.shape
+    inf = np.inf
+    for m in range(N):
+        ok1 = m - 1 >= first[m]
+        ok2 = m - 2 >= first[m]
+        for n in range(L):
+            v = (q2[n] + f2[m]) - 2.0 * G[m, n]
+            v = max(v, 0.0)
+            c = np.sqrt(v) * w[n]
+            if n == 0:
+                D[0, m] = c
+                S[0, m] = 0
+                continue
+            b0 = D[n - 1, m - 1] + c if ok1 else inf
+            b1 = D[n - 1, m - 2] + c if ok2 else inf
+            b2 = D[n - 2, m - 1] + skip[n] * c if (ok1 and n >= 2 and skip[n] >= 0) else inf
+            best = b0
+            step = 0
+            if b1 < best:
+                best = b1
+                step = 1
+            if b2 < best:
+                best = b2
+                step = 2
+            D[n, m] = best
+            S[n, m] = step
+
+
 def _backtrack_loop(S, end, pos):  # compiled by numba; uncompiled it is the Python reference
     n = S.shape[0] - 1
     m = end
@@ -277,6 +324,11 @@ def _accumulate_kernel():
 
 
 @cache
+def _accumulate_gram_kernel():
+    return _compiled(_accumulate_gram_loop) or _accumulate_gram_numpy
+
+
+@cache
 def _backtrack_kernel():
     return _compiled(_backtrack_loop) or _backtrack_loop
 
@@ -305,6 +357,35 @@ def accumulated_cost(C: np.ndarray, first: np.ndarray, skip: np.ndarray | None =
     return D, S
 
 
+def subsequence_dtw(query: np.ndarray, library: np.ndarray, first: np.ndarray,
+                    weights: np.ndarray | None = None, library_sq: np.ndarray | None = None,
+                    compiled: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`accumulated_cost` of :func:`cost_matrix` ``(query, library, weights)`` with the
+    :func:`skip_factors` of the weights: ``query`` (L, D), ``library`` (N, D), ``first`` (N,), ``weights``
+    (L,) (None: 1), ``library_sq`` (N,) the library's squared norms if known. Returns ``(D, steps)``, each
+    (L, N), column-major. Compiled, the local costs are computed inside the DP from the GEMM's (N, L)
+    products (no (L, N) cost matrix, no transposition); ``compiled=False`` builds the cost matrix and runs the numpy
+    reference DP (identical results)."""
+    q = np.asarray(query, dtype=np.float64)
+    if q.ndim != 2 or library.ndim != 2 or library.shape[1] != q.shape[1] or len(q) < 1:
+        raise ValueError(f"query (L >= 1, D) and library (N, D) must agree, got {q.shape} and "
+                         f"{library.shape}")
+    L, N = len(q), len(library)
+    first = np.ascontiguousarray(first, dtype=np.int64)
+    if first.shape != (N,):
+        raise ValueError(f"first must be (N,) = ({N},), got {first.shape}")
+    w = np.ones(L) if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
+    if w.shape != (L,):
+        raise ValueError(f"weights must be (L,) = ({L},), got {w.shape}")
+    f2 = squared_norms(library) if library_sq is None else np.ascontiguousarray(library_sq, dtype=np.float64)
+    # column-major, the order the compiled kernel fills them in (column by column)
+    D = np.empty((L, N), order="F")
+    S = np.empty((L, N), dtype=np.int8, order="F")
+    kernel = _accumulate_gram_kernel() if compiled else _accumulate_gram_numpy
+    kernel(_gram(q, library), (q * q).sum(axis=1), f2, w, first, skip_factors(w), D, S)
+    return D, S
+
+
 def skip_factors(weights: np.ndarray) -> np.ndarray:
     """(L,) factor of ``C(n, m) = w_n d(n, m)`` in the (2, 1) step landing on row n, for per-frame weights
     ``w`` (L,): ``1 + w_{n-1} / w_n``, so the step costs ``(w_{n-1} + w_n) d(n, m)`` -- the landing
@@ -322,7 +403,9 @@ def warping_positions(steps: np.ndarray, end: int, compiled: bool = True) -> np.
     """(L,) float64 library position of every query row on the warping path ending at ``(L-1, end)``,
     backtracked through ``steps`` (from :func:`accumulated_cost`; the cell must have a finite D). A row
     skipped by a (2, 1) step gets the midpoint ``m - 0.5`` of the library frames around it."""
-    S = np.ascontiguousarray(steps, dtype=np.int8)
+    S = np.asarray(steps)
+    if S.dtype != np.int8:
+        S = S.astype(np.int8)
     if S.ndim != 2 or not 0 <= end < S.shape[1]:
         raise ValueError(f"steps must be (L, N) and 0 <= end < N, got {S.shape} and {end}")
     pos = np.empty(S.shape[0])
@@ -415,14 +498,17 @@ def _retrieve_window(q, w, valid_w, view_list, lib_features, lib_sq, first, last
     """The window's k subsequences: (ids (K, L) int64, cost (K,), view (K,))."""
     end_rows, step_mats = [], []
     for v in view_list:
-        C = cost_matrix(q, lib_features[v], w, library_sq=lib_sq(v))
-        D, S = accumulated_cost(C, first, skip_factors(w), compiled=compiled)
+        D, S = subsequence_dtw(q, lib_features[v], first, w, library_sq=lib_sq(v), compiled=compiled)
         end_rows.append(D[-1].copy())
         step_mats.append(S)
-        del C, D
-    ends_all = np.stack(end_rows)  # (V', N)
-    which = np.argmin(ends_all, axis=0)  # ties: the earlier view
-    end_cost = ends_all[which, np.arange(ends_all.shape[1])]
+        del D
+    if len(end_rows) == 1:
+        end_cost = end_rows[0]
+        which = np.zeros(len(end_cost), dtype=np.int64)
+    else:
+        ends_all = np.stack(end_rows)  # (V', N)
+        which = np.argmin(ends_all, axis=0)  # ties: the earlier view
+        end_cost = ends_all[which, np.arange(ends_all.shape[1])]
     ends = best_ends(end_cost, first, k, exclusion)
     ids = np.empty((len(ends), len(q)), dtype=np.int64)
     for j, m in enumerate(ends):
