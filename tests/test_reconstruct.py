@@ -150,3 +150,12 @@ def test_bad_parameters_exit_2_naming_the_flag_before_any_work(tmp_path, args, f
     assert status == 2
     assert flag in capsys.readouterr().err
     assert not (tmp_path / "o.bvh").exists()
+
+
+def test_view_rotations_equal_augmgs_view_rotation():
+    from vidstyle.augmg.projection import view_rotation
+    from vidstyle.reconstruct.core import view_rotations
+
+    az = np.array([-170.0, -33.3, 0.0, 12.5, 90.0, 181.0])
+    for e in (0.0, 10.0, 45.0):
+        np.testing.assert_allclose(view_rotations(az, e), np.stack([view_rotation(a, e) for a in az]), atol=1e-12)

@@ -126,6 +126,8 @@ def evaluate_reconstruct(
                                       help="Millimetres per mocap length unit (default: the dataset's)."),
     headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge reconstruct.* keys into this "
                                             "headline JSON."),
+    animation: Optional[Path] = typer.Option(None, "--animation", help="Also write a video (.mp4) of the first "
+                                             "video's reconstruction against the truth, front and side."),
     jobs: int = jobs_option(-1, help="Parallel workers for the library index (-1 = all cores)."),
 ) -> None:
     """Root-relative / aligned / PA-MPJPE, acceleration error and foot skate of reconstructions of held-out
@@ -139,7 +141,8 @@ def evaluate_reconstruct(
     from ..formats.metrics import RECONSTRUCT, write_metrics
 
     metrics = evaluate(dataset, library, videos=video or None, poses_dirs=poses_dir, methods=method,
-                       max_frames=max_frames, seed=seed, unit_mm=unit_mm, jobs=jobs)
+                       max_frames=max_frames, seed=seed, unit_mm=unit_mm, jobs=jobs,
+                       animation=animation)
     write_metrics(out, metrics, kind=RECONSTRUCT)
     if headline is not None:
         head = read_json(headline) if headline.is_file() else {}

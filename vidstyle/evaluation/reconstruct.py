@@ -98,6 +98,45 @@ def blazepose_world_points(poses, n_frames: int, elevation_deg: float) -> np.nda
     return out @ camera_rotation(elevation_deg)  # camera -> world (rows of Rc are the camera axes)
 
 
+def write_comparison(path: str | os.PathLike, pred_mm: np.ndarray, true_mm: np.ndarray, fps: float,
+                     title: str = "") -> None:
+    """A video of the reconstruction (orange) against the truth (grey), aligned by one yaw and floor
+    translation (:func:`vidstyle.reconstruct.metrics.align_sequence`), seen from the front (left) and
+    the side (right), orthographic, the floor as a line."""
+    import cv2
+
+    from ..reconstruct import metrics as M
+    from ..reconstruct.run import _BONES
+    from ..video.writer import VideoWriter
+
+    aligned, _, _ = M.align_sequence(pred_mm, true_mm)
+    both = np.concatenate([aligned, true_mm])
+    ok = np.all(np.isfinite(both), axis=(1, 2))
+    centre = np.nanmedian(true_mm[:, 2], axis=0)
+    span = float(np.nanmax(both[ok][..., 1]) - min(0.0, float(np.nanmin(both[ok][..., 1])))) * 1.15 or 1.0
+    size = 320
+    px = size / span
+
+    def view(p, axis):  # (15, 3) -> (15, 2) pixels: horizontal axis 0 (front) or 2 (side)
+        h = p[:, axis] - centre[axis]
+        return np.column_stack([size / 2 + h * px, size - 12 - p[:, 1] * px])
+
+    with VideoWriter(path, fps) as out:
+        for t in range(len(true_mm)):
+            img = np.full((size, 2 * size, 3), 255, np.uint8)
+            for off, axis in ((0, 0), (size, 2)):
+                cv2.line(img, (off, size - 12), (off + size - 1, size - 12), (190, 190, 190), 1)
+                for pts, colour in ((true_mm[t], (150, 150, 150)), (aligned[t], (0, 120, 255))):
+                    if not np.all(np.isfinite(pts)):
+                        continue
+                    q = view(pts, axis)
+                    for a, b in _BONES:
+                        cv2.line(img, (int(off + q[a, 0]), int(q[a, 1])), (int(off + q[b, 0]), int(q[b, 1])), colour, 2,
+                                 cv2.LINE_AA)
+            cv2.putText(img, f"{title} {t}", (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+            out.write(img)
+
+
 def _figures(pred_mm: np.ndarray, true_mm: np.ndarray, fps: float) -> dict[str, Any]:
     from ..reconstruct import metrics as M
 
@@ -126,8 +165,11 @@ def _pool(rows: list[dict]) -> dict[str, Any]:
 def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike], videos: Sequence[str] | None = None,
              poses_dirs: Sequence[str | os.PathLike] = (), methods: Sequence[str] = ("nn", "olng"),
              skeletons: Sequence[str] = SKELETONS, max_frames: int | None = None, seed: int = 0,
-             unit_mm: float | None = None, jobs: int = 1, **params) -> dict[str, Any]:
-    """The reconstruct metrics document (module docstring). ``params``: :class:`Reconstructor` parameters."""
+             unit_mm: float | None = None, jobs: int = 1, animation: str | os.PathLike | None = None,
+             **params) -> dict[str, Any]:
+    """The reconstruct metrics document (module docstring). ``params``: :class:`Reconstructor` parameters.
+    ``animation``: also write :func:`write_comparison` of the first video's reconstruction from the first
+    estimated source (true 2D without one), the library skeleton and the last of ``methods``."""
     from ..evaluation.augmg import mocap_unit_mm
     from ..formats.dataset import read_dataset
     from ..formats.poses import read_poses
@@ -191,6 +233,9 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
                            **_figures(out.points * mm, true_mm, fps),
                            "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
                     runs.append(row)
+                    if (animation is not None and vid == videos[0] and skel == skeletons[0] and method == methods[-1]
+                            and src == list(sources)[min(1, len(sources) - 1)]):
+                        write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")
                     log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
                              row["mpjpe_root_relative_mm"] or float("nan"), row["pa_mpjpe_mm"] or float("nan"))
         for src, w in world.items():
@@ -214,13 +259,15 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
 
     best = "olng" if "olng" in methods else methods[0]
     if estimated:
-        headline["mpjpe_mm"] = pick(estimated[0], best, "library")
-        headline["mpjpe_source"] = estimated[0]
-        headline["pa_mpjpe_mm"] = pick(estimated[0], best, "library", "pa_mpjpe_mm")
-        headline["mpjpe_performer_skeleton_mm"] = pick(estimated[0], best, "performer")
-    headline["mpjpe_true2d_mm"] = pick("true2d", best, "library")
+        headline["reconstruct.mpjpe_mm"] = pick(estimated[0], best, "library")
+        headline["reconstruct.pa_mpjpe_mm"] = pick(estimated[0], best, "library", "pa_mpjpe_mm")
+        headline["reconstruct.mpjpe_performer_skeleton_mm"] = pick(estimated[0], best, "performer")
+        headline["reconstruct.foot_skate_mm_per_frame"] = pick(estimated[0], best, "library", "foot_skate_mm_per_frame")
+        headline["reconstruct.source"] = estimated[0]
+    headline["reconstruct.mpjpe_true2d_mm"] = pick("true2d", best, "library")
+    headline["reconstruct.method"] = best
     return {"runs": pooled + runs, "videos": videos,
             "params": {**base.get_params(), "methods": list(methods), "skeletons": list(skeletons),
                        "max_frames": max_frames, "library": [str(p) for p in library], "library_frames": lib.n_frames,
                        "unit_mm": mm},
-            "headline": {"reconstruct": headline}, "seed": seed}
+            "headline": headline, "seed": seed}

@@ -12,6 +12,11 @@ the camera's azimuth about the performer when the pose stage estimated it):
 2. **Temporal coherence** (``method="olng"``): the online lazy neighbourhood graph over a window of
    ``window_s`` seconds (:func:`.olng.olng_costs`); each node's cost becomes the cost of the best
    coherent path ending there. ``method="nn"`` skips this (per-frame nearest neighbours: the baseline).
+   ``method="subsequence"`` replaces steps 2 and 3 by Tautges' subsequence graph (chapter 4,
+   :func:`.subsequence.subsequence_reconstruct`): windows of ``ssg_window_s`` seconds overlapping by
+   ``ssg_overlap`` of a window, each matched by subsequence DTW at the view of its frames' best
+   neighbours, the best chain of subsequences cross-faded (its two library frames per video frame are the
+   blended nodes, weighted by the cross-fade).
 3. **Blend** (Tautges eq. 3.3): the ``n_blend`` nodes of least cost, weighted
    ``w_i = (max C - c_i) / sum_j (max C - c_j)``; the pose is the weighted mean of their local joint
    rotations (quaternions aligned to the best node's hemisphere, normalised), the root's facing-relative
@@ -61,7 +66,7 @@ log = logging.getLogger(__name__)
 #: a frame is observed when at least this many keypoints have a finite position and a score above MIN_SCORE
 MIN_KEYPOINTS = 8
 MIN_SCORE = 0.2
-METHODS = ("olng", "nn")
+METHODS = ("olng", "nn", "subsequence")
 
 
 @dataclass
@@ -208,6 +213,17 @@ def _yaw_rotation(theta: np.ndarray) -> np.ndarray:
     return R
 
 
+def view_rotations(azimuth_deg: np.ndarray, elevation_deg: float) -> np.ndarray:
+    """(n, 3, 3) :func:`vidstyle.augmg.projection.view_rotation` of every azimuth at one elevation, at once."""
+    a = np.radians(np.asarray(azimuth_deg, dtype=np.float64))
+    e = math.radians(elevation_deg)
+    fwd = -np.stack([math.cos(e) * np.sin(a), np.full(a.shape, math.sin(e)), math.cos(e) * np.cos(a)], axis=-1)
+    right = np.cross(fwd, np.array([0.0, 1.0, 0.0]))
+    right /= np.linalg.norm(right, axis=-1, keepdims=True)
+    down = np.cross(fwd, right)
+    return np.stack([right, down, fwd], axis=-2)
+
+
 def camera_rotation(elevation_deg: float) -> np.ndarray:
     """(3, 3) world-to-camera rotation of the reconstruction's camera: at the origin, looking along +Z
     pitched down by ``elevation_deg`` (rows: image right, image down, viewing direction)."""
@@ -231,7 +247,8 @@ class Reconstructor:
                  use_azimuth: bool = True, spread: int = 1, smooth_frames: float = 1.0,
                  root_smooth_frames: float = 3.0, foot_lock: bool = True, relax_s: float = 2.0,
                  focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
-                 library_elevation_deg: float = 10.0, target_fps: float = 20.0, jobs: int = 1,
+                 library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
+                 ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0, jobs: int = 1,
                  scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
@@ -248,13 +265,18 @@ class Reconstructor:
         self.n_views = n_views
         self.library_elevation_deg = library_elevation_deg
         self.target_fps = target_fps
+        self.ssg_window_s = ssg_window_s
+        self.ssg_overlap = ssg_overlap
+        self.ssg_k = ssg_k
+        self.ssg_transition_weight = ssg_transition_weight
         self.jobs = jobs
         self.scheduler = scheduler
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in (
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
-            "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps")}
+            "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
+            "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight")}
 
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
@@ -272,6 +294,14 @@ class Reconstructor:
         if self.method not in METHODS:
             raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
         for name in ("window_s", "smooth_frames", "root_smooth_frames", "relax_s"):
+            v = float(getattr(self, name))
+            if not (v >= 0 and math.isfinite(v)):
+                raise ParameterError(name, f"must be a finite number >= 0, got {v}")
+        if not 0 <= float(self.ssg_overlap) <= 0.5:
+            raise ParameterError("ssg_overlap", f"must be in 0..0.5 (a fraction of the window), got {self.ssg_overlap}")
+        if not 1 <= int(self.ssg_k) <= 1000:
+            raise ParameterError("ssg_k", f"must be in 1..1000, got {self.ssg_k}")
+        for name in ("ssg_window_s", "ssg_transition_weight"):
             v = float(getattr(self, name))
             if not (v >= 0 and math.isfinite(v)):
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
@@ -382,6 +412,35 @@ class Reconstructor:
         chosen = np.where(ok, chosen, -1)
         return chosen, w
 
+    def subsequence_nodes(self, obs: Observation, view: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Steps 2-3 of ``method="subsequence"``: ``(chosen, weights, views)`` each (T, 2), the cross-faded
+        library frames of the subsequence graph's best chain, their weights and the views they were
+        matched at (-1 / 0 / -1 on frames without a pose)."""
+        from ..augmg.projection import angle_features
+        from .subsequence import subsequence_reconstruct
+
+        lib = self.library_
+        index = lib.index_
+        T = obs.n_frames
+        valid = obs.valid
+        feats = np.nan_to_num(angle_features(obs.xy)).astype(np.float64)
+        window = max(3, int(round(float(self.ssg_window_s) * obs.fps)))
+        overlap = min(window // 2, int(round(float(self.ssg_overlap) * window)))
+        pts = lib.points_.astype(np.float64)
+        pts = pts - pts[:, 2:3]  # root-relative (the pelvis)
+        frame_view = np.where(view[:, 0] >= 0, view[:, 0], 0)
+        path = subsequence_reconstruct(feats, valid, frame_view, index.features_, index.clip_, pts, window=window,
+                                       overlap=overlap, k=int(self.ssg_k),
+                                       transition_weight=float(self.ssg_transition_weight))
+        v0 = np.full(T, -1)
+        v1 = np.full(T, -1)
+        for (s, e), v in zip(path.windows, path.view):
+            v0[s:e] = np.where(v0[s:e] < 0, v, v0[s:e])
+            v1[s:e] = v
+        chosen = np.where(valid[:, None], path.ids, -1)
+        w = np.where(valid[:, None], np.column_stack([path.alpha, 1.0 - path.alpha]), 0.0)
+        return chosen, w, np.where(valid[:, None], np.column_stack([v0, v1]), -1)
+
     # ------------------------------------------------------------------ reconstruct
     def reconstruct(self, obs: Observation) -> Reconstruction:
         """The 3D motion of ``obs`` (module docstring)."""
@@ -400,11 +459,14 @@ class Reconstructor:
         if not observed.any():
             raise InputError(f"{obs.source or 'poses'}: no frame has a pose to reconstruct from")
         ids, cost, view = self.neighbours(obs)
-        total = self.coherent_costs(ids, cost, obs.fps)
-        chosen, w = self.blend_weights(ids, total)
-        # node views, aligned with the chosen nodes
-        pos_in_row = np.argsort(total, axis=1, kind="stable")[:, :chosen.shape[1]]
-        node_view = np.take_along_axis(view, pos_in_row, 1)
+        if self.method == "subsequence":
+            chosen, w, node_view = self.subsequence_nodes(obs, view)
+        else:
+            total = self.coherent_costs(ids, cost, obs.fps)
+            chosen, w = self.blend_weights(ids, total)
+            # node views, aligned with the chosen nodes
+            pos_in_row = np.argsort(total, axis=1, kind="stable")[:, :chosen.shape[1]]
+            node_view = np.take_along_axis(view, pos_in_row, 1)
         use = chosen >= 0
         safe = np.maximum(chosen, 0)
 
@@ -490,7 +552,7 @@ class Reconstructor:
                         elevation: float) -> np.ndarray:
         """Step 4: per observed frame the azimuth (1-degree grid within half a view step of ``az``) whose
         orthographic projection of the facing-normalised pose ``pts`` fits the keypoints best."""
-        from ..augmg.projection import facing_normalised, facing_of_keypoints, view_rotation
+        from ..augmg.projection import facing_normalised, facing_of_keypoints
 
         half = 180.0 / self.library_.index_.n_views
         grid = np.arange(-math.floor(half), math.floor(half) + 1, 1.0)
@@ -504,7 +566,7 @@ class Reconstructor:
         best = az[rows].copy()
         for g in grid:
             cand = az[rows] + g
-            R = np.stack([view_rotation(float(a), elevation) for a in cand])  # (n, 3, 3)
+            R = view_rotations(cand, elevation)  # (n, 3, 3)
             proj = np.einsum("nij,nkj->nki", R, norm[rows])[..., :2]
             res = _similarity_residual(proj, obs.xy[rows], wts[rows])
             better = res < best_res

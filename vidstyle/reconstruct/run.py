@@ -22,9 +22,9 @@ _BONES = ((0, 1), (1, 2), (1, 3), (3, 5), (5, 7), (1, 4), (4, 6), (6, 8), (2, 9)
 def observation_for(video: str | os.PathLike | None, poses: str | os.PathLike | None, backend: str | None = None,
                     model: str | os.PathLike | None = None, frames: Sequence[int] | None = None, jobs: int = 1,
                     fps: float | None = None, size: tuple[int, int] | None = None) -> Observation:
-    """The :class:`Observation` of ``video``: its ``poses`` file (``vidstyle pose`` output), or poses
-    estimated here with ``backend`` / ``model`` on ``frames`` (default all). The frame rate and size come
-    from the video (or ``fps`` / ``size`` when there is no video)."""
+    """The :class:`Observation` of ``video``: its ``poses`` file (``vidstyle pose`` output; the frames up to
+    the last one it holds), or poses estimated here with ``backend`` / ``model`` on ``frames`` (default
+    all). The frame rate and size come from the video (or ``fps`` / ``size`` when there is no video)."""
     from ..formats.poses import read_poses
 
     n = None
@@ -39,6 +39,8 @@ def observation_for(video: str | os.PathLike | None, poses: str | os.PathLike | 
         raise InputError("reconstruct: give the video (for its frame rate and size) or --fps and --size")
     if poses is not None:
         doc = read_poses(poses)
+        last = max((f.frame for f in doc.frames), default=-1) + 1  # the frames the file covers
+        n = last if n is None else min(n, last)
     else:
         if video is None:
             raise InputError("reconstruct: no video to estimate poses in (give VIDEO or --poses)")

@@ -582,6 +582,15 @@ def subsequence_reconstruct(features_q: np.ndarray, valid: np.ndarray, views: np
     first, last = segment_bounds(clip)
 
     sq_cache: dict[int, np.ndarray] = {}
+    f64_cache: dict[int, np.ndarray] = {}
+
+    class _Views:  # each view's features as float64, converted once (the GEMMs run in float64)
+        def __getitem__(self, v: int) -> np.ndarray:
+            if v not in f64_cache:
+                f64_cache[v] = np.ascontiguousarray(lib[v], dtype=np.float64)
+            return f64_cache[v]
+
+    lib64 = _Views()
 
     def lib_sq(v: int) -> np.ndarray:
         if v not in sq_cache:
@@ -596,7 +605,7 @@ def subsequence_reconstruct(features_q: np.ndarray, valid: np.ndarray, views: np
         else:
             vv = views[s:e][vw] if vw.any() else views[s:e]
             view_list = [int(np.argmax(np.bincount(vv, minlength=V)))]
-        ids, cost, vsel = _retrieve_window(q[s:e], w[s:e], vw, view_list, lib, lib_sq, first, last, k, excl,
+        ids, cost, vsel = _retrieve_window(q[s:e], w[s:e], vw, view_list, lib64, lib_sq, first, last, k, excl,
                                            compiled)
         if len(ids) == 0:
             raise ValueError(f"no library subsequence fits the window of query frames [{s}, {e}): every clip "

@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import InputError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, STYLE, TIMING, read_metrics
+from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, RECONSTRUCT, STYLE, TIMING, read_metrics
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
@@ -399,6 +399,39 @@ def timing_section(page: Page, run: Path) -> None:
     page.add("Stage times", body)
 
 
+def _reconstruct_section(page: Page, run: Path) -> None:
+    """Whole video to 3D (``vidstyle reconstruct``): the pooled errors per 2D source, method and skeleton
+    (metrics/reconstruct.json), one video's frames with the reconstruction projected over them
+    (RUN/reconstruct/*.preview.mp4) and its 3D against the truth (RUN/reconstruct/compare.mp4)."""
+    title = "Whole video to 3D motion (reconstruct)"
+    path = run / "metrics" / "reconstruct.json"
+    m = _metrics(path, RECONSTRUCT)
+    if m is None:
+        page.add(title, _missing("reconstruct metrics", path))
+        return
+    names = {"true2d": "true 2D pose", "ps": "estimated 2D (pictorial structures)", "blazepose": "estimated 2D (BlazePose)"}
+    rows = [[names.get(r["source"], r["source"]), r["method"], r["skeleton"], r["frames"],
+             r.get("mpjpe_root_relative_mm"), r.get("mpjpe_mm"), r.get("pa_mpjpe_mm"),
+             r.get("acceleration_error_mm_per_frame2"), r.get("foot_skate_mm_per_frame")]
+            for r in m["runs"] if r["data"] == "demo test performers"]
+    params = m.get("params") or {}
+    body = [table(rows, ["2D source", "method", "skeleton", "frames", "root-relative MPJPE (mm)", "MPJPE (mm)",
+                         "PA-MPJPE (mm)", "acceleration error (mm/frame²)", "foot skate (mm/frame)"]),
+            f'<p class="note">{esc(", ".join(m.get("videos") or []))}: the first {esc(str(params.get("max_frames")))} '
+            f'frames of each, against {esc(str(params.get("library_frames", "?")))} indexed library frames. Skeleton '
+            f'"library": the output skeleton is the library\'s (the performer\'s body unknown, as for any video); '
+            f'"performer": the take\'s own skeleton given (the motion\'s error alone) (metrics/reconstruct.json)</p>']
+    folder = run / "reconstruct"
+    for p, caption in [*((p, f"{p.stem}: the video with the reconstruction projected over it (yellow) and the "
+                          "reconstruction from the side") for p in sorted(folder.glob("*.preview.mp4"))[:1]),
+                       *((p, "the reconstruction (orange) against the true 3D motion (grey), front and side")
+                         for p in [folder / "compare.mp4"] if p.is_file())]:
+        gif = gif_from_video(p)
+        body.append(f'<figure><img class="anim" alt="{esc(p.stem)}" src="{data_uri(gif, "image/gif")}">'
+                    f'<figcaption>{esc(caption)}</figcaption></figure>')
+    page.add(title, "".join(body))
+
+
 def _get(doc: dict | None, *keys):
     for k in keys:
         if not isinstance(doc, dict) or k not in doc:
@@ -452,6 +485,10 @@ def headline_metrics(run: Path) -> dict:
         for key in ("retrieval_mpjpe", "transition_error_augmg"):
             if h.get(f"augmg.blazepose.{key}") is not None:
                 out["augmg"][f"blazepose_{key}"] = h[f"augmg.blazepose.{key}"]
+    rc = _metrics(run / "metrics" / "reconstruct.json", RECONSTRUCT)
+    if rc is not None:
+        h = rc.get("headline") or {}
+        out["reconstruct"] = {k.split(".", 1)[1]: v for k, v in h.items() if k.startswith("reconstruct.")}
     return out
 
 
@@ -470,5 +507,6 @@ def build_report(run: Path) -> str:
     _style_section(page, run, dataset)
     _motion_section(page, run)
     _augmg_section(page, run, dataset)
+    _reconstruct_section(page, run)
     timing_section(page, run)
     return page.render()
