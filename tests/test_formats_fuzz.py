@@ -20,6 +20,7 @@ from vidstyle.formats.dataset import parse_dataset, read_dataset, write_dataset
 from vidstyle.formats.labels import FrameLabels, parse_labels, read_labels, write_labels
 from vidstyle.formats.library import parse_library, read_library, write_library
 from vidstyle.formats.metrics import parse_metrics, read_metrics, write_metrics
+from vidstyle.formats.poses import parse_poses, read_poses, write_poses
 from vidstyle.formats.recognised import RecognisedLabels, parse_recognised, read_recognised, write_recognised
 from vidstyle.formats.reconstruction import parse_reconstruction, read_reconstruction, write_reconstruction
 from vidstyle.formats.runrecord import parse_run_record, read_run_record, write_run_record
@@ -87,6 +88,19 @@ def _library_doc() -> dict:
                        "frames": 873, "bvh": "clips/lib00_stop.bvh", "labels": "clips/lib00_stop.labels.json"},
                       {"name": "cmu_02_05", "performer": "cmu02", "kind": "cmu", "holds_pose": None, "frames": 400,
                        "bvh": "clips/cmu_02_05.bvh", "labels": "clips/cmu_02_05.labels.json", "source": "x/02_05.bvh"}]}
+
+
+def _poses_doc() -> dict:
+    """A blazepose poses.json (schema 3): a frame with world keypoints, one without, one with no pose."""
+    from vidstyle.formats.poses import PoseFrame, Poses
+
+    rng = np.random.default_rng(1)
+    pts = np.column_stack([rng.uniform(0, 160, (15, 2)), rng.uniform(0, 1, 15)]).round(3)
+    frames = [PoseFrame(0, "front", pts, {"front": 0.7, "left": 0.1, "right": 0.1, "back": 0.1}, azimuth=-20.0,
+                        world=rng.uniform(-0.9, 0.9, (15, 3)).round(5)),
+              PoseFrame(1, "left", pts, {"left": 1.0}),
+              PoseFrame.none(2, "performer not found")]
+    return Poses("v.mp4", "blazepose", frames, params={"smoothed": "one-euro"}).to_document()
 
 
 def _sequence_doc() -> dict:
@@ -239,6 +253,8 @@ def _to_doc(obj):
         return style_to_dict(obj)
     if hasattr(obj, "to_dict"):
         return obj.to_dict()
+    if hasattr(obj, "to_document"):
+        return obj.to_document()
     if isinstance(obj, dict):
         return obj
     return obj.doc
@@ -257,6 +273,7 @@ READERS = {
     "library": (parse_library, write_library, read_library, _library_doc),
     "run_record": (parse_run_record, write_run_record, read_run_record, _run_record_doc),
     "reconstruction": (parse_reconstruction, write_reconstruction, read_reconstruction, _reconstruction_doc),
+    "poses": (parse_poses, write_poses, read_poses, _poses_doc),
     **{f"metrics_{k}": (parse_metrics, write_metrics, read_metrics, (lambda d=d: d)) for k, d in METRICS.items()},
 }
 

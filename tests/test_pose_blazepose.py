@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from vidstyle.mocap.keypoints import KEYPOINT_INDEX, KEYPOINTS, keypoint_joints, keypoint_positions
-from vidstyle.pose.blazepose import BlazePoseEstimator, facing_azimuth, to_keypoints
+from vidstyle.pose.blazepose import BlazePoseEstimator, facing_azimuth, to_keypoints, to_world_keypoints
 
 SHARED_REAL = __import__("tests.conftest", fromlist=["SHARED"]).SHARED / "data" / "video" / "real"
 BODY = [KEYPOINT_INDEX[k] for k in ("left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_knee",
@@ -49,6 +49,12 @@ def test_rendered_frame_keypoints_and_view(take, estimator, view, azimuth):
         assert np.all((pf.points[:, 2] >= 0) & (pf.points[:, 2] <= 1))
         # head_top (extrapolated from the face) near the true crown
         assert np.linalg.norm(pf.points[0, :2] - truth[f, 0]) < 0.5 * torso
+        # the world keypoints: metres, hip-centred, y down (the head above the neck above the pelvis)
+        w = pf.world
+        assert w.shape == (15, 3) and np.all(np.isfinite(w))
+        assert np.linalg.norm(w[KEYPOINT_INDEX["pelvis"]]) < 0.02
+        assert w[0, 1] < w[KEYPOINT_INDEX["neck"], 1] < w[KEYPOINT_INDEX["pelvis"], 1]
+        assert 0.3 < np.linalg.norm(w[KEYPOINT_INDEX["neck"]] - w[KEYPOINT_INDEX["pelvis"]]) < 0.8
 
 
 def test_nobody_is_a_missing_frame_not_fake_points(estimator):
@@ -68,6 +74,14 @@ def test_mapping_and_facing_geometry():
     np.testing.assert_allclose(k[KEYPOINT_INDEX["neck"], :2], (50, 40))
     np.testing.assert_allclose(k[KEYPOINT_INDEX["pelvis"], :2], (50, 80))
     np.testing.assert_allclose(k[0, :2], (50, 20 - 1.6 * 6))
+    # world landmarks map the same way (the image visibilities choose ears or eyes for head_top)
+    xyz = np.column_stack([lm[:, :2], np.arange(33.0)])
+    kw = to_world_keypoints(xyz, lm[:, 2])
+    np.testing.assert_allclose(kw[:, :2], k[:, :2])
+    assert kw[KEYPOINT_INDEX["left_wrist"], 2] == 15 and kw[KEYPOINT_INDEX["pelvis"], 2] == (23 + 24) / 2
+    lm_eyes = lm.copy()
+    lm_eyes[[7, 8], 2] = 0.2
+    assert to_world_keypoints(xyz, lm_eyes[:, 2])[0, 2] == pytest.approx((2 + 5) / 2 + 1.6 * ((2 + 5) / 2 - 9.5))
     w = np.zeros((33, 3))
     w[11], w[12], w[23], w[24] = (0.2, -0.5, 0), (-0.2, -0.5, 0), (0.1, 0, 0), (-0.1, 0, 0)
     assert facing_azimuth(w) == pytest.approx(0.0, abs=1e-6)
@@ -94,7 +108,7 @@ def test_pose_command_blazepose_in_input_pixels(tmp_path, take):
     assert doc["backend"] == "blazepose" and doc["keypoints"] == list(KEYPOINTS) and len(doc["frames"]) == 1
     assert doc["params"]["tracked"] is True
     fr = doc["frames"][0]
-    assert fr["frame"] == 1
+    assert fr["frame"] == 1 and doc["schema_version"] == 3 and np.array(fr["world"]).shape == (15, 3)
     m = keypoint_joints(take.skeleton)
     pts = np.array(fr["points"])
     gt = np.array([truth["joints2d"][1, m[KEYPOINTS[i]].joint] for i in BODY])

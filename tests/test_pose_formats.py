@@ -24,7 +24,7 @@ def test_round_trip(tmp_path, rng):
     path = tmp_path / "poses.json"
     write_poses(path, p)
     doc = json.loads(path.read_text())
-    assert doc["kind"] == "vidstyle.poses" and doc["schema_version"] == 2
+    assert doc["kind"] == "vidstyle.poses" and doc["schema_version"] == 3
     assert doc["keypoints"] == list(KEYPOINTS) and doc["backend"] == "ps" and doc["video"] == "clip.mp4"
     assert set(doc["frames"][0]) == {"frame", "viewpoint", "viewpoint_scores", "points"}
     q = read_poses(path)
@@ -120,3 +120,53 @@ def test_match_pose_reader_skips_missing_frames_with_a_warning(tmp_path, rng, ca
     assert [f.frame for f in frames] == [3, 12, 40]
     assert frames[2].viewpoint == "120"  # unknown view but a known azimuth: matched at that azimuth
     assert "1 of 4 frames have no pose" in caplog.text and "frame 50: nobody found" in caplog.text
+
+
+def test_world_keypoints_round_trip_and_are_validated(tmp_path, rng):
+    p = _poses(rng)
+    p.backend = "blazepose"
+    world = rng.uniform(-0.9, 0.9, (15, 3))
+    p.frames[0].world = world
+    path = tmp_path / "poses.json"
+    write_poses(path, p)
+    doc = json.loads(path.read_text())
+    assert doc["schema_version"] == 3 and len(doc["frames"][0]["world"]) == 15 and "world" not in doc["frames"][1]
+    q = read_poses(path)
+    np.testing.assert_allclose(q.frame(3).world, world, atol=1e-5)
+    assert q.frame(12).world is None
+    for edit, problem in ((lambda w: w[:14], "shape"), (lambda w: [r[:2] for r in w], "shape"),
+                          (lambda w: [[1e6, 0, 0]] + w[1:], "within"), (lambda w: "x", "numeric")):
+        bad = json.loads(json.dumps(doc))
+        bad["frames"][0]["world"] = edit(doc["frames"][0]["world"])
+        path.write_text(json.dumps(bad))
+        with pytest.raises(FormatError, match=problem) as e:
+            read_poses(path)
+        assert e.value.field == "frames[0].world" and str(path) in str(e.value)
+    p.frames[0].world = world.copy()
+    p.frames[0].world[2, 1] = np.nan
+    with pytest.raises(FormatError, match="non-finite"):
+        write_poses(tmp_path / "nan.json", p)
+    missing = PoseFrame.none(50, "nobody found")
+    missing.world = world
+    p.frames[0].world = None
+    p.frames.append(missing)
+    with pytest.raises(FormatError, match="no world"):
+        write_poses(tmp_path / "m.json", p)
+
+
+def test_version_2_files_still_load_without_world(tmp_path, rng):
+    path = tmp_path / "poses.json"
+    write_poses(path, _poses(rng))
+    doc = json.loads(path.read_text())
+    doc["schema_version"] = 2
+    doc["frames"][0]["world"] = "ignored in version 2"
+    path.write_text(json.dumps(doc))
+    assert all(f.world is None for f in read_poses(path).frames)
+
+
+def test_params_must_be_finite_json(tmp_path, rng):
+    p = _poses(rng)
+    p.params = {"scales": [1.0, float("nan")]}
+    with pytest.raises(FormatError) as e:
+        write_poses(tmp_path / "p.json", p)
+    assert e.value.field.startswith("params")

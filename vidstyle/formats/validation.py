@@ -8,6 +8,7 @@ kind                                          version   written by
 ``vidstyle.strikes_diagnostics``              1         ``scripts/strikes_diagnostics.py``
 ``vidstyle.strikes_real_variety``             1         ``scripts/strikes_real_variety.py``
 ``vidstyle.metrics.style_viterbi_prior``      1         ``scripts/style_viterbi_prior.py``
+``vidstyle.validation.reconstruct_reference`` 1         ``scripts/real_reference.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -30,6 +31,7 @@ RECOGNITION = "vidstyle.validation.recognition"
 STRIKES_DIAGNOSTICS = "vidstyle.strikes_diagnostics"
 STRIKES_REAL_VARIETY = "vidstyle.strikes_real_variety"
 STYLE_VITERBI_PRIOR = "vidstyle.metrics.style_viterbi_prior"
+RECONSTRUCT_REFERENCE = "vidstyle.validation.reconstruct_reference"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -37,6 +39,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     STRIKES_DIAGNOSTICS: (1, 1, False, True),
     STRIKES_REAL_VARIETY: (1, 1, False, True),
     STYLE_VITERBI_PRIOR: (1, 2, True, False),
+    RECONSTRUCT_REFERENCE: (1, 1, True, False),
 }
 
 

@@ -16,7 +16,10 @@ Mapping of BlazePose's 33 landmarks (indices in ``mp.solutions.pose.PoseLandmark
   steeper, but the ears sit above the mouth by less than a third of the head). Its score is the
   smallest visibility of the landmarks used.
 
-Scores are BlazePose's per-landmark ``visibility`` (a probability). The viewpoint is read from the
+Scores are BlazePose's per-landmark ``visibility`` (a probability). The 3D world landmarks (metres,
+hip-centred, camera-aligned axes: x right, y down, z away from the camera) are mapped onto the same 15
+keypoints the same way and kept as :attr:`PoseFrame.world` (``"world"`` in ``poses.json``); they are
+per-frame estimates (the tracker's crops and ``--smooth`` leave them as estimated). The viewpoint is read from the
 3D world landmarks (metres, hip-centred, camera-aligned axes): the performer's facing direction is
 perpendicular to the shoulder+hip line; its angle to the camera axis gives front/left/right/back
 scores by a softmax over the cosine of the angular distance to each view.
@@ -256,30 +259,46 @@ class BlazePoseEstimator:
         pts = to_keypoints(img)
         scores = viewpoint_scores(world)
         view = max(scores, key=scores.get)
-        return PoseFrame(index, view, pts, scores, azimuth=round(facing_azimuth(world), 2))
+        return PoseFrame(index, view, pts, scores, azimuth=round(facing_azimuth(world), 2),
+                         world=to_world_keypoints(world, img[:, 2]))
 
     def estimate_many(self, frames: Iterable[tuple[int, np.ndarray]]) -> list[PoseFrame]:
         return [self.estimate(f, i) for i, f in frames]
 
 
+def _map_landmarks(coords: np.ndarray, vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(33, d) landmark coordinates and (33,) visibilities -> (15, d) keypoint coordinates and (15,)
+    scores, by the module's mapping (the same for image and world landmarks: midpoints and the head-top
+    extrapolation are affine, so they hold in either space)."""
+    out = np.zeros((len(KEYPOINTS), coords.shape[1]))
+    score = np.zeros(len(KEYPOINTS))
+    for k, i in DIRECT.items():
+        out[KEYPOINTS.index(k)] = coords[i]
+        score[KEYPOINTS.index(k)] = vis[i]
+    for name, (a, b) in (("neck", (11, 12)), ("pelvis", (23, 24))):
+        out[KEYPOINTS.index(name)] = (coords[a] + coords[b]) / 2
+        score[KEYPOINTS.index(name)] = min(vis[a], vis[b])
+    top_of = [L_EAR, R_EAR] if vis[[L_EAR, R_EAR]].min() >= 0.5 else [L_EYE, R_EYE]
+    e = coords[top_of].mean(axis=0)
+    m = coords[[MOUTH_L, MOUTH_R]].mean(axis=0)
+    out[0] = e + HEAD_TOP_FACTOR * (e - m)
+    score[0] = min(vis[top_of].min(), vis[MOUTH_L], vis[MOUTH_R])
+    return out, np.clip(score, 0.0, 1.0)
+
+
 def to_keypoints(lm: np.ndarray) -> np.ndarray:
     """(33, 3) BlazePose landmarks (x, y, visibility) -> (15, 3) keypoints (x, y, score)."""
     lm = np.asarray(lm, dtype=np.float64)
-    out = np.zeros((len(KEYPOINTS), 3))
-    for k, i in DIRECT.items():
-        out[KEYPOINTS.index(k)] = lm[i]
-    ls, rs, lh, rh = lm[11], lm[12], lm[23], lm[24]
-    out[KEYPOINTS.index("neck")] = [*(ls[:2] + rs[:2]) / 2, min(ls[2], rs[2])]
-    out[KEYPOINTS.index("pelvis")] = [*(lh[:2] + rh[:2]) / 2, min(lh[2], rh[2])]
-    ears = lm[[L_EAR, R_EAR]]
-    eyes = lm[[L_EYE, R_EYE]]
-    top_of = ears if ears[:, 2].min() >= 0.5 else eyes
-    e = top_of[:, :2].mean(axis=0)
-    m = lm[[MOUTH_L, MOUTH_R], :2].mean(axis=0)
-    top = e + HEAD_TOP_FACTOR * (e - m)
-    out[0] = [*top, min(top_of[:, 2].min(), lm[MOUTH_L, 2], lm[MOUTH_R, 2])]
-    out[:, 2] = np.clip(out[:, 2], 0.0, 1.0)
-    return out
+    xy, score = _map_landmarks(lm[:, :2], lm[:, 2])
+    return np.column_stack([xy, score])
+
+
+def to_world_keypoints(world: np.ndarray, visibility: np.ndarray) -> np.ndarray:
+    """(33, 3) BlazePose world landmarks (metres, hip-centred; x right, y down, z away from the camera)
+    and the image landmarks' (33,) visibilities -> (15, 3) keypoints in the same frame and unit, mapped
+    as :func:`to_keypoints` maps the image landmarks (the visibilities choose ears or eyes for head_top)."""
+    xyz, _ = _map_landmarks(np.asarray(world, dtype=np.float64), np.asarray(visibility, dtype=np.float64))
+    return xyz
 
 
 def facing_azimuth(world: np.ndarray) -> float:
