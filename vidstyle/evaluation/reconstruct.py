@@ -271,3 +271,134 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
                        "max_frames": max_frames, "library": [str(p) for p in library], "library_frames": lib.n_frames,
                        "unit_mm": mm},
             "headline": headline, "seed": seed}
+
+
+# ------------------------------------------------------------------------------------------ beyond the demo
+def _runs_for(rec_base, obs: "Observation", true_mm: np.ndarray, mm: float, fps: float, methods, data: str,
+              source: str, skeleton: str) -> list[dict]:
+    out = []
+    for method in methods:
+        rec_base.set_params(method=method)
+        t0 = time.perf_counter()
+        r = rec_base.reconstruct(obs)
+        seconds = time.perf_counter() - t0
+        out.append({"data": data, "source": source, "method": method, "skeleton": skeleton,
+                    **_figures(r.points * mm, true_mm, fps), "observed_frames": int(r.observed.sum()),
+                    "frames_per_second": len(true_mm) / max(seconds, 1e-9)})
+    return out
+
+
+def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[str], test_subjects: Sequence[str],
+                         seconds: float = 20.0, fps: float = 30.0, noise: float = 0.05, seed: int = 0,
+                         methods: Sequence[str] = ("nn", "olng", "subsequence"), unit_mm: float = 56.44,
+                         size: tuple[int, int] = (640, 480), jobs: int = 1, **params) -> dict[str, Any]:
+    """Reconstruction of CMU subjects the library never saw. The library: every clip of
+    ``library_subjects`` (file names ``<subject>_<trial>.bvh``); the test: the first ``seconds`` of every
+    clip of ``test_subjects`` (each subject in one role), resampled to ``fps``, filmed by the
+    reconstruction's camera model at a seeded azimuth (uniform about the performer's first facing),
+    elevation (0-20 degrees) and distance (4.5-6.5 m) with the default 60-degree lens; 2D sources: the true
+    projection (``true2d``) and it plus Gaussian noise of ``noise`` torso lengths per keypoint (``noisy``),
+    both with the true azimuth. The output skeleton is the library's (the test subject's own body is not
+    given). ``unit_mm``: millimetres per CMU unit (1/0.45 inch)."""
+    from ..augmg.projection import facing_of_keypoints, relative_azimuth
+    from ..mocap import read_bvh
+    from ..mocap.keypoints import keypoint_positions
+    from ..motiongraph.graph import has_tpose_first_frame
+    from ..reconstruct.camera import default_intrinsics, project
+    from ..reconstruct.core import Observation, Reconstructor, camera_rotation
+
+    cmu = Path(cmu_dir)
+    lib_files = sorted(f for s in library_subjects for f in cmu.glob(f"{s}_*.bvh"))
+    test_files = sorted(f for s in test_subjects for f in cmu.glob(f"{s}_*.bvh"))
+    if set(library_subjects) & set(test_subjects):
+        raise InputError("a CMU subject is either in the library or in the test, not both")
+    if not lib_files or not test_files:
+        raise InputError(f"{cmu}: no clips of subjects {list(library_subjects)} / {list(test_subjects)}")
+    rng = np.random.default_rng(seed)
+    base = Reconstructor(jobs=jobs, target_fps=fps, **params).fit([str(f) for f in lib_files])
+    K = default_intrinsics(*size)
+    runs: list[dict] = []
+    for f in test_files:
+        m = read_bvh(f)
+        first = 1 if has_tpose_first_frame(m) else 0
+        step = max(1, int(round(m.fps / fps)))
+        pts = keypoint_positions(m)[first::step][: int(seconds * fps)]
+        if len(pts) < 10:
+            continue
+        az0 = float(rng.uniform(0, 360))
+        el = float(rng.uniform(0, 20))
+        dist = float(rng.uniform(4500, 6500)) / unit_mm
+        centre = pts[:, 2].mean(axis=0)
+        face = facing_of_keypoints(pts[:1])[0]
+        a = face + np.radians(az0)
+        cam = centre + dist * np.array([np.sin(a) * np.cos(np.radians(el)), 0.0, np.cos(a) * np.cos(np.radians(el))])
+        cam[1] = centre[1] + dist * np.sin(np.radians(el))
+        # camera axes: looking at the performer's mean position, pitched by el
+        fwd = centre - cam
+        yaw = np.arctan2(fwd[0], fwd[2])
+        Rc = camera_rotation(el)
+        c, s = np.cos(yaw), np.sin(yaw)
+        Ry = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])  # world -> facing the camera's +Z
+        R = Rc @ Ry.T
+        uv = project((pts - cam) @ R.T, K)
+        az = relative_azimuth(cam, pts[:, 2], facing_of_keypoints(pts))
+        true_mm = pts * unit_mm
+        torso = np.linalg.norm(uv[:, 1] - uv[:, 2], axis=-1)[:, None, None]
+        sources = {"true2d": uv, "noisy": uv + rng.normal(0, 1, uv.shape) * noise * torso}
+        for name, xy in sources.items():
+            inside = np.all((xy >= 0) & (xy < np.array(size)), axis=-1)
+            scores = inside.astype(float)
+            obs = Observation(np.where(inside[..., None], xy, np.nan), scores, az, fps, size, source=f.name)
+            runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"cmu:{f.stem}", name, "library")
+    pooled = []
+    for key in sorted({(r["source"], r["method"]) for r in runs}):
+        rows = [r for r in runs if (r["source"], r["method"]) == key]
+        pooled.append({"data": "cmu held-out subjects", "source": key[0], "method": key[1], "skeleton": "library",
+                       **_pool(rows)})
+    return {"runs": pooled + runs, "library_subjects": list(library_subjects), "test_subjects": list(test_subjects),
+            "library_clips": len(lib_files), "library_frames": base.library_.n_frames,
+            "params": {**base.get_params(), "seconds": seconds, "fps": fps, "noise": noise, "unit_mm": unit_mm,
+                       "size": list(size)}, "seed": seed}
+
+
+def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os.PathLike],
+                  videos: Sequence[str | os.PathLike], library: Sequence[str | os.PathLike], unit_mm: float = 56.44,
+                  methods: Sequence[str] = ("nn", "olng", "subsequence"), target_fps: float = 30.0, jobs: int = 1,
+                  **params) -> dict[str, Any]:
+    """Reconstruction of a real calibrated multi-view take from each view alone, against the 3D reference
+    triangulated from all views (:func:`vidstyle.reconstruct.reference.triangulated_reference`; it shares
+    the 2D estimator's biases). ``poses_paths``: BlazePose poses (with world landmarks) of every view,
+    ``videos`` the views' videos (frame rate and size), in the same order. Also scores BlazePose's own 3D
+    world landmarks of the view (``blazepose-world``) under the same assumed camera pitch and alignment."""
+    from ..formats.poses import read_poses
+    from ..reconstruct.core import Observation, Reconstructor
+    from ..reconstruct.reference import reference_in_y_up, triangulated_reference
+    from ..video import VideoReader
+
+    ref = triangulated_reference(calibration, poses_paths)
+    true_mm = reference_in_y_up(ref, floor_at_zero=True)
+    base = Reconstructor(jobs=jobs, target_fps=target_fps, **params).fit(library)
+    runs: list[dict] = []
+    for name, p, v in zip(ref.names, poses_paths, videos):
+        with VideoReader(v) as r:
+            size = (r.width, r.height)
+            ts = r.timestamps
+        fps = float(1.0 / np.median(np.diff(ts)))
+        doc = read_poses(p)
+        frames = np.asarray(ref.frames)
+        obs_all = Observation.from_poses(doc, fps, size, int(frames.max()) + 1)
+        obs = Observation(obs_all.xy[frames], obs_all.scores[frames], obs_all.azimuth[frames], fps, size, str(p))
+        runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"real:{name}", "blazepose", "library")
+        world = blazepose_world_points(doc, int(frames.max()) + 1,
+                                       base.elevation_deg if base.elevation_deg is not None else base.library_elevation_deg)
+        if world is not None:
+            runs.append({"data": f"real:{name}", "source": "blazepose", "method": "blazepose-world",
+                         "skeleton": "blazepose", **_figures(world[frames], true_mm, fps)})
+    pooled = []
+    for key in sorted({(r["source"], r["method"], r["skeleton"]) for r in runs}):
+        rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]
+        pooled.append({"data": "real pose2sim take, every view", "source": key[0], "method": key[1],
+                       "skeleton": key[2], **_pool(rows)})
+    return {"runs": pooled + runs, "views": list(ref.names), "frames": int(len(ref.frames)),
+            "library_frames": base.library_.n_frames, "reference_up_axis": ref.up_axis,
+            "params": {**base.get_params(), "unit_mm": unit_mm}}

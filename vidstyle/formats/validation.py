@@ -32,6 +32,8 @@ STRIKES_DIAGNOSTICS = "vidstyle.strikes_diagnostics"
 STRIKES_REAL_VARIETY = "vidstyle.strikes_real_variety"
 STYLE_VITERBI_PRIOR = "vidstyle.metrics.style_viterbi_prior"
 RECONSTRUCT_REFERENCE = "vidstyle.validation.reconstruct_reference"
+RECONSTRUCT_HELDOUT = "vidstyle.validation.reconstruct_heldout"
+RECONSTRUCT_DEFAULTS = "vidstyle.validation.reconstruct_defaults"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -40,6 +42,8 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     STRIKES_REAL_VARIETY: (1, 1, False, True),
     STYLE_VITERBI_PRIOR: (1, 2, True, False),
     RECONSTRUCT_REFERENCE: (1, 1, True, False),
+    RECONSTRUCT_HELDOUT: (1, 1, True, False),
+    RECONSTRUCT_DEFAULTS: (1, 1, True, False),
 }
 
 
