@@ -9,13 +9,15 @@ from typing import List, Optional
 import typer
 
 from ..errors import InputError
+from ..reconstruct import defaults as D
 from ._evaluate import evaluate_app
 from ._numbers import jobs_option, number
 
 log = logging.getLogger(__name__)
 
 _METHOD_HELP = ("olng: the online lazy neighbourhood graph keeps temporally coherent library paths (Tautges); "
-                "nn: every frame's nearest library frames alone (the baseline).")
+                "nn: every frame's nearest library frames alone (the baseline); subsequence: windows matched "
+                "to library subsequences by DTW, chained by a shortest path (Tautges ch. 4).")
 
 
 def _frames(text: Optional[str]) -> Optional[list[int]]:
@@ -66,10 +68,13 @@ def reconstruct(
                                           "matched library frames (needs <clip>.labels.json beside the clips)."),
     preview: Optional[Path] = typer.Option(None, "--preview", help="Also write a side-by-side video (.mp4): the "
                                            "frames with the reconstruction projected over them, and a side view."),
-    method: str = typer.Option("olng", "--method", help=_METHOD_HELP),
-    k: int = number(32, "--k", lo=1, hi=1000, help="Library neighbours per frame."),
-    blend: int = number(8, "--blend", lo=1, hi=1000, help="Neighbours blended into a frame's pose (at most --k)."),
-    window: float = number(0.5, "--window", lo=0, hi=10, help="OLNG window in seconds (Tautges: about 0.5)."),
+    method: str = typer.Option(D.METHOD, "--method", help=_METHOD_HELP + " Default: chosen on validation performers."),
+    k: int = number(D.K, "--k", lo=1, hi=1000, help="Library neighbours per frame."),
+    blend: int = number(D.N_BLEND, "--blend", lo=1, hi=1000, help="Neighbours blended into a frame's pose (at most --k)."),
+    window: float = number(D.WINDOW_S, "--window", lo=0, hi=10, help="OLNG window in seconds (Tautges: about 0.5; "
+                           "the validation found 0.25-2 s alike)."),
+    smooth: float = number(D.SMOOTH_FRAMES, "--smooth", lo=0, hi=100, help="Gaussian sigma of the pose over time, "
+                           "in frames."),
     views: int = number(12, "--views", lo=1, hi=360, help="Azimuths the library is projected at."),
     focal: Optional[float] = number(None, "--focal", integer=False, lo=0, lo_open=True,
                                     help="Focal length in pixels (default: a 60-degree lens across the longer side)."),
@@ -104,7 +109,7 @@ def reconstruct(
     reconstruct_video(video, library, out, poses=poses, backend=backend, model=model, frames=_frames(frames),
                       fps=fps, size=wh,
                       skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
-                      k=k, n_blend=blend, window_s=window, n_views=views, focal_px=focal, elevation_deg=elevation,
+                      k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views, focal_px=focal, elevation_deg=elevation,
                       foot_lock=foot_lock)
 
 
@@ -118,7 +123,8 @@ def evaluate_reconstruct(
                                     "performance of every test performer)."),
     poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of <video id>.poses.json (vidstyle "
                                          "pose): an estimated 2D source named by its backend; repeatable."),
-    method: List[str] = typer.Option(["nn", "olng"], "--method", help="Methods to score (repeatable). " + _METHOD_HELP),
+    method: List[str] = typer.Option(["nn", "olng", "subsequence"], "--method", help="Methods to score "
+                                     "(repeatable). " + _METHOD_HELP + " subsequence: Tautges' subsequence graph."),
     max_frames: Optional[int] = number(None, "--max-frames", lo=1, hi=10**7, help="Score the first frames of "
                                        "each video only."),
     seed: int = typer.Option(0, "--seed", help="Seed of the split that names the test performers."),

@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, ParameterError
+from . import defaults as D
 from .library import ReconstructionLibrary
 
 log = logging.getLogger(__name__)
@@ -236,15 +237,16 @@ def camera_rotation(elevation_deg: float) -> np.ndarray:
 class Reconstructor:
     """Video 2D poses -> 3D motion by coherent search of a mocap library (module docstring).
 
-    Parameters: ``k`` neighbours per frame; ``window_s`` the OLNG window (Tautges: about half a second);
+    Parameters (defaults: :mod:`.defaults`, chosen on validation performers): ``k`` neighbours per frame;
+    ``window_s`` the OLNG window (Tautges: about half a second);
     ``n_blend`` nodes blended; ``method`` ``"olng"`` or ``"nn"``; ``use_azimuth`` / ``spread`` the views
     searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
     camera's root path; ``foot_lock`` and ``relax_s``; ``focal_px`` (None: the default intrinsics);
     ``elevation_deg`` of the camera (None: the library's); ``n_views``, ``library_elevation_deg`` and
     ``target_fps`` of the library index (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
 
-    def __init__(self, k: int = 32, window_s: float = 0.5, n_blend: int = 8, method: str = "olng",
-                 use_azimuth: bool = True, spread: int = 1, smooth_frames: float = 1.0,
+    def __init__(self, k: int = D.K, window_s: float = D.WINDOW_S, n_blend: int = D.N_BLEND, method: str = D.METHOD,
+                 use_azimuth: bool = True, spread: int = 1, smooth_frames: float = D.SMOOTH_FRAMES,
                  root_smooth_frames: float = 3.0, foot_lock: bool = True, relax_s: float = 2.0,
                  focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
