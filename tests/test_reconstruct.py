@@ -159,3 +159,17 @@ def test_view_rotations_equal_augmgs_view_rotation():
     az = np.array([-170.0, -33.3, 0.0, 12.5, 90.0, 181.0])
     for e in (0.0, 10.0, 45.0):
         np.testing.assert_allclose(view_rotations(az, e), np.stack([view_rotation(a, e) for a in az]), atol=1e-12)
+
+
+def test_brute_force_knn_equals_a_kd_tree():
+    from scipy.spatial import cKDTree
+
+    from vidstyle.reconstruct.core import knn_brute
+
+    rng = np.random.default_rng(3)
+    f = rng.normal(size=(5000, 28)).astype(np.float32)
+    q = rng.normal(size=(37, 28)).astype(np.float32) * 1.5
+    d, i = knn_brute(f, np.einsum("ij,ij->i", f, f), q, 10)
+    dt, it = cKDTree(f.astype(np.float64)).query(q.astype(np.float64), k=10)
+    np.testing.assert_array_equal(i, it)
+    np.testing.assert_allclose(d, dt, rtol=1e-9)

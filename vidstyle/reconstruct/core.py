@@ -225,6 +225,55 @@ def view_rotations(azimuth_deg: np.ndarray, elevation_deg: float) -> np.ndarray:
     return np.stack([right, down, fwd], axis=-2)
 
 
+#: memory of one block of query-to-library products in :func:`knn_brute` (float32 entries)
+KNN_BLOCK_ENTRIES = 1 << 24
+#: library rows whose exact distances bound each query's k-th neighbour before the full pass
+KNN_SAMPLE = 4096
+
+
+def knn_brute(features: np.ndarray, sqnorms: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Exact ``k`` nearest rows of ``features`` (N, D) float32 (``sqnorms`` their squared norms) to each
+    query (Q, D): ``(distances, indices)`` each (Q, k), nearest first (ties: smaller index).
+
+    A video's 2D poses sit off the library's manifold (estimation noise, other bodies), where a kd-tree in
+    these 28 dimensions visits most of its leaves; this is faster there (scripts/bench_reconstruct.py):
+    the k-th smallest exact distance to a fixed sample of :data:`KNN_SAMPLE` library rows bounds the
+    query's k-th neighbour from above; one float32 matrix product per block of queries gives
+    ``2 q.f - |f|^2``, and only the rows where it reaches ``|q|^2 - bound`` (with a float32 slack) are
+    candidates, whose distances are recomputed in float64 and the k smallest kept. Every true neighbour
+    is a candidate, so the answer is exact."""
+    N = len(features)
+    k = min(int(k), N)
+    q = np.ascontiguousarray(queries, dtype=np.float32)
+    out_d = np.empty((len(q), k))
+    out_i = np.empty((len(q), k), dtype=np.int64)
+    if len(q) == 0:
+        return out_d, out_i
+    sample = np.arange(N) if N <= KNN_SAMPLE else np.linspace(0, N - 1, KNN_SAMPLE).astype(np.int64)
+    fs = features[sample].astype(np.float64)
+    q64 = q.astype(np.float64)
+    ds = (q64 * q64).sum(1)[:, None] + (fs * fs).sum(1)[None, :] - 2.0 * q64 @ fs.T  # (Q, S)
+    bound = np.partition(ds, k - 1, axis=1)[:, k - 1] if k <= len(sample) else np.full(len(q), np.inf)
+    qq = (q64 * q64).sum(1)
+    scale = np.maximum(qq, 1.0) + float(np.max(sqnorms, initial=0.0))
+    thresh = (qq - bound - 1e-5 * scale).astype(np.float32)  # 2 q.f - |f|^2 >= thresh for every candidate
+    step = max(1, KNN_BLOCK_ENTRIES // max(N, 1))
+    for s in range(0, len(q), step):
+        qb = q[s:s + step]
+        g = qb @ features.T  # (b, N)
+        g *= 2.0
+        g -= sqnorms[None, :]
+        for j in range(len(qb)):
+            cand = np.flatnonzero(g[j] >= thresh[s + j])
+            if len(cand) < k:  # cannot happen but for rounding: take them all
+                cand = np.arange(N)
+            diff = features[cand].astype(np.float64) - q64[s + j]
+            dist = np.sqrt(np.einsum("kd,kd->k", diff, diff))
+            top = np.lexsort((cand, dist))[:k]
+            out_d[s + j], out_i[s + j] = dist[top], cand[top]
+    return out_d, out_i
+
+
 def camera_rotation(elevation_deg: float) -> np.ndarray:
     """(3, 3) world-to-camera rotation of the reconstruction's camera: at the origin, looking along +Z
     pitched down by ``elevation_deg`` (rows: image right, image down, viewing direction)."""
@@ -357,9 +406,9 @@ class Reconstructor:
             rows = np.flatnonzero(want[:, v])
             if rows.size == 0:
                 continue
-            d, i = index.trees_[v].query(feats[rows], k=k)
-            ids[rows, v * k:(v + 1) * k] = np.asarray(i).reshape(len(rows), k)
-            cost[rows, v * k:(v + 1) * k] = np.asarray(d).reshape(len(rows), k)
+            d, i = knn_brute(index.features_[v], self._sqnorms(v), feats[rows], k)
+            ids[rows, v * k:(v + 1) * k] = i
+            cost[rows, v * k:(v + 1) * k] = d
             view[rows, v * k:(v + 1) * k] = v
         # each library frame once per video frame, at its best view
         order = np.argsort(cost, axis=1, kind="stable")
@@ -375,6 +424,15 @@ class Reconstructor:
         bad = ~np.isfinite(cost)
         ids[bad], view[bad] = -1, -1
         return ids, cost, view
+
+    def _sqnorms(self, v: int) -> np.ndarray:
+        """(N,) squared norms of view ``v``'s library features (computed once per library)."""
+        lib = self.library_
+        cache = lib.__dict__.setdefault("_sqnorm_cache", {})
+        if v not in cache:
+            f = lib.index_.features_[v]
+            cache[v] = np.einsum("ij,ij->i", f, f)
+        return cache[v]
 
     def coherent_costs(self, ids: np.ndarray, cost: np.ndarray, fps: float) -> np.ndarray:
         """Step 2: (T, k) cost of every node (the OLNG best-path cost; the plain cost for ``method="nn"``),
