@@ -22,7 +22,11 @@ Reads every JSON document under ``--metrics DIR`` (recursively) and recognises t
 - ``vidstyle.metrics.strikes`` (``vidstyle evaluate strikes --out``): the share of a real mocap clip's
   action frames recognised as punches, per camera;
 - ``vidstyle.strikes_diagnostics`` (``scripts/strikes_diagnostics.py``): the same share for each variant
-  of the clip (mirrored, arms only, upper body, slower, faster) and for demo punches.
+  of the clip (mirrored, arms only, upper body, slower, faster) and for demo punches;
+- ``vidstyle.metrics.reconstruct`` (``vidstyle evaluate reconstruct --out``), ``vidstyle.validation.
+  reconstruct_heldout`` (``scripts/reconstruct_heldout.py``) and ``vidstyle.validation.reconstruct_defaults``
+  (``scripts/validate_reconstruct.py``): 3D reconstruction errors per 2D source, method and skeleton, and
+  the validated defaults.
 
 Every row names the file it came from (several ``--metrics`` directories: the README uses the committed
 results and the validation files, ``--metrics pipelines/kickboxing/results pipelines/kickboxing/validation``).
@@ -437,6 +441,66 @@ def people_table(items, root: Path) -> list[str]:
     return lines
 
 
+_REC_SOURCES = {"true2d": "true 2D", "ps": "pictorial structures", "blazepose": "BlazePose",
+                "noisy": "true 2D + 5 % noise"}
+
+
+def _mm(x) -> str:
+    return "n/a" if x is None else f"{x:.1f}"
+
+
+def _reconstruct_rows(rows, data_prefix: str) -> list[str]:
+    out = []
+    for r in rows:
+        if not str(r["data"]).startswith(data_prefix):
+            continue
+        out.append(f"| {_REC_SOURCES.get(r['source'], r['source'])} | {r['method']} | {r['skeleton']} | {r['frames']} | "
+                   f"{_mm(r['mpjpe_root_relative_mm'])} | {_mm(r['pa_mpjpe_mm'])} | {_mm(r['mpjpe_mm'])} | "
+                   f"{_mm(r['acceleration_error_mm_per_frame2'])} | {_mm(r['foot_skate_mm_per_frame'])} |")
+    return out
+
+
+_REC_HEAD = ["| 2D source | method | skeleton | frames | root-relative MPJPE (mm) | PA-MPJPE (mm) | MPJPE (mm) | "
+             "acceleration error (mm/frame²) | foot skate (mm/frame) |", "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+
+
+def reconstruct_table(items, root: Path) -> list[str]:
+    lines = []
+    for p, d in items:
+        lines += [f"Held-out renders: {', '.join(d.get('videos') or [])}, first "
+                  f"{(d.get('params') or {}).get('max_frames')} frames each (`{_rel(p, root)}`). Skeleton *library*: "
+                  "the output is on the library's skeleton (the performer's body unknown); *performer*: the take's own "
+                  "skeleton given, so the error is the motion's alone. *blazepose-world*: BlazePose's own 3D.", "",
+                  *_REC_HEAD, *_reconstruct_rows(d["runs"], "demo test performers"), ""]
+    return lines[:-1]
+
+
+def reconstruct_heldout_table(items, root: Path) -> list[str]:
+    lines = []
+    for p, d in items:
+        cmu, real = d.get("cmu"), d.get("real")
+        if cmu:
+            lines += [f"CMU subjects {', '.join(cmu['test_subjects'])} against a library of subjects "
+                      f"{', '.join(cmu['library_subjects'])} ({cmu['library_frames']:,} indexed frames), seeded "
+                      f"cameras (`{_rel(p, root)}`, `scripts/reconstruct_heldout.py`):", "", *_REC_HEAD,
+                      *_reconstruct_rows(cmu["runs"], "cmu held-out"), ""]
+        if real:
+            lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
+                      f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
+                      f"library):", "", *_REC_HEAD, *_reconstruct_rows(real["runs"], "real pose2sim"), ""]
+    return lines[:-1] if lines else []
+
+
+def reconstruct_defaults_table(items, root: Path) -> list[str]:
+    lines = []
+    for p, d in items:
+        c = d["chosen"]
+        lines.append(f"- `{_rel(p, root)}`: on {', '.join(d['videos'])} ({d['frames']} frames, {d['source']} 2D): "
+                     + ", ".join(f"{k} {v}" for k, v in c.items())
+                     + f", root-relative MPJPE {d['chosen_score_mm']:.1f} mm ({len(d['table'])} settings tried)")
+    return lines
+
+
 def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
     docs = load_documents(root)
     EXTRA_ROOTS[:] = list(extra)
@@ -460,7 +524,12 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
                  "(`vidstyle evaluate pose --calibration`, leave-one-view-out)", multiview_table),
                 ("vidstyle.metrics.people", "Following one performer among several people (`vidstyle evaluate people`)",
                  people_table),
-                ("vidstyle.metrics.augmg", "AugMG (`vidstyle evaluate augmg`, held-out performers' marks)", augmg_table)]
+                ("vidstyle.metrics.augmg", "AugMG (`vidstyle evaluate augmg`, held-out performers' marks)", augmg_table),
+                ("vidstyle.metrics.reconstruct", "Whole video to 3D (`vidstyle evaluate reconstruct`)", reconstruct_table),
+                ("vidstyle.validation.reconstruct_heldout", "Whole video to 3D beyond the demo", reconstruct_heldout_table),
+                ("vidstyle.validation.reconstruct_defaults",
+                 "Reconstruction defaults, chosen on validation performers (`scripts/validate_reconstruct.py`)",
+                 reconstruct_defaults_table)]
     for kind, title, fn in sections:
         if docs.get(kind):
             out += [f"**{title}**", "", *fn(docs[kind], root), ""]
@@ -515,6 +584,15 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
         rows.append(f"| Demo, method 2: transitions through the performer's own pose, error against the true transition "
                     f"| {b['transition_augmg_mm']:.0f} mm instead of {b['transition_plain_mm']:.0f} mm with a plain blend "
                     f"(lower by {_pct(b.get('transition_reduction'))}) | [AugMG](" + results_link + ") |")
+    first = _first(docs.get("vidstyle.metrics.reconstruct", []))
+    if first:
+        h = first[1].get("headline") or {}
+        if h.get("reconstruct.mpjpe_mm") is not None:
+            rows.append(f"| Demo: a video's performer as 3D motion, mean joint error against the true motion (root-relative, "
+                        f"{_REC_SOURCES.get(h.get('reconstruct.source'), h.get('reconstruct.source'))} 2D) "
+                        f"| {h['reconstruct.mpjpe_mm']:.0f} mm on the library's skeleton, "
+                        f"{h['reconstruct.mpjpe_performer_skeleton_mm']:.0f} mm on the performer's own "
+                        f"| [reconstruct](" + results_link + ") |")
     first = next(((p, d) for p, d in docs.get("vidstyle.metrics.multiview_pose", [])
                   if Path(p).name == "pose_realviews_blazepose.json"), None)
     if first:
