@@ -36,7 +36,7 @@ GOAL_FPS_AT_1M = 30.0
 
 def tiled(lib, n: int, seed: int = 0):
     """A copy of a fitted ReconstructionLibrary grown to ``n`` indexed frames by tiling its clips."""
-    from vidstyle.augmg.index import _build_tree
+    from vidstyle.augmg.index import build_tree
 
     rng = np.random.default_rng(seed)
     base_n = lib.n_frames
@@ -53,7 +53,7 @@ def tiled(lib, n: int, seed: int = 0):
     idx.fps_ = np.concatenate([idx.fps_] * reps)
     feats = np.concatenate([idx.features_] * reps, axis=1)[:, :n]
     idx.features_ = (feats + rng.normal(0, 0.01, feats.shape)).astype(np.float32)
-    idx.trees_ = [_build_tree(f) for f in idx.features_]
+    idx.trees_ = [build_tree(f) for f in idx.features_]
     out.index_ = idx
     return out
 

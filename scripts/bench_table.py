@@ -54,7 +54,7 @@ def augmg(d: dict) -> list[tuple]:
     rows = []
     top = max(r["n"] for r in d["rows"])
     for r in d["rows"]:
-        if r["n"] == top and r["index"].endswith(" bal"):  # the index vidstyle ships (augmg.index._build_tree)
+        if r["n"] == top and r["index"].endswith(" bal"):  # the index vidstyle ships (augmg.index.build_tree)
             rows.append((f"AugMG query, {r['n']:,} library frames, one core ({r['index']})",
                          f"{r['query_ms']:.2f} ms ({r['speedup']:.0f}x brute force)",
                          f"<= {d['goal_ms_at_1M']:g} ms at 1M", _met(r["query_ms"] <= d["goal_ms_at_1M"])))

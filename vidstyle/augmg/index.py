@@ -48,7 +48,7 @@ def _project_clip(args) -> list[np.ndarray]:
     return [angle_features(project(norm, az, elevation)) for az in views]
 
 
-def _build_tree(features: np.ndarray):
+def build_tree(features: np.ndarray):
     """A balanced, compact kd-tree (median splits): exact like any kd-tree, and on a projected library
     35x faster per query at 1M frames than sliding-midpoint splits (scripts/bench_augmg.py)."""
     from scipy.spatial import cKDTree
@@ -144,7 +144,7 @@ class PoseIndex:
         self.clip_ = np.concatenate([np.full(len(f[0]), i) for i, f in enumerate(per_clip)])
         self.frame_ = np.concatenate([np.arange(len(f[0])) * self.stride for f in per_clip])
         self.features_ = np.stack([np.concatenate([f[v] for f in per_clip]) for v in range(self.n_views)])
-        self.trees_ = parallel_map(_build_tree, list(self.features_), jobs=self.jobs, scheduler=self.scheduler,
+        self.trees_ = parallel_map(build_tree, list(self.features_), jobs=self.jobs, scheduler=self.scheduler,
                                    description="indexing views")
         self.bone_ratio_ = bone_length_ratios(np.concatenate([c.points[::self.stride] for c in clips]))
         return self

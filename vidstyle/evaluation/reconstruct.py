@@ -106,7 +106,7 @@ def write_comparison(path: str | os.PathLike, pred_mm: np.ndarray, true_mm: np.n
     import cv2
 
     from ..reconstruct import metrics as M
-    from ..reconstruct.run import _BONES
+    from ..augmg.keypoints import BONE_INDEX as _BONES
     from ..video.writer import VideoWriter
 
     aligned, _, _ = M.align_sequence(pred_mm, true_mm)

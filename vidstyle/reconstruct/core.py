@@ -231,7 +231,18 @@ KNN_BLOCK_ENTRIES = 1 << 24
 KNN_SAMPLE = 4096
 
 
-def knn_brute(features: np.ndarray, sqnorms: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+def augmented_features(features: np.ndarray) -> np.ndarray:
+    """(N, D + 1) float32 ``[2 f, -|f|^2]`` of library features (N, D): one product with ``[q, 1]`` gives
+    ``2 q.f - |f|^2`` (:func:`knn_brute`)."""
+    f = np.asarray(features, dtype=np.float32)
+    out = np.empty((len(f), f.shape[1] + 1), dtype=np.float32)
+    np.multiply(f, 2.0, out=out[:, :-1])
+    out[:, -1] = -np.einsum("ij,ij->i", f.astype(np.float64), f.astype(np.float64))
+    return out
+
+
+def knn_brute(features: np.ndarray, sqnorms: np.ndarray, queries: np.ndarray, k: int,
+              augmented: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Exact ``k`` nearest rows of ``features`` (N, D) float32 (``sqnorms`` their squared norms) to each
     query (Q, D): ``(distances, indices)`` each (Q, k), nearest first (ties: smaller index).
 
@@ -241,7 +252,8 @@ def knn_brute(features: np.ndarray, sqnorms: np.ndarray, queries: np.ndarray, k:
     query's k-th neighbour from above; one float32 matrix product per block of queries gives
     ``2 q.f - |f|^2``, and only the rows where it reaches ``|q|^2 - bound`` (with a float32 slack) are
     candidates, whose distances are recomputed in float64 and the k smallest kept. Every true neighbour
-    is a candidate, so the answer is exact."""
+    is a candidate, so the answer is exact. ``augmented``: :func:`augmented_features` of ``features`` when
+    already known (one product then gives the whole left-hand side)."""
     N = len(features)
     k = min(int(k), N)
     q = np.ascontiguousarray(queries, dtype=np.float32)
@@ -257,12 +269,12 @@ def knn_brute(features: np.ndarray, sqnorms: np.ndarray, queries: np.ndarray, k:
     qq = (q64 * q64).sum(1)
     scale = np.maximum(qq, 1.0) + float(np.max(sqnorms, initial=0.0))
     thresh = (qq - bound - 1e-5 * scale).astype(np.float32)  # 2 q.f - |f|^2 >= thresh for every candidate
+    aug = augmented_features(features) if augmented is None else augmented
+    qa = np.concatenate([q, np.ones((len(q), 1), dtype=np.float32)], axis=1)
     step = max(1, KNN_BLOCK_ENTRIES // max(N, 1))
     for s in range(0, len(q), step):
         qb = q[s:s + step]
-        g = qb @ features.T  # (b, N)
-        g *= 2.0
-        g -= sqnorms[None, :]
+        g = qa[s:s + step] @ aug.T  # (b, N): 2 q.f - |f|^2
         for j in range(len(qb)):
             cand = np.flatnonzero(g[j] >= thresh[s + j])
             if len(cand) < k:  # cannot happen but for rounding: take them all
@@ -406,7 +418,7 @@ class Reconstructor:
             rows = np.flatnonzero(want[:, v])
             if rows.size == 0:
                 continue
-            d, i = knn_brute(index.features_[v], self._sqnorms(v), feats[rows], k)
+            d, i = knn_brute(index.features_[v], self._sqnorms(v), feats[rows], k, self._augmented(v))
             ids[rows, v * k:(v + 1) * k] = i
             cost[rows, v * k:(v + 1) * k] = d
             view[rows, v * k:(v + 1) * k] = v
@@ -432,6 +444,14 @@ class Reconstructor:
         if v not in cache:
             f = lib.index_.features_[v]
             cache[v] = np.einsum("ij,ij->i", f, f)
+        return cache[v]
+
+    def _augmented(self, v: int) -> np.ndarray:
+        """:func:`augmented_features` of view ``v`` (computed once per library)."""
+        lib = self.library_
+        cache = lib.__dict__.setdefault("_augmented_cache", {})
+        if v not in cache:
+            cache[v] = augmented_features(lib.index_.features_[v])
         return cache[v]
 
     def coherent_costs(self, ids: np.ndarray, cost: np.ndarray, fps: float) -> np.ndarray:

@@ -14,9 +14,6 @@ from .core import Observation, Reconstruction, Reconstructor
 
 log = logging.getLogger(__name__)
 
-#: bones drawn in the preview (keypoint index pairs)
-_BONES = ((0, 1), (1, 2), (1, 3), (3, 5), (5, 7), (1, 4), (4, 6), (6, 8), (2, 9), (9, 11), (11, 13), (2, 10),
-          (10, 12), (12, 14))
 
 
 def observation_for(video: str | os.PathLike | None, poses: str | os.PathLike | None, backend: str | None = None,
@@ -97,6 +94,7 @@ def write_preview(rec: Reconstruction, video: str | os.PathLike | None, obs: Obs
     reconstruction seen from the performer's side (orthographic, the floor as a line)."""
     import cv2
 
+    from ..augmg.keypoints import BONE_INDEX as _BONES
     from ..video import VideoReader
     from ..video.writer import VideoWriter
     from .camera import project
