@@ -11,5 +11,6 @@
 - :mod:`.core`: :class:`~.core.Reconstructor`, from a video's 2D poses to a blended, smoothed 3D motion
   with its root placed by :mod:`.camera` (the static pinhole camera from 2D keypoints) and planted feet
   locked (:mod:`.metrics` also holds the contacts and the 3D error metrics).
+- :mod:`.footlock`: planted feet pinned by two-bone IK of the legs (:func:`~.footlock.pin_feet`).
 - :mod:`.run`: ``vidstyle reconstruct`` as a library call (BVH, ``reconstruction.json``, labels, preview).
 """

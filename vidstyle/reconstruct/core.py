@@ -44,6 +44,13 @@ the camera's azimuth about the performer when the pose stage estimated it):
    is moved horizontally so a planted foot stays where it was planted (both planted: the mean of the
    two corrections); the difference between that path and the camera's is low-passed (Gaussian, sigma
    ``relax_s`` seconds) and added back, so a long take does not drift away from what the camera saw.
+   What that leaves (two planted feet under a changing stance, the relaxed drift) is taken up by the
+   legs: :func:`.footlock.pin_feet` turns hip and knee by two-bone IK so that each planted ankle stays
+   where its run of contact began (height: the run's median, not below the floor), the foot keeping
+   its world orientation, blended in and out over 3 frames either side; the IK moves an ankle at most
+   ``pin_max_offset`` leg lengths (thigh + shin) from where the pose puts it (beyond that the contact or
+   the root path is wrong, and bending the leg further would only trade slide for pose error: the foot
+   then trails the pose at that distance). The keypoints are those of the pinned motion.
 
 The result (:class:`Reconstruction`) is a :class:`vidstyle.mocap.motion.Motion` on the library's skeleton
 at the video's frame rate (library length units), with per-frame keypoints, labels from the matched library
@@ -183,6 +190,18 @@ def _fill_gaps(x: np.ndarray, ok: np.ndarray) -> np.ndarray:
     return out.reshape(x.shape)
 
 
+def _leg_length(skeleton) -> float:
+    """Thigh plus shin of the skeleton's left leg: ``|knee - hip| + |ankle - knee|`` in the rest pose."""
+    from ..mocap.keypoints import keypoint_joints
+
+    kj = keypoint_joints(skeleton)
+    rest = np.zeros((skeleton.n_joints, 3))
+    for j, p in enumerate(skeleton.parents):  # parents come first
+        rest[j] = (rest[p] if p >= 0 else 0.0) + skeleton.offsets[j]
+    hip, knee, ankle = (rest[kj[f"left_{k}"].joint] for k in ("hip", "knee", "ankle"))
+    return float(np.linalg.norm(knee - hip) + np.linalg.norm(ankle - knee))
+
+
 def _hemisphere_continuous(q: np.ndarray) -> np.ndarray:
     """Quaternions (T, J, 4) with signs flipped so consecutive frames are in one hemisphere."""
     q = q.copy()
@@ -302,17 +321,19 @@ class Reconstructor:
     ``window_s`` the OLNG window (Tautges: about half a second);
     ``n_blend`` nodes blended; ``method`` ``"olng"`` or ``"nn"``; ``use_azimuth`` / ``spread`` the views
     searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
-    camera's root path; ``foot_lock`` and ``relax_s``; ``focal_px`` (None: the default intrinsics);
-    ``elevation_deg`` of the camera (None: the library's); ``n_views``, ``library_elevation_deg`` and
-    ``target_fps`` of the library index (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
+    camera's root path; ``foot_lock`` and ``relax_s`` (the root lock) and ``pin_max_offset`` (the leg
+    IK's reach from the pose, in leg lengths; None: unlimited) of step 7; ``focal_px`` (None: the default
+    intrinsics); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
+    ``library_elevation_deg`` and ``target_fps`` of the library index
+    (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
 
     def __init__(self, k: int = D.K, window_s: float = D.WINDOW_S, n_blend: int = D.N_BLEND, method: str = D.METHOD,
                  use_azimuth: bool = True, spread: int = 1, smooth_frames: float = D.SMOOTH_FRAMES,
                  root_smooth_frames: float = 3.0, foot_lock: bool = True, relax_s: float = 2.0,
                  focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
-                 ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0, jobs: int = 1,
-                 scheduler: str | None = None) -> None:
+                 ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
+                 pin_max_offset: float | None = 0.25, jobs: int = 1, scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend
@@ -332,6 +353,7 @@ class Reconstructor:
         self.ssg_overlap = ssg_overlap
         self.ssg_k = ssg_k
         self.ssg_transition_weight = ssg_transition_weight
+        self.pin_max_offset = pin_max_offset
         self.jobs = jobs
         self.scheduler = scheduler
 
@@ -339,7 +361,7 @@ class Reconstructor:
         return {k: getattr(self, k) for k in (
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
             "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
-            "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight")}
+            "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset")}
 
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
@@ -360,6 +382,10 @@ class Reconstructor:
             v = float(getattr(self, name))
             if not (v >= 0 and math.isfinite(v)):
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
+        if self.pin_max_offset is not None and not (float(self.pin_max_offset) >= 0
+                                                    and math.isfinite(float(self.pin_max_offset))):
+            raise ParameterError("pin_max_offset",
+                                 f"must be a finite number >= 0 or None, got {self.pin_max_offset}")
         if not 0 <= float(self.ssg_overlap) <= 0.5:
             raise ParameterError("ssg_overlap", f"must be in 0..0.5 (a fraction of the window), got {self.ssg_overlap}")
         if not 1 <= int(self.ssg_k) <= 1000:
@@ -606,7 +632,16 @@ class Reconstructor:
         if self.foot_lock:
             root = self._lock_feet(root, rel, contacts, obs.fps)
         motion = Motion(skeleton, qw, fps=obs.fps, root_positions=root)
-        points = rel + root[:, None, :]
+        if self.foot_lock:
+            from .footlock import pin_feet
+
+            reach = None
+            if self.pin_max_offset is not None:
+                reach = float(self.pin_max_offset) * _leg_length(skeleton)
+            motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach)  # the library's floor: height 0
+            points = self._keypoints(motion)
+        else:
+            points = rel + root[:, None, :]
         return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
                               {**self.get_params(), "stride": int(lib.stride_), "library_frames": lib.n_frames})
 
