@@ -6,9 +6,12 @@ For one performance take of each validation performer of the ``unseen-performer`
 ``--frames`` frames, 2D poses from the shipped pictorial-structures model (``vidstyle pose --backend ps``,
 what the pipeline uses on renders; cached in ``--cache``), reconstructed against the demo library
 (``out/augmg/library``) on the library's skeleton. Score: the pooled root-relative MPJPE (mm; lower is
-better). Search: coordinate descent from the starting values, one factor at a time over its candidates,
-twice over the factors (of the candidates within ``TIE_MM`` of a factor's best score the first listed, the
-cheaper, wins); every (values, score) tried is written to the table.
+better). Search: per method, coordinate descent over the factors that method uses, from the starting
+values, twice over them; the method whose best scores least wins. Of a factor's candidates within
+``TIE_MM`` of its best score the first listed (the cheaper) wins, except the foot-pinning cap
+(``pin_max_offset``, leg lengths; None: no cap), chosen by the least foot skate at the true planted feet
+among those within ``POSE_TOLERANCE`` of the best pose error (pinning may trade one for the other). Every
+(values, score) tried is written to the table.
 
     python scripts/validate_reconstruct.py [--run pipelines/kickboxing/out]
 
@@ -35,11 +38,14 @@ RUN = ROOT / "pipelines" / "kickboxing" / "out"
 DEFAULT_OUT = ROOT / "pipelines" / "kickboxing" / "validation" / "reconstruct.json"
 DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_validate_reconstruct"
 
+#: the pinning cap may cost at most this share of pose error (relative to its factor's best) for less skate
+POSE_TOLERANCE = 0.02
 #: differences below this are noise: of the candidates within it of the best, the first listed (the cheaper) wins
 TIE_MM = 0.1
-START = {"method": "olng", "k": 32, "n_blend": 8, "window_s": 0.5, "smooth_frames": 1.0}
+START = {"method": "olng", "k": 32, "n_blend": 8, "window_s": 0.5, "smooth_frames": 1.0, "pin_max_offset": 0.25}
 CANDIDATES = {"method": ["nn", "olng", "subsequence"], "k": [16, 32, 64, 128], "n_blend": [1, 4, 8, 16, 32],
-              "window_s": [0.25, 0.5, 1.0, 2.0], "smooth_frames": [0.0, 1.0, 2.0, 3.0]}
+              "window_s": [0.25, 0.5, 1.0, 2.0], "smooth_frames": [0.0, 1.0, 2.0, 3.0],
+              "pin_max_offset": [0.1, 0.25, 0.4, None]}
 
 
 def poses_for(dataset, videos: list[str], frames: int, cache: Path) -> Path:
@@ -86,8 +92,12 @@ def main() -> int:
         table: list[dict] = []
         seen: dict[tuple, float] = {}
 
+        rows: dict[tuple, dict] = {}
+
         def score(values: dict) -> float:
-            key = tuple(sorted(values.items()))
+            key = tuple(sorted(values.items(), key=lambda kv: kv[0]))
+            if values["n_blend"] > values["k"]:  # not a setting: blend at most the k neighbours
+                return float("inf")
             if key not in seen:
                 params = {k: v for k, v in values.items() if k != "method"}
                 m = evaluate(args.run / "dataset", [args.run / "augmg" / "library" / "clips"], videos=videos,
@@ -95,18 +105,36 @@ def main() -> int:
                              max_frames=args.frames, seed=args.seed, **params)
                 row = next(r for r in m["runs"] if r["data"] == "demo test performers" and r["source"] == "ps")
                 seen[key] = row["mpjpe_root_relative_mm"]
+                rows[key] = row
                 table.append({**values, "mpjpe_root_relative_mm": row["mpjpe_root_relative_mm"],
                               "pa_mpjpe_mm": row["pa_mpjpe_mm"], "foot_skate_mm_per_frame": row["foot_skate_mm_per_frame"],
                               "acceleration_error_mm_per_frame2": row["acceleration_error_mm_per_frame2"]})
                 log.info("%s: %.1f mm", values, seen[key])
             return seen[key]
 
-        best = dict(START)
-        for _ in range(2):
-            for factor, cands in CANDIDATES.items():
-                scores = {c: score({**best, factor: c}) for c in cands}
-                low = min(scores.values())
-                best[factor] = next(c for c in cands if scores[c] <= low + TIE_MM)  # the first within the tie
+        #: the factors each method uses (the subsequence graph has its own window and takes no k / blend)
+        uses = {"nn": ["k", "n_blend", "smooth_frames", "pin_max_offset"],
+                "olng": ["k", "n_blend", "window_s", "smooth_frames", "pin_max_offset"],
+                "subsequence": ["smooth_frames", "pin_max_offset"]}
+        per_method = {}
+        for method in CANDIDATES["method"]:
+            best = {**START, "method": method}
+            for _ in range(2):
+                for factor in uses[method]:
+                    cands = CANDIDATES[factor]
+                    scores = {c: score({**best, factor: c}) for c in cands}
+                    low = min(scores.values())
+                    if factor == "pin_max_offset":  # least skate among those within POSE_TOLERANCE of the best pose
+                        ok = [c for c in cands if scores[c] <= low * (1 + POSE_TOLERANCE)]
+                        skate = {c: rows[tuple(sorted({**best, factor: c}.items(), key=lambda kv: kv[0]))]
+                                 ["foot_skate_mm_per_frame"] for c in ok}
+                        best[factor] = min(ok, key=lambda c: (skate[c], cands.index(c)))
+                    else:
+                        best[factor] = next(c for c in cands if scores[c] <= low + TIE_MM)  # the first within the tie
+            per_method[method] = dict(best)
+        method_scores = {m: score(b) for m, b in per_method.items()}
+        low = min(method_scores.values())
+        best = per_method[next(m for m in CANDIDATES["method"] if method_scores[m] <= low + TIE_MM)]
     except VidstyleError as e:
         log.error("%s", e)
         return 2
@@ -115,7 +143,7 @@ def main() -> int:
            "score": "pooled root-relative MPJPE (mm), lower is better", "start": START, "candidates": CANDIDATES,
            "factors_not_searched": ["n_views", "spread", "root_smooth_frames", "relax_s", "ssg_window_s",
                                     "ssg_overlap", "ssg_k", "ssg_transition_weight"],
-           "tie_mm": TIE_MM, "chosen": best, "chosen_score_mm": seen[tuple(sorted(best.items()))], "table": table}
+           "tie_mm": TIE_MM, "pose_tolerance": POSE_TOLERANCE, "chosen": best, "per_method": per_method, "chosen_score_mm": seen[tuple(sorted(best.items(), key=lambda kv: kv[0]))], "table": table}
     write_validation(args.out, doc)
     log.info("chosen %s (%.1f mm); wrote %s", best, doc["chosen_score_mm"], args.out)
     return 0

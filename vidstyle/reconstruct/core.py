@@ -333,7 +333,7 @@ class Reconstructor:
                  focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
-                 pin_max_offset: float | None = 0.25, jobs: int = 1, scheduler: str | None = None) -> None:
+                 pin_max_offset: float | None = D.PIN_MAX_OFFSET, jobs: int = 1, scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend

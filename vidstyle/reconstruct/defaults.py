@@ -3,8 +3,9 @@ performers (``pipelines/kickboxing/validation/reconstruct.json``: every value tr
 performers never took part). ``tests/test_reconstruct_defaults.py`` checks that these are that file's
 choices and that the CLI and the library default to them."""
 
-METHOD = "olng"        # validation: olng beat nn and subsequence
-K = 64                 # neighbours per frame: 64 beat 16, 32 and 128
-N_BLEND = 8            # neighbours blended: 8 (16 within the 0.1 mm tie; 1, 4 and 32 worse)
-WINDOW_S = 0.25        # OLNG window, seconds: all of 0.25-2 s within the tie, the shortest kept
-SMOOTH_FRAMES = 1.0    # Gaussian sigma of the pose over time, frames: 1 beat 0, 2 and 3
+METHOD = "olng"          # olng's best beat nn's and the subsequence graph's
+K = 64                   # neighbours per frame
+N_BLEND = 16             # neighbours blended
+WINDOW_S = 0.25          # OLNG window, seconds (0.25-2 s alike within the 0.1 mm tie; the shortest kept)
+SMOOTH_FRAMES = 1.0      # Gaussian sigma of the pose over time, frames
+PIN_MAX_OFFSET = None    # no cap on how far leg IK pulls a planted foot: least pose error and least skate
