@@ -73,6 +73,15 @@ GROUPS: list[tuple[str, str, list[tuple[str, str, str]]]] = [
         ("blazepose_retrieval_mpjpe", "BlazePose poses: retrieval MPJPE", " mm"),
         ("blazepose_transition_error_augmg", "transition error with AugMG", " mm"),
     ]),
+    ("reconstruct", "reconstruct", [
+        ("mpjpe_mm", "root-relative MPJPE", " mm"),
+        ("mpjpe_performer_skeleton_mm", "on the performer's skeleton", " mm"),
+        ("pa_mpjpe_mm", "PA-MPJPE", " mm"),
+        ("mpjpe_true2d_mm", "with true 2D", " mm"),
+        ("foot_skate_mm_per_frame", "foot skate", " mm/frame"),
+        ("source", "2D:", ""),
+        ("method", "method:", ""),
+    ]),
 ]
 
 
