@@ -28,7 +28,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 
 import numpy as np
-
 from _benchutil import machine, timeit, write_results
 
 GOAL_FPS_AT_1M = 30.0
@@ -44,7 +43,7 @@ def tiled(lib, n: int, seed: int = 0):
     out = copy.copy(lib)
     idx = copy.copy(lib.index_)
     n_clips = len(idx.paths_)
-    take = lambda a: np.concatenate([a] * reps)[:n]  # noqa: E731
+    take = lambda a: np.concatenate([a] * reps)[:n]
     out.rotations_, out.root_height_ = take(lib.rotations_), take(lib.root_height_)
     out.points_, out.contacts_, out.labels_ = take(lib.points_), take(lib.contacts_), take(lib.labels_)
     idx.clip_ = np.concatenate([idx.clip_ + r * n_clips for r in range(reps)])[:n]

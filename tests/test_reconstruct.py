@@ -5,24 +5,18 @@ reader), and the evaluation scores the true motion better than a wrong one."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from reconstruct_util import FPS, H, W, filmed
 from typer.testing import CliRunner
 
 from vidstyle.augmg.keypoints import KP
 from vidstyle.cli import app
 from vidstyle.mocap import read_bvh
-from vidstyle.mocap.keypoints import keypoint_positions
-from vidstyle.mocap.placement import yaw_quat
-from vidstyle.mocap.quat import qmul
 from vidstyle.reconstruct import metrics as M
-from vidstyle.reconstruct.camera import default_intrinsics, project
-from vidstyle.reconstruct.core import Observation, Reconstructor, camera_rotation
-
-W, H, FPS = 320, 240, 20.0
+from vidstyle.reconstruct.core import Observation, Reconstructor
 
 
 @pytest.fixture(scope="module")
@@ -34,31 +28,10 @@ def library(tmp_path_factory):
     return out / "clips"
 
 
-def _filmed(clip: Path, yaw: float, place: np.ndarray, elevation: float = 10.0, cam_height: float = 20.0):
-    """A library clip turned by ``yaw`` and moved to ``place`` (floor), filmed at 20 fps by the
-    reconstruction's camera model: (true world keypoints (T, 15, 3), 2D (T, 15, 2), azimuth (T,))."""
-    from vidstyle.augmg.projection import facing_of_keypoints, relative_azimuth
-    from vidstyle.mocap.motion import Motion
-
-    m = read_bvh(clip)
-    step = int(round(m.fps / FPS))
-    q = m.rotations[::step].copy()
-    q[:, 0] = qmul(yaw_quat(np.full(len(q), yaw)), q[:, 0])
-    c, s = math.cos(yaw), math.sin(yaw)
-    r = m.root_positions[::step]
-    root = np.column_stack([c * r[:, 0] + s * r[:, 2], r[:, 1], -s * r[:, 0] + c * r[:, 2]])
-    root[:, [0, 2]] += place - root[0, [0, 2]]
-    pts = keypoint_positions(Motion(m.skeleton, q, fps=FPS, root_positions=root))
-    cam = np.array([0.0, cam_height, 0.0])
-    uv = project((pts - cam) @ camera_rotation(elevation).T, default_intrinsics(W, H))
-    az = relative_azimuth(cam, pts[:, KP["pelvis"]], facing_of_keypoints(pts))
-    return pts, uv, az
-
-
 def test_a_library_clip_filmed_by_the_model_camera_comes_back_as_itself(library):
     clip = sorted(library.glob("*jab*.bvh"))[0]
     own = sorted(library.glob(clip.name.split("_")[0] + "_*.bvh"))  # the clip's performer only: one body
-    pts, uv, az = _filmed(clip, yaw=2.5, place=np.array([3.0, 70.0]))
+    pts, uv, az = filmed(clip, yaw=2.5, place=np.array([3.0, 70.0]))
     obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
     # views 5 degrees apart: the true frame is in the index at about the true viewpoint
     rec = Reconstructor(n_blend=1, foot_lock=False, smooth_frames=0, root_smooth_frames=0, n_views=72).fit(own).reconstruct(obs)
@@ -75,7 +48,7 @@ def test_a_library_clip_filmed_by_the_model_camera_comes_back_as_itself(library)
 
 def test_missing_frames_are_bridged_and_blending_stays_close(library):
     clip = sorted(library.glob("*hook*.bvh"))[0]
-    pts, uv, az = _filmed(clip, yaw=-1.0, place=np.array([-5.0, 80.0]))
+    pts, uv, az = filmed(clip, yaw=-1.0, place=np.array([-5.0, 80.0]))
     scores = np.ones(uv.shape[:2])
     uv = uv.copy()
     uv[20:26] = np.nan  # six frames without a pose
@@ -93,7 +66,7 @@ def test_missing_frames_are_bridged_and_blending_stays_close(library):
 
 def test_olng_is_never_worse_than_its_nearest_neighbours_on_noisy_2d(library):
     clip = sorted(library.glob("*uppercut*.bvh"))[0]
-    pts, uv, az = _filmed(clip, yaw=0.3, place=np.array([0.0, 60.0]))
+    pts, uv, az = filmed(clip, yaw=0.3, place=np.array([0.0, 60.0]))
     rng = np.random.default_rng(0)
     torso = np.linalg.norm(uv[:, KP["neck"]] - uv[:, KP["pelvis"]], axis=-1).mean()
     noisy = uv + rng.normal(0, 0.15 * torso, uv.shape)
@@ -108,7 +81,7 @@ def test_cli_writes_bvh_record_labels_and_preview_that_read_back(tmp_path, libra
     from vidstyle.formats.reconstruction import read_reconstruction
 
     clip = sorted(library.glob("*jab*.bvh"))[0]
-    pts, uv, az = _filmed(clip, yaw=3.0, place=np.array([0.0, 70.0]))
+    pts, uv, az = filmed(clip, yaw=3.0, place=np.array([0.0, 70.0]))
     frames = [{"frame": i, "viewpoint": "unknown", "azimuth": float(az[i]),
                "viewpoint_scores": {"front": 1.0}, "points": [[float(x), float(y), 1.0] for x, y in uv[i]]}
               for i in range(len(uv))]

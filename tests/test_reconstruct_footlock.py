@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from reconstruct_util import FPS, H, W, filmed
 from scipy.spatial.transform import Rotation
 
 from vidstyle.mocap import read_bvh
@@ -18,8 +19,6 @@ from vidstyle.mocap.kinematics import forward_kinematics
 from vidstyle.mocap.motion import Motion
 from vidstyle.reconstruct import metrics as M
 from vidstyle.reconstruct.footlock import pin_feet
-
-W, H, FPS = 320, 240, 20.0
 
 
 @pytest.fixture(scope="module")
@@ -204,31 +203,6 @@ def test_bad_arguments_raise_value_error(clip):
     assert out is not clip and np.array_equal(out.rotations, clip.rotations)
 
 
-def _filmed(clip_path, yaw: float, place: np.ndarray, elevation: float = 10.0, cam_height: float = 20.0):
-    """A library clip turned by ``yaw``, moved to ``place`` and filmed at 20 fps by the reconstruction's
-    camera model: (true world keypoints (T, 15, 3), 2D (T, 15, 2), azimuth (T,))."""
-    from vidstyle.augmg.keypoints import KP
-    from vidstyle.augmg.projection import facing_of_keypoints, relative_azimuth
-    from vidstyle.mocap.placement import yaw_quat
-    from vidstyle.mocap.quat import qmul
-    from vidstyle.reconstruct.camera import default_intrinsics, project
-    from vidstyle.reconstruct.core import camera_rotation
-
-    m = read_bvh(clip_path)
-    step = round(m.fps / FPS)
-    q = m.rotations[::step].copy()
-    q[:, 0] = qmul(yaw_quat(np.full(len(q), yaw)), q[:, 0])
-    c, s = math.cos(yaw), math.sin(yaw)
-    r = m.root_positions[::step]
-    root = np.column_stack([c * r[:, 0] + s * r[:, 2], r[:, 1], -s * r[:, 0] + c * r[:, 2]])
-    root[:, [0, 2]] += place - root[0, [0, 2]]
-    pts = keypoint_positions(Motion(m.skeleton, q, fps=FPS, root_positions=root))
-    cam = np.array([0.0, cam_height, 0.0])
-    uv = project((pts - cam) @ camera_rotation(elevation).T, default_intrinsics(W, H))
-    az = relative_azimuth(cam, pts[:, KP["pelvis"]], facing_of_keypoints(pts))
-    return pts, uv, az
-
-
 @pytest.mark.parametrize("method,noise", [("olng", 0.0), ("subsequence", 0.0), ("olng", 0.02)])
 def test_reconstruction_skate_drops_below_5_mm_per_frame(clips, monkeypatch, method, noise):
     """Every clip of the library filmed by the model camera from one side (2D noise ``noise`` torso
@@ -244,7 +218,7 @@ def test_reconstruction_skate_drops_below_5_mm_per_frame(clips, monkeypatch, met
     slides = {"pinned": [], "locked": []}
     err = {"pinned": [], "locked": []}
     for path in sorted(clips.glob("*.bvh")):
-        pts, uv, az = _filmed(path, yaw=2.0, place=rng.uniform(-5, 5, 2) + [0, 70])
+        pts, uv, az = filmed(path, yaw=2.0, place=rng.uniform(-5, 5, 2) + [0, 70])
         torso = np.linalg.norm(uv[:, 1] - uv[:, 2], axis=-1).mean()
         obs = Observation(uv + rng.normal(0, noise * torso, uv.shape), np.ones(uv.shape[:2]), az, FPS, (W, H))
         with monkeypatch.context() as mp:

@@ -171,7 +171,6 @@ def evaluate_augmg_cmd(
     from rich.table import Table
 
     from ..evaluation.augmg import evaluate
-    from ..fileio import write_json
     from ..formats.augmg_transitions import write_augmg_transitions
     from ..formats.metrics import AUGMG, write_metrics
 
@@ -188,11 +187,9 @@ def evaluate_augmg_cmd(
         log.info("wrote %s", transitions)
     write_metrics(out, metrics, kind=AUGMG)
     if headline is not None:
-        from ..fileio import read_json
+        from ._evaluate import merge_headline
 
-        head = read_json(headline) if headline.is_file() else {}
-        head.update(metrics["headline"])
-        write_json(headline, head)
+        merge_headline(headline, metrics["headline"])
     table = Table(title=f"AugMG: {metrics['params']['queries']} held-out transitions, "
                         f"{metrics['params']['library_frames']} library frames")
     for col in ("2D source", "queries", "MPJPE top-1 mm", "MPJPE ref mm", "oracle mm", "R@1", "R@10",

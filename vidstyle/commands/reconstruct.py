@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import List, Optional
 
 import typer
 
@@ -20,7 +19,7 @@ _METHOD_HELP = ("olng: the online lazy neighbourhood graph keeps temporally cohe
                 "to library subsequences by DTW, chained by a shortest path (Tautges ch. 4).")
 
 
-def _frames(text: Optional[str]) -> Optional[list[int]]:
+def _frames(text: str | None) -> list[int] | None:
     """``"0-199"`` or ``"0,5,9"`` -> frame list."""
     if text is None:
         return None
@@ -47,26 +46,26 @@ def register(app: typer.Typer) -> None:
 
 
 def reconstruct(
-    video: Optional[Path] = typer.Argument(None, help="Input video (its frame rate and size; poses are estimated "
+    video: Path | None = typer.Argument(None, help="Input video (its frame rate and size; poses are estimated "
                                            "in it unless --poses)."),
-    library: List[Path] = typer.Option(..., "--library", "-l", help="Mocap clips (BVH files or directories) to "
+    library: list[Path] = typer.Option(..., "--library", "-l", help="Mocap clips (BVH files or directories) to "
                                        "search; repeatable. All on one joint layout."),
     out: Path = typer.Option(..., "--out", "-o", help="BVH to write (the library's skeleton and length unit; +Y "
                              "up, the camera at the origin looking along +Z)."),
-    poses: Optional[Path] = typer.Option(None, "--poses", "-p", help="poses.json of the video (vidstyle pose) "
+    poses: Path | None = typer.Option(None, "--poses", "-p", help="poses.json of the video (vidstyle pose) "
                                          "instead of estimating them here."),
-    backend: Optional[str] = typer.Option(None, "--backend", help="Pose backend when estimating (as vidstyle "
+    backend: str | None = typer.Option(None, "--backend", help="Pose backend when estimating (as vidstyle "
                                           "pose: ps or blazepose)."),
-    model: Optional[Path] = typer.Option(None, "--model", "-m", help="Pose model of --backend ps."),
-    frames: Optional[str] = typer.Option(None, "--frames", help="Frames to reconstruct: A-B or a comma list "
+    model: Path | None = typer.Option(None, "--model", "-m", help="Pose model of --backend ps."),
+    frames: str | None = typer.Option(None, "--frames", help="Frames to reconstruct: A-B or a comma list "
                                          "(default: all)."),
-    skeleton: Optional[Path] = typer.Option(None, "--skeleton", help="BVH whose skeleton the motion is put on "
+    skeleton: Path | None = typer.Option(None, "--skeleton", help="BVH whose skeleton the motion is put on "
                                             "(same joint layout as the library; default: the first clip's)."),
-    record: Optional[Path] = typer.Option(None, "--record", help="Also write reconstruction.json: per frame the "
+    record: Path | None = typer.Option(None, "--record", help="Also write reconstruction.json: per frame the "
                                           "blended library frames and weights, azimuth, label, foot contacts."),
-    labels: Optional[Path] = typer.Option(None, "--labels", help="Also write per-frame action labels of the "
+    labels: Path | None = typer.Option(None, "--labels", help="Also write per-frame action labels of the "
                                           "matched library frames (needs <clip>.labels.json beside the clips)."),
-    preview: Optional[Path] = typer.Option(None, "--preview", help="Also write a side-by-side video (.mp4): the "
+    preview: Path | None = typer.Option(None, "--preview", help="Also write a side-by-side video (.mp4): the "
                                            "frames with the reconstruction projected over them, and a side view."),
     method: str = typer.Option(D.METHOD, "--method", help=_METHOD_HELP + " Default: chosen on validation performers."),
     k: int = number(D.K, "--k", lo=1, hi=1000, help="Library neighbours per frame."),
@@ -76,15 +75,15 @@ def reconstruct(
     smooth: float = number(D.SMOOTH_FRAMES, "--smooth", lo=0, hi=100, help="Gaussian sigma of the pose over time, "
                            "in frames."),
     views: int = number(12, "--views", lo=1, hi=360, help="Azimuths the library is projected at."),
-    focal: Optional[float] = number(None, "--focal", integer=False, lo=0, lo_open=True,
+    focal: float | None = number(None, "--focal", integer=False, lo=0, lo_open=True,
                                     help="Focal length in pixels (default: a 60-degree lens across the longer side)."),
-    elevation: Optional[float] = number(None, "--elevation", integer=False, lo=-80, hi=80,
+    elevation: float | None = number(None, "--elevation", integer=False, lo=-80, hi=80,
                                         help="Camera pitch in degrees, down positive (default: the library "
                                         "projection's, 10)."),
     foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Keep planted feet in place."),
-    fps: Optional[float] = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
+    fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
-    size: Optional[str] = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
+    size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
     jobs: int = jobs_option(-1, help="Parallel workers for the pose estimate and the library index (-1 = all cores)."),
 ) -> None:
     """The performer of a video as 3D motion (BVH): each frame's 2D pose matched against the mocap library
@@ -117,22 +116,22 @@ def reconstruct(
 def evaluate_reconstruct(
     dataset: Path = typer.Option(..., "--dataset", "-d", help="Demo dataset directory (renders with their true "
                                  "3D motion)."),
-    library: List[Path] = typer.Option(..., "--library", "-l", help="Library clips or directories (repeatable)."),
+    library: list[Path] = typer.Option(..., "--library", "-l", help="Library clips or directories (repeatable)."),
     out: Path = typer.Option(Path("metrics/reconstruct.json"), "--out", "-o", help="Metrics JSON."),
-    video: List[str] = typer.Option([], "--video", help="Video ids to reconstruct (repeatable; default: one "
+    video: list[str] = typer.Option([], "--video", help="Video ids to reconstruct (repeatable; default: one "
                                     "performance of every test performer)."),
-    poses_dir: List[Path] = typer.Option([], "--poses-dir", help="Directory of <video id>.poses.json (vidstyle "
+    poses_dir: list[Path] = typer.Option([], "--poses-dir", help="Directory of <video id>.poses.json (vidstyle "
                                          "pose): an estimated 2D source named by its backend; repeatable."),
-    method: List[str] = typer.Option(["nn", "olng", "subsequence"], "--method", help="Methods to score "
+    method: list[str] = typer.Option(["nn", "olng", "subsequence"], "--method", help="Methods to score "
                                      "(repeatable). " + _METHOD_HELP + " subsequence: Tautges' subsequence graph."),
-    max_frames: Optional[int] = number(None, "--max-frames", lo=1, hi=10**7, help="Score the first frames of "
+    max_frames: int | None = number(None, "--max-frames", lo=1, hi=10**7, help="Score the first frames of "
                                        "each video only."),
     seed: int = typer.Option(0, "--seed", help="Seed of the split that names the test performers."),
-    unit_mm: Optional[float] = number(None, "--unit-mm", integer=False, lo=0, lo_open=True,
+    unit_mm: float | None = number(None, "--unit-mm", integer=False, lo=0, lo_open=True,
                                       help="Millimetres per mocap length unit (default: the dataset's)."),
-    headline: Optional[Path] = typer.Option(None, "--headline", help="Also merge reconstruct.* keys into this "
+    headline: Path | None = typer.Option(None, "--headline", help="Also merge reconstruct.* keys into this "
                                             "headline JSON."),
-    animation: Optional[Path] = typer.Option(None, "--animation", help="Also write a video (.mp4) of the first "
+    animation: Path | None = typer.Option(None, "--animation", help="Also write a video (.mp4) of the first "
                                              "video's reconstruction against the truth, front and side."),
     jobs: int = jobs_option(-1, help="Parallel workers for the library index (-1 = all cores)."),
 ) -> None:
@@ -143,17 +142,15 @@ def evaluate_reconstruct(
     from rich.table import Table
 
     from ..evaluation.reconstruct import evaluate
-    from ..fileio import read_json, write_json
     from ..formats.metrics import RECONSTRUCT, write_metrics
+    from ._evaluate import merge_headline
 
     metrics = evaluate(dataset, library, videos=video or None, poses_dirs=poses_dir, methods=method,
                        max_frames=max_frames, seed=seed, unit_mm=unit_mm, jobs=jobs,
                        animation=animation)
     write_metrics(out, metrics, kind=RECONSTRUCT)
     if headline is not None:
-        head = read_json(headline) if headline.is_file() else {}
-        head.update(metrics["headline"])
-        write_json(headline, head)
+        merge_headline(headline, metrics["headline"])
     table = Table(title=f"Reconstruction of {len(metrics['videos'])} held-out videos "
                         f"({metrics['params']['library_frames']} indexed library frames)")
     for col in ("2D source", "method", "skeleton", "frames", "root-rel. MPJPE mm", "MPJPE mm", "PA-MPJPE mm",

@@ -30,9 +30,12 @@ import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..reconstruct.core import Observation
 
 from ..errors import InputError
 
@@ -105,8 +108,8 @@ def write_comparison(path: str | os.PathLike, pred_mm: np.ndarray, true_mm: np.n
     the side (right), orthographic, the floor as a line."""
     import cv2
 
-    from ..reconstruct import metrics as M
     from ..augmg.keypoints import BONE_INDEX as _BONES
+    from ..reconstruct import metrics as M
     from ..video.writer import VideoWriter
 
     aligned, _, _ = M.align_sequence(pred_mm, true_mm)
@@ -274,7 +277,7 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
 
 
 # ------------------------------------------------------------------------------------------ beyond the demo
-def _runs_for(rec_base, obs: "Observation", true_mm: np.ndarray, mm: float, fps: float, methods, data: str,
+def _runs_for(rec_base, obs: Observation, true_mm: np.ndarray, mm: float, fps: float, methods, data: str,
               source: str, skeleton: str) -> list[dict]:
     out = []
     for method in methods:
@@ -399,6 +402,6 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
         rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]
         pooled.append({"data": "real pose2sim take, every view", "source": key[0], "method": key[1],
                        "skeleton": key[2], **_pool(rows)})
-    return {"runs": pooled + runs, "views": list(ref.names), "frames": int(len(ref.frames)),
+    return {"runs": pooled + runs, "views": list(ref.names), "frames": len(ref.frames),
             "library_frames": base.library_.n_frames, "reference_up_axis": ref.up_axis,
             "params": {**base.get_params(), "unit_mm": unit_mm}}
