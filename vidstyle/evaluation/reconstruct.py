@@ -172,7 +172,7 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
              **params) -> dict[str, Any]:
     """The reconstruct metrics document (module docstring). ``params``: :class:`Reconstructor` parameters.
     ``animation``: also write :func:`write_comparison` of the first video's reconstruction from the first
-    estimated source (true 2D without one), the library skeleton and the last of ``methods``."""
+    estimated source (true 2D without one), the library skeleton and ``olng`` (else the last of ``methods``)."""
     from ..evaluation.augmg import mocap_unit_mm
     from ..formats.dataset import read_dataset
     from ..formats.poses import read_poses
@@ -236,7 +236,8 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
                            **_figures(out.points * mm, true_mm, fps),
                            "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
                     runs.append(row)
-                    if (animation is not None and vid == videos[0] and skel == skeletons[0] and method == methods[-1]
+                    shown = "olng" if "olng" in methods else methods[-1]
+                    if (animation is not None and vid == videos[0] and skel == skeletons[0] and method == shown
                             and src == list(sources)[min(1, len(sources) - 1)]):
                         write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")
                     log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
