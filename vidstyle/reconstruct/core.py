@@ -75,6 +75,8 @@ log = logging.getLogger(__name__)
 MIN_KEYPOINTS = 8
 MIN_SCORE = 0.2
 METHODS = ("olng", "nn", "subsequence")
+#: a frame whose fitted depth is more than this factor from the take's median is bridged, not believed
+DEPTH_RANGE = 2.0
 
 
 @dataclass
@@ -619,6 +621,10 @@ class Reconstructor:
             rel = self._keypoints(posed)  # (T, 15, 3) world axes, relative to the root joint
             t_cam = cam.fit_translations(rel @ Rc.T, obs.xy, wts, K)  # (T, 3) root in camera coordinates
             t_ok = ok & np.all(np.isfinite(t_cam), axis=1)
+            if t_ok.any():  # a collapsed 2D pose puts the performer at an absurd depth: bridge it instead
+                z = t_cam[:, 2]
+                zm = float(np.median(z[t_ok]))
+                t_ok &= (z > zm / DEPTH_RANGE) & (z < zm * DEPTH_RANGE)
             if not t_ok.any():
                 raise InputError(f"{obs.source or 'poses'}: no frame's keypoints fix the camera")
             root = _fill_gaps(np.where(t_ok[:, None], t_cam, 0.0), t_ok) @ Rc  # camera -> world, camera at 0
