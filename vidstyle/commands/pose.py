@@ -134,7 +134,7 @@ def train_pose(
 
 
 def pose(
-    videos: list[Path] = typer.Argument(..., help="Input video; several with --out-dir (one process for all: "
+    videos: list[Path] = typer.Argument(..., metavar="VIDEO...", help="Input video; several with --out-dir (one process for all: "
                                         "the backend's libraries are loaded once)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="poses.json to write (one VIDEO)."),
     out_dir: Path | None = typer.Option(None, "--out-dir", help="Write <video stem>.poses.json here, one per "
@@ -169,7 +169,8 @@ def pose(
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
-    y = row in the input video's pixels, as a player shows the video)."""
+    y = row in the input video's pixels, as a player shows the video); several videos -> one poses.json
+    each in --out-dir."""
     import contextlib
 
     from ..fileio import check_writable, output_dir, outputs_by_stem
