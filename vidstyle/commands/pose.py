@@ -134,7 +134,7 @@ def train_pose(
 
 
 def pose(
-    videos: list[Path] = typer.Argument(..., metavar="VIDEO...", help="Input video; several with --out-dir (one process for all: "
+    videos: list[Path] = typer.Argument(..., metavar="VIDEO", help="Input video; several with --out-dir (one process for all: "
                                         "the backend's libraries are loaded once)."),
     out: Path | None = typer.Option(None, "--out", "-o", help="poses.json to write (one VIDEO)."),
     out_dir: Path | None = typer.Option(None, "--out-dir", help="Write <video stem>.poses.json here, one per "
