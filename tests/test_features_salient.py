@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from vidstyle.errors import InputError
-from vidstyle.features.salient import SalientParams, salient_points, select_points, silhouette
+from vidstyle.features.salient import (
+    SalientParams,
+    frame_points,
+    frame_points_numpy,
+    salient_points,
+    select_points,
+    silhouette,
+)
 
 
 def moving_disc(T=12, H=60, W=80, speed=3, radius=9):
@@ -150,3 +157,25 @@ def test_fast_mover_wins_over_slow_mover():
     inner = pts[(pts[:, 0] > 0) & (pts[:, 0] < T - 1)]
     assert len(inner) >= 3 * (T - 2) - 2
     assert (inner[:, 1] < 32).mean() >= 0.9  # rows of the fast disc (centre row 20, radius 8, plus flow spread)
+
+
+def test_compiled_frame_points_are_the_numpy_reference(rng):
+    """salient_points scores and selects a frame's points in one compiled pass (frame_points): the same
+    points in the same order as the numpy reference (the float32 magnitude on the silhouette, then
+    select_points), on random flows with exact ties, infinite and NaN flow, empty silhouettes, one-pixel
+    frames and min_flow values that float32 rounds (numpy compares a float32 array in float32)."""
+    for trial in range(300):
+        H, W = (int(x) for x in rng.integers(1, 40, 2))
+        mask = rng.random((H, W)) < rng.random()
+        flow = rng.normal(size=(H, W, 2)) * rng.choice([0.1, 1.0, 5.0])
+        if trial % 3 == 0:
+            flow = np.round(flow)  # many exact ties
+        if trial % 7 == 0:
+            flow[rng.random((H, W)) < 0.1] = np.inf
+        if trial % 11 == 0:
+            flow[rng.random((H, W)) < 0.1] = np.nan
+        flow = flow.astype(np.float32)
+        p = SalientParams(n_points=int(rng.integers(1, 15)), min_distance=float(rng.choice([0.0, 1.0, 2.5, 5.0])),
+                          min_flow=float(rng.choice([0.0, 0.05, 1.0, 0.1])))
+        got, want = frame_points(mask, flow, p), frame_points_numpy(mask, flow, p)
+        assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), trial

@@ -255,3 +255,29 @@ def test_cli_defaults_are_the_library_defaults():
     for k in ("backend", "context", "jobs", "scheduler"):
         assert got[k] == lib_pose[k], k
     assert got["scales"] is None and lib_pose["scales"] is None and got["model"] is None
+
+
+def test_several_videos_with_out_dir_give_each_video_s_own_run(tmp_path, tiny):
+    """vidstyle pose A B --out-dir D (the pipeline's pose_marks: one process per backend for all videos)
+    writes D/<video stem>.poses.json byte-identical to a run per video with --out; a mix that cannot be
+    written is refused before any work."""
+    import shutil
+
+    _, path, video = tiny
+    videos = []
+    for name in ("a", "b"):
+        videos.append(tmp_path / f"{name}.mp4")
+        shutil.copy(video, videos[-1])
+    opts = ["--model", str(path), "-j", "1"]
+    out_dir = tmp_path / "poses"
+    assert main(["pose", str(videos[0]), "--frames", "0,3", *opts, "--out", str(tmp_path / "a1.json")]) == 0
+    assert main(["pose", str(videos[1]), "--frames", "0,3", *opts, "--out", str(tmp_path / "b1.json")]) == 0
+    assert main(["pose", *map(str, videos), "--frames", "0,3", *opts, "--out-dir", str(out_dir)]) == 0
+    assert sorted(p.name for p in out_dir.iterdir()) == ["a.poses.json", "b.poses.json"]
+    assert (out_dir / "a.poses.json").read_bytes() == (tmp_path / "a1.json").read_bytes()
+    assert (out_dir / "b.poses.json").read_bytes() == (tmp_path / "b1.json").read_bytes()
+    bad = tmp_path / "bad"
+    assert main(["pose", *map(str, videos), *opts, "--out", str(bad / "x.json")]) == 2
+    assert main(["pose", str(videos[0]), *opts]) == 2  # neither --out nor --out-dir
+    assert main(["pose", *map(str, videos), *opts, "--out-dir", str(bad), "--overlay", str(bad / "o")]) == 2
+    assert not bad.exists()

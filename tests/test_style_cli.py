@@ -220,3 +220,29 @@ def test_library_with_defaults_is_the_cli(dataset, tmp_path, capsys):
     gen = {p.name: p.default for p in typer.main.get_command(app).commands["generate"].params}
     sig = inspect.signature(generate_sequence).parameters
     assert (gen["length"], gen["model"], gen["seed"]) == (sig["length"].default, sig["model"].default, sig["seed"].default)
+
+
+@pytest.mark.parametrize("fmt", ["json", "text"])
+def test_generate_several_styles_in_one_run_writes_what_single_runs_write(dataset, tmp_path, capsys, fmt):
+    """generate --style A --style B --out-dir D (the pipeline's generate stage, one process for every
+    performer) writes D/<style stem>.<format> byte-identical to a run per style with --out."""
+    styles = tmp_path / "styles"
+    assert main(["learn-style", "--dataset", str(dataset), "--out-dir", str(styles), "--n-init", "1",
+                 "--modes", "1-2"]) == 0
+    paths = sorted(styles.iterdir())
+    out_dir = tmp_path / "generated"
+    opts = ["--length", "15", "--seed", "4", "--format", fmt]
+    assert main(["generate", *[x for p in paths for x in ("--style", str(p))], *opts, "--out-dir", str(out_dir)]) == 0
+    suffix = {"json": ".json", "text": ".txt"}[fmt]
+    assert sorted(p.name for p in out_dir.iterdir()) == [p.stem + suffix for p in paths]
+    for p in paths:
+        single = tmp_path / f"single_{p.stem}{suffix}"
+        assert main(["generate", "--style", str(p), *opts, "--out", str(single)]) == 0
+        assert (out_dir / f"{p.stem}{suffix}").read_bytes() == single.read_bytes()
+    capsys.readouterr()
+    # several styles need --out-dir; --out and --out-dir together are refused; nothing is written
+    bad = tmp_path / "bad"
+    _fails(capsys, ["generate", "--style", str(paths[0]), "--style", str(paths[1]), *opts], None, "--out-dir")
+    _fails(capsys, ["generate", "--style", str(paths[0]), *opts, "--out", str(bad / "x"), "--out-dir", str(bad)],
+           None, "not both")
+    assert not bad.exists()

@@ -264,3 +264,38 @@ def test_a_still_image_renamed_mp4_is_not_a_video(tmp_path):
         VideoReader(fake)
     with pytest.raises(InputError, match="still image"):
         probe(fake)
+
+
+@pytest.mark.parametrize("suffix,shape", [(".mp4", (120, 160, 3)), (".mp4", (121, 161, 3)), (".mp4", (48, 64))])
+def test_background_encoder_writes_the_same_file(tmp_path, suffix, shape):
+    """VideoWriter(background=True) encodes on a thread of its own: the same bytes as the encoder in the
+    caller's thread, also when the caller reuses one frame buffer for every frame (the encoder must not
+    see a later frame's pixels), more frames than the hand-over queue holds. (H.264 in mp4 only: the MKV
+    muxer does not write the same bytes twice even from one thread.)"""
+    rng = np.random.default_rng(4)
+    frames = [rng.integers(0, 256, shape, dtype=np.uint8) for _ in range(23)]
+    paths = []
+    for background in (False, True):
+        out = tmp_path / f"v{int(background)}{suffix}"
+        buf = np.empty(shape, np.uint8)
+        with VideoWriter(out, 20.0, background=background) as w:
+            for f in frames:
+                buf[...] = f
+                w.write(buf)
+        paths.append(out)
+    assert paths[0].read_bytes() == paths[1].read_bytes()
+
+
+def test_background_encoder_error_leaves_no_file(tmp_path):
+    """An error while writing with the background encoder (a frame of another size) leaves no file and no
+    temporary behind, and the encoder thread ends."""
+    import threading
+
+    out = tmp_path / "v.mp4"
+    with pytest.raises(ValueError):
+        with VideoWriter(out, 20.0, background=True) as w:
+            for _ in range(6):
+                w.write(np.zeros((32, 32, 3), np.uint8))
+            w.write(np.zeros((16, 16, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []
+    assert not any(t.name == "vidstyle-video-encoder" for t in threading.enumerate())

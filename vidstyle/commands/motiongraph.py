@@ -108,7 +108,8 @@ def write_preview(motion, path: Path, fps: float = 30.0) -> None:
         from ..render import render_to_file
     except ImportError:
         raise InputError("--preview: the renderer (vidstyle.render.render_to_file) is not available") from None
-    render_to_file(motion, str(path), view="front", size=(640, 480), fps=fps)
+    # one 640x480 preview: x264 on a thread of its own while the frames are drawn (the same file)
+    render_to_file(motion, str(path), view="front", size=(640, 480), fps=fps, background_encode=True)
     log.info("wrote preview %s", path)
 
 

@@ -134,8 +134,11 @@ def train_pose(
 
 
 def pose(
-    video: Path = typer.Argument(..., help="Input video."),
-    out: Path = typer.Option(..., "--out", "-o", help="poses.json to write."),
+    videos: list[Path] = typer.Argument(..., metavar="VIDEO", help="Input video; several with --out-dir (one process for all: "
+                                        "the backend's libraries are loaded once)."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="poses.json to write (one VIDEO)."),
+    out_dir: Path | None = typer.Option(None, "--out-dir", help="Write <video stem>.poses.json here, one per "
+                                        "VIDEO (each what a run with that video alone and --out writes)."),
     model: Path | None = typer.Option(None, "--model", "-m", help="Pose model (train-pose) of --backend ps "
                                       "[default: the model shipped with vidstyle, when it ships one]."),
     backend: str | None = typer.Option(None, "--backend", help="ps (pictorial structures) or blazepose (MediaPipe) "
@@ -166,8 +169,11 @@ def pose(
     scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT)."),
 ) -> None:
     """2D pose (15 keypoints) and viewpoint of chosen frames of a video -> poses.json (x = column,
-    y = row in the input video's pixels, as a player shows the video)."""
-    from ..fileio import check_writable
+    y = row in the input video's pixels, as a player shows the video); several videos -> one poses.json
+    each in --out-dir."""
+    import contextlib
+
+    from ..fileio import check_writable, output_dir, outputs_by_stem
     from ..formats.poses import write_poses
     from ..pose.run import (
         check_estimate_params,
@@ -181,27 +187,46 @@ def pose(
 
     if annotations is not None and frames is not None:
         raise InputError("--frames: not used with --annotations (the marks give the frames)")
-    check_writable(out)
+    if (out is None) == (out_dir is None):
+        raise InputError("pose: give --out (one VIDEO) or --out-dir")
+    if out is not None and len(videos) > 1:
+        raise InputError("pose: several videos need --out-dir")
+    if overlay is not None and len(videos) > 1:
+        raise InputError("--overlay: one video only")
+    if out is not None:
+        check_writable(out)
+        dests = [out]
+    else:
+        dests = outputs_by_stem(videos, out_dir, ".poses.json")
+        for v in videos:
+            if not Path(v).is_file():
+                raise InputError(f"{v}: file not found")
     backend = default_backend(model) if backend is None else backend
     zooms = parse_scales(scales, "--scales")
     check_estimate_params(backend, model, zooms)
     who = parse_person(person)
-    if annotations is not None:
-        poses = estimate_marks(video, annotations, backend, model, context, jobs=jobs, scheduler=scheduler,
-                               scales=zooms, track=True if who is not None else track, person=who)
-    else:
-        with VideoReader(video) as r:
-            idx = parse_frames(frames, len(r))
-        poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms,
-                               track=track if who is None else True, person=who, smooth=smooth)
-    write_poses(out, poses)
-    missing = sum(not f.found for f in poses.frames)
-    log.info("wrote %s (%d frames, backend %s%s)", out, len(poses.frames), backend,
-             f"; {missing} without the performer" if missing else "")
+    # every video first, written afterwards: a failing video leaves no partial set of outputs
+    done = []
+    for video in videos:
+        if annotations is not None:
+            poses = estimate_marks(video, annotations, backend, model, context, jobs=jobs, scheduler=scheduler,
+                                   scales=zooms, track=True if who is not None else track, person=who)
+        else:
+            with VideoReader(video) as r:
+                idx = parse_frames(frames, len(r))
+            poses = estimate_video(video, backend, model, idx, jobs=jobs, scheduler=scheduler, scales=zooms,
+                                   track=track if who is None else True, person=who, smooth=smooth)
+        done.append(poses)
+    with output_dir(out_dir, dests) if out_dir is not None else contextlib.nullcontext():
+        for dest, poses in zip(dests, done):
+            write_poses(dest, poses)
+            missing = sum(not f.found for f in poses.frames)
+            log.info("wrote %s (%d frames, backend %s%s)", dest, len(poses.frames), backend,
+                     f"; {missing} without the performer" if missing else "")
     if overlay is not None:
         from ..pose.overlay import write_overlays
 
-        log.info("wrote %d overlay frames to %s", write_overlays(video, poses, overlay), overlay)
+        log.info("wrote %d overlay frames to %s", write_overlays(videos[0], done[0], overlay), overlay)
 
 
 @evaluate_app.command("pose")

@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from pathlib import Path
 
@@ -93,8 +94,6 @@ def learn_style(
     wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
     learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params)
     styles = [(out if pid is None else Path(out_dir) / f"{pid}.json", style) for pid, style in learned]
-    import contextlib
-
     from ..fileio import output_dir
 
     # --out-dir: made if missing (removed again, when empty, if writing fails), its stale temporaries swept
@@ -106,33 +105,52 @@ def learn_style(
                      style.model_b.n_modes_)
 
 
+#: file suffix of a generated sequence per --format (generate --out-dir)
+SUFFIXES = {"text": ".txt", "json": ".json", "csv": ".csv"}
+
+
 def generate(
-    style_path: Path = typer.Option(..., "--style", "-s", help="style.json from learn-style."),
+    style_paths: list[Path] = typer.Option(..., "--style", "-s", metavar="PATH", help="style.json from learn-style; repeat "
+                                           "it (with --out-dir) for one sequence per style in one run."),
     start: str | None = typer.Option(None, "--start", help="First action (default: drawn from the model)."),
     length: int = typer.Option(D.GENERATE_LENGTH, "--length", "-n", help="Number of action events."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed; the output is a function of it."),
     fmt: str = typer.Option("text", "--format", "-f", help="text (thesis Table 4 style), json or csv."),
     model: str = typer.Option(D.MODEL, "--model", "-m", help="a (thesis HMM), b (behaviour modes) or bigram."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
+    out_dir: Path | None = typer.Option(None, "--out-dir", help="Write <style stem>.json (.txt, .csv by "
+                                        "--format) here, one per --style."),
 ) -> None:
-    """Generate a new action sequence (with durations) in a learned style."""
-    from ..fileio import write_text
+    """Generate a new action sequence (with durations) in a learned style; with several --style and
+    --out-dir, one per style, each the sequence a run with that style alone writes (the same --seed)."""
+    from ..fileio import output_dir, outputs_by_stem, write_text
     from ..formats.sequence import format_sequence, write_sequence
     from ..style.artifact import Style
     from ..style.learn import generate_sequence
 
     if fmt not in FORMATS:
         raise InputError(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
-    style = Style.load(style_path)
-    seq = generate_sequence(style, length, start=start, seed=seed, model=model, style_path=style_path)
-    text = format_sequence(seq, fmt)
-    log.info("generated %d events with model %s (seed %d) from %s", len(seq.events), model, seed, style_path)
-    if out is not None and fmt == "json":
-        write_sequence(out, seq)
-    elif out is not None:
-        write_text(out, text)
-    else:
-        typer.echo(text, nl=False)
+    if out_dir is not None and out is not None:
+        raise InputError("generate: give --out or --out-dir, not both")
+    if len(style_paths) > 1 and out_dir is None:
+        raise InputError("generate: several --style need --out-dir")
+    dests = outputs_by_stem(style_paths, out_dir, SUFFIXES[fmt]) if out_dir is not None else [out]
+    # generate everything first, write afterwards: a bad style file leaves no partial set of outputs
+    done = []
+    for style_path in style_paths:
+        style = Style.load(style_path)
+        seq = generate_sequence(style, length, start=start, seed=seed, model=model, style_path=style_path)
+        log.info("generated %d events with model %s (seed %d) from %s", len(seq.events), model, seed, style_path)
+        done.append(seq)
+    into = output_dir(out_dir, dests) if out_dir is not None else contextlib.nullcontext()
+    with into:
+        for dest, seq in zip(dests, done):
+            if dest is not None and fmt == "json":
+                write_sequence(dest, seq)
+            elif dest is not None:
+                write_text(dest, format_sequence(seq, fmt))
+            else:
+                typer.echo(format_sequence(seq, fmt), nl=False)
 
 
 @evaluate_app.command("style")

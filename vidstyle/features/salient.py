@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -98,6 +99,11 @@ class FlowMagnitude:
 
     def __call__(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """|flow| (pixels/frame) at the pixels of ``a`` towards ``b``; both uint8 (h, w)."""
+        flow = self.field(a, b)
+        return np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2)
+
+    def field(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The flow (h, w, 2) float32 (pixels/frame) at the pixels of ``a`` towards ``b``."""
         import cv2
 
         if self.method == "farneback":
@@ -109,7 +115,7 @@ class FlowMagnitude:
             # before, and a size change crashes OpenCV 4.x), so the flow of a frame pair would depend on
             # where a video starts or is cut into windows
             flow = cv2.DISOpticalFlow_create(self._preset).calc(a, b, None)
-        return np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2)
+        return flow
 
 
 def select_points(score: np.ndarray, n_points: int, min_distance: float) -> np.ndarray:
@@ -136,6 +142,91 @@ def select_points(score: np.ndarray, n_points: int, min_distance: float) -> np.n
         sub[disc[r0 - r + rad : r1 - r + rad, c0 - c + rad : c1 - c + rad]] = -np.inf
         s[r, c] = -np.inf  # min_distance == 0: still never pick the same pixel twice
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _disc(min_distance: float) -> tuple[int, np.ndarray]:
+    """The suppression radius and disc (offsets closer than ``min_distance``) of :func:`select_points`."""
+    rad = math.ceil(min_distance) - 1 if min_distance > 0 else 0
+    d = np.arange(-rad, rad + 1)
+    return rad, (d[:, None] ** 2 + d[None, :] ** 2) < min_distance * min_distance
+
+
+def _frame_points_loop(mask, flow, min_flow, n_points, rad, disc, s, cand, out):
+    # compiled by numba: the score of frame_points_numpy (|flow| = sqrt(fx * fx + fy * fy) in float32 on
+    # the silhouette where it is above min_flow, a float32 compared in float32, else -inf; never NaN), then
+    # select_points on it: n_points times the first maximum in raster order, stop at a value that is not
+    # finite, suppress the disc around it and the pixel itself. The maximum is searched among the pixels
+    # whose score is above -inf (listed in raster order, so the first maximum is the same); when none is
+    # left, np.argmax would find -inf, which stops select_points too. Returns the count.
+    H, W = mask.shape
+    nc = 0
+    for r in range(H):
+        for c in range(W):
+            fx = flow[r, c, 0]
+            fy = flow[r, c, 1]
+            m = np.sqrt(fx * fx + fy * fy)
+            if mask[r, c] and m > min_flow:
+                s[r, c] = m
+                cand[nc] = r * W + c
+                nc += 1
+            else:
+                s[r, c] = -np.inf
+    n = 0
+    for _ in range(n_points):
+        best = -np.inf
+        bi = -1
+        for k in range(nc):
+            i = cand[k]
+            v = s[i // W, i % W]
+            if v > best:
+                best, bi = v, i
+        if bi < 0 or not np.isfinite(best):
+            break
+        br, bc = bi // W, bi % W
+        out[n, 0] = br
+        out[n, 1] = bc
+        n += 1
+        for r in range(max(br - rad, 0), min(br + rad + 1, H)):
+            for c in range(max(bc - rad, 0), min(bc + rad + 1, W)):
+                if disc[r - br + rad, c - bc + rad]:
+                    s[r, c] = -np.inf
+        s[br, bc] = -np.inf
+    return n
+
+
+def frame_points_numpy(mask: np.ndarray, flow: np.ndarray, p: SalientParams) -> np.ndarray:
+    """Points (k, 2) (row, column) of one frame from its silhouette ``mask`` and its flow field (h, w, 2)
+    float32: :func:`select_points` on the flow magnitude where the silhouette is and the magnitude is
+    above ``p.min_flow`` (the reference of :func:`frame_points`)."""
+    mag = np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2)
+    score = np.where(mask & (mag > p.min_flow), mag, -np.inf)
+    return select_points(score, p.n_points, p.min_distance)
+
+
+@cache
+def _frame_points_kernel():
+    """The compiled :func:`_frame_points_loop`, or None without numba (then :func:`frame_points_numpy`)."""
+    from ..compiled import compile_kernel
+
+    return compile_kernel(_frame_points_loop, None)
+
+
+def frame_points(mask: np.ndarray, flow: np.ndarray, p: SalientParams) -> np.ndarray:
+    """:func:`frame_points_numpy` in one compiled pass (score, then the greedy selection), the same
+    points: the same float32 magnitudes and comparisons (``min_flow`` as float32, as numpy compares a
+    float32 array with a Python float) and the same first-maximum rule."""
+    kernel = _frame_points_kernel()
+    flow = np.asarray(flow)
+    if kernel is None or flow.dtype != np.float32:  # pragma: no cover - numba is a dependency; OpenCV gives float32
+        return frame_points_numpy(mask, flow, p)
+    rad, disc = _disc(p.min_distance)
+    H, W = mask.shape
+    s = np.empty((H, W), dtype=np.float32)
+    cand = np.empty(H * W, dtype=np.int64)
+    out = np.empty((p.n_points, 2), dtype=np.int64)
+    n = kernel(np.ascontiguousarray(mask), np.ascontiguousarray(flow), np.float32(p.min_flow), p.n_points,
+               rad, disc, s, cand, out)
+    return out[:n]
 
 
 def salient_points(
@@ -169,9 +260,8 @@ def salient_points(
         mask = silhouette(frames, t, p.threshold)
         if not mask.any():
             continue
-        mag = flow(byte(t), byte(t + 1)) if t < T - 1 else flow(byte(t), byte(t - 1))
-        score = np.where(mask & (mag > p.min_flow), mag, -np.inf)
-        rc = select_points(score, p.n_points, p.min_distance)
+        field = flow.field(byte(t), byte(t + 1)) if t < T - 1 else flow.field(byte(t), byte(t - 1))
+        rc = frame_points(mask, field, p)
         if len(rc):
             out.append(np.column_stack([np.full(len(rc), t), rc]))
     if not out:

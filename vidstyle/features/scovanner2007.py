@@ -35,6 +35,9 @@ bit-identical to a literal per-sample loop, not just the uint8 result.
 Speed: the 3-bin assignment is a per-voxel property (there is no rotation), so it is computed once per
 voxel of the neighbourhoods in use, with a pre-selection of candidate bins and the exact element-wise
 cosines for the final choice (a compiled loop, :func:`_top3_loop`, checked against its numpy reference).
+The voxels a chunk of points reaches and their gradients are found in two compiled passes
+(:func:`_chunk_voxels`), and the quantisation is one compiled pass per row (:func:`quantise`); both are
+checked bit for bit against their numpy references (:func:`_chunk_voxels_numpy`, :func:`quantise_numpy`).
 """
 
 from __future__ import annotations
@@ -294,6 +297,101 @@ def gradients_at(vol: np.ndarray, t: np.ndarray, r: np.ndarray, c: np.ndarray, t
     return g1, g2, g3
 
 
+def _mark_loop(q, a, n_t, R, slot):
+    # compiled by numba: the voxels of frames a..a+n_t-1 (rows, columns: all) that some point's cube
+    # (offsets -R..R, clipped to the volume) reaches get slot -2 in the padded map (-1 elsewhere); returns
+    # how many there are
+    H, W = slot.shape[1] - 2 * R, slot.shape[2] - 2 * R
+    n = 0
+    for p in range(q.shape[0]):
+        t, r, c = q[p, 0] - a, q[p, 1], q[p, 2]
+        for tt in range(max(t - R, 0), min(t + R + 1, n_t)):
+            for rr in range(max(r - R, 0), min(r + R + 1, H)):
+                for cc in range(max(c - R, 0), min(c + R + 1, W)):
+                    if slot[tt + R, rr + R, cc + R] == -1:
+                        slot[tt + R, rr + R, cc + R] = -2
+                        n += 1
+    return n
+
+
+def _gradient_loop(vol, a, n_t, t_lo, t_hi, R, slot, g1, g2, g3):
+    # compiled by numba: numbers the marked voxels (slot -2) in raster order (frame, row, column) and
+    # writes their gradients as gradients_at computes them: the voxels read converted to float64, per
+    # axis v[i+1] - v[i-1], 2 * (v[i+1] - v[i]) on an end plane, zero along an axis shorter than 2 (g2
+    # the negation, so -0.0 there as well); frames span t_lo..t_hi-1, rows and columns the volume
+    T, H, W = vol.shape
+    j = 0
+    for tt in range(n_t):
+        t = tt + a
+        for r in range(H):
+            for c in range(W):
+                if slot[tt + R, r + R, c + R] != -2:
+                    continue
+                slot[tt + R, r + R, c + R] = j
+                if W < 2:
+                    g1[j] = 0.0
+                else:
+                    hi, lo = min(c + 1, W - 1), max(c - 1, 0)
+                    d = np.float64(vol[t, r, hi]) - np.float64(vol[t, r, lo])
+                    g1[j] = 2 * d if hi - lo == 1 else d
+                if H < 2:
+                    g2[j] = -0.0
+                else:
+                    hi, lo = min(r + 1, H - 1), max(r - 1, 0)
+                    d = np.float64(vol[t, hi, c]) - np.float64(vol[t, lo, c])
+                    g2[j] = -(2 * d if hi - lo == 1 else d)
+                if t_hi - t_lo < 2:
+                    g3[j] = 0.0
+                else:
+                    hi, lo = min(t + 1, t_hi - 1), max(t - 1, t_lo)
+                    d = np.float64(vol[hi, r, c]) - np.float64(vol[lo, r, c])
+                    g3[j] = 2 * d if hi - lo == 1 else d
+                j += 1
+
+
+@cache
+def _voxel_kernels():
+    """The compiled :func:`_mark_loop` and :func:`_gradient_loop`, or None without numba (then
+    :func:`_chunk_voxels_numpy` runs)."""
+    mark, grad = _compiled(_mark_loop, None), _compiled(_gradient_loop, None)
+    return None if mark is None or grad is None else (mark, grad)
+
+
+def _chunk_voxels_numpy(vol, q, a, b, ga, gb):
+    """The voxels of frames a..b-1 that some point of ``q`` (frame, row, column) reaches with its cube
+    (clipped to the volume), in raster order: their slot map (b - a + 2R, H + 2R, W + 2R) int32 (-1: no
+    voxel) and their gradients (:func:`gradients_at` with frames ga..gb-1). The reference of
+    :func:`_chunk_voxels`."""
+    R = HALF
+    _, H, W = vol.shape
+    need = np.zeros((b - a, H, W), dtype=bool)
+    for t, r, c in (q - (a, 0, 0)).tolist():  # each point's cube, clipped to the volume
+        need[max(t - R, 0):t + R + 1, max(r - R, 0):r + R + 1, max(c - R, 0):c + R + 1] = True
+    vox = np.flatnonzero(need)
+    tt, rr, cc = np.unravel_index(vox, need.shape)
+    g = gradients_at(vol, tt + a, rr, cc, ga, gb)
+    slot = np.full((b - a + 2 * R, H + 2 * R, W + 2 * R), -1, dtype=np.int32)
+    slot[tt + R, rr + R, cc + R] = np.arange(len(vox))
+    return slot, g
+
+
+def _chunk_voxels(vol, q, a, b, ga, gb):
+    """:func:`_chunk_voxels_numpy` in two compiled passes over the chunk (mark the cubes, then number
+    the marked voxels and compute their gradients), without the index arrays and fancy indexing; the
+    same slot map and gradients to the bit."""
+    kernels = _voxel_kernels()
+    if kernels is None:  # pragma: no cover - numba is a dependency
+        return _chunk_voxels_numpy(vol, q, a, b, ga, gb)
+    mark, grad = kernels
+    R = HALF
+    _, H, W = vol.shape
+    slot = np.full((b - a + 2 * R, H + 2 * R, W + 2 * R), -1, dtype=np.int32)
+    n = mark(np.ascontiguousarray(q, dtype=np.int64), a, b - a, R, slot)
+    g1, g2, g3 = np.empty(n), np.empty(n), np.empty(n)
+    grad(vol, a, b - a, ga, gb, R, slot, g1, g2, g3)
+    return slot, (g1, g2, g3)
+
+
 @cache
 def _accumulate_kernel():
     """The compiled :func:`_accumulate_loop`, or :func:`_accumulate_numpy` without numba."""
@@ -456,8 +554,8 @@ def assign_bins_numpy(g1: np.ndarray, g2: np.ndarray, g3: np.ndarray) -> tuple[n
     return m, bins, wts
 
 
-def quantise(hist: np.ndarray) -> np.ndarray:
-    """Rows of float64 histograms (n, 640) -> uint8 descriptors as the released code does."""
+def quantise_numpy(hist: np.ndarray) -> np.ndarray:
+    """:func:`quantise` in numpy (the reference of the compiled kernel and its fallback without numba)."""
     h = np.asarray(hist, dtype=np.float64)
     out = np.zeros(h.shape, dtype=np.uint8)
     for i in range(2):
@@ -471,6 +569,60 @@ def quantise(hist: np.ndarray) -> np.ndarray:
     r = t + (v - t >= 0.5)  # half away from zero (all values are >= 0); v - t is exact
     np.minimum(r, 255, out=r)
     out[:] = r.astype(np.uint8)
+    return out
+
+
+def _quantise_loop(h, out):
+    # compiled by numba: quantise_numpy row by row, the same float64 operations in the same order (sum of
+    # squares from index 0 up, sqrt, divide, or zeros when the norm is not > 0; the clip as np.minimum,
+    # NaN kept; times 512, half away from zero, cap 255)
+    n, D = h.shape
+    row = np.empty(D)
+    for i in range(n):
+        for k in range(D):
+            row[k] = h[i, k]
+        for it in range(2):
+            acc = 0.0
+            for k in range(D):
+                acc += row[k] * row[k]
+            nrm = np.sqrt(acc)
+            if nrm > 0:
+                for k in range(D):
+                    row[k] = row[k] / nrm
+            else:
+                for k in range(D):
+                    row[k] = 0.0
+            if it == 0:
+                for k in range(D):
+                    x = row[k]
+                    if x > 0.2:
+                        row[k] = 0.2
+        for k in range(D):
+            v = row[k] * 512
+            t = np.trunc(v)
+            r = t + 1.0 if v - t >= 0.5 else t
+            if r > 255:
+                r = 255.0
+            out[i, k] = np.uint8(r)
+
+
+@cache
+def _quantise_kernel():
+    """The compiled :func:`_quantise_loop`, or None without numba (then :func:`quantise_numpy` runs)."""
+    return _compiled(_quantise_loop, None)
+
+
+def quantise(hist: np.ndarray) -> np.ndarray:
+    """Rows of float64 histograms (n, 640) -> uint8 descriptors as the released code does: L2-normalise
+    (the sum of squares accumulated in index order), clip at 0.2, L2-normalise again, times 512, rounded
+    half away from zero, capped at 255 (an all-zero row stays zero). One compiled pass
+    (:func:`_quantise_loop`); :func:`quantise_numpy` is its reference, equal to the bit."""
+    kernel = _quantise_kernel()
+    h = np.ascontiguousarray(hist, dtype=np.float64)
+    if kernel is None or h.ndim != 2:  # pragma: no cover - numba is a dependency
+        return quantise_numpy(h)
+    out = np.zeros(h.shape, dtype=np.uint8)
+    kernel(h, out)
     return out
 
 
@@ -505,15 +657,8 @@ def histograms(volume: np.ndarray, points: np.ndarray) -> np.ndarray:
         # only voxels inside some point's cube need a gradient and a bin assignment; the gradients are
         # those of frames ga..gb-1 (the extra frame on each side makes g3 central on frames a..b-1 unless
         # they border the volume)
-        need = np.zeros((b - a, H, W), dtype=bool)
-        for t, r, c in (q - (a, 0, 0)).tolist():  # each point's cube, clipped to the volume
-            need[max(t - R, 0):t + R + 1, max(r - R, 0):r + R + 1, max(c - R, 0):c + R + 1] = True
-        vox = np.flatnonzero(need)
-        tt, rr, cc = np.unravel_index(vox, need.shape)
-        g1, g2, g3 = gradients_at(vol, tt + a, rr, cc, ga, gb)
+        slot, (g1, g2, g3) = _chunk_voxels(vol, q, a, b, ga, gb)
         m, bins, wts = assign_bins(g1, g2, g3)
-        slot = np.full((b - a + 2 * R, Hp, Wp), -1, dtype=np.int32)
-        slot[tt + R, rr + R, cc + R] = np.arange(len(vox))
         base = ((q[:, 0] - a + R) * Hp + (q[:, 1] + R)) * Wp + (q[:, 2] + R)
         hist = np.zeros((len(sel), DIM))
         accumulate(hist, base.astype(np.int64), flat_off, gauss, sub, slot.reshape(-1), m, bins, wts, N_BINS)

@@ -282,9 +282,11 @@ def render_to_file(
     seed: int = 0,
     labels: Sequence[str] | None = None,
     transitions: np.ndarray | None = None,
+    background_encode: bool = False,
 ) -> Path:
     """Render to a video file plus its ground-truth sidecar ``<stem>.truth.npz``; returns the sidecar
-    path.
+    path. ``background_encode``: the encoder on a thread of its own beside the renderer (the same file;
+    faster where a core is free, e.g. one large preview, not a pool of workers already on every core).
 
     The camera is ``Camera.for_view(motion, view, elevation_deg, distance, size)`` unless ``camera`` is
     given (then ``view``, ``size``, ``elevation_deg`` and ``distance`` are ignored). Other options as in
@@ -300,7 +302,7 @@ def render_to_file(
     side = sidecar_path(out)
     # the writer renames its temporary file when its block ends without error; an error anywhere
     # (rendering, the sidecar) leaves neither file
-    with atomic_path(side, suffix=".npz") as tmp_side, VideoWriter(out, job.fps) as writer:
+    with atomic_path(side, suffix=".npz") as tmp_side, VideoWriter(out, job.fps, background=background_encode) as writer:
         for frame, _ in job.frames(False):
             writer.write(frame)
         truth = job.truth()

@@ -3,7 +3,8 @@
 Codec by suffix: ``.mp4`` / ``.m4v`` / ``.mov`` H.264 (libx264, yuv420p, ``crf`` 17 by default: visually
 lossless, so features computed on a written video are close to the rendered frames), ``.mkv`` FFV1
 (lossless, for tests), ``.avi`` Motion-JPEG. Encoding is single-threaded, so the same frames give the
-same bytes on every machine. The file appears under its name only when :meth:`close`
+same bytes on every machine; ``background=True`` runs that one encoder on a thread of its own, beside the
+caller that makes the frames (the same frames in the same order: the same bytes). The file appears under its name only when :meth:`close`
 succeeds; an exception inside ``with VideoWriter(...)`` leaves no file.
 """
 
@@ -31,8 +32,15 @@ class VideoWriter:
     (H, W, 3) uint8 BGR or (H, W) uint8 gray; ``time`` (seconds) gives a variable frame rate, otherwise
     frame ``k`` is shown at ``k / fps``."""
 
-    def __init__(self, path: str | os.PathLike, fps: float, crf: int = 17) -> None:
+    def __init__(self, path: str | os.PathLike, fps: float, crf: int = 17, background: bool = False) -> None:
         self.path = Path(path)
+        #: encode on a thread of its own (:meth:`_encode_loop`; the encoder releases the GIL), so that
+        #: making the next frame and encoding this one overlap
+        self.background = bool(background)
+        self._queue = None
+        self._thread = None
+        self._error: BaseException | None = None
+        self._stopping = False
         suffix = self.path.suffix.lower()
         if suffix not in CODECS:
             raise InputError(f"{path}: video must end in {', '.join(CODECS)} (got {suffix or 'no suffix'!r})")
@@ -115,9 +123,49 @@ class VideoWriter:
             vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="bgr24")
         vf.pts = pts
         vf.time_base = TIME_BASE
+        if self.background:
+            self._put(vf)
+        else:
+            self._encode(vf)
+        self.count += 1
+
+    def _encode(self, vf) -> None:
         for packet in self._stream.encode(vf):  # type: ignore[union-attr]
             self._container.mux(packet)  # type: ignore[union-attr]
-        self.count += 1
+
+    def _put(self, vf) -> None:
+        """Hand a frame to the encoder thread (started with the first), at most a few frames ahead of it;
+        an error of the encoder is raised here, at the next frame."""
+        if self._thread is None:
+            import queue
+            import threading
+
+            self._queue = queue.Queue(maxsize=4)
+            self._thread = threading.Thread(target=self._encode_loop, name="vidstyle-video-encoder", daemon=True)
+            self._thread.start()
+        if self._error is not None:
+            raise self._error
+        self._queue.put(vf)  # type: ignore[union-attr]
+
+    def _encode_loop(self) -> None:
+        # every frame taken off the queue (so a put never waits forever), encoded until an error or a stop
+        while True:
+            vf = self._queue.get()  # type: ignore[union-attr]
+            if vf is None:
+                return
+            if self._error is not None or self._stopping:
+                continue
+            try:
+                self._encode(vf)
+            except BaseException as e:  # raised in the caller's thread (write, close)
+                self._error = e
+
+    def _join(self) -> None:
+        """Stop taking frames and wait until the encoder thread has encoded (or dropped) the queued ones."""
+        if self._thread is not None:
+            self._queue.put(None)  # type: ignore[union-attr]
+            self._thread.join()
+            self._thread = None
 
     def close(self) -> Path:
         """Finish the file and move it to its name; no frames written is an :class:`InputError`."""
@@ -127,6 +175,9 @@ class VideoWriter:
             self.abort()
             raise InputError(f"{self.path}: no frames to write")
         try:
+            self._join()
+            if self._error is not None:
+                raise self._error
             for packet in self._stream.encode(None):  # type: ignore[union-attr]
                 self._container.mux(packet)  # type: ignore[union-attr]
             self._container.close()  # type: ignore[union-attr]
@@ -140,6 +191,8 @@ class VideoWriter:
 
     def abort(self) -> None:
         """Drop everything written so far (no file appears)."""
+        self._stopping = True
+        self._join()
         if self._container is not None:
             with contextlib.suppress(Exception):
                 self._container.close()
