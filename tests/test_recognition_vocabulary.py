@@ -87,33 +87,3 @@ def test_bad_inputs(rng, tmp_path):
     with pytest.raises(InputError, match="junk.npz"):
         Vocabulary.load(tmp_path / "junk.npz")
     assert voc.transform(np.zeros((0, 8))).shape == (0,)
-
-
-def test_seeding_with_the_sample_upcast_once_gives_the_same_vocabulary(monkeypatch):
-    """The minibatch vocabulary's k-means++ seeding runs with scikit-learn's float32 distances reusing the
-    float64 copy of the sample (vocabulary._upcast_once): the same distances as scikit-learn's own
-    function, to the bit, on uint8-like descriptors with many exact ties, and so the same words."""
-    import sklearn
-    from sklearn.metrics import pairwise
-    from sklearn.metrics.pairwise import _euclidean_distances
-
-    from vidstyle.recognition import vocabulary as V
-
-    if sklearn.__version__ != V._UPCAST_SKLEARN:
-        pytest.skip(f"the cached upcast reproduces scikit-learn {V._UPCAST_SKLEARN} only (here it is not used)")
-    rng = np.random.default_rng(5)
-    Y = rng.integers(0, 40, (2500, 96)).astype(np.float32)
-    X = Y[rng.integers(0, 2500, 9)]
-    orig = pairwise._euclidean_distances_upcast
-    want = _euclidean_distances(X, Y, squared=True)
-    with V._upcast_once():
-        assert pairwise._euclidean_distances_upcast is not orig
-        for _ in range(2):  # the second call reads the cached copies
-            got = _euclidean_distances(X, Y, squared=True)
-            assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
-    assert pairwise._euclidean_distances_upcast is orig
-    D = rng.integers(0, 30, (3000, 64)).astype(np.uint8)
-    fast = Vocabulary(n_words=60, random_state=3).fit(D).cluster_centers_
-    monkeypatch.setattr(V, "_upcast_once", lambda: __import__("contextlib").nullcontext())
-    slow = Vocabulary(n_words=60, random_state=3).fit(D).cluster_centers_
-    assert fast.tobytes() == slow.tobytes()

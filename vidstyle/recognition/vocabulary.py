@@ -18,9 +18,7 @@ node, -1 for inner nodes); node 0 is the root and the children of a node are con
 
 from __future__ import annotations
 
-import contextlib
 import logging
-import math
 from pathlib import Path
 from typing import Sequence
 
@@ -32,74 +30,6 @@ from ..errors import InputError, ParameterError
 log = logging.getLogger(__name__)
 
 METHODS = ("minibatch", "hierarchical", "kmeans")
-
-
-#: the scikit-learn release whose ``_euclidean_distances_upcast`` :func:`_upcast_once` reproduces
-_UPCAST_SKLEARN = "1.9.1"
-
-
-def _upcast_cached(orig, cache: dict):
-    """``sklearn.metrics.pairwise._euclidean_distances_upcast`` (release :data:`_UPCAST_SKLEARN`) for dense
-    numpy arrays, with the float64 copies of ``Y``'s chunks and their squared norms made once per ``Y``
-    (``cache``) instead of once per call: k-means++ seeding calls it a thousand times against the same
-    sample, and upcasting that sample chunk by chunk was most of the vocabulary stage. The same chunks,
-    products and sums in the same order as the original, so the distances are the same to the bit; any
-    other case goes to ``orig``."""
-    from scipy.sparse import issparse
-    from sklearn.utils import gen_batches
-    from sklearn.utils.extmath import row_norms, safe_sparse_dot
-
-    def upcast(X, XX=None, Y=None, YY=None, batch_size=None):
-        if (X is Y or XX is not None or YY is not None or batch_size is not None or issparse(X) or issparse(Y)
-                or type(X) is not np.ndarray or type(Y) is not np.ndarray or X.dtype != np.float32
-                or Y.dtype != np.float32):
-            return orig(X, XX, Y, YY, batch_size)
-        n_samples_X, n_features = X.shape
-        n_samples_Y = Y.shape[0]
-        distances = np.empty((n_samples_X, n_samples_Y), dtype=np.float32)
-        maxmem = max(((1 * n_samples_X + 1 * n_samples_Y) * n_features + (1 * n_samples_X * 1 * n_samples_Y)) / 10,
-                     10 * 2**17)
-        tmp = (1 + 1) * n_features
-        batch_size = max(int((-tmp + math.sqrt(tmp**2 + 4 * maxmem)) / 2), 1)
-        if cache.get("Y") is not Y:  # one sample at a time (its float64 copy is the memory this holds)
-            cache.clear()
-            cache["Y"] = Y
-        for x_slice in gen_batches(n_samples_X, batch_size):
-            X_chunk = X[x_slice, :].astype(np.float64)
-            XX_chunk = row_norms(X_chunk, squared=True)[:, None]
-            for y_slice in gen_batches(n_samples_Y, batch_size):
-                key = (y_slice.start, y_slice.stop)
-                if key not in cache:
-                    Y_chunk = Y[y_slice, :].astype(np.float64)
-                    cache[key] = (Y_chunk, row_norms(Y_chunk, squared=True)[None, :])
-                Y_chunk, YY_chunk = cache[key]
-                d = -2 * safe_sparse_dot(X_chunk, Y_chunk.T, dense_output=True)
-                d += XX_chunk
-                d += YY_chunk
-                distances[x_slice, y_slice] = d.astype(np.float32, copy=False)
-        return distances
-
-    return upcast
-
-
-@contextlib.contextmanager
-def _upcast_once():
-    """Inside the block, scikit-learn's float32 Euclidean distances reuse the float64 copy of the same
-    ``Y`` (:func:`_upcast_cached`); with another scikit-learn release, nothing changes."""
-    import sklearn
-    from sklearn.metrics import pairwise
-
-    orig = getattr(pairwise, "_euclidean_distances_upcast", None)
-    if orig is None or sklearn.__version__ != _UPCAST_SKLEARN:
-        yield
-        return
-    cache: dict = {}
-    pairwise._euclidean_distances_upcast = _upcast_cached(orig, cache)
-    try:
-        yield
-    finally:
-        pairwise._euclidean_distances_upcast = orig
-        cache.clear()
 
 
 def nearest_centre(x: np.ndarray, centres: np.ndarray, chunk: int = 8192) -> np.ndarray:
@@ -185,9 +115,7 @@ class Vocabulary(TransformerMixin, BaseEstimator):
                 random_state=seed,
                 reassignment_ratio=0.01,
                 compute_labels=False,
-            )
-            with _upcast_once():  # the seeding's distances, the same to the bit, without re-upcasting X
-                km.fit(X)
+            ).fit(X)
             self.cluster_centers_ = km.cluster_centers_.astype(np.float32)
             self.tree_ = None
         elif self.method == "kmeans":
