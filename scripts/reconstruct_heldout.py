@@ -6,6 +6,11 @@ pose2sim take reconstructed from each calibrated view alone against the 3D trian
   01, 02, 05, 06; the test: the first 20 s of every clip of subjects 07 and 08 (each subject in one
   role), filmed by the reconstruction's camera model at seeded cameras; true 2D and true 2D plus 5 %
   torso noise.
+- CMU rendered: the same subjects' clips rendered by ``vidstyle demo make-cmu-dataset`` (front view, at
+  most 4 windows of 4 s per subject and action), 2D poses estimated on the renders by the shipped
+  pictorial structures and by BlazePose (every frame; cached), scored by
+  :func:`vidstyle.evaluation.reconstruct.evaluate` on subjects 07 and 08's videos against the library of
+  subjects 01, 02, 05, 06 (skeletons: the library's and the subject's own).
 - Real: :func:`vidstyle.evaluation.reconstruct.evaluate_real`. The library: all 86 CMU clips (no subject
   of them is the pose2sim performer); BlazePose 2D of each view (cached as scripts/real_reference.py
   caches them), against the triangulated reference; BlazePose's own 3D world landmarks scored alike.
@@ -49,6 +54,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--skip-real", action="store_true")
     ap.add_argument("--skip-cmu", action="store_true")
+    ap.add_argument("--skip-cmu-rendered", action="store_true")
+    ap.add_argument("--cache", type=Path, default=Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_reconstruct_heldout")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
@@ -59,7 +66,9 @@ def main() -> int:
     doc = {**validation_header(RECONSTRUCT_HELDOUT), "script": "scripts/reconstruct_heldout.py", "seed": args.seed}
     try:
         if not args.skip_cmu:
-            doc["cmu"] = evaluate_cmu_heldout(CMU, ["01", "02", "05", "06"], ["07", "08"], seed=args.seed, jobs=args.jobs)
+            doc["cmu"] = evaluate_cmu_heldout(CMU, LIBRARY_SUBJECTS, TEST_SUBJECTS, seed=args.seed, jobs=args.jobs)
+        if not args.skip_cmu_rendered:
+            doc["cmu_rendered"] = cmu_rendered(args.cache, args.seed, args.jobs)
         if not args.skip_real:
             rr = _real_reference_module()
             poses = rr.poses_of_videos(rr.VIDEOS, rr.DEFAULT_CACHE, False, args.jobs)
@@ -68,14 +77,51 @@ def main() -> int:
         log.error("%s", e)
         return 2
     write_validation(args.out, doc)
-    for part in ("cmu", "real"):
+    for part in ("cmu", "cmu_rendered", "real"):
         for r in (doc.get(part) or {}).get("runs", []):
-            if r["data"].startswith(("cmu held-out", "real pose2sim")):
+            if r["data"].startswith(("cmu held-out", "real pose2sim", "demo test performers")):
                 log.info("%s %s %s: root-relative MPJPE %s mm, PA %s mm, accel %s, skate %s", r["data"], r["source"],
                          r["method"], _f(r["mpjpe_root_relative_mm"]), _f(r["pa_mpjpe_mm"]),
                          _f(r["acceleration_error_mm_per_frame2"]), _f(r["foot_skate_mm_per_frame"]))
     log.info("wrote %s", args.out)
     return 0
+
+
+LIBRARY_SUBJECTS = ["01", "02", "05", "06"]
+TEST_SUBJECTS = ["07", "08"]
+
+
+def cmu_rendered(cache: Path, seed: int, jobs: int) -> dict:
+    """Held-out CMU subjects rendered to video, with estimated 2D (module docstring)."""
+    from vidstyle.demo.cmu import CMUParams, make_cmu_dataset, parse_actions
+    from vidstyle.evaluation.reconstruct import evaluate
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.formats.poses import write_poses
+    from vidstyle.pose.run import estimate_video
+
+    ds = cache / f"cmu_dataset_seed{seed}"
+    if not (ds / "dataset.json").is_file():
+        make_cmu_dataset(CMU, ds, CMUParams(seed=seed, classes=parse_actions("walk,run,jump,punch,dance,basketball"),
+                                            views=("front",), max_per_subject=4), overwrite=True, jobs=jobs)
+    dataset = read_dataset(ds)
+    videos = sorted(v.id for v in dataset.videos if v.performer in {f"s{s}" for s in TEST_SUBJECTS})
+    dirs = []
+    for backend in ("ps", "blazepose"):
+        d = cache / f"poses_{backend}_seed{seed}"
+        d.mkdir(parents=True, exist_ok=True)
+        for v in videos:
+            path = d / f"{v}.poses.json"
+            if not path.is_file():
+                write_poses(path, estimate_video(ds / dataset.by_id()[v].video, backend, jobs=jobs))
+        dirs.append(d)
+    lib = sorted(str(f) for s in LIBRARY_SUBJECTS for f in CMU.glob(f"{s}_*.bvh"))
+    out = evaluate(ds, lib, videos=videos, poses_dirs=dirs, methods=("nn", "olng", "subsequence"), seed=seed,
+                   unit_mm=56.44, jobs=jobs)
+    for r in out["runs"]:
+        if r["data"] == "demo test performers":
+            r["data"] = "cmu rendered held-out subjects"
+    out["library_subjects"], out["test_subjects"] = LIBRARY_SUBJECTS, TEST_SUBJECTS
+    return out
 
 
 def _f(x):
