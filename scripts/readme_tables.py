@@ -484,6 +484,11 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
                       f"{', '.join(cmu['library_subjects'])} ({cmu['library_frames']:,} indexed frames), seeded "
                       f"cameras (`{_rel(p, root)}`, `scripts/reconstruct_heldout.py`):", "", *_REC_HEAD,
                       *_reconstruct_rows(cmu["runs"], "cmu held-out"), ""]
+        rend = d.get("cmu_rendered")
+        if rend:
+            lines += [f"The same held-out subjects rendered to video ({', '.join(rend['videos'])}; the first "
+                      f"frames of each) with 2D estimated on the renders; skeletons: the library's and the subject's "
+                      f"own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]
         if real:
             lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
                       f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
