@@ -467,8 +467,9 @@ _REC_HEAD = ["| 2D source | method | skeleton | frames | root-relative MPJPE (mm
 def reconstruct_table(items, root: Path) -> list[str]:
     lines = []
     for p, d in items:
+        mf = (d.get("params") or {}).get("max_frames")
         lines += [f"Held-out renders: {', '.join(d.get('videos') or [])}, first "
-                  f"{(d.get('params') or {}).get('max_frames')} frames each (`{_rel(p, root)}`). Skeleton *library*: "
+                  f"{int(mf) if isinstance(mf, float) and mf.is_integer() else mf} frames each (`{_rel(p, root)}`). Skeleton *library*: "
                   "the output is on the library's skeleton (the performer's body unknown); *performer*: the take's own "
                   "skeleton given, so the error is the motion's alone. *blazepose-world*: BlazePose's own 3D.", "",
                   *_REC_HEAD, *_reconstruct_rows(d["runs"], "demo test performers"), ""]

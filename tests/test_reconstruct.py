@@ -174,3 +174,36 @@ def test_evaluate_reconstruct_scores_the_test_takes_and_its_own_skeleton_helps(t
         assert 0 < own_err <= lib_err * 1.02 and lib_err < 200
     assert m["headline"]["reconstruct.mpjpe_true2d_mm"] == pooled[("true2d", "olng", "library")]["mpjpe_root_relative_mm"]
     assert (tmp_path / "cmp.mp4").stat().st_size > 0
+
+
+@pytest.mark.shared
+@pytest.mark.slow
+def test_the_real_pose2sim_clip_becomes_a_bvh_an_independent_reader_opens(tmp_path, cmu_dir):
+    """The issue's done-when: the real take (one calibrated view, BlazePose 2D on its first 60 frames)
+    reconstructed against eight CMU clips to a BVH that the `bvh` package reads with every frame
+    and channel, the performer in front of the camera and a foot near the floor."""
+    real = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "video" / "real"
+    video = real / "pose2sim_single_cam01.mp4"
+    if not video.is_file():
+        pytest.skip("../shared/data/video/real is absent")
+    pytest.importorskip("mediapipe")
+    bvh = pytest.importorskip("bvh")
+    from vidstyle.cli import main
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    out = tmp_path / "real.bvh"
+    clips = [str(p) for p in sorted(cmu_dir.glob("0[12]_*.bvh"))[:8]]
+    lib_args = [a for c in clips for a in ("--library", c)]
+    assert main(["reconstruct", str(video), *lib_args, "--backend", "blazepose", "--frames", "0-59", "--out",
+                 str(out), "--record", str(tmp_path / "rec.json"), "--jobs", "1"]) == 0
+    with open(out) as f:
+        doc = bvh.Bvh(f.read())
+    m = read_bvh(out)
+    assert doc.nframes == m.n_frames == 60
+    assert len(doc.frames[0]) == sum(len(c) for c in m.skeleton.channels)
+    pts = keypoint_positions(m)
+    assert np.all(np.isfinite(pts))
+    assert np.median(pts[:, KP["pelvis"], 2]) > 0  # in front of the camera
+    ankles = pts[:, [KP["left_ankle"], KP["right_ankle"]], 1]
+    leg = np.median(np.linalg.norm(pts[:, KP["left_hip"]] - pts[:, KP["left_knee"]], axis=-1))
+    assert np.median(ankles.min(axis=1)) < 0.6 * leg  # a foot near the floor (Y = 0), not floating

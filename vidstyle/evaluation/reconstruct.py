@@ -13,7 +13,8 @@ the lazy neighbourhood graph ``olng``). Skeletons: ``library`` (the output skele
 the performer's body is unknown, as for a user's video) and ``performer`` (the take's own skeleton given
 as ``--skeleton``: the error of the motion alone, without the body-size difference). When the estimated
 poses carry BlazePose's 3D world landmarks, they are scored too (method ``blazepose-world``: the offline
-peer), turned into the reconstruction's world with the same assumed camera pitch.
+peer), turned into the reconstruction's world with the same assumed camera pitch; they are hip-centred, so
+their MPJPE after one alignment per take and their foot skate are not scored (null).
 
 Figures (:mod:`vidstyle.reconstruct.metrics`, mm): MPJPE after one yaw and floor translation per
 sequence, root-relative MPJPE (pelvis subtracted per frame, one yaw per sequence), PA-MPJPE, acceleration
@@ -154,6 +155,12 @@ def _figures(pred_mm: np.ndarray, true_mm: np.ndarray, fps: float) -> dict[str, 
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
 
 
+def _hip_centred(figures: dict) -> dict:
+    """BlazePose's world landmarks are hip-centred (no path through the room): the figures that need one,
+    MPJPE after a single alignment per take and foot skate, do not apply to them."""
+    return {**figures, "mpjpe_mm": None, "foot_skate_mm_per_frame": None}
+
+
 def _pool(rows: list[dict]) -> dict[str, Any]:
     from ..formats.metrics import RECONSTRUCT_FIGURES
 
@@ -243,9 +250,8 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
                     log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
                              row["mpjpe_root_relative_mm"] or float("nan"), row["pa_mpjpe_mm"] or float("nan"))
         for src, w in world.items():
-            row = {"data": f"demo:{vid}", "source": src, "method": "blazepose-world", "skeleton": "blazepose",
-                   **_figures(w, true_mm, fps)}
-            runs.append(row)
+            runs.append({"data": f"demo:{vid}", "source": src, "method": "blazepose-world", "skeleton": "blazepose",
+                         **_hip_centred(_figures(w, true_mm, fps))})
     pooled = []
     keys = sorted({(r["source"], r["method"], r["skeleton"]) for r in runs})
     for src, method, skel in keys:
@@ -397,7 +403,7 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
                                        base.elevation_deg if base.elevation_deg is not None else base.library_elevation_deg)
         if world is not None:
             runs.append({"data": f"real:{name}", "source": "blazepose", "method": "blazepose-world",
-                         "skeleton": "blazepose", **_figures(world[frames], true_mm, fps)})
+                         "skeleton": "blazepose", **_hip_centred(_figures(world[frames], true_mm, fps))})
     pooled = []
     for key in sorted({(r["source"], r["method"], r["skeleton"]) for r in runs}):
         rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]

@@ -7,7 +7,10 @@ and keeps, for every ``stride``-th frame (an *indexed frame*, the unit of the kN
 
 - ``rotations_`` (N, J, 4) float32: the local joint rotations (x, y, z, w), the root's with its *yaw
   removed* (rotated by minus the character's facing, so every indexed pose faces +Z),
-- ``root_height_`` (N,): the root joint's height above the floor (Y; library units),
+- ``root_height_`` (N,): the root joint's height above the floor (Y; library units), measured from the
+  frame's lower ankle plus the library's planted-ankle height (the median lower-ankle height over its
+  planted frames), so a clip recorded on a raised platform or with its floor off Y = 0 stands on the floor
+  too (an airborne frame is put down on it: the flight of a jump is not kept),
 - ``points_`` (N, 15, 3) float32: the body keypoints facing-normalised (:func:`..augmg.projection.
   facing_normalised`: facing +Z, pelvis above the origin), what a reconstruction is compared with,
 - ``contacts_`` (N, 2) bool: left / right ankle planted (:func:`.metrics.foot_contacts` on the clip),
@@ -31,6 +34,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, ParameterError
+
+#: the left and right ankle keypoints (vidstyle.formats.keypoints.KEYPOINTS order)
+KP_ANKLES = (13, 14)
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +122,7 @@ class ReconstructionLibrary:
         fps = np.array([m.fps for m in motions])
         self.stride_ = max(1, int(round(float(np.median(fps)) / self.target_fps)))
         self.skeleton_ = reference
-        rots, heights, points, contacts, labels, lib_clips = [], [], [], [], [], []
+        rots, heights, points, contacts, labels, lib_clips, lowers = [], [], [], [], [], [], []
         for path, motion in zip(paths, motions):
             m, _ = retarget(motion, reference, source=path)
             first = 1 if has_tpose_first_frame(m) else 0
@@ -129,7 +135,9 @@ class ReconstructionLibrary:
             q[:first] = q[first:first + 1]
             sel = slice(None, None, self.stride_)
             rots.append(q[sel].astype(np.float32))
-            heights.append(m.root_positions[sel, 1].copy())
+            lower = np.minimum(pts[:, KP_ANKLES[0], 1], pts[:, KP_ANKLES[1], 1])
+            heights.append((m.root_positions[:, 1] - lower)[sel])
+            lowers.append(lower[sel])
             points.append(facing_normalised(pts, facing)[sel].astype(np.float32))
             contacts.append(foot_contacts(pts, m.fps)[sel])
             labels.append(_clip_labels(Path(path), m.n_frames, m.fps)[sel])
@@ -137,7 +145,11 @@ class ReconstructionLibrary:
         self.index_ = PoseIndex(n_views=self.n_views, elevation_deg=self.elevation_deg, stride=self.stride_,
                                 jobs=self.jobs, scheduler=self.scheduler).fit(lib_clips)
         self.rotations_ = np.concatenate(rots)
-        self.root_height_ = np.concatenate(heights)
+        contacts_all = np.concatenate(contacts)
+        lower_all = np.concatenate(lowers)
+        planted = contacts_all.any(axis=1)
+        self.ankle_height_ = float(np.median(lower_all[planted] if planted.any() else lower_all))
+        self.root_height_ = np.concatenate(heights) + self.ankle_height_
         self.points_ = np.concatenate(points)
         self.contacts_ = np.concatenate(contacts)
         self.labels_ = np.concatenate(labels)
