@@ -42,10 +42,11 @@ DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_validate_reco
 POSE_TOLERANCE = 0.02
 #: differences below this are noise: of the candidates within it of the best, the first listed (the cheaper) wins
 TIE_MM = 0.1
-START = {"method": "olng", "k": 32, "n_blend": 8, "window_s": 0.5, "smooth_frames": 1.0, "pin_max_offset": 0.25}
+START = {"method": "olng", "k": 32, "n_blend": 8, "window_s": 0.5, "smooth_frames": 1.0, "pin_max_offset": 0.25,
+         "refine_prior": None}
 CANDIDATES = {"method": ["nn", "olng", "subsequence"], "k": [16, 32, 64, 128], "n_blend": [1, 4, 8, 16, 32],
               "window_s": [0.25, 0.5, 1.0, 2.0], "smooth_frames": [0.0, 1.0, 2.0, 3.0],
-              "pin_max_offset": [0.1, 0.25, 0.4, None]}
+              "pin_max_offset": [0.1, 0.25, 0.4, None], "refine_prior": [None, 1.0, 0.1, 0.03]}
 
 
 def poses_for(dataset, videos: list[str], frames: int, cache: Path) -> Path:
@@ -113,9 +114,9 @@ def main() -> int:
             return seen[key]
 
         #: the factors each method uses (the subsequence graph has its own window and takes no k / blend)
-        uses = {"nn": ["k", "n_blend", "smooth_frames", "pin_max_offset"],
-                "olng": ["k", "n_blend", "window_s", "smooth_frames", "pin_max_offset"],
-                "subsequence": ["smooth_frames", "pin_max_offset"]}
+        uses = {"nn": ["k", "n_blend", "smooth_frames", "pin_max_offset", "refine_prior"],
+                "olng": ["k", "n_blend", "window_s", "smooth_frames", "pin_max_offset", "refine_prior"],
+                "subsequence": ["smooth_frames", "pin_max_offset", "refine_prior"]}
         per_method = {}
         for method in CANDIDATES["method"]:
             best = {**START, "method": method}

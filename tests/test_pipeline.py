@@ -34,6 +34,7 @@ TINY = {
     "graph": {"clips": "out/dataset/mocap/p00_*.bvh"},
     "synthesize": {"performers": "p00"},
     "augmg": {"annotations": "annotations.json", "videos": "p03_perf0_front p04_perf0_front", "synthesize": "p03"},
+    "reconstruct": {"videos": "p03_perf0_front", "show": "p03_perf0_front", "frames": 40},
 }
 
 
@@ -116,6 +117,9 @@ def test_pipeline_outputs(run):
     head = json.loads((out / "metrics/headline.json").read_text())
     assert head["recognition"]["frame_accuracy_smoothed"] == rec["frame_accuracy"]["smoothed"]
     assert head["seed"] == 0 and head["motion"]["graph_frames"] > 0
+    rc = json.loads((out / "metrics/reconstruct.json").read_text())
+    assert rc["headline"]["reconstruct.mpjpe_mm"] == head["reconstruct"]["mpjpe_mm"] > 0
+    assert (out / "reconstruct" / "p03_perf0_front.bvh").is_file() and (out / "reconstruct" / "compare.mp4").is_file()
     shown = _dvc(run, "metrics", "show").stdout
     assert "headline.json" in shown and "recognition.frame_accuracy_smoothed" in shown
     assert "confusion" not in shown  # the full documents are outputs, not metric columns

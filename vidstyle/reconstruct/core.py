@@ -335,7 +335,8 @@ class Reconstructor:
                  focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
-                 pin_max_offset: float | None = D.PIN_MAX_OFFSET, jobs: int = 1, scheduler: str | None = None) -> None:
+                 pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
+                 jobs: int = 1, scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend
@@ -356,6 +357,7 @@ class Reconstructor:
         self.ssg_k = ssg_k
         self.ssg_transition_weight = ssg_transition_weight
         self.pin_max_offset = pin_max_offset
+        self.refine_prior = refine_prior
         self.jobs = jobs
         self.scheduler = scheduler
 
@@ -363,7 +365,8 @@ class Reconstructor:
         return {k: getattr(self, k) for k in (
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
             "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
-            "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset")}
+            "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset",
+            "refine_prior")}
 
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
@@ -606,6 +609,12 @@ class Reconstructor:
         az = self._refine_azimuth(local_pts, obs, az, ok, elevation)
         az = np.degrees(np.unwrap(np.radians(_fill_gaps(np.degrees(np.unwrap(np.radians(az))), ok))))
         az = _gaussian(az, float(self.smooth_frames))
+        if self.refine_prior is not None:  # the blend bent toward the keypoints (Tautges 3.5; .refine)
+            from .refine import refine_poses
+
+            wts0 = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0) * observed[:, None]
+            qb = refine_poses(skeleton, qb, q, use & observed[:, None], obs.xy, wts0, az, elevation,
+                              prior=float(self.refine_prior))
 
         # world orientation: the character faces pi - azimuth
         Rc = camera_rotation(elevation)
