@@ -213,7 +213,7 @@ def _hemisphere_continuous(q: np.ndarray) -> np.ndarray:
     return q
 
 
-def _similarity_residual(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> np.ndarray:
+def similarity_residual(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Weighted least-squares fit ``obs ~ s * model + c`` per leading index: the residual over the
     observation's weighted spread. ``model`` (..., 15, 2), ``obs`` (..., 15, 2), ``w`` (..., 15)."""
     sw = np.maximum(w.sum(-1, keepdims=True), 1e-12)
@@ -698,7 +698,7 @@ class Reconstructor:
             cand = az[rows] + g
             R = view_rotations(cand, elevation)  # (n, 3, 3)
             proj = np.einsum("nij,nkj->nki", R, norm[rows])[..., :2]
-            res = _similarity_residual(proj, obs.xy[rows], wts[rows])
+            res = similarity_residual(proj, obs.xy[rows], wts[rows])
             better = res < best_res
             best_res = np.where(better, res, best_res)
             best = np.where(better, cand, best)
