@@ -17,9 +17,9 @@ VALIDATION = Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / 
 def test_defaults_are_the_validated_choice():
     doc = json.loads(VALIDATION.read_text())
     chosen = doc["chosen"]
-    assert (D.METHOD, D.K, D.N_BLEND, D.WINDOW_S, D.SMOOTH_FRAMES, D.PIN_MAX_OFFSET) == (
+    assert (D.METHOD, D.K, D.N_BLEND, D.WINDOW_S, D.SMOOTH_FRAMES, D.PIN_MAX_OFFSET, D.REFINE_PRIOR) == (
         chosen["method"], chosen["k"], chosen["n_blend"], chosen["window_s"], chosen["smooth_frames"],
-        chosen["pin_max_offset"])
+        chosen["pin_max_offset"], chosen["refine_prior"])
     scores = [r["mpjpe_root_relative_mm"] for r in doc["table"]]
     best = [r for r in doc["table"] if all(r[k] == v for k, v in chosen.items())]
     assert len(best) == 1 and best[0]["mpjpe_root_relative_mm"] <= min(scores) + doc["tie_mm"] * 2
@@ -29,9 +29,11 @@ def test_defaults_are_the_validated_choice():
 
 def test_library_and_cli_default_to_them():
     p = Reconstructor().get_params()
-    assert (p["method"], p["k"], p["n_blend"], p["window_s"], p["smooth_frames"], p["pin_max_offset"]) == (
-        D.METHOD, D.K, D.N_BLEND, D.WINDOW_S, D.SMOOTH_FRAMES, D.PIN_MAX_OFFSET)
+    assert (p["method"], p["k"], p["n_blend"], p["window_s"], p["smooth_frames"], p["pin_max_offset"],
+            p["refine_prior"]) == (D.METHOD, D.K, D.N_BLEND, D.WINDOW_S, D.SMOOTH_FRAMES, D.PIN_MAX_OFFSET,
+                                   D.REFINE_PRIOR)
     sig = inspect.signature(reconstruct_cmd).parameters
     assert sig["method"].default.default == D.METHOD
     assert sig["k"].default.default == D.K and sig["blend"].default.default == D.N_BLEND
     assert sig["window"].default.default == D.WINDOW_S and sig["smooth"].default.default == D.SMOOTH_FRAMES
+    assert sig["refine"].default.default is (D.REFINE_PRIOR is not None)

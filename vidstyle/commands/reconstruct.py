@@ -81,6 +81,9 @@ def reconstruct(
                                         help="Camera pitch in degrees, down positive (default: the library "
                                         "projection's, 10)."),
     foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Keep planted feet in place."),
+    refine: bool = typer.Option(D.REFINE_PRIOR is not None, "--refine/--no-refine", help="Bend the blended pose "
+                                "toward the keypoints within the span of its neighbours (the prior's weight: "
+                                "chosen on validation performers)."),
     fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
     size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
@@ -108,7 +111,8 @@ def reconstruct(
     reconstruct_video(video, library, out, poses=poses, backend=backend, model=model, frames=_frames(frames),
                       fps=fps, size=wh,
                       skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
-                      k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views, focal_px=focal, elevation_deg=elevation,
+                      k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
+                      refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px=focal, elevation_deg=elevation,
                       foot_lock=foot_lock)
 
 

@@ -9,4 +9,4 @@ N_BLEND = 16             # neighbours blended
 WINDOW_S = 0.25          # OLNG window, seconds (0.25-2 s alike within the 0.1 mm tie; the shortest kept)
 SMOOTH_FRAMES = 1.0      # Gaussian sigma of the pose over time, frames
 PIN_MAX_OFFSET = None    # no cap on how far leg IK pulls a planted foot: least pose error and least skate
-REFINE_PRIOR = None      # the blend is not bent toward the keypoints (vidstyle.reconstruct.refine)
+REFINE_PRIOR = 0.1       # the blend bent toward the keypoints (vidstyle.reconstruct.refine): 0.1 beat off, 1, 0.03
