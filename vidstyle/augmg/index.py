@@ -202,14 +202,12 @@ def coherent_ranking(index: PoseIndex, idx: np.ndarray, cost: np.ndarray, query_
     return np.take_along_axis(idx, order, 1), np.take_along_axis(total, order, 1)
 
 
-def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
-    """Read BVH clips (files or directories) into keypoints; a CMU calibration T-pose frame is dropped."""
+def clip_files(paths) -> list:
+    """The BVH files of ``paths`` (files, or directories searched recursively, sorted), as Paths;
+    :class:`~vidstyle.errors.InputError` for a path that does not exist or no file at all."""
     from pathlib import Path
 
     from ..errors import InputError
-    from ..mocap import read_bvh
-    from ..motiongraph.graph import has_tpose_first_frame
-    from .keypoints import keypoint_positions
 
     files = []
     for p in map(Path, paths):
@@ -221,6 +219,17 @@ def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
             raise InputError(f"{p}: no such clip file or directory")
     if not files:
         raise InputError("--library: no .bvh clips")
+    return files
+
+
+def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
+    """Read BVH clips (files or directories) into keypoints; a CMU calibration T-pose frame is dropped."""
+
+    from ..mocap import read_bvh
+    from ..motiongraph.graph import has_tpose_first_frame
+    from .keypoints import keypoint_positions
+
+    files = clip_files(paths)
     out = []
     for f in files:
         m = read_bvh(f)
@@ -231,7 +240,7 @@ def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
     return out
 
 
-__all__ = ["KP", "LibraryClip", "PoseIndex", "coherent_ranking", "library_clips"]
+__all__ = ["KP", "LibraryClip", "PoseIndex", "clip_files", "coherent_ranking", "library_clips"]
 
 
 def _girdle_midpoints(points: np.ndarray) -> np.ndarray:

@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, ParameterError
+from ..mocap.quat import continuous_quaternions
 from . import defaults as D
 from .library import ReconstructionLibrary
 
@@ -204,35 +205,21 @@ def _leg_length(skeleton) -> float:
     return float(np.linalg.norm(knee - hip) + np.linalg.norm(ankle - knee))
 
 
-def _hemisphere_continuous(q: np.ndarray) -> np.ndarray:
-    """Quaternions (T, J, 4) with signs flipped so consecutive frames are in one hemisphere."""
-    q = q.copy()
-    for t in range(1, len(q)):
-        flip = np.sum(q[t] * q[t - 1], axis=-1) < 0
-        q[t, flip] *= -1
-    return q
-
-
-def similarity_residual(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Weighted least-squares fit ``obs ~ s * model + c`` per leading index: the residual over the
-    observation's weighted spread. ``model`` (..., 15, 2), ``obs`` (..., 15, 2), ``w`` (..., 15)."""
+def similarity_fit(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted least-squares fit ``obs ~ s * model + c`` per leading index: ``(residuals, centred obs)``,
+    each (..., 15, 2). ``model`` (..., 15, 2), ``obs`` (..., 15, 2), ``w`` (..., 15)."""
     sw = np.maximum(w.sum(-1, keepdims=True), 1e-12)
     mm = (w[..., None] * model).sum(-2, keepdims=True) / sw[..., None]
     om = (w[..., None] * obs).sum(-2, keepdims=True) / sw[..., None]
     dm, do = model - mm, obs - om
     s = (w * (dm * do).sum(-1)).sum(-1) / np.maximum((w * (dm * dm).sum(-1)).sum(-1), 1e-12)
-    r = do - s[..., None, None] * dm
+    return do - s[..., None, None] * dm, do
+
+
+def similarity_residual(model: np.ndarray, obs: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The weighted squared residual of :func:`similarity_fit` over the observation's weighted spread."""
+    r, do = similarity_fit(model, obs, w)
     return (w * (r * r).sum(-1)).sum(-1) / np.maximum((w * (do * do).sum(-1)).sum(-1), 1e-12)
-
-
-def _yaw_rotation(theta: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) rotations about +Y by ``theta`` (radians): +Z turns towards +X."""
-    c, s = np.cos(theta), np.sin(theta)
-    R = np.zeros(theta.shape + (3, 3))
-    R[..., 0, 0], R[..., 0, 2] = c, s
-    R[..., 1, 1] = 1.0
-    R[..., 2, 0], R[..., 2, 2] = -s, c
-    return R
 
 
 def view_rotations(azimuth_deg: np.ndarray, elevation_deg: float) -> np.ndarray:
@@ -449,7 +436,8 @@ class Reconstructor:
             rows = np.flatnonzero(want[:, v])
             if rows.size == 0:
                 continue
-            d, i = knn_brute(index.features_[v], self._sqnorms(v), feats[rows], k, self._augmented(v))
+            aug = self._augmented(v)  # [2f, -|f|^2]
+            d, i = knn_brute(index.features_[v], -aug[:, -1], feats[rows], k, aug)
             ids[rows, v * k:(v + 1) * k] = i
             cost[rows, v * k:(v + 1) * k] = d
             view[rows, v * k:(v + 1) * k] = v
@@ -467,15 +455,6 @@ class Reconstructor:
         bad = ~np.isfinite(cost)
         ids[bad], view[bad] = -1, -1
         return ids, cost, view
-
-    def _sqnorms(self, v: int) -> np.ndarray:
-        """(N,) squared norms of view ``v``'s library features (computed once per library)."""
-        lib = self.library_
-        cache = lib.__dict__.setdefault("_sqnorm_cache", {})
-        if v not in cache:
-            f = lib.index_.features_[v]
-            cache[v] = np.einsum("ij,ij->i", f, f)
-        return cache[v]
 
     def _augmented(self, v: int) -> np.ndarray:
         """:func:`augmented_features` of view ``v`` (computed once per library)."""
@@ -595,7 +574,7 @@ class Reconstructor:
 
         # bridge frames without a pose, then smooth in time
         ok = observed & use.any(axis=1)
-        qb = _hemisphere_continuous(_fill_gaps(_hemisphere_continuous(qb), ok))
+        qb = continuous_quaternions(_fill_gaps(continuous_quaternions(qb), ok))
         qb = _gaussian(qb, float(self.smooth_frames))
         qb /= np.linalg.norm(qb, axis=-1, keepdims=True)
         height = _gaussian(_fill_gaps(height, ok), float(self.smooth_frames))

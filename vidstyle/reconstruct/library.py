@@ -41,20 +41,6 @@ KP_ANKLES = (13, 14)
 log = logging.getLogger(__name__)
 
 
-def _clip_files(paths: Sequence[str | os.PathLike]) -> list[Path]:
-    files: list[Path] = []
-    for p in map(Path, paths):
-        if p.is_dir():
-            files += sorted(p.rglob("*.bvh"))
-        elif p.is_file():
-            files.append(p)
-        else:
-            raise InputError(f"{p}: no such clip file or directory")
-    if not files:
-        raise InputError("--library: no .bvh clips")
-    return files
-
-
 def _clip_labels(path: Path, n_frames: int, fps: float) -> np.ndarray:
     """(F,) per-frame labels of a clip from its ``<stem>.labels.json`` sidecar; ``""`` without one."""
     side = path.with_suffix("").with_suffix(".labels.json")
@@ -94,9 +80,10 @@ class ReconstructionLibrary:
     def fit(self, clips: Sequence[str | os.PathLike], skeleton=None) -> ReconstructionLibrary:
         """Read BVH ``clips`` (files or directories) and index them; ``skeleton`` (a
         :class:`vidstyle.mocap.skeleton.Skeleton`) is the output skeleton (default: the first clip's)."""
+        from ..augmg.index import clip_files
         from ..mocap import read_bvh
 
-        files = _clip_files(clips)
+        files = clip_files(clips)
         motions = [read_bvh(f) for f in files]
         return self.fit_motions(motions, [str(f) for f in files], skeleton=skeleton)
 

@@ -30,18 +30,14 @@ def _residuals(skeleton, q: np.ndarray, obs_xy: np.ndarray, obs_w: np.ndarray, R
     from ..augmg.projection import facing_normalised, facing_of_keypoints
     from ..mocap.keypoints import keypoint_positions
     from ..mocap.motion import Motion
+    from .core import similarity_fit
 
     T = len(q)
     pts = keypoint_positions(Motion(skeleton, q, root_positions=np.zeros((T, 3))))
     norm = facing_normalised(pts, facing_of_keypoints(pts))
     model = np.einsum("tij,tkj->tki", R, norm)[..., :2]
+    r, do = similarity_fit(model, obs_xy, obs_w)
     w = obs_w
-    sw = np.maximum(w.sum(-1, keepdims=True), 1e-12)
-    mm = (w[..., None] * model).sum(-2, keepdims=True) / sw[..., None]
-    om = (w[..., None] * obs_xy).sum(-2, keepdims=True) / sw[..., None]
-    dm, do = model - mm, obs_xy - om
-    s = (w * (dm * do).sum(-1)).sum(-1) / np.maximum((w * (dm * dm).sum(-1)).sum(-1), 1e-12)
-    r = do - s[:, None, None] * dm
     spread = np.sqrt(np.maximum((w * (do * do).sum(-1)).sum(-1), 1e-12))
     return (np.sqrt(w)[..., None] * r).reshape(T, -1) / spread[:, None]
 
