@@ -165,8 +165,9 @@ def test_killed_dask_client_stops_its_running_tasks(tmp_path):
         assert sum(client.run(_running).values()) == 0, f"tasks still running {SURVIVAL:.0f} s after the kill"
         time.sleep(1.0)
         # a call already writing its output at the kill (its temporary file listed) may finish that rename
-        # (np.savez is one C call Dask cannot interrupt); nothing else appears
-        finishing = {re.sub(r"^\.(.+)\.[a-z0-9_]{8}\.tmp(\.npz)$", r"\1\2", n) for n in before if n.startswith(".")}
+        # (np.savez is one C call Dask cannot interrupt); nothing else appears. Temporaries are named
+        # .<stem>.<writer pid>-<8 random>.tmp<suffix> (vidstyle.fileio.atomic_path)
+        finishing = {re.sub(r"^\.(.+)\.\d+-[a-z0-9_]{8}\.tmp(\.npz)$", r"\1\2", n) for n in before if n.startswith(".")}
         after = sorted(os.listdir(out))
         assert {n for n in after if not n.startswith(".")} <= {n for n in before if not n.startswith(".")} | finishing
         assert {n for n in after if n.startswith(".")} <= set(before)
