@@ -231,3 +231,43 @@ def test_strike_parameters_are_checked_by_the_library(kw, param):
         StrikeEvalParams(**kw)
     assert e.value.param == param
     assert StrikeEvalParams(start=0, stop=None, points=1).stop is None  # the edges are allowed
+
+
+def test_pose_model_end_to_end_on_true_keypoints(cmu_dir, tmp_path, rng):
+    """A pose-sequence recognizer through ``evaluate strikes --pose-input true``: the counts are those of the
+    model on the clip's keypoints projected through each rendered camera (recounted here from the sidecars
+    the command kept)."""
+    from vidstyle.demo.actions import CLASSES
+    from vidstyle.formats.metrics import STRIKES, read_metrics
+    from vidstyle.formats.truth import read_truth
+    from vidstyle.mocap import read_bvh
+    from vidstyle.mocap.keypoints import keypoint_positions
+    from vidstyle.recognition.posefeatures import PoseTrack
+    from vidstyle.recognition.poserecognizer import PoseRecognizer, save_pose_model
+    from vidstyle.render.camera import Camera
+
+    tracks = [PoseTrack(np.cumsum(rng.normal(0, 2, (80, 15, 2)), axis=0) + 60, 20.0) for _ in range(4)]
+    labels = [[CLASSES[(i // 10 + v) % len(CLASSES)] for i in range(80)] for v in range(4)]
+    model = PoseRecognizer(max_frames_per_class=None, mirror=False, smoothing="vote", random_state=0)
+    save_pose_model(tmp_path / "p.joblib", model.fit(tracks, labels, classes=CLASSES))
+    out, work = tmp_path / "strikes.json", tmp_path / "work"
+    assert main(["evaluate", "strikes", "--bvh", str(cmu_dir / "02_05.bvh"), "--model", str(tmp_path / "p.joblib"),
+                 "--cameras", "0:10:texture,150:30:texture:moon", "--start", "100", "--stop", "420",
+                 "--pose-input", "true", "--work-dir", str(work), "--out", str(out)]) == 0
+    m = read_metrics(out, STRIKES)
+    assert m.doc["params"]["pose_input"] == "true"
+    motion = read_bvh(cmu_dir / "02_05.bvh")[100:420]
+    mask = action_frames(motion)
+    pts = keypoint_positions(motion)
+    for cam in m.doc["cameras"]:
+        t = read_truth(work / f"{cam['name']}.truth.npz").to_arrays()
+        idx = np.clip(np.rint(t["source_time"] * motion.fps).astype(int), 0, motion.n_frames - 1)
+        uv, _ = Camera(t["K"], t["R"], t["t"], size=tuple(int(s) for s in t["size"])).project(pts[idx])
+        names = model.classes_[model.predict_video(PoseTrack(np.asarray(uv, float), 20.0))["smoothed"]]
+        act = mask[idx]
+        assert cam["action_video_frames"] == act.sum() > 10
+        assert cam["smoothed"]["punch"] == int(np.isin(names[act], PUNCHES).sum())
+        assert cam["smoothed"]["kick"] == int(np.isin(names[act], KICKS).sum())
+    assert main(["evaluate", "strikes", "--bvh", str(cmu_dir / "02_05.bvh"), "--model", str(tmp_path / "p.joblib"),
+                 "--pose-input", "nope", "--out", str(tmp_path / "x.json")]) == 2
+    assert not (tmp_path / "x.json").exists()

@@ -50,6 +50,10 @@ def evaluate_strikes_cmd(
     actions: Path = typer.Option(None, "--actions", help="Take the action frames from this labels JSON "
                                  "(vidstyle.labels, one label per frame of the whole BVH, e.g. a demo take's "
                                  "mocap/<take>.labels.json) instead of the rule."),
+    pose_input: str = typer.Option("ps", "--pose-input", help="A pose-sequence recognizer's input (MODEL trained "
+                                   "with --features pose): ps or blazepose (that pose backend on each rendered "
+                                   "video), or true (the clip's keypoints projected through the camera: the upper "
+                                   "bound)."),
     action_labels: str = typer.Option("Strike,Jab,Hook,Uppercut", "--action-labels",
                                       help="With --actions: the labels that mark action frames, comma-separated."),
 ) -> None:
@@ -78,11 +82,12 @@ def evaluate_strikes_cmd(
     try:
         cams = parse_cameras(cameras)
         rule = StrikeRule(extension_min=extension_min, reach_min=reach_min).validate()
+        params = StrikeEvalParams.for_model(model, variant=variant, points=points, start=start, stop=stop or None,
+                                            pose_input=pose_input)
     except ParameterError as e:
         raise InputError(f"--{e.param.replace('_', '-')}: {e.problem}") from None
     if stop < 0:
         raise InputError(f"--stop: must be 0 (the end) or above --start, got {stop}")
-    params = StrikeEvalParams.for_model(model, variant=variant, points=points, start=start, stop=stop or None)
     labels_list = [x.strip() for x in action_labels.split(",") if x.strip()]
     if actions is not None and not labels_list:
         raise InputError("--action-labels: give at least one label")

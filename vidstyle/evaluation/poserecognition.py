@@ -54,26 +54,115 @@ def true_keypoints(dataset: Dataset, video_id: str) -> np.ndarray:
 
 
 def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str]) -> dict[str, Any]:
-    """Error of the pose files ``<poses_dir>/<id>.poses.json`` against the true keypoints, in true torso
-    lengths: median and RMS of the inliers (< 0.5), outlier share, missing-frame share."""
+    """:func:`pose_error` of the pose files ``<poses_dir>/<id>.poses.json`` against the true keypoints of
+    the dataset videos ``ids``."""
     from ..formats.poses import read_poses
 
-    errs, n_missing, n = [], 0, 0
+    trues, ests = [], []
     for i in ids:
         true = true_keypoints(dataset, i)
-        est = track_from_poses(read_poses(poses_dir / f"{i}.poses.json"), dataset.fps, len(true)).xy
+        trues.append(true)
+        ests.append(track_from_poses(read_poses(poses_dir / f"{i}.poses.json"), dataset.fps, len(true)).xy)
+    return {"videos": list(ids), **pose_error(trues, ests)}
+
+
+def pose_error(trues: list[np.ndarray], ests: list[np.ndarray]) -> dict[str, Any]:
+    """Error of estimated 2D keypoint tracks (F, 15, 2; a frame with any NaN is missing) against true ones,
+    in true torso lengths: median, the RMS per coordinate of the inliers (< 0.5) and of the outliers, outlier
+    share, missing-frame share and the mean length of the runs of missing frames."""
+    errs, n_missing, n, runs = [], 0, 0, []
+    for true, est in zip(trues, ests):
         torso = np.linalg.norm(true[:, NECK] - true[:, PELVIS], axis=-1)
         found = np.all(np.isfinite(est), axis=(1, 2))
         n += len(true)
         n_missing += int((~found).sum())
+        edges = np.diff(np.concatenate([[0], (~found).astype(np.int8), [0]]))
+        runs += list(np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1))
         e = np.linalg.norm(est[found] - true[found], axis=-1) / torso[found, None]
         errs.append(e.ravel())
     e = np.concatenate(errs) if errs else np.zeros(0)
-    inl = e[e < 0.5]
-    return {"videos": ids, "n_frames": n, "missing_share": n_missing / max(n, 1),
+    inl, outl = e[e < 0.5], e[e >= 0.5]
+    return {"n_frames": n, "missing_share": n_missing / max(n, 1),
+            "missing_run_mean": float(np.mean(runs)) if runs else None,
             "median": float(np.median(e)) if e.size else None,
             "inlier_rms_per_coordinate": float(np.sqrt(np.mean(inl**2) / 2)) if inl.size else None,
+            "outlier_rms_per_coordinate": float(np.sqrt(np.mean(outl**2) / 2)) if outl.size else None,
             "outlier_share": float((e >= 0.5).mean()) if e.size else None}
+
+
+def noise_from_error(error: dict[str, Any]) -> KeypointNoise:
+    """The :class:`KeypointNoise` whose corruption matches a measured pose error
+    (:func:`measure_pose_error`): Gaussian noise of the inliers' RMS, outliers at the measured share and
+    RMS, dropouts at the measured missing share and run length (defaults where a figure is missing)."""
+    d = KeypointNoise()
+    return KeypointNoise(
+        sigma=error.get("inlier_rms_per_coordinate") or d.sigma,
+        outlier_rate=error["outlier_share"] if error.get("outlier_share") is not None else d.outlier_rate,
+        outlier_sigma=error.get("outlier_rms_per_coordinate") or d.outlier_sigma,
+        dropout_rate=float(error.get("missing_share", d.dropout_rate)),
+        dropout_length=max(1.0, error.get("missing_run_mean") or d.dropout_length),
+        extra={"calibrated_on_videos": len(error.get("videos", []))})
+
+
+def train_for_split(dataset: Dataset, split, seed: int, n_views: int, noise: KeypointNoise | None,
+                    recognizer_params: dict | None = None, phases=(0,)) -> tuple[PoseRecognizer, dict]:
+    """A :class:`PoseRecognizer` trained on the mocap takes of ``split``'s training performers (sets A and
+    B) seen from ``n_views`` virtual cameras with ``noise``; and what the metrics record of the training."""
+    train_perf = sorted(set(split.vocab_performers) | set(split.train_performers))
+    t0 = time.perf_counter()
+    motions = dataset_motions(dataset, train_perf, dataset.fps, phases)
+    params = {"random_state": seed, "fps": dataset.fps, **(recognizer_params or {})}
+    rec = PoseRecognizer(**params)
+    check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
+    tracks, labels = virtual_views(motions, n_views, seed, noise)
+    rec.fit(tracks, labels, classes=dataset.classes or None)
+    return rec, {"performers": train_perf, "n_motions": len(motions), "n_views": n_views,
+                 "phases": list(phases), "noise": noise.to_dict() if noise else None,
+                 "train_s": time.perf_counter() - t0}
+
+
+def pose_track_of(score_ds: Dataset, video_id: str, poses_dir: str | Path | None, n_frames: int) -> PoseTrack | None:
+    """The pose track a test video is scored from: its true 2D keypoints (``poses_dir`` None), or its
+    ``<poses_dir>/<id>.poses.json`` (None when there is none)."""
+    from ..formats.poses import read_poses
+
+    if poses_dir is None:
+        return PoseTrack(true_keypoints(score_ds, video_id), score_ds.fps, source=video_id)
+    p = Path(poses_dir) / f"{video_id}.poses.json"
+    if not p.exists():
+        return None
+    return track_from_poses(read_poses(p), score_ds.fps, n_frames)
+
+
+def sift_outputs(model, features_dir: str | Path, ids: list[str]) -> list[dict]:
+    """The 3D SIFT recognizer ``model``'s ``predict_video`` of each video's ``<features_dir>/<id>.npz``."""
+    from ..formats.features import load_features
+
+    out = []
+    for i in ids:
+        p = Path(features_dir) / f"{i}.npz"
+        if not p.exists():
+            raise InputError(f"{p}: no features of the video {i}")
+        out.append(model.predict_video(load_features(p)))
+    return out
+
+
+def fused_outputs(pose_rec: PoseRecognizer, pose_outs: list[dict], sift_model, sift_outs: list[dict],
+                  weight: float) -> list[dict]:
+    """Late fusion (:func:`~vidstyle.recognition.fusion.fuse_scores`) of the two recognizers' frame
+    scores, ``weight`` on the pose recognizer's, smoothed by the pose recognizer's smoother."""
+    from ..recognition.fusion import fuse_scores
+
+    out = []
+    for po, so in zip(pose_outs, sift_outs):
+        n = min(len(po["raw"]), len(so["raw"]))
+        if abs(len(po["raw"]) - len(so["raw"])) > 1:
+            raise InputError(f"fusion: {len(po['raw'])} pose frames against {len(so['raw'])} video frames")
+        raw, fused, conf = fuse_scores([po["scores"][:n], so["scores"][:n]],
+                                       [pose_rec.classes_, sift_model.classes_], [weight, 1.0 - weight],
+                                       pose_rec.classes_)
+        out.append(pose_rec.smooth(raw, fused, conf))
+    return out
 
 
 def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-performer", seed: int = 0,
@@ -85,55 +174,54 @@ def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-perfor
     virtual cameras and score the test set T (or ``score_set="val"``: V) from the true 2D keypoints or
     from the pose files in ``poses_dir`` (see the module docstring)."""
     split = make_split(dataset, split_kind, seed=seed, test_dataset=test_dataset)
+    rec, training = train_for_split(dataset, split, seed, n_views, noise, recognizer_params, phases)
+    return score_pose_recognizer(rec, training, dataset, split, test_dataset, poses_dir, score_set)
+
+
+def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset, split,
+                          test_dataset: Dataset | None = None, poses_dir: str | Path | None = None,
+                          score_set: str = "test", sift: tuple | None = None) -> dict[str, Any]:
+    """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
+    or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight)``, of its late fusion
+    with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT recognizer alone, smoothed
+    by the pose recognizer's smoother)."""
     if score_set == "val":
         ids, score_ds = split.val, dataset
     else:
         ids, score_ds = split.test, (test_dataset if split.kind == "unseen-camera" else dataset)
-    train_perf = sorted(set(split.vocab_performers) | set(split.train_performers))
-    t0 = time.perf_counter()
-    motions = dataset_motions(dataset, train_perf, dataset.fps, phases)
-    params = {"random_state": seed, "fps": dataset.fps, **(recognizer_params or {})}
-    rec = PoseRecognizer(**params)
-    check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
-    tracks, labels = virtual_views(motions, n_views, seed, noise)
-    rec.fit(tracks, labels, classes=dataset.classes or None)
-    t_train = time.perf_counter() - t0
-
-    from ..formats.poses import read_poses
-
     t0 = time.perf_counter()
     by_id = score_ds.by_id()
     used, outputs, truths, skipped = [], [], [], []
     n_pred_frames = 0
     for i in ids:
         truth = read_labels(score_ds.labels_path(by_id[i]))
-        if poses_dir is None:
-            track = PoseTrack(true_keypoints(score_ds, i), score_ds.fps, source=i)
-        else:
-            p = Path(poses_dir) / f"{i}.poses.json"
-            if not p.exists():
-                skipped.append(i)
-                continue
-            track = track_from_poses(read_poses(p), score_ds.fps, len(truth.labels))
-        t1 = time.perf_counter()
+        track = pose_track_of(score_ds, i, poses_dir, len(truth.labels))
+        if track is None:
+            skipped.append(i)
+            continue
         outputs.append(rec.predict_video(track))
         n_pred_frames += track.n_frames
         used.append(i)
         truths.append(truth.labels)
-        log.debug("%s: %.2fs", i, time.perf_counter() - t1)
     t_pred = time.perf_counter() - t0
     if not used:
         raise InputError(f"{poses_dir}: no pose file of any test video")
+    fusion = None
+    if sift is not None:
+        model, features_dir, weight = sift
+        outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used), weight)
+        truths = [t[: len(o["raw"])] for t, o in zip(truths, outputs)]
+        fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir)}
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in used]
     metrics = score_videos(rec.classes_, truths, outputs, used, actions)
     return {
-        "kind": "vidstyle.metrics.recognition", "schema_version": 1, "recognizer": "pose",
-        "seed": seed, "split": split.to_dict(), "scored_set": "V" if score_set == "val" else "T",
-        "input": "true-2d" if poses_dir is None else f"poses:{poses_dir}",
-        "scored_videos": used, "skipped_videos": skipped,
-        "training": {"performers": train_perf, "n_motions": len(motions), "n_views": n_views,
-                     "phases": list(phases), "noise": noise.to_dict() if noise else None},
+        "kind": "vidstyle.metrics.recognition", "schema_version": 1,
+        "recognizer": "pose" if fusion is None else ("sift" if fusion["weight_pose"] == 0 else "pose+sift"),
+        "seed": training.get("seed", rec.random_state), "split": split.to_dict(),
+        "scored_set": "V" if score_set == "val" else "T",
+        "input": "true-2d" if poses_dir is None else f"poses:{poses_dir}", "fusion": fusion,
+        "scored_videos": used, "skipped_videos": skipped, "training": training,
         "params": rec.public_params(), "model": rec.summary(), **metrics,
-        "timing_s": {"train": t_train, "predict": t_pred,
+        "timing_s": {"train": training.get("train_s"), "predict": t_pred,
                      "predict_frames_per_s": n_pred_frames / t_pred if t_pred > 0 else None},
     }

@@ -250,8 +250,11 @@ class StrikeEvalParams:
     points: int = 10
     start: int = 1  # first motion frame (frame 0 of a CMU file is the conversion's T-pose)
     stop: int | None = None  # motion frame after the last (None: the end)
+    pose_input: str = "ps"  # a pose-sequence recognizer's input: a pose backend on the video, or "true" 2D
 
     def __post_init__(self) -> None:
+        if self.pose_input not in POSE_INPUTS:
+            raise ParameterError("pose_input", f"must be one of {', '.join(POSE_INPUTS)}, got {self.pose_input!r}")
         if self.start < 0:
             raise ParameterError("start", f"must be >= 0, got {self.start}")
         if self.stop is not None and self.stop <= self.start:
@@ -261,7 +264,7 @@ class StrikeEvalParams:
 
     @classmethod
     def for_model(cls, model_path: str | os.PathLike, variant: str | None = None, points: int | None = None,
-                  start: int = 1, stop: int | None = None) -> "StrikeEvalParams":
+                  start: int = 1, stop: int | None = None, pose_input: str = "ps") -> "StrikeEvalParams":
         """Checked parameters for the recognizer ``model_path``: ``variant`` / ``points`` default to those
         its training features were extracted with (its header), else scovanner2007 / 10; ``stop`` 0 or
         None is the end of the clip."""
@@ -271,12 +274,38 @@ class StrikeEvalParams:
             fp = read_header(model_path).get("features_params") or {}
             variant = variant or fp.get("variant", "scovanner2007")
             points = points if points is not None else int((fp.get("salient") or {}).get("n_points", 10))
-        return cls(variant=variant, points=points, start=start, stop=stop or None)
+        return cls(variant=variant, points=points, start=start, stop=stop or None, pose_input=pose_input)
 
     def to_dict(self) -> dict:
         d = asdict(self)
         d["size"] = list(self.size)
         return d
+
+
+POSE_INPUTS = ("ps", "blazepose", "true")
+
+
+def _pose_prediction(model, motion, video: Path, truth: dict, params: StrikeEvalParams) -> dict:
+    """``predict_video`` of a pose-sequence recognizer on a rendered clip: from the poses a pose backend
+    finds in ``video`` (``params.pose_input`` ps / blazepose), or from the motion's true keypoints at the
+    frames the video shows, projected through its camera (``"true"``, the upper bound)."""
+    from ..recognition.posefeatures import PoseTrack, track_from_poses
+
+    n = len(truth["source_time"])
+    if params.pose_input == "true":
+        from ..mocap.keypoints import keypoint_positions
+        from ..render.camera import Camera
+
+        idx = np.clip(np.rint(truth["source_time"] * motion.fps).astype(np.int64), 0, motion.n_frames - 1)
+        cam = Camera(truth["K"], truth["R"], truth["t"], size=tuple(int(s) for s in truth["size"]))
+        uv, _ = cam.project(keypoint_positions(motion)[idx])
+        track = PoseTrack(np.asarray(uv, dtype=np.float64), params.fps, source=str(video))
+    else:
+        from ..pose.run import estimate_video
+
+        poses = estimate_video(video, params.pose_input, None, jobs=1)
+        track = track_from_poses(poses, params.fps, n)
+    return model.predict_video(track)
 
 
 def _counts(names: np.ndarray, classes: Sequence[str]) -> dict[str, int]:
@@ -310,13 +339,15 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     side = render_to_file(motion, video, view=camera.azimuth_deg, size=tuple(params.size), fps=params.fps,
                           elevation_deg=camera.elevation_deg, appearance=appearance, background=camera.background,
                           noise_sigma=params.noise_sigma, seed=render_seed)
-    feats_path = work_dir / f"{camera.name}.npz"
-    process_video(video, feats_path, variant=params.variant, salient=SalientParams(n_points=params.points))
-    feats = load_features(feats_path)
-    pred = model.predict_video(feats)
     from ..formats.truth import read_truth
 
     truth = read_truth(side).to_arrays()
+    if is_pose_model(model):
+        pred = _pose_prediction(model, motion, video, truth, params)
+    else:
+        feats_path = work_dir / f"{camera.name}.npz"
+        process_video(video, feats_path, variant=params.variant, salient=SalientParams(n_points=params.points))
+        pred = model.predict_video(load_features(feats_path))
     src = np.clip(np.rint(truth["source_time"] * motion.fps).astype(np.int64), 0, motion.n_frames - 1)
     # the features' working frames are the video's decoded frames (same rate and size)
     n = min(len(src), len(pred["raw"]))
@@ -336,6 +367,12 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
         out["per_strike"].append({**s, "punch_fraction": _fractions(c, s["end"] - s["start"])["punch_fraction"],
                                   "majority": max(c, key=c.get)})
     return out
+
+
+def is_pose_model(model) -> bool:
+    from ..recognition.poserecognizer import PoseRecognizer
+
+    return isinstance(model, PoseRecognizer)
 
 
 def labelled_action_frames(path: str | os.PathLike, n_frames: int, action_labels: Sequence[str],
