@@ -43,7 +43,7 @@ from vidstyle.evaluation.poserecognition import (  # noqa: E402
     score_pose_recognizer,
     train_for_split,
 )
-from vidstyle.fileio import write_json  # noqa: E402
+from vidstyle.formats.validation import POSE_RECOGNITION, validation_header, write_validation  # noqa: E402
 from vidstyle.formats.dataset import read_dataset  # noqa: E402
 from vidstyle.formats.metrics import write_metrics  # noqa: E402
 from vidstyle.recognition.pipeline import load_recognizer  # noqa: E402
@@ -75,6 +75,7 @@ def main() -> None:
     ap.add_argument("--C", type=float, default=10.0)
     ap.add_argument("--cap", type=int, default=1500, help="SVM training frames per class")
     ap.add_argument("--validation-out", type=Path)
+    ap.add_argument("--model-out", type=Path, help="also save the chosen pose recognizer (a recognizer model file)")
     ap.add_argument("--results-dir", type=Path, default=ROOT / "pipelines/kickboxing/results")
     a = ap.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(message)s")
@@ -117,13 +118,19 @@ def main() -> None:
     if best["weight_pose"] == 0.0:  # 3D SIFT alone: the noise does not matter, keep the default
         best = {**best, "noise": "default"}
     log.info("validation chose %s", best)
-    doc = {"kind": "vidstyle.validation.pose_recognition", "schema_version": 1, "seed": seed,
+    doc = {**validation_header(POSE_RECOGNITION), "seed": seed,
            "command": command, "split": split.to_dict(), "scored_set": "V",
            "pose_error_on_validation": error, "noises": {k: v.to_dict() for k, v in noises.items()},
            "views": a.views, "params": params, "sift_model": str(a.sift_model),
            "rows": rows, "chosen": best,
            "rule": "highest smoothed frame accuracy on V; ties: video accuracy, fewer recognizers, default noise"}
-    write_json(val_out, doc)
+    write_validation(val_out, doc)
+    if a.model_out is not None and best["weight_pose"] > 0.0:
+        from vidstyle.recognition.poserecognizer import save_pose_model
+
+        rec, training = recs[best["noise"]]
+        save_pose_model(a.model_out, rec, training={k: v for k, v in training.items() if k != "train_s"},
+                        extra={"validation": str(val_out), "chosen": best})
 
     # 4. test, once
     rec, training = recs[best["noise"]]

@@ -40,6 +40,11 @@ computed, e.g. video accuracy without single-action test videos):
   with ``data``, ``source``, ``method`` and ``skeleton`` strings, ``frames`` >= 0, and ``mpjpe_mm``,
   ``mpjpe_root_relative_mm``, ``pa_mpjpe_mm``, ``acceleration_error_mm_per_frame2``,
   ``foot_skate_mm_per_frame`` each >= 0 or null; ``params`` and ``headline`` objects.
+* ``vidstyle.metrics.real_motion`` (``vidstyle evaluate real-motion``): ``recognizers`` a non-empty list;
+  ``rows`` a non-empty list, each with ``clip``, ``family``, ``camera`` strings, ``recognizer`` one of
+  ``recognizers``, ``frames`` >= 0, ``family_counts`` (``punch``, ``kick``, ``other`` >= 0, summing to
+  ``frames``) and ``family_accuracy`` in [0, 1] or null; ``overall`` an object per recognizer with
+  ``family_accuracy`` in [0, 1] or null; ``params`` an object.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
@@ -79,7 +84,9 @@ MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
 PEOPLE = "vidstyle.metrics.people"
 TIMING = "vidstyle.metrics.timing"
 RECONSTRUCT = "vidstyle.metrics.reconstruct"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT)
+REAL_MOTION = "vidstyle.metrics.real_motion"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
+         REAL_MOTION)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -188,6 +195,29 @@ def _reconstruct(f: Fields) -> None:
             _opt_number(r, key, 0, None)
     f.sub("params")
     f.sub("headline")
+
+
+def _real_motion(f: Fields) -> None:
+    names = f.list("recognizers", min_len=1)
+    f.sub("params")
+    rows = f.list("rows", min_len=1)
+    for i, raw in enumerate(rows):
+        r = Fields(raw, f.path, f"rows[{i}]")
+        for key in ("clip", "family", "camera", "recognizer"):
+            r.str(key, nonempty=True)
+        if r.get("recognizer") not in names:
+            raise r.fail("recognizer", f"not one of the recognizers {names}")
+        n = r.int("frames", min=0)
+        counts = r.sub("family_counts")
+        total = 0
+        for fam in ("punch", "kick", "other"):
+            total += counts.int(fam, min=0)
+        if total != n:
+            raise r.fail("family_counts", f"sum to {total}, not the {n} frames")
+        _opt_number(r, "family_accuracy", 0, 1)
+    o = f.sub("overall")
+    for name in names:
+        _opt_number(o.sub(name), "family_accuracy", 0, 1)
 
 
 def _augmg(f: Fields) -> None:
@@ -341,7 +371,7 @@ def _timing(f: Fields) -> None:
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
-           RECONSTRUCT: _reconstruct}
+           RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
