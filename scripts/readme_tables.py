@@ -104,11 +104,17 @@ EXTRA_ROOTS: list[Path] = []
 
 def _config(d: dict) -> str:
     """The recognizer values a metrics file records (the decoding of scored labels when it differs)."""
-    if d.get("recognizer") == "pose":  # the pose-sequence recognizer keeps its values in params
+    if d.get("recognizer") in ("pose", "pose+sift"):  # the pose-sequence recognizer keeps its values in params
         q = d.get("params") or {}
-        views = (d.get("training") or {}).get("n_views")
+        tr = d.get("training") or {}
+        views = tr.get("n_views")
+        noise = tr.get("noise") or {}
+        fusion = d.get("fusion") or {}
         return ", ".join(x for x in ("pose sequences" + (f" from {d['input']}" if d.get("input") else ""),
                                      f"{views} virtual views per take" if views else "",
+                                     "noise calibrated on validation" if noise.get("calibrated_on_videos") else "",
+                                     (f"fused with the seed's 3D SIFT recognizer, pose weight {fusion['weight_pose']:g}"
+                                      if fusion.get("weight_pose") is not None else ""),
                                      f"C {q['C']:g}" if q.get("C") is not None else "",
                                      f"cap {q['max_frames_per_class']}" if "max_frames_per_class" in q else "",
                                      f"{q['smoothing']}" if q.get("smoothing") else "") if x)
@@ -158,9 +164,10 @@ def recognition_table(items, root: Path) -> list[str]:
             kind += ", no mirror training"
         if d.get("scored_set") == "V":
             kind += ", validation set"
-        if d.get("recognizer") == "pose":
+        if d.get("recognizer") in ("pose", "pose+sift"):
             sp = d.get("split")
-            kind = f"{sp if isinstance(sp, str) else kind}, pose sequences ({d.get('input', '?')})"
+            what = "pose sequences" if d["recognizer"] == "pose" else "pose sequences + 3D SIFT"
+            kind = f"{sp if isinstance(sp, str) else kind}, {what} ({d.get('input', '?')})"
         groups[kind].append((p, d))
     lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
              "|---|---|---|---:|---:|---:|---:|---|"]

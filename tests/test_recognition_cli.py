@@ -227,3 +227,53 @@ def test_recognize_reloads_a_model_retrained_at_the_same_path(ds, tmp_path):
         os.utime(model, ns=(10**18 + k, 10**18 + k))
         assert main(["recognize", feats, "--model", str(model), "--out", str(tmp_path / f"l{w}.json")]) == 0
         assert json.loads((tmp_path / f"l{w}.json").read_text())["smoothing_window"] == w
+
+
+def test_recognize_with_late_fusion(ds, tmp_path):
+    """recognize --pose-model --poses-dir: the labels are the pose recognizer's smoothing of the weighted mean
+    of the two recognizers' frame scores, recomputed here; bad combinations exit 2 without output."""
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+    from vidstyle.recognition.fusion import fuse_scores
+    from vidstyle.recognition.io import load_features
+    from vidstyle.recognition.posefeatures import PoseTrack, track_from_poses
+    from vidstyle.recognition.poserecognizer import PoseRecognizer, save_pose_model
+    from vidstyle.recognition.recognizer import load_model
+
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--seed", str(SEED)]
+    assert main(["vocabulary", *common, "--words", "60", "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", "24",
+                 "--out", str(tmp_path / "m.joblib")]) == 0
+    sift, header = load_model(tmp_path / "m.joblib")
+    rng = np.random.default_rng(SEED)
+    classes = [str(c) for c in sift.classes_]
+    tracks = [PoseTrack(np.cumsum(rng.normal(0, 2, (60, 15, 2)), axis=0) + 80, 20.0) for _ in range(3)]
+    labels = [[classes[(i // 12 + v) % len(classes)] for i in range(60)] for v in range(3)]
+    pose = PoseRecognizer(max_frames_per_class=None, mirror=False, smoothing="vote", random_state=0)
+    save_pose_model(tmp_path / "p.joblib", pose.fit(tracks, labels, classes=classes))
+    inputs = [ds / "features" / f"{i}.npz" for i in header["split"]["test"][:2]]
+    (tmp_path / "poses").mkdir()
+    for p in inputs:
+        n = load_features(p).n_frames
+        xy = np.cumsum(rng.normal(0, 2, (n, 15, 2)), axis=0) + 80
+        frames = [PoseFrame(f, "front", np.c_[xy[f], np.ones(15)]) for f in range(n) if f % 7]
+        write_poses(tmp_path / "poses" / f"{p.stem}.poses.json", Poses(p.name, "blazepose", frames))
+    args = ["recognize", *map(str, inputs), "--model", str(tmp_path / "m.joblib"), "--pose-model",
+            str(tmp_path / "p.joblib"), "--poses-dir", str(tmp_path / "poses"), "--fusion-weight", "0.7"]
+    assert main([*args, "--out-dir", str(tmp_path / "lab")]) == 0
+    from vidstyle.formats.poses import read_poses
+
+    for p in inputs:
+        doc = json.loads((tmp_path / "lab" / f"{p.stem}.json").read_text())
+        so = sift.predict_video(load_features(p))
+        n = len(so["raw"])
+        po = pose.predict_video(track_from_poses(read_poses(tmp_path / "poses" / f"{p.stem}.poses.json"), 20.0, n))
+        want = pose.smooth(*fuse_scores([po["scores"], so["scores"]], [pose.classes_, sift.classes_], [0.7, 0.3],
+                                        pose.classes_))
+        assert doc["labels"] == [str(pose.classes_[i]) for i in want["smoothed"]]
+        assert doc["fusion"]["weight_pose"] == 0.7
+    # --pose-model without --poses-dir; a weight outside [0, 1]; a missing poses file
+    assert main([*args[:-4], "--out-dir", str(tmp_path / "x")]) == 2
+    assert main([*args[:-1], "1.5", "--out-dir", str(tmp_path / "x")]) == 2
+    (tmp_path / "poses" / f"{inputs[0].stem}.poses.json").unlink()
+    assert main([*args, "--out-dir", str(tmp_path / "x")]) == 2
+    assert not (tmp_path / "x").exists()

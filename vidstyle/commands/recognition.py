@@ -163,6 +163,13 @@ def recognize(
     scheduler: Optional[str] = typer.Option(
         None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): recognise on that cluster; its workers must see the same paths."
     ),
+    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Late fusion with this pose-sequence "
+                                              "recognizer (train-recognizer --features pose) on --poses-dir."),
+    poses_dir: Optional[Path] = typer.Option(None, "--poses-dir", help="With --pose-model: <input stem>.poses.json "
+                                             "per input (vidstyle pose VIDEOS --out-dir)."),
+    fusion_weight: float = number(D.FUSION_WEIGHT, "--fusion-weight", integer=False, lo=0, hi=1,
+                                  help="With --pose-model: the weight of the pose recognizer's scores (the rest is the "
+                                  "3D SIFT recognizer's)."),
 ) -> None:
     """Per-frame action labels with confidence, raw and smoothed.
 
@@ -178,6 +185,9 @@ def recognize(
         if not p.exists():
             raise InputError(f"{p}: file not found")
     targets = [out] if out is not None else outputs_by_stem(inputs, out_dir, ".json")
+    if (pose_model is None) != (poses_dir is None):
+        raise InputError("recognize: --pose-model and --poses-dir go together (late fusion)")
+    poses = None if poses_dir is None else [poses_dir / f"{p.stem}.poses.json" for p in inputs]
     from ._flags import as_flags
 
     import contextlib
@@ -187,7 +197,7 @@ def recognize(
     into = output_dir(out_dir, targets) if out_dir is not None else contextlib.nullcontext()
     with as_flags(jobs="--jobs", scheduler="--scheduler"), into:
         run(model, inputs, targets, window=window, smoothing=smoothing, emission_weight=emission_weight, fps=fps,
-            jobs=jobs, scheduler=scheduler)
+            jobs=jobs, scheduler=scheduler, pose_model=pose_model, poses=poses, fusion_weight=fusion_weight)
     if out_dir is not None:
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 

@@ -180,11 +180,13 @@ def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-perfor
 
 def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset, split,
                           test_dataset: Dataset | None = None, poses_dir: str | Path | None = None,
-                          score_set: str = "test", sift: tuple | None = None) -> dict[str, Any]:
+                          score_set: str = "test", sift: tuple | None = None,
+                          input_name: str | None = None) -> dict[str, Any]:
     """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
     or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight)``, of its late fusion
     with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT recognizer alone, smoothed
-    by the pose recognizer's smoother)."""
+    by the pose recognizer's smoother). ``input_name``: what the metrics call the pose files' source
+    (default ``poses:<poses_dir>``)."""
     if score_set == "val":
         ids, score_ds = split.val, dataset
     else:
@@ -219,7 +221,7 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
         "recognizer": "pose" if fusion is None else ("sift" if fusion["weight_pose"] == 0 else "pose+sift"),
         "seed": training.get("seed", rec.random_state), "split": split.to_dict(),
         "scored_set": "V" if score_set == "val" else "T",
-        "input": "true-2d" if poses_dir is None else f"poses:{poses_dir}", "fusion": fusion,
+        "input": "true-2d" if poses_dir is None else (input_name or f"poses:{poses_dir}"), "fusion": fusion,
         "scored_videos": used, "skipped_videos": skipped, "training": training,
         "params": rec.public_params(), "model": rec.summary(), **metrics,
         "timing_s": {"train": training.get("train_s"), "predict": t_pred,

@@ -114,17 +114,24 @@ def read_clip_list(path: str | os.PathLike, root: str | os.PathLike | None = Non
 class Recognizers:
     """What is run on each render: a 3D SIFT recognizer and/or a pose-sequence recognizer (models as
     loaded by :func:`vidstyle.recognition.recognizer.load_model`), and the pose weight of their fusion
-    (None: no fusion)."""
+    (None: no fusion; several weights: one fused recognizer ``fusion@W`` each)."""
 
     sift: Any = None
     pose: Any = None
-    fusion_weight: float | None = None
+    fusion_weight: float | Sequence[float] | None = None
+
+    def weights(self) -> dict[str, float]:
+        """Fusion name -> pose weight: ``fusion`` for one weight, ``fusion@W`` for each of several."""
+        w = self.fusion_weight
+        if w is None:
+            return {}
+        if isinstance(w, (int, float)):
+            return {"fusion": float(w)}
+        return {f"fusion@{float(x):g}": float(x) for x in w}
 
     def names(self) -> list[str]:
         out = [n for n, m in (("sift", self.sift), ("pose", self.pose)) if m is not None]
-        if self.fusion_weight is not None:
-            out.append("fusion")
-        return out
+        return out + list(self.weights())
 
     def check(self) -> None:
         if self.sift is None and self.pose is None:
@@ -132,8 +139,9 @@ class Recognizers:
         if self.fusion_weight is not None:
             if self.sift is None or self.pose is None:
                 raise ParameterError("fusion_weight", "fusion needs both a 3D SIFT and a pose-sequence recognizer")
-            if not 0.0 <= self.fusion_weight <= 1.0:
-                raise ParameterError("fusion_weight", f"must be in [0, 1], got {self.fusion_weight}")
+            for w in self.weights().values():
+                if not 0.0 <= w <= 1.0:
+                    raise ParameterError("fusion_weight", f"must be in [0, 1], got {w}")
 
 
 def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: StrikeEvalParams,
@@ -152,14 +160,14 @@ def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: Strike
         out["sift"] = recs.sift.predict_video(load_features(feats))
     if recs.pose is not None:
         out["pose"] = _pose_prediction(recs.pose, motion, video, truth, params)
-    if recs.fusion_weight is not None:
+    for fname, w in recs.weights().items():
         from ..recognition.fusion import fuse_scores
 
         po, so = out["pose"], out["sift"]
         n = min(len(po["raw"]), len(so["raw"]))
-        out["fusion"] = recs.pose.smooth(*fuse_scores(
-            [po["scores"][:n], so["scores"][:n]], [recs.pose.classes_, recs.sift.classes_],
-            [recs.fusion_weight, 1.0 - recs.fusion_weight], recs.pose.classes_))
+        out[fname] = recs.pose.smooth(*fuse_scores(
+            [po["scores"][:n], so["scores"][:n]], [recs.pose.classes_, recs.sift.classes_], [w, 1.0 - w],
+            recs.pose.classes_))
     return out
 
 
@@ -221,7 +229,7 @@ def evaluate_real_motion(clips: Sequence[RealClip], recs: Recognizers,
             vmask = mask[src]
             outs = _outputs(recs, motion, video, truth, params, work, name)
             for rname in names:
-                model = recs.pose if rname in ("pose", "fusion") else recs.sift
+                model = recs.sift if rname == "sift" else recs.pose
                 rows.append({"clip": clip.name, "family": clip.family, "frames_set": clip.frames,
                              "camera": cam.name, "recognizer": rname, "appearance": appearance.to_dict(),
                              **_score(model.classes_, outs[rname]["smoothed"], vmask, clip.family)})

@@ -36,6 +36,9 @@ SMOOTHING = "duration"         # validated: explicit-duration HMM over frame sco
 EMISSION_WEIGHT = 1.0          # validated
 MIRROR = True                  # also train on mirror images (scovanner2007 descriptors only)
 
+# ------------------------------------------------------------------ late fusion with the pose recognizer
+FUSION_WEIGHT = 0.5            # weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model)
+
 # ------------------------------------------------------------------ runs
 SPLIT = "unseen-performer"     # unseen-performer | unseen-view | unseen-camera
 SEED = 0

@@ -353,10 +353,14 @@ def _load_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], 
 
 
 def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: Optional[float] = None,
-                   model_path: PathLike | None = None):
+                   model_path: PathLike | None = None, fusion: tuple | None = None):
     """Per-frame labels of one features ``.npz`` (or video: its features are computed as the model's
     training files were) as a :class:`~vidstyle.formats.recognised.RecognisedLabels`: raw and smoothed
-    labels with confidence. ``fps``: frame rate to record (default: the features', else 20)."""
+    labels with confidence. ``fps``: frame rate to record (default: the features', else 20).
+
+    ``fusion = (pose_model, poses_path, weight)``: late fusion (:mod:`vidstyle.recognition.fusion`) with a
+    pose-sequence recognizer on that video's ``poses.json``, ``weight`` on the pose recognizer's scores;
+    the labels are then smoothed by the pose recognizer's smoother (its classes name them)."""
     from ..formats.recognised import RecognisedLabels
 
     input = Path(input)
@@ -371,13 +375,28 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
     if fps is None:
         fps = feats.fps if feats.fps > 0 else None
     res = model.predict_video(feats)
+    extra = {"emission_weight": model.emission_weight}
+    if fusion is not None:
+        from ..formats.poses import read_poses
+        from .fusion import fuse_scores
+        from .posefeatures import track_from_poses
+
+        pose_model, poses_path, weight = fusion
+        n = len(res["raw"])
+        pres = pose_model.predict_video(track_from_poses(read_poses(poses_path), float(pose_model.fps), n))
+        if len(pres["raw"]) != n:
+            raise InputError(f"{poses_path}: {len(pres['raw'])} pose frames for the {n} frames of {input}")
+        res = pose_model.smooth(*fuse_scores([pres["scores"], res["scores"]], [pose_model.classes_, model.classes_],
+                                             [weight, 1.0 - weight], pose_model.classes_))
+        model = pose_model
+        extra.update(emission_weight=pose_model.emission_weight, fusion={"poses": str(poses_path), "weight_pose": weight})
     classes = [str(c) for c in model.classes_]
     return RecognisedLabels(
         labels=[classes[i] for i in res["smoothed"]], classes=tuple(classes), fps=float(fps) if fps else D.FPS,
         video=video, confidence=np.clip(np.round(res["smoothed_confidence"], 4), 0, 1),
         raw=[classes[i] for i in res["raw"]], raw_confidence=np.clip(np.round(res["confidence"], 4), 0, 1),
         smoothing=str(model.smoothing), smoothing_window=int(model.smoothing_window), model=str(model_path),
-        features=str(input), extra={"emission_weight": model.emission_weight},
+        features=str(input), extra=extra,
     )
 
 
@@ -410,9 +429,13 @@ def _recognize_task(item: tuple) -> None:
     """One input of :func:`recognize` (module level, so joblib and Dask workers can run it)."""
     from ..formats.recognised import write_recognised
 
-    model, window, smoothing, emission_weight, input, target, fps = item
+    model, window, smoothing, emission_weight, input, target, fps, fusion = item
     rec, header = load_recognizer(model, window, smoothing, emission_weight)
-    track = recognize_file(rec, header, input, fps, model_path=model)
+    fuse = None
+    if fusion is not None:
+        pose_path, poses, weight = fusion
+        fuse = (load_recognizer(pose_path)[0], poses, weight)
+    track = recognize_file(rec, header, input, fps, model_path=model, fusion=fuse)
     write_recognised(target, track)
     classes = [str(c) for c in rec.classes_]
     log.info("wrote %s: %d frames, %s", target, track.n_frames,
@@ -422,10 +445,13 @@ def _recognize_task(item: tuple) -> None:
 def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[PathLike], *,
               window: Optional[int] = None, smoothing: Optional[str] = None,
               emission_weight: Optional[float] = None, fps: Optional[float] = None, jobs: int = 1,
-              scheduler: Optional[str] = None) -> None:
+              scheduler: Optional[str] = None, pose_model: PathLike | None = None,
+              poses: Sequence[PathLike] | None = None, fusion_weight: float | None = None) -> None:
     """Recognise every input (features ``.npz`` or video) with the model file ``model`` and write its
     labels JSON to the matching target, in parallel (``jobs`` workers or a Dask ``scheduler``; each worker
-    loads the model once). A bad model or missing input fails before any work."""
+    loads the model once). With ``pose_model``, ``poses`` (one ``poses.json`` per input) and
+    ``fusion_weight``: the late fusion of ``model`` (3D SIFT) with that pose-sequence recognizer
+    (:func:`recognize_file`). A bad model or missing input fails before any work."""
     from ..parallel import parallel_map
 
     if len(inputs) != len(targets):
@@ -433,6 +459,22 @@ def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[Pat
     for p in inputs:
         if not Path(p).exists():
             raise InputError(f"{p}: file not found")
-    load_recognizer(model, window, smoothing, emission_weight)  # a bad model fails here, once
-    items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps) for p, t in zip(inputs, targets)]
+    rec, header = load_recognizer(model, window, smoothing, emission_weight)  # a bad model fails here, once
+    fusion = [None] * len(inputs)
+    if pose_model is not None:
+        if header.get("input") == "pose":
+            raise InputError(f"{model}: fusion needs a 3D SIFT recognizer as the model, this is a pose recognizer")
+        prec, pheader = load_recognizer(pose_model)
+        if pheader.get("input") != "pose":
+            raise InputError(f"{pose_model}: not a pose-sequence recognizer (train-recognizer --features pose)")
+        if poses is None or len(poses) != len(inputs):
+            raise InputError(f"recognize: fusion needs one poses.json per input ({len(inputs)})")
+        for p in poses:
+            if not Path(p).exists():
+                raise InputError(f"{p}: file not found (the poses of an input; vidstyle pose VIDEO --out-dir)")
+        if fusion_weight is None or not 0.0 <= fusion_weight <= 1.0:
+            raise InputError(f"recognize: the fusion weight must be in [0, 1], got {fusion_weight}")
+        fusion = [(str(pose_model), str(p), float(fusion_weight)) for p in poses]
+    items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps, f)
+             for p, t, f in zip(inputs, targets, fusion)]
     parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
