@@ -514,6 +514,35 @@ def reconstruct_defaults_table(items, root: Path) -> list[str]:
     return lines
 
 
+def real_motion_table(items, root: Path) -> list[str]:
+    """Real mocap clips at unseen cameras, by action family (``vidstyle evaluate real-motion``)."""
+    lines = ["| clips | recognizer | pose input | family accuracy | punch | other | videos right (majority) | file |",
+             "|---|---|---|---:|---:|---:|---:|---|"]
+    for p, d in sorted(items, key=lambda t: str(t[0])):
+        clips = ", ".join(c["clip"] for c in d.get("clips", []))
+        pin = (d.get("params") or {}).get("pose_input", "?")
+        for r, v in (d.get("overall") or {}).items():
+            fam = v.get("per_family") or {}
+            name = r if r != "fusion" else f"fusion (pose weight {d.get('fusion_weight'):g})"
+            lines.append(f"| {clips} | {name} | {pin if r != 'sift' else '—'} | {_pct(v.get('family_accuracy'))} | "
+                         f"{_pct(fam.get('punch'))} | {_pct(fam.get('other'))} | {_pct(v.get('video_majority_accuracy'))} | "
+                         f"`{_rel(p, root)}` |")
+    return lines
+
+
+def pose_recognition_validation_table(items, root: Path) -> list[str]:
+    """Pose recognizer vs 3D SIFT vs fusion on the validation sets (``scripts/pose_recognition_results.py``)."""
+    lines = ["| seed | training noise | pose weight (0 = 3D SIFT alone) | validation performers, smoothed | "
+             "real-motion validation, family | score | file |", "|---|---|---:|---:|---:|---:|---|"]
+    for p, d in sorted(items, key=lambda t: (t[1].get("seed") is None, t[1].get("seed"))):
+        ch = d.get("chosen") or {}
+        for r in d.get("rows", []):
+            mark = " **(chosen)**" if (r["noise"], r["weight_pose"]) == (ch.get("noise"), ch.get("weight_pose")) else ""
+            lines.append(f"| {d.get('seed')} | {r['noise']} | {r['weight_pose']:g}{mark} | {_pct(r['smoothed'])} | "
+                         f"{_pct(r.get('real_motion_val'))} | {_pct(r.get('score'))} | `{_rel(p, root)}` |")
+    return lines
+
+
 def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
     docs = load_documents(root)
     EXTRA_ROOTS[:] = list(extra)
@@ -527,6 +556,11 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
                  prior_table),
                 ("vidstyle.validation.recognition", "Tuned on validation performers (`scripts/validate_recognition.py`)",
                  validation_table),
+                ("vidstyle.validation.pose_recognition", "Pose sequences, 3D SIFT and their fusion on the validation "
+                 "sets (`scripts/pose_recognition_results.py`; estimated 2D: pictorial structures)",
+                 pose_recognition_validation_table),
+                ("vidstyle.metrics.real_motion", "Real motion at unseen cameras, by action family "
+                 "(`vidstyle evaluate real-motion`)", real_motion_table),
                 ("vidstyle.metrics.strikes", "Real mocap strikes through the demo-trained recognizer (`vidstyle evaluate strikes`)",
                  strikes_table),
                 ("vidstyle.strikes_diagnostics", "Why real strikes are missed: the same evaluation on variants of the "

@@ -230,3 +230,45 @@ def test_refinement_bends_the_blend_toward_the_keypoints_and_a_strong_prior_keep
     assert residual(bent) < 0.9 * residual(plain)
     assert M.mpjpe_root_relative(bent.points, pts) <= M.mpjpe_root_relative(plain.points, pts) * 1.05
     np.testing.assert_allclose(held.points, plain.points, atol=1e-6)
+
+
+def test_the_index_cache_returns_the_same_library_and_notices_changed_clips(tmp_path, library, caplog):
+    """--index-cache: a second fit on the same clip bytes and settings loads the stored index (identical
+    arrays and reconstructions, no projection); a changed clip or setting refits; a corrupt file is refitted
+    over."""
+    import logging
+    import shutil
+
+    from vidstyle.reconstruct.library import ReconstructionLibrary, cached_library
+
+    clips = tmp_path / "clips"
+    shutil.copytree(library, clips)
+    cache = tmp_path / "cache"
+    a = cached_library(ReconstructionLibrary(n_views=4), [clips], cache_dir=cache)
+    files = list(cache.glob("library-*.joblib"))
+    assert len(files) == 1
+    with caplog.at_level(logging.INFO, logger="vidstyle.reconstruct.library"):
+        b = cached_library(ReconstructionLibrary(n_views=4), [clips], cache_dir=cache)
+    assert "from the cache" in caplog.text
+    for name in ("rotations_", "root_height_", "points_", "contacts_", "labels_"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    np.testing.assert_array_equal(a.index_.features_, b.index_.features_)
+    clip = sorted(clips.glob("*jab*.bvh"))[0]
+    pts, uv, az = filmed(clip, yaw=1.0, place=np.array([0.0, 60.0]))
+    obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    ra = Reconstructor(n_views=4).fit_library(a).reconstruct(obs)
+    rb = Reconstructor(n_views=4).fit_library(b).reconstruct(obs)
+    np.testing.assert_array_equal(ra.points, rb.points)
+    # another setting, then a changed clip: new keys, new files
+    cached_library(ReconstructionLibrary(n_views=6), [clips], cache_dir=cache)
+    assert len(list(cache.glob("library-*.joblib"))) == 2
+    text = clip.read_text()
+    clip.write_text(text.replace("Frame Time:", "Frame Time:  ", 1))  # same motion, other bytes
+    cached_library(ReconstructionLibrary(n_views=4), [clips], cache_dir=cache)
+    assert len(list(cache.glob("library-*.joblib"))) == 3
+    # a truncated cache file is refitted over
+    files[0].write_bytes(b"not a joblib file")
+    clip.write_text(text)
+    c = cached_library(ReconstructionLibrary(n_views=4), [clips], cache_dir=cache)
+    np.testing.assert_array_equal(c.rotations_, a.rotations_)
+    assert len(files[0].read_bytes()) > 1000

@@ -88,6 +88,9 @@ def reconstruct(
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
     size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
     jobs: int = jobs_option(-1, help="Parallel workers for the pose estimate and the library index (-1 = all cores)."),
+    index_cache: Path | None = typer.Option(None, "--index-cache", help="Directory to keep the library index in: a "
+                                            "later run on the same clips (same bytes) and settings reuses it instead "
+                                            "of projecting the library again."),
 ) -> None:
     """The performer of a video as 3D motion (BVH): each frame's 2D pose matched against the mocap library
     projected at the frame's viewpoint, temporally coherent neighbours kept (Tautges' lazy neighbourhood
@@ -113,7 +116,7 @@ def reconstruct(
                       skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
                       k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
                       refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px=focal, elevation_deg=elevation,
-                      foot_lock=foot_lock)
+                      foot_lock=foot_lock, cache_dir=index_cache)
 
 
 @evaluate_app.command("reconstruct")

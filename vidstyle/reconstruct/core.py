@@ -394,11 +394,16 @@ class Reconstructor:
             raise ParameterError("elevation_deg", f"must be in -80..80 degrees, got {self.elevation_deg}")
 
     # ------------------------------------------------------------------ fit
-    def fit(self, clips, skeleton=None) -> Reconstructor:
-        """Index the library clips (BVH files or directories); ``skeleton``: the output skeleton."""
+    def fit(self, clips, skeleton=None, cache_dir=None) -> Reconstructor:
+        """Index the library clips (BVH files or directories); ``skeleton``: the output skeleton;
+        ``cache_dir``: reuse (or store) the index fitted on the same clips and parameters there
+        (:func:`~vidstyle.reconstruct.library.cached_library`)."""
+        from .library import cached_library
+
         self.check_params()
-        self.library_ = ReconstructionLibrary(self.n_views, self.library_elevation_deg, self.target_fps,
-                                              self.jobs, self.scheduler).fit(clips, skeleton=skeleton)
+        lib = ReconstructionLibrary(self.n_views, self.library_elevation_deg, self.target_fps, self.jobs,
+                                    self.scheduler)
+        self.library_ = cached_library(lib, clips, skeleton=skeleton, cache_dir=cache_dir)
         return self
 
     def fit_library(self, library: ReconstructionLibrary) -> Reconstructor:

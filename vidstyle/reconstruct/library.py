@@ -150,3 +150,69 @@ class ReconstructionLibrary:
     @property
     def n_frames(self) -> int:
         return len(self.rotations_)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_augmented_cache", None)  # query-time caches are rebuilt on demand
+        return state
+
+
+#: bump when what a cached library holds changes (old cache files are then ignored, not misread)
+CACHE_VERSION = 1
+
+
+def library_cache_key(files: Sequence[str | os.PathLike], params: dict, skeleton=None) -> str:
+    """sha256 naming a fitted library: the bytes of every clip (and its ``.labels.json`` when there is one),
+    in order, the library parameters, the output skeleton (names, parents, offsets; None: the first clip's)
+    and :data:`CACHE_VERSION` with the package version."""
+    import hashlib
+    import json
+
+    from .. import __version__
+    from ..formats.annotations import file_sha256
+
+    h = hashlib.sha256()
+    h.update(json.dumps({"cache": CACHE_VERSION, "vidstyle": __version__, "params": params}, sort_keys=True).encode())
+    for f in files:
+        f = Path(f)
+        h.update(file_sha256(f).encode())
+        lab = f.with_suffix(".labels.json")
+        h.update(file_sha256(lab).encode() if lab.is_file() else b"-")
+    if skeleton is not None:
+        h.update(json.dumps([list(skeleton.names), skeleton.parents.tolist()]).encode())
+        h.update(np.ascontiguousarray(skeleton.offsets, dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
+def cached_library(library: ReconstructionLibrary, clips, skeleton=None,
+                   cache_dir: str | os.PathLike | None = None) -> ReconstructionLibrary:
+    """``library.fit(clips, skeleton)``, or, with ``cache_dir``, the library fitted before on the same clip
+    bytes, parameters and skeleton (``<cache_dir>/library-<key>.joblib``, :func:`library_cache_key`),
+    written there atomically after a fit. A cache file that cannot be read is refitted over (and says so)."""
+    if cache_dir is None:
+        return library.fit(clips, skeleton=skeleton)
+    import joblib
+
+    from ..augmg.index import clip_files
+    from ..fileio import atomic_path, make_dir
+
+    files = clip_files(clips)
+    key = library_cache_key(files, library.get_params(), skeleton)
+    path = Path(cache_dir) / f"library-{key[:32]}.joblib"
+    if path.is_file():
+        try:
+            cached = joblib.load(path)
+            if isinstance(cached, ReconstructionLibrary) and getattr(cached, "cache_key_", None) == key:
+                cached.jobs, cached.scheduler = library.jobs, library.scheduler
+                log.info("library: %d indexed frames from the cache %s", cached.n_frames, path)
+                return cached
+            log.warning("%s: not a cached library of these clips; refitting", path)
+        except Exception as e:  # a truncated or foreign file: refit and overwrite
+            log.warning("%s: unreadable cache (%s); refitting", path, e.__class__.__name__)
+    library.fit(files, skeleton=skeleton)
+    library.cache_key_ = key
+    make_dir(path.parent)
+    with atomic_path(path) as tmp:
+        joblib.dump(library, tmp)
+    log.info("library: cached in %s", path)
+    return library

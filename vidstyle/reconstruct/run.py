@@ -151,10 +151,11 @@ def reconstruct_video(video: str | os.PathLike | None, library: Sequence[str | o
                       skeleton: str | os.PathLike | None = None, record: str | os.PathLike | None = None,
                       labels: str | os.PathLike | None = None, preview: str | os.PathLike | None = None,
                       fps: float | None = None, size: tuple[int, int] | None = None, jobs: int = 1,
-                      scheduler: str | None = None, **params) -> Reconstruction:
+                      scheduler: str | None = None, cache_dir: str | os.PathLike | None = None,
+                      **params) -> Reconstruction:
     """Reconstruct ``video`` against the ``library`` clips and write the BVH ``out`` (and the optional
     ``record`` / ``labels`` / ``preview`` files). ``params``: :class:`Reconstructor` parameters (checked
-    before any work)."""
+    before any work); ``cache_dir``: where the library index is cached between runs."""
     from ..fileio import check_writable
     from ..mocap import read_bvh, write_bvh
 
@@ -165,7 +166,7 @@ def reconstruct_video(video: str | os.PathLike | None, library: Sequence[str | o
     reconstructor.check_params()
     obs = observation_for(video, poses, backend, model, frames, jobs=jobs, fps=fps, size=size)
     target = read_bvh(skeleton).skeleton if skeleton is not None else None
-    reconstructor.set_params(target_fps=obs.fps).fit(library, skeleton=target)
+    reconstructor.set_params(target_fps=obs.fps).fit(library, skeleton=target, cache_dir=cache_dir)
     rec = reconstructor.reconstruct(obs)
     write_bvh(rec.motion, out)
     log.info("wrote %s: %d frames (%d with a pose), %d library frames", out, len(rec.observed), int(rec.observed.sum()),
