@@ -39,18 +39,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from vidstyle.evaluation.poserecognition import (  # noqa: E402
+from vidstyle.evaluation.poserecognition import (
     measure_pose_error,
     noise_from_error,
     score_pose_recognizer,
     train_for_split,
 )
-from vidstyle.formats.validation import POSE_RECOGNITION, validation_header, write_validation  # noqa: E402
-from vidstyle.formats.dataset import read_dataset  # noqa: E402
-from vidstyle.formats.metrics import write_metrics  # noqa: E402
-from vidstyle.recognition.pipeline import load_recognizer  # noqa: E402
-from vidstyle.recognition.posetraining import KeypointNoise  # noqa: E402
-from vidstyle.recognition.splits import make_split  # noqa: E402
+from vidstyle.formats.dataset import read_dataset
+from vidstyle.formats.metrics import write_metrics
+from vidstyle.formats.validation import POSE_RECOGNITION, validation_header, write_validation
+from vidstyle.recognition.pipeline import load_recognizer
+from vidstyle.recognition.posetraining import KeypointNoise
+from vidstyle.recognition.splits import make_split
 
 log = logging.getLogger("pose_recognition_results")
 OUT = ROOT / "pipelines/kickboxing/out"
@@ -117,7 +117,12 @@ def main() -> None:
     real = None
     if a.real_val.is_file():
         from vidstyle.evaluation.realmocap import StrikeEvalParams
-        from vidstyle.evaluation.realmotion import VAL_CAMERAS, Recognizers, evaluate_real_motion, read_clip_list
+        from vidstyle.evaluation.realmotion import (
+            VAL_CAMERAS,
+            Recognizers,
+            evaluate_real_motion,
+            read_clip_list,
+        )
 
         try:
             clips = read_clip_list(a.real_val)

@@ -30,7 +30,7 @@ def test_fuse_scores_is_the_weighted_mean_of_aligned_scores():
     np.testing.assert_array_equal(raw, np.argmax(want, axis=1))
     np.testing.assert_allclose(conf, want.max(axis=1))
     # weight 1 on one recognizer is that recognizer
-    raw1, f1, _ = fuse_scores([pose, sift], [["a", "b"], ["b", "a"]], [1.0, 0.0], ["a", "b"])
+    _, f1, _ = fuse_scores([pose, sift], [["a", "b"], ["b", "a"]], [1.0, 0.0], ["a", "b"])
     np.testing.assert_allclose(f1, pose)
     with pytest.raises(ParameterError):
         fuse_scores([pose, sift], [["a", "b"], ["b", "a"]], [0.0, 0.0], ["a", "b"])

@@ -46,6 +46,8 @@ def test_summarise_weights_by_frames():
 def test_command_with_both_recognizers_and_fusion(cmu_dir, tmp_path, rng):
     """Toy recognizers (arbitrary labels): what is checked is the scoring. The fused row is recomputed from
     the two recognizers' outputs on the kept renders."""
+    from test_recognition_realmocap import _toy_model
+
     from vidstyle.demo.actions import CLASSES
     from vidstyle.formats.metrics import REAL_MOTION, read_metrics
     from vidstyle.formats.truth import read_truth
@@ -57,8 +59,6 @@ def test_command_with_both_recognizers_and_fusion(cmu_dir, tmp_path, rng):
     from vidstyle.recognition.poserecognizer import PoseRecognizer, save_pose_model
     from vidstyle.recognition.recognizer import load_model
     from vidstyle.render.camera import Camera
-
-    from test_recognition_realmocap import _toy_model
 
     _toy_model(tmp_path / "s.joblib", rng, points=5)
     tracks = [PoseTrack(np.cumsum(rng.normal(0, 2, (80, 15, 2)), axis=0) + 60, 20.0) for _ in range(4)]

@@ -42,9 +42,15 @@ def evaluate_real_motion_cmd(
     family. Prints a Markdown table."""
     from ..errors import InputError, ParameterError
     from ..evaluation.realmocap import StrikeEvalParams, parse_cameras
-    from ..evaluation.realmotion import TEST_CAMERAS, Recognizers, evaluate_real_motion, read_clip_list, real_motion_table
-    from ..formats.metrics import REAL_MOTION, write_metrics
+    from ..evaluation.realmotion import (
+        TEST_CAMERAS,
+        Recognizers,
+        evaluate_real_motion,
+        read_clip_list,
+        real_motion_table,
+    )
     from ..fileio import check_writable
+    from ..formats.metrics import REAL_MOTION, write_metrics
     from ..recognition.recognizer import load_model
 
     check_writable(out)

@@ -75,6 +75,8 @@ def train_recognizer(
     noise_sigma: float = number(0.05, "--noise-sigma", lo=0, hi=10, help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
     outlier_rate: float = number(0.05, "--outlier-rate", lo=0, hi=1, help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
     dropout_rate: float = number(0.02, "--dropout-rate", lo=0, hi=1, help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
+    clips: list[Path] = typer.Option(None, "--clips", help="--features pose: also (or instead of --dataset) train on these labelled mocap clips (BVH files or directories; any skeleton with the 15 keypoints' joints), labelled by --clip-labels or a <clip>.labels.json beside each."),
+    clip_labels: list[Path] = typer.Option(None, "--clip-labels", help="--features pose: labels of --clips: a CSV file,label[,start,end] (BVH frame numbers, end exclusive), a demo labels JSON, or a CMU clips.csv. Unlabelled frames do not train."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on its classifier videos (chosen by --split)."),
@@ -106,8 +108,11 @@ def train_recognizer(
     t0 = time.perf_counter()
     if features_kind == "pose":
         _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
-                    max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations)
+                    max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
+                    clips or [], clip_labels or [])
         return
+    if clips or clip_labels:
+        raise InputError("--clips / --clip-labels: only with --features pose (3D SIFT trains on videos)")
     if features_kind != "sift3d":
         raise InputError(f"--features: must be sift3d or pose, got {features_kind!r}")
     if vocab is None:
@@ -132,18 +137,25 @@ def train_recognizer(
 
 
 def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
-                max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations):
+                max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
+                clips, clip_labels):
     from ..formats.dataset import read_dataset
     from ..recognition.poserecognizer import save_pose_model
-    from ..recognition.posetraining import KeypointNoise, train_from_dataset
+    from ..recognition.posetraining import KeypointNoise, clip_motions, train_from_dataset
 
-    if dataset is None or features or annotations:
-        raise InputError("--features pose: give --dataset (its mocap takes and labels), not FEATURES or --annotations")
+    if features or annotations or (dataset is None and not clips):
+        raise InputError("--features pose: give --dataset (its mocap takes and labels) and/or labelled --clips, "
+                         "not FEATURES or --annotations")
+    if clip_labels and not clips:
+        raise InputError("--clip-labels: give the --clips they label")
     noise = KeypointNoise(sigma=noise_sigma, outlier_rate=outlier_rate, dropout_rate=dropout_rate)
     params = {"classifier": classifier, "C": c, "max_frames_per_class": max_frames_per_class or None,
               "smoothing_window": window, "smoothing": smoothing, "emission_weight": emission_weight,
               "mirror": mirror, "n_jobs": jobs}
-    rec, extra = train_from_dataset(read_dataset(dataset), split, seed, test_view, views, noise, params)
+    ds = read_dataset(dataset) if dataset is not None else None
+    extra_motions = clip_motions(clips, clip_labels, ds.fps if ds else D.FPS,
+                                 classes=(ds.classes or None) if ds else None) if clips else []
+    rec, extra = train_from_dataset(ds, split, seed, test_view, views, noise, params, extra_motions=extra_motions)
     header = save_pose_model(out, rec, extra["training"], {"split": extra["split"]})
     log.info("wrote %s (pose recognizer, %d classes): %s", out, len(rec.classes_), header["summary"])
 

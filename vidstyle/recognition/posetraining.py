@@ -171,6 +171,52 @@ def virtual_views(motions: Sequence[LabelledMotion], n_views: int, rng: np.rando
     return tracks, labels
 
 
+def clip_motions(clips, label_files, fps: float, classes=None, min_frames: int = 10) -> list[LabelledMotion]:
+    """Labelled motions from mocap clips (BVH files or directories) labelled by ``label_files`` (a
+    :class:`~vidstyle.motiongraph.labels.LabelBook`: label CSV ``file,label[,start,end]``, demo labels
+    JSON, or a CMU ``clips.csv``; a ``<clip>.labels.json`` beside a clip is used too), resampled to ``fps``.
+    Only labelled frames train: a clip is cut into its runs of frames whose label is one of ``classes``
+    (default: any label but ``unlabelled``), runs shorter than ``min_frames`` working frames dropped. A
+    clip with no such run is skipped with a warning; none at all is an :class:`InputError`."""
+    from ..augmg.index import clip_files
+    from ..mocap import read_bvh
+    from ..mocap.keypoints import keypoint_positions
+    from ..motiongraph.graph import has_tpose_first_frame
+    from ..motiongraph.labels import UNLABELLED, LabelBook
+
+    book = LabelBook()
+    for f in label_files or []:
+        book.load(f)
+    keep = None if classes is None else set(map(str, classes))
+    out = []
+    for path in clip_files(clips):
+        side = path.with_name(path.stem + ".labels.json")
+        if side.is_file() and not book.has(path):
+            book.load(side)
+        motion = read_bvh(path)
+        labels = np.array(book.frame_labels(path, motion.n_frames), dtype=object)
+        if has_tpose_first_frame(motion):  # a CMU conversion's calibration T-pose is no action
+            labels[0] = UNLABELLED
+        step = float(motion.fps) / float(fps)
+        idx = np.round(np.arange(0, motion.n_frames, step)).astype(int)
+        idx = idx[idx < motion.n_frames]
+        lab = labels[idx].astype(str)
+        ok = (lab != UNLABELLED) if keep is None else np.isin(lab, list(keep))
+        edges = np.diff(np.concatenate([[0], ok.astype(np.int8), [0]]))
+        runs = [(a, b) for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)) if b - a >= min_frames]
+        if not runs:
+            log.warning("%s: no labelled run of %d frames or more (labels %s); skipped", path, min_frames,
+                        sorted(set(lab))[:5])
+            continue
+        pts = keypoint_positions(motion)[idx]
+        facing = circular_median(motion.facing_angles())
+        for a, b in runs:
+            out.append(LabelledMotion(pts[a:b], list(lab[a:b]), float(fps), facing, f"{path.stem}[{idx[a]}:{idx[b - 1] + 1}]"))
+    if not out:
+        raise InputError(f"{', '.join(map(str, clips))}: no labelled frames to train on (give label files)")
+    return out
+
+
 def dataset_motions(dataset, performers: list[str], fps: float, phases=(0,)) -> list:
     """The labelled mocap takes of ``performers`` (each take once, whatever its number of videos)."""
     seen, out = set(), []
@@ -199,22 +245,31 @@ def check_training_memory(rec, n_frames: int) -> None:
 
 
 def train_from_dataset(dataset, split: str = "unseen-performer", seed: int = 0, test_view: str | None = None,
-                       n_views: int = 8, noise: KeypointNoise | None = None, params: dict | None = None):
+                       n_views: int = 8, noise: KeypointNoise | None = None, params: dict | None = None,
+                       extra_motions: Sequence[LabelledMotion] = ()):
     """``(PoseRecognizer, header extra)`` trained on the mocap takes of the training performers (sets A
-    and B) of ``split`` of a demo ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`), each seen
-    from ``n_views`` virtual cameras with ``noise``."""
+    and B) of ``split`` of a demo ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`, or None: the
+    ``extra_motions`` alone) and on ``extra_motions`` (:func:`clip_motions`), each seen from ``n_views``
+    virtual cameras with ``noise``."""
     from .pipeline import split_header
     from .poserecognizer import PoseRecognizer
     from .splits import make_split
 
-    kind = "unseen-performer" if split == "unseen-camera" else split
-    sp = make_split(dataset, kind, seed=seed, test_view=test_view)
-    performers = sorted(set(sp.vocab_performers) | set(sp.train_performers))
-    motions = dataset_motions(dataset, performers, dataset.fps)
-    rec = PoseRecognizer(**{"random_state": seed, "fps": dataset.fps, **(params or {})})
+    motions, performers, header = list(extra_motions), [], {"kind": "clips"}
+    fps = extra_motions[0].fps if extra_motions else None
+    classes = None
+    if dataset is not None:
+        kind = "unseen-performer" if split == "unseen-camera" else split
+        sp = make_split(dataset, kind, seed=seed, test_view=test_view)
+        performers = sorted(set(sp.vocab_performers) | set(sp.train_performers))
+        motions = dataset_motions(dataset, performers, dataset.fps) + motions
+        fps, classes, header = dataset.fps, dataset.classes or None, split_header(sp, "A+B")
+    if not motions:
+        raise InputError("pose recognizer: nothing to train on")
+    rec = PoseRecognizer(**{"random_state": seed, "fps": fps, **(params or {})})
     check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
     tracks, labels = virtual_views(motions, n_views, seed, noise)
-    rec.fit(tracks, labels, classes=dataset.classes or None)
+    rec.fit(tracks, labels, classes=classes)
     training = {"performers": performers, "takes": [m.name for m in motions], "n_views": n_views,
                 "noise": noise.to_dict() if noise else None}
-    return rec, {"training": training, "split": split_header(sp, "A+B")}
+    return rec, {"training": training, "split": header}
