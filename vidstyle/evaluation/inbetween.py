@@ -45,6 +45,9 @@ OFFSET = 40
 TRAIN_WINDOW = 50
 TRAIN_OFFSET = 20
 FPS = 30.0
+#: CMU subjects by role (each in one role only): the library the methods learn from, the validation subject
+#: parameters are chosen on, the test subjects scored once
+SPLIT = {"library": ("01", "05", "06", "08"), "validation": ("03",), "test": ("02", "07")}
 
 
 # ---------------------------------------------------------------------------------------------- metrics
@@ -178,12 +181,9 @@ def library_graph(folder: str | Path, subjects, cache: str | Path | None = None,
     return graph
 
 
-def benchmark(folder: str | Path, library_subjects, eval_subjects, methods=("markov", "graph", "slerp"),
-              gaps=GAPS, seed: int = 0, markov_params: dict | None = None, graph_cache=None) -> dict:
-    """Library graph of ``library_subjects``, windows of ``eval_subjects``, scores of ``methods`` (the
-    metrics document's body: ``split``, ``gaps``, ``methods``, ``params``)."""
-    from ..inbetween import GraphInbetweener, MarkovInbetweener
-
+def prepare(folder: str | Path, library_subjects, eval_subjects, seed: int = 0, graph_cache=None) -> dict:
+    """What every scoring run needs: the library ``graph``, the evaluation windows ``wins`` (and their clip
+    ``names``) and the training position statistics ``mean``, ``std``."""
     graph = library_graph(folder, library_subjects, graph_cache, seed)
     train, _, _ = load_subject_motions(folder, library_subjects, graph.skeleton_)
     mean, std = position_stats([w for m in train for w in windows(m, TRAIN_WINDOW, TRAIN_OFFSET)])
@@ -191,22 +191,38 @@ def benchmark(folder: str | Path, library_subjects, eval_subjects, methods=("mar
     wins = [w for m in evals for w in windows(m)]
     if not wins:
         raise ValueError("no evaluation windows")
+    return {"graph": graph, "wins": wins, "names": names, "mean": mean, "std": std,
+            "library_subjects": list(library_subjects), "eval_subjects": list(eval_subjects)}
+
+
+def fit_methods(graph, methods, seed: int = 0, markov_params: dict | None = None) -> dict:
+    """``name -> fitted in-betweener`` (``None`` for slerp)."""
+    from ..inbetween import GraphInbetweener, MarkovInbetweener
+
     models = {}
-    params = {}
     for name in methods:
         if name == "markov":
             models[name] = MarkovInbetweener(random_state=seed, **(markov_params or {})).fit(graph)
-            params[name] = models[name].get_params()
         elif name == "graph":
             models[name] = GraphInbetweener().fit(graph)
-            params[name] = models[name].get_params()
-        else:
+        elif name == "slerp":
             models[name] = None
+        else:
+            raise ValueError(f"unknown method {name!r}")
+    return models
+
+
+def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed: int = 0,
+              markov_params: dict | None = None) -> dict:
+    """Scores of ``methods`` on prepared ``data`` (:func:`prepare`): the metrics document's body
+    (``split``, ``gaps``, ``methods``, ``params``)."""
+    models = fit_methods(data["graph"], methods, seed, markov_params)
+    params = {f"{k}_params": m.get_params() for k, m in models.items() if m is not None}
     return {
-        "split": {"library_subjects": list(library_subjects), "eval_subjects": list(eval_subjects),
-                  "eval_clips": names, "windows": len(wins), "library_frames": int(graph.n_frames)},
+        "split": {"library_subjects": data["library_subjects"], "eval_subjects": data["eval_subjects"],
+                  "eval_clips": data["names"], "windows": len(data["wins"]), "library_frames": int(data["graph"].n_frames)},
         "gaps": list(gaps),
-        "methods": score_methods(models, wins, gaps, mean, std),
+        "methods": score_methods(models, data["wins"], gaps, data["mean"], data["std"]),
         "params": {"fps": FPS, "window": WINDOW, "offset": OFFSET, "n_past": N_PAST, "train_window": TRAIN_WINDOW,
-                   "train_offset": TRAIN_OFFSET, **{f"{k}_params": v for k, v in params.items()}},
+                   "train_offset": TRAIN_OFFSET, **params},
     }

@@ -40,6 +40,10 @@ computed, e.g. video accuracy without single-action test videos):
   with ``data``, ``source``, ``method`` and ``skeleton`` strings, ``frames`` >= 0, and ``mpjpe_mm``,
   ``mpjpe_root_relative_mm``, ``pa_mpjpe_mm``, ``acceleration_error_mm_per_frame2``,
   ``foot_skate_mm_per_frame`` each >= 0 or null; ``params`` and ``headline`` objects.
+* ``vidstyle.metrics.inbetween`` (``vidstyle evaluate inbetween``, ``scripts/eval_inbetween.py``): ``gaps`` a
+  non-empty list of integers >= 1; ``methods`` an object per method (``markov``, ``graph``, ``slerp``) with one
+  block per gap (its decimal string) holding ``l2p``, ``l2q``, ``ms_per_request`` >= 0 and ``windows`` >= 1;
+  ``split`` and ``params`` objects.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
@@ -63,6 +67,7 @@ from ._base import (
     FormatError,
     check_array,
     check_header,
+    check_int,
     check_leaves,
     read_json_document,
     write_json_document,
@@ -79,7 +84,9 @@ MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
 PEOPLE = "vidstyle.metrics.people"
 TIMING = "vidstyle.metrics.timing"
 RECONSTRUCT = "vidstyle.metrics.reconstruct"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT)
+INBETWEEN = "vidstyle.metrics.inbetween"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
+         INBETWEEN)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -188,6 +195,24 @@ def _reconstruct(f: Fields) -> None:
             _opt_number(r, key, 0, None)
     f.sub("params")
     f.sub("headline")
+
+
+def _inbetween(f: Fields) -> None:
+    gaps = f.list("gaps", min_len=1)
+    for i, g in enumerate(gaps):
+        check_int(g, f.path, f"gaps[{i}]", 1)
+    methods = f.sub("methods")
+    if not methods.obj:
+        raise methods.fail(None, "no method")
+    for name in methods.obj:
+        m = methods.sub(name)
+        for g in gaps:
+            b = m.sub(str(int(g)))
+            for key in ("l2p", "l2q", "ms_per_request"):
+                b.number(key, min=0)
+            b.int("windows", min=1)
+    f.sub("split")
+    f.sub("params")
 
 
 def _augmg(f: Fields) -> None:
@@ -341,7 +366,7 @@ def _timing(f: Fields) -> None:
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
-           RECONSTRUCT: _reconstruct}
+           RECONSTRUCT: _reconstruct, INBETWEEN: _inbetween}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -378,6 +403,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 __all__ = [
     "AUGMG",
     "HEADLINE",
+    "INBETWEEN",
     "KINDS",
     "MOTION",
     "MULTIVIEW_POSE",

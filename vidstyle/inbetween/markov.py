@@ -141,31 +141,44 @@ def best_cluster_path(log_a: np.ndarray, start: int, end: int, n_states: int, lo
 
 
 def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_first: np.ndarray,
-                 cost_last: np.ndarray, mismatch_cost: float, jump_cost: float) -> tuple[np.ndarray, float]:
+                 cost_last: np.ndarray, mismatch_cost: float, jump_cost: float,
+                 emission: np.ndarray | None = None, warp_cost: float | None = None) -> tuple[np.ndarray, float]:
     """Level 2: the library frame shown at each output frame (``len(path)``), least total cost.
 
     ``labels`` (N,) cluster of each library frame; ``cont[i]``: frame ``i`` follows frame ``i-1`` in the same
     clip. Moves: play ``i-1 -> i`` (``cont[i]``, free) or jump ``j -> i`` with ``labels[j]`` equal to the
-    cluster of ``i``'s predecessor in its clip (of ``i`` itself at a clip start), cost ``jump_cost``.
-    Frame costs: ``mismatch_cost`` when ``labels[i] != path[t]``, plus ``cost_first`` at t = 0 and
-    ``cost_last`` at the last t."""
+    cluster of ``i``'s predecessor in its clip (of ``i`` itself at a clip start), cost ``jump_cost``; with
+    ``warp_cost``, also hold ``i -> i`` and skip ``i-2 -> i`` inside a clip at that cost (a time warp
+    of the segment, so a segment whose pace differs from the gap's can still meet both keys).
+    Frame costs: ``mismatch_cost`` when ``labels[i] != path[t]`` (or, given ``emission`` (N, K), ``mismatch_cost
+    * emission[i, path[t]]``: a soft mismatch, e.g. the squared distance to the cluster's centre), plus
+    ``cost_first`` at t = 0 and ``cost_last`` at the last t."""
     N = len(labels)
     K = int(max(labels.max(), path.max())) + 1
     n = len(path)
     entry = np.where(cont, np.roll(labels, 1), labels)  # cluster a jump into i must come from
-    V = cost_first + mismatch_cost * (labels != path[0])
+    cont2 = np.zeros(N, bool)
+    cont2[2:] = cont[2:] & cont[1:-1]
+
+    def emit(c: int) -> np.ndarray:
+        return mismatch_cost * (labels != c) if emission is None else mismatch_cost * emission[:, c]
+
+    V = cost_first + emit(path[0])
     if n == 1:
         V = V + cost_last
     history = [V]
-    jumped = np.zeros((n, N), bool)
+    move = np.zeros((n, N), np.int8)  # 0 play, 1 jump, 2 hold, 3 skip
     for t in range(1, n):
-        play = np.full(N, np.inf)
-        play[1:][cont[1:]] = V[:-1][cont[1:]]
+        cand = np.full((4, N), np.inf)
+        cand[0, 1:][cont[1:]] = V[:-1][cont[1:]]
         best = np.full(K, np.inf)
         np.minimum.at(best, labels, V)
-        jump = best[entry] + jump_cost
-        jumped[t] = jump < play
-        V = np.minimum(play, jump) + mismatch_cost * (labels != path[t])
+        cand[1] = best[entry] + jump_cost
+        if warp_cost is not None:
+            cand[2] = V + warp_cost
+            cand[3, 2:][cont2[2:]] = V[:-2][cont2[2:]] + warp_cost
+        move[t] = np.argmin(cand, axis=0)
+        V = cand[move[t], np.arange(N)] + emit(path[t])
         if t == n - 1:
             V = V + cost_last
         history.append(V)
@@ -176,12 +189,12 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
         frames[t] = i
         if t == 0:
             break
-        prev = history[t - 1]
-        if jumped[t, i]:
+        mv = move[t, i]
+        if mv == 1:
             same = np.flatnonzero(labels == entry[i])
-            i = int(same[np.argmin(prev[same])])
+            i = int(same[np.argmin(history[t - 1][same])])
         else:
-            i = i - 1
+            i = i - (1, 0, 0, 2)[mv]
     return frames, total
 
 
@@ -190,7 +203,8 @@ def render_frames(rotations: np.ndarray, roots: np.ndarray, clip: np.ndarray, fr
     """Library ``frames`` (one per output frame) as placed motion: the first at ``start``, each later
     segment continuing from where the previous one is (its predecessor frame put onto the frame shown
     before the jump), jumps blended over ``blend`` frames (departing clip's continuation into the
-    arriving segment, :func:`~vidstyle.motiongraph.blend.blend_frames`)."""
+    arriving segment, :func:`~vidstyle.motiongraph.blend.blend_frames`). A hold or a skip of one frame
+    inside a clip (a time warp) stays in its segment."""
     n = len(frames)
     rot, root = np.empty((n, rotations.shape[1], 4)), np.empty((n, 3))
     here = start
@@ -198,7 +212,7 @@ def render_frames(rotations: np.ndarray, roots: np.ndarray, clip: np.ndarray, fr
     t = 0
     while t < n:
         t1 = t + 1
-        while t1 < n and frames[t1] == frames[t1 - 1] + 1 and clip[frames[t1]] == clip[frames[t1 - 1]]:
+        while t1 < n and 0 <= frames[t1] - frames[t1 - 1] <= 2 and clip[frames[t1]] == clip[frames[t1 - 1]]:
             t1 += 1
         f = frames[t:t1]
         if t > 0:
@@ -230,17 +244,17 @@ class MarkovInbetweener:
 
     Parameters: ``n_clusters`` (Markov states), ``n_components`` (PCA dimension), ``height_weight`` and
     ``velocity_weight`` (of the root height and feature-velocity parts of the pose feature),
-    ``smoothing`` (pseudo-count of the transition counts), ``mismatch_cost``, ``jump_cost``,
+    ``smoothing`` (pseudo-count of the transition counts), ``mismatch_cost``, ``jump_cost``, ``warp_cost``,
     ``key_weight`` (level 2, see :func:`segment_path`), ``blend_frames`` (jump blend length).
     """
 
     PARAMS = ("n_clusters", "n_components", "height_weight", "velocity_weight", "smoothing", "mismatch_cost",
-              "jump_cost", "key_weight", "blend_frames", "random_state")
+              "jump_cost", "warp_cost", "key_weight", "blend_frames", "random_state")
 
     def __init__(self, n_clusters: int = D.N_CLUSTERS, n_components: int = D.N_COMPONENTS,
                  height_weight: float = D.HEIGHT_WEIGHT, velocity_weight: float = D.VELOCITY_WEIGHT,
                  smoothing: float = D.SMOOTHING, mismatch_cost: float = D.MISMATCH_COST, jump_cost: float = D.JUMP_COST,
-                 key_weight: float = D.KEY_WEIGHT, blend_frames: int = D.BLEND_FRAMES,
+                 warp_cost: float | None = D.WARP_COST, key_weight: float = D.KEY_WEIGHT, blend_frames: int = D.BLEND_FRAMES,
                  random_state: int = D.RANDOM_STATE) -> None:
         self.n_clusters = n_clusters
         self.n_components = n_components
@@ -249,6 +263,7 @@ class MarkovInbetweener:
         self.smoothing = smoothing
         self.mismatch_cost = mismatch_cost
         self.jump_cost = jump_cost
+        self.warp_cost = warp_cost
         self.key_weight = key_weight
         self.blend_frames = blend_frames
         self.random_state = random_state
@@ -317,6 +332,10 @@ class MarkovInbetweener:
         self.labels_ = self.kmeans_.labels_.astype(np.int64)
         self.features_ = Z
         self.spread_ = float(self.kmeans_.inertia_ / N) or 1.0  # mean squared distance to the centre
+        # level 2's soft mismatch: squared distance of every frame to every centre, in mean spreads
+        cen = self.kmeans_.cluster_centers_
+        self.emission_ = np.maximum(
+            np.sum(Z**2, 1)[:, None] - 2 * Z @ cen.T + np.sum(cen**2, 1)[None], 0.0) / self.spread_
         self.cont_ = np.zeros(N, bool)
         self.cont_[1:] = self.clip_[1:] == self.clip_[:-1]
         K = int(self.n_clusters)
@@ -351,7 +370,8 @@ class MarkovInbetweener:
         cost_first = w * np.sum((self.features_ - z0) ** 2, axis=1)
         cost_last = w * np.sum((self.features_ - z1) ** 2, axis=1)
         frames, cost = segment_path(self.labels_, self.cont_, path, cost_first, cost_last,
-                                    float(self.mismatch_cost), float(self.jump_cost))
+                                    float(self.mismatch_cost), float(self.jump_cost), self.emission_,
+                                    None if self.warp_cost is None else float(self.warp_cost))
         return {"clusters": path, "log_probability": logp, "frames": frames, "cost": cost}
 
     def inbetween(self, start: Keypose, end: Keypose, n_frames: int, free_end: bool = False) -> tuple[np.ndarray, np.ndarray]:
