@@ -10,6 +10,7 @@ from typing import List, Optional
 import typer
 
 from ..errors import InputError
+from ..inbetween import defaults as KD
 from ..motiongraph import defaults as D
 from ._evaluate import evaluate_app
 from ._numbers import jobs_option
@@ -76,8 +77,10 @@ def build_graph(
 
 def synthesize(
     graph_path: Path = typer.Option(..., "--graph", "-g", help="Graph file from build-graph."),
-    sequence: Path = typer.Option(..., "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
-    out: Path = typer.Option(..., "--out", "-o", help="Output BVH; <out stem>.labels.json is written beside it."),
+    sequence: Optional[Path] = typer.Option(None, "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
+    keyframes: Optional[Path] = typer.Option(None, "--keyframes", "-K", help="Instead of --sequence: keyframes JSON {\"keyframes\": [{\"clip\": BVH, \"frame\": i, \"time\": s}, ...]} (>= 2); the motion passes through each pose at its time (docs/keyframes.md)."),
+    method: Optional[str] = typer.Option(None, "--method", help=f"With --keyframes: {' | '.join(KD.METHODS)} (default {KD.METHOD}: Molina Tanco & Hilton's Markov chain over pose clusters; graph: the graph's shortest path; slerp: LERP+SLERP)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output BVH; with --sequence, <out stem>.labels.json is written beside it."),
     preview: Optional[Path] = typer.Option(None, "--preview", help="Also render a preview video (.mp4)."),
     seconds: float = typer.Option(D.STEP_SECONDS, "--seconds", help="Duration of steps given without one."),
     mismatch_penalty: float = typer.Option(D.MISMATCH_PENALTY, "--mismatch-penalty", help="Cost of one output frame with a wrong label."),
@@ -85,12 +88,25 @@ def synthesize(
     strict: bool = typer.Option(D.STRICT, "--strict/--lenient", help="Fail when a step gets no frame of its action within its duration (default: warn, naming the step)."),
     foot_lock: bool = typer.Option(D.FOOT_LOCK, "--foot-lock/--no-foot-lock", help="Hold planted feet still across seams (two-bone leg IK)."),
     max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
+    seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="With --keyframes --method markov: seed of the pose clustering."),
 ) -> None:
-    """Walk the graph to realise an action sequence at minimum transition cost; write BVH (+ labels, preview)."""
+    """Walk the graph to realise an action sequence at minimum transition cost (--sequence), or make motion
+    from keyframe to keyframe (--keyframes); write BVH (+ labels, preview)."""
     from ..motiongraph import MotionGraph, save_synthesis
     from ..motiongraph import synthesize as synth
 
+    if (sequence is None) == (keyframes is None):
+        raise InputError("--sequence / --keyframes: give exactly one (an action sequence, or keyframes to pass through)")
+    if keyframes is None and method is not None:
+        raise InputError("--method: only with --keyframes (a sequence is always realised by the motion graph)")
     graph = MotionGraph.load(graph_path)
+    if keyframes is not None:
+        synthesize_from_keyframes(graph, keyframes, method or KD.METHOD, out, seed)
+        if preview is not None:
+            from ..mocap import read_bvh
+
+            write_preview(read_bvh(out), preview)
+        return
     with flag_names(_PLAN_FLAGS):
         result = synth(graph, sequence, bvh_name=out.name, seconds=seconds, mismatch_penalty=mismatch_penalty,
                        transition_penalty=transition_penalty, strict=strict, foot_lock=foot_lock,
@@ -101,6 +117,18 @@ def synthesize(
              motion.duration, len(result.walk.transitions_used), motion.duration / max(result.seconds, 1e-9))
     if preview is not None:
         write_preview(motion, preview)
+
+
+def synthesize_from_keyframes(graph, keyframes: Path, method: str, out: Path, seed: int) -> None:
+    """``synthesize --keyframes``: in-between every consecutive pair, write the BVH (atomically)."""
+    from ..inbetween import synthesize_keyframes
+    from ..mocap import write_bvh
+
+    with flag_names({"method": "--method"}):
+        result = synthesize_keyframes(graph, keyframes, method, random_state=seed)
+    write_bvh(result.motion, out)
+    log.info("wrote %s: %d frames (%.1f s) through %d keyframes (%s), %.0f ms", out, result.motion.n_frames,
+             result.motion.duration, len(result.key_frames), method, 1000 * result.seconds)
 
 
 def write_preview(motion, path: Path, fps: float = 30.0) -> None:

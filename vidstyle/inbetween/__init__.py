@@ -15,12 +15,35 @@ included and matched exactly):
 >>> rotations, roots = model.inbetween(start, end, n_frames=31)       # doctest: +SKIP
 
 Whole keyframe files: :func:`.keyframes.synthesize_keyframes` (``vidstyle synthesize --keyframes``).
-Defaults: :mod:`.defaults`. Evaluation: :mod:`vidstyle.evaluation.inbetween`.
+Defaults: :mod:`.defaults` (imported by the CLI without SciPy: the names below load on first use).
+Evaluation: :mod:`vidstyle.evaluation.inbetween`.
 """
 
-from .graphpath import GraphInbetweener
-from .markov import MarkovInbetweener, best_cluster_path, render_frames, segment_path
-from .poses import Keypose, pin, placement_onto, pose_features, slerp_inbetween
+from typing import TYPE_CHECKING
 
-__all__ = ["GraphInbetweener", "Keypose", "MarkovInbetweener", "best_cluster_path", "pin", "placement_onto",
-           "pose_features", "render_frames", "segment_path", "slerp_inbetween"]
+from ..lazy import lazy_package
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .graphpath import GraphInbetweener
+    from .keyframes import KeyframeSynthesis, synthesize_keyframes
+    from .markov import MarkovInbetweener, best_cluster_path, path_score, render_frames, segment_path
+    from .poses import Keypose, pin, placement_onto, pose_features, slerp_inbetween
+
+_WHERE = {
+    "GraphInbetweener": "graphpath",
+    "KeyframeSynthesis": "keyframes",
+    "synthesize_keyframes": "keyframes",
+    "MarkovInbetweener": "markov",
+    "best_cluster_path": "markov",
+    "path_score": "markov",
+    "render_frames": "markov",
+    "segment_path": "markov",
+    "Keypose": "poses",
+    "pin": "poses",
+    "placement_onto": "poses",
+    "pose_features": "poses",
+    "slerp_inbetween": "poses",
+}
+__getattr__ = lazy_package(__name__, _WHERE)
+
+__all__ = sorted(_WHERE)

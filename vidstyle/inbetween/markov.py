@@ -110,15 +110,21 @@ def best_cluster_path(log_a: np.ndarray, start: int, end: int, n_states: int, lo
     # middle run (or as the first run when it is the first)
     G = np.full((n + 1, K), -np.inf)
     back = np.full((n + 1, K, 2), -1, np.int64)  # (duration, previous cluster); previous -1: the first run
+    M = np.full((n + 1, K), -np.inf)  # M[t, c]: best G[t, c'] + la[c', c] over c' (entering c after t frames)
+    argM = np.zeros((n + 1, K), np.int64)
     for t in range(1, n):
         G[t, start] = log_s[start, t]
-        for d in range(1, t):
-            prev = G[t - d][:, None] + la  # (from, to)
-            arg = np.argmax(prev, axis=0)
-            cand = prev[arg, np.arange(K)] + log_d[:, d]
-            better = cand > G[t]
-            G[t] = np.where(better, cand, G[t])
-            back[t][better] = np.stack([np.full(better.sum(), d), arg[better]], axis=1)
+        if t > 1:
+            cand = M[t - 1 : 0 : -1] + log_d[:, 1:t].T  # row d-1: entering after t-d frames, staying d
+            d = np.argmax(cand, axis=0)
+            val = cand[d, np.arange(K)]
+            better = val > G[t]
+            G[t] = np.where(better, val, G[t])
+            dd = d[better] + 1
+            back[t][better] = np.stack([dd, argM[t - dd, np.flatnonzero(better)]], axis=1)
+        enter = G[t][:, None] + la
+        argM[t] = np.argmax(enter, axis=0)
+        M[t] = enter[argM[t], np.arange(K)]
     best, choice = (log_s[end, n], (n, -1)) if start == end else (-np.inf, None)
     for d in range(1, n):
         prev = G[n - d] + la[:, end]
@@ -160,8 +166,13 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
     cont2 = np.zeros(N, bool)
     cont2[2:] = cont[2:] & cont[1:-1]
 
+    emission_t = None if emission is None else np.ascontiguousarray(emission.T)  # (K, N): one row per cluster
+    order = np.argsort(labels, kind="stable")  # per-cluster minima by one reduceat over frames sorted by cluster
+    present = np.unique(labels)
+    starts = np.searchsorted(labels[order], present)
+
     def emit(c: int) -> np.ndarray:
-        return mismatch_cost * (labels != c) if emission is None else mismatch_cost * emission[:, c]
+        return mismatch_cost * (labels != c) if emission_t is None else mismatch_cost * emission_t[c]
 
     V = cost_first + emit(path[0])
     if n == 1:
@@ -172,13 +183,18 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
         cand = np.full((4, N), np.inf)
         cand[0, 1:][cont[1:]] = V[:-1][cont[1:]]
         best = np.full(K, np.inf)
-        np.minimum.at(best, labels, V)
+        best[present] = np.minimum.reduceat(V[order], starts)
         cand[1] = best[entry] + jump_cost
         if warp_cost is not None:
             cand[2] = V + warp_cost
             cand[3, 2:][cont2[2:]] = V[:-2][cont2[2:]] + warp_cost
-        move[t] = np.argmin(cand, axis=0)
-        V = cand[move[t], np.arange(N)] + emit(path[t])
+        V = cand[0].copy()
+        mv = move[t]
+        for k in range(1, 4 if warp_cost is not None else 2):
+            better = cand[k] < V
+            mv[better] = k
+            np.minimum(V, cand[k], out=V)
+        V += emit(path[t])
         if t == n - 1:
             V = V + cost_last
         history.append(V)
