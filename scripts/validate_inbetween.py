@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CMU = ROOT.parent / "shared" / "data" / "mocap" / "cmu"
 DEFAULT_OUT = ROOT / "pipelines" / "kickboxing" / "validation" / "inbetween.json"
 DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_inbetween"
-GRID = {"n_clusters": [16, 32, 64], "n_components": [8, 16, 32], "warp_cost": [None, 0.2]}
+GRID = {"n_clusters": [16, 32, 64], "n_components": [8, 16, 32, 64], "warp_cost": [None, 0.2]}
 
 
 def main() -> int:

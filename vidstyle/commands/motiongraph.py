@@ -194,3 +194,47 @@ def evaluate_motion(
         table.add_row("synthesis x real time", fmt(summary["synthesis_x_real_time"]), "", "", "")
     Console().print(table)
     log.info("wrote %s", out)
+
+
+@evaluate_app.command("inbetween")
+def evaluate_inbetween(
+    cmu: Path = typer.Option(..., "--cmu", help="Folder of CMU BVH clips named <subject>_<trial>.bvh (with clips.csv)."),
+    library: str = typer.Option(",".join(KD.EVAL_SPLIT["library"]), "--library", help="Comma-separated subjects the methods learn from."),
+    test: str = typer.Option(",".join(KD.EVAL_SPLIT["test"]), "--test", help="Comma-separated held-out subjects whose windows are scored (none of --library)."),
+    gaps: str = typer.Option(",".join(map(str, KD.EVAL_GAPS)), "--gaps", help="Comma-separated gap lengths in frames at 30 fps."),
+    methods: str = typer.Option(",".join(KD.METHODS), "--methods", help=f"Comma-separated: {', '.join(KD.METHODS)}."),
+    graph_cache: Optional[Path] = typer.Option(None, "--graph-cache", help="Motion graph of the library: read when it exists, else built and written there."),
+    out: Path = typer.Option(Path("metrics/inbetween.json"), "--out", "-o", help="Metrics JSON."),
+    seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="Seed of the graph's threshold sample and the pose clustering."),
+) -> None:
+    """Keyframe in-betweening on held-out windows: LAFAN1's L2P and L2Q per gap and method, ms per request."""
+    from ..evaluation.inbetween import evaluate, table
+    from ..formats.metrics import INBETWEEN, write_metrics
+
+    lib = [s.strip() for s in library.split(",") if s.strip()]
+    held = [s.strip() for s in test.split(",") if s.strip()]
+    if set(lib) & set(held):
+        raise InputError(f"--test: subject(s) {', '.join(sorted(set(lib) & set(held)))} are also in --library")
+    try:
+        gap_list = [int(g) for g in gaps.split(",") if g.strip()]
+    except ValueError:
+        raise InputError(f"--gaps: expected comma-separated integers, got {gaps!r}") from None
+    if not gap_list or min(gap_list) < 1 or max(gap_list) > 54:
+        raise InputError(f"--gaps: each gap must be 1 .. 54 frames (windows are 65 frames), got {gaps!r}")
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    unknown = [m for m in names if m not in KD.METHODS]
+    if unknown or not names:
+        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.METHODS)}")
+    if not cmu.is_dir():
+        raise InputError(f"--cmu: {cmu} is not a folder")
+    for group, flag in ((lib, "--library"), (held, "--test")):
+        if not group or not any(any(cmu.glob(f"{s}_*.bvh")) for s in group):
+            raise InputError(f"{flag}: no clips <subject>_*.bvh of {', '.join(group) or 'no subject'} in {cmu}")
+    try:
+        doc = evaluate(cmu, lib, held, gap_list, names, seed, graph_cache,
+                       command=f"vidstyle evaluate inbetween --cmu {cmu} --library {','.join(lib)} --test {','.join(held)}")
+    except ValueError as e:
+        raise InputError(f"--test: {e}") from None
+    write_metrics(out, doc, kind=INBETWEEN)
+    typer.echo(table(doc))
+    log.info("wrote %s", out)

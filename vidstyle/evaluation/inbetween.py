@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..inbetween import defaults as D
 from ..mocap import Motion, Skeleton, forward_kinematics
 from ..mocap.quat import continuous_quaternions
 
@@ -39,15 +40,15 @@ log = logging.getLogger(__name__)
 
 N_PAST = 10
 N_FUTURE = 10
-GAPS = (15, 30, 45)
+GAPS = D.EVAL_GAPS
 WINDOW = 65
 OFFSET = 40
 TRAIN_WINDOW = 50
 TRAIN_OFFSET = 20
 FPS = 30.0
 #: CMU subjects by role (each in one role only): the library the methods learn from, the validation subject
-#: parameters are chosen on, the test subjects scored once
-SPLIT = {"library": ("01", "05", "06", "08"), "validation": ("03",), "test": ("02", "07")}
+#: parameters are chosen on, the test subjects scored once (:mod:`vidstyle.inbetween.defaults`)
+SPLIT = D.EVAL_SPLIT
 
 
 # ---------------------------------------------------------------------------------------------- metrics
@@ -226,3 +227,31 @@ def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed:
         "params": {"fps": FPS, "window": WINDOW, "offset": OFFSET, "n_past": N_PAST, "train_window": TRAIN_WINDOW,
                    "train_offset": TRAIN_OFFSET, **params},
     }
+
+
+def evaluate(folder: str | Path, library_subjects=SPLIT["library"], test_subjects=SPLIT["test"], gaps=GAPS,
+             methods=("markov", "graph", "slerp"), seed: int = 0, graph_cache=None, command: str = "") -> dict:
+    """The in-betweening metrics document (``vidstyle.metrics.inbetween``, without its header): the
+    methods at their defaults (:mod:`vidstyle.inbetween.defaults`) on the test subjects' windows."""
+    data = prepare(folder, library_subjects, test_subjects, seed, graph_cache)
+    body = benchmark(data, methods, gaps, seed)
+    goal = {}
+    if "markov" in body["methods"] and "slerp" in body["methods"]:
+        goal = {f"markov_below_slerp_l2p_{g}": body["methods"]["markov"][str(g)]["l2p"]
+                < body["methods"]["slerp"][str(g)]["l2p"] for g in gaps}
+    return {"seed": seed, "command": command, **body, "goal": goal,
+            "speed": {"unit": "ms per request (median over windows), one thread",
+                      **{m: {str(g): v[str(g)]["ms_per_request"] for g in gaps} for m, v in body["methods"].items()}}}
+
+
+def table(doc: dict) -> str:
+    """The metrics document as a text table (rows: method; columns: L2P and L2Q per gap, ms)."""
+    gaps = doc["gaps"]
+    head = f"{'method':>8} | " + " ".join(f"L2P@{g:<3}" for g in gaps) + " | " + " ".join(f"L2Q@{g:<3}" for g in gaps) \
+        + " | " + " ".join(f"ms@{g:<4}" for g in gaps)
+    lines = [head, "-" * len(head)]
+    for name, res in doc["methods"].items():
+        lines.append(f"{name:>8} | " + " ".join(f"{res[str(g)]['l2p']:7.3f}" for g in gaps) + " | "
+                     + " ".join(f"{res[str(g)]['l2q']:7.3f}" for g in gaps) + " | "
+                     + " ".join(f"{res[str(g)]['ms_per_request']:7.1f}" for g in gaps))
+    return "\n".join(lines)

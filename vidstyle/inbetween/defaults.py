@@ -41,3 +41,7 @@ BLEND_FRAMES = 5
 #: graph method: cost of one blend edge in frames per threshold unit of its edge cost
 GRAPH_TRANSITION_PENALTY = 5.0
 RANDOM_STATE = 0
+
+# -- evaluation (vidstyle evaluate inbetween, scripts/eval_inbetween.py, scripts/validate_inbetween.py): CMU subjects by role
+EVAL_SPLIT = {"library": ("01", "05", "06", "08"), "validation": ("03",), "test": ("02", "07")}
+EVAL_GAPS = (15, 30, 45)
