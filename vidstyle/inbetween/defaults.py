@@ -18,8 +18,8 @@ METHOD = "markov"
 METHODS = ("markov", "graph", "slerp")
 
 # -- chosen on validation (scripts/validate_inbetween.py -> pipelines/kickboxing/validation/inbetween.json)
-N_CLUSTERS = 32
-N_COMPONENTS = 16
+N_CLUSTERS = 64
+N_COMPONENTS = 64
 VELOCITY_WEIGHT = 0.0
 
 # -- fixed
