@@ -26,8 +26,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.evaluation.inbetween import GAPS, SPLIT, evaluate, table  # noqa: E402
-from vidstyle.formats.metrics import INBETWEEN, write_metrics  # noqa: E402
+from vidstyle.evaluation.inbetween import GAPS, SPLIT, evaluate, table
+from vidstyle.formats.metrics import INBETWEEN, write_metrics
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CMU = ROOT.parent / "shared" / "data" / "mocap" / "cmu"
@@ -50,7 +50,7 @@ def main() -> int:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_metrics(args.out, doc, kind=INBETWEEN)
     print(table(doc))
-    logging.info("wrote %s", args.out)
+    logging.getLogger("eval_inbetween").info("wrote %s", args.out)
     return 0
 
 

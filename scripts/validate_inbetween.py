@@ -28,8 +28,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.evaluation.inbetween import GAPS, SPLIT, benchmark, prepare  # noqa: E402
-from vidstyle.formats.validation import INBETWEEN, validation_header, write_validation  # noqa: E402
+from vidstyle.evaluation.inbetween import GAPS, SPLIT, benchmark, prepare
+from vidstyle.formats.validation import INBETWEEN, validation_header, write_validation
 
 log = logging.getLogger("validate_inbetween")
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,7 +64,7 @@ def main() -> int:
     print(f"{'n_clusters':>10} {'n_comp':>6} {'warp':>5} " + " ".join(f"{c:>7}" for c in cols) + "  mean_l2p")
     for r in rows:
         p = r["params"]
-        print(f"{p['n_clusters']:>10} {p['n_components']:>6} {str(p['warp_cost']):>5} "
+        print(f"{p['n_clusters']:>10} {p['n_components']:>6} {p['warp_cost']!s:>5} "
               + " ".join(f"{r[c]:7.3f}" for c in cols) + f"  {r['mean_l2p']:.3f}" + ("  <- chosen" if r is best else ""))
     for name, res in base.items():
         print(f"{name:>24} " + " ".join(f"{res[str(g)]['l2p']:7.3f}" for g in GAPS) + " "

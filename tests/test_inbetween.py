@@ -8,9 +8,9 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bvh_samples import TWO_JOINT
 from scipy.spatial.transform import Rotation
 
-from bvh_samples import TWO_JOINT
 from vidstyle.inbetween import (
     Keypose,
     MarkovInbetweener,
@@ -69,7 +69,7 @@ def test_cluster_path_dp_equals_brute_force(seed, n):
     log_d, log_s = duration_tables(counts, n, 0.1)
     for start, end in [(0, 2), (1, 1), (2, 0)]:
         path, score = best_cluster_path(log_a, start, end, n, log_d, log_s)
-        ref, ref_score = _brute_force(log_a, log_d, log_s, start, end, n, K)
+        _ref, ref_score = _brute_force(log_a, log_d, log_s, start, end, n, K)
         assert score == pytest.approx(ref_score)
         assert path_score(path, log_a, log_d, log_s) == pytest.approx(ref_score)
         assert path[0] == start and path[-1] == end and len(path) == n
@@ -101,11 +101,11 @@ def test_segment_path_equals_brute_force_on_a_tiny_library():
     emission = rng.random((N, 3))
     entry = np.where(cont, np.roll(labels, 1), labels)
     for warp in (None, 0.3):
-        frames, cost = segment_path(labels, cont, path, first, last, 0.7, 0.9, emission, warp)
+        _frames, cost = segment_path(labels, cont, path, first, last, 0.7, 0.9, emission, warp)
         best = np.inf
         for seq in itertools.product(range(N), repeat=n):
             c = first[seq[0]] + last[seq[-1]] + sum(0.7 * emission[seq[t], path[t]] for t in range(n))
-            for a, b in zip(seq[:-1], seq[1:]):
+            for a, b in itertools.pairwise(seq):
                 steps = [0.0 if b == a + 1 and cont[b] else np.inf,
                          0.9 if labels[a] == entry[b] else np.inf]
                 if warp is not None:

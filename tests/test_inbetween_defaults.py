@@ -10,7 +10,8 @@ import pytest
 
 from vidstyle.cli import main
 from vidstyle.formats.metrics import INBETWEEN, read_metrics
-from vidstyle.formats.validation import INBETWEEN as VALIDATION, read_validation
+from vidstyle.formats.validation import INBETWEEN as VALIDATION
+from vidstyle.formats.validation import read_validation
 from vidstyle.inbetween import defaults as D
 
 ROOT = Path(__file__).resolve().parents[1]

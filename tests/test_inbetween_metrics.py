@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from bvh_samples import TWO_JOINT
 from scipy.spatial.transform import Rotation
 
-from bvh_samples import TWO_JOINT
 from vidstyle.evaluation.inbetween import global_pose, l2p, l2q, sign_continuous, windows
 from vidstyle.formats.metrics import INBETWEEN, parse_metrics
 from vidstyle.mocap import Motion, parse_bvh

@@ -12,7 +12,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vidstyle.formats import FormatError
-from vidstyle.formats.keyframes import KIND, Keyframe, Keyframes, parse_keyframes, read_keyframes, write_keyframes
+from vidstyle.formats.keyframes import (
+    KIND,
+    Keyframe,
+    Keyframes,
+    parse_keyframes,
+    read_keyframes,
+    write_keyframes,
+)
 
 DOC = {"keyframes": [{"clip": "a.bvh", "frame": 3, "time": 0.0}, {"clip": "sub/b.bvh", "frame": 40, "time": 1.5}]}
 

@@ -46,4 +46,18 @@ _WHERE = {
 }
 __getattr__ = lazy_package(__name__, _WHERE)
 
-__all__ = sorted(_WHERE)
+__all__ = [
+    "GraphInbetweener",
+    "KeyframeSynthesis",
+    "Keypose",
+    "MarkovInbetweener",
+    "best_cluster_path",
+    "path_score",
+    "pin",
+    "placement_onto",
+    "pose_features",
+    "render_frames",
+    "segment_path",
+    "slerp_inbetween",
+    "synthesize_keyframes",
+]

@@ -10,6 +10,8 @@ frames (slerp / linear resampling), placed at the start key and pinned to both k
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 
 from ..errors import InputError
@@ -31,7 +33,7 @@ class GraphInbetweener:
     def get_params(self, deep: bool = True) -> dict:
         return {"transition_penalty": self.transition_penalty, "height_weight": self.height_weight}
 
-    def fit(self, graph, y=None) -> "GraphInbetweener":
+    def fit(self, graph, y=None) -> GraphInbetweener:
         from scipy.sparse import csr_matrix
 
         if not graph.scc_.any():
@@ -74,7 +76,7 @@ class GraphInbetweener:
             nodes.append(int(pred[nodes[-1]]))
         nodes.reverse()
         frames, trans = [a], [-1]
-        for s, d in zip(nodes[:-1], nodes[1:]):
+        for s, d in pairwise(nodes):
             e = self.edge_ids_[(s, d)]
             if g.edge_kind_[e] == EdgeKind.PLAYBACK:
                 frames.append(d)

@@ -54,7 +54,7 @@ def load_keyposes(keys: Keyframes, graph) -> list[Keypose]:
         if k.frame >= m.n_frames:
             raise InputError(f"{keys.path or 'keyframes'}: keyframes[{i}].frame: {k.frame} is past the last frame "
                              f"({m.n_frames - 1}) of {path}")
-        step = max(1, int(round(m.fps / float(graph.fps))))
+        step = max(1, round(m.fps / float(graph.fps)))
         p = max(k.frame - step, 0)
         prev = Keypose(m.rotations[p].copy(), m.root_positions[p].copy())
         poses.append(Keypose(m.rotations[k.frame].copy(), m.root_positions[k.frame].copy(), prev))
@@ -89,7 +89,7 @@ def synthesize_keyframes(graph, keyframes: str | os.PathLike | Keyframes, method
     keys = keyframes if isinstance(keyframes, Keyframes) else read_keyframes(keyframes)
     fps = float(graph.fps)
     t0 = keys.keyframes[0].time
-    at = [int(round((k.time - t0) * fps)) for k in keys.keyframes]
+    at = [round((k.time - t0) * fps) for k in keys.keyframes]
     for i in range(1, len(at)):
         if at[i] <= at[i - 1]:
             raise InputError(f"{keys.path or 'keyframes'}: keyframes[{i}].time: {keys.keyframes[i].time:g} s is less "

@@ -30,6 +30,8 @@ The library is any fitted :class:`~vidstyle.motiongraph.MotionGraph` (its frames
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -81,7 +83,7 @@ def path_score(path: np.ndarray, log_a: np.ndarray, log_d: np.ndarray, log_s: np
         return float(log_s[runs[0][0], runs[0][1]])
     score = log_s[runs[0][0], runs[0][1]] + log_s[runs[-1][0], runs[-1][1]]
     score += sum(log_d[c, d] for c, d in runs[1:-1])
-    score += sum(log_a[a[0], b[0]] for a, b in zip(runs[:-1], runs[1:]))
+    score += sum(log_a[a[0], b[0]] for a, b in pairwise(runs))
     return float(score)
 
 
@@ -287,7 +289,7 @@ class MarkovInbetweener:
     def get_params(self, deep: bool = True) -> dict:
         return {k: getattr(self, k) for k in self.PARAMS}
 
-    def set_params(self, **params) -> "MarkovInbetweener":
+    def set_params(self, **params) -> MarkovInbetweener:
         for k, v in params.items():
             if k not in self.PARAMS:
                 raise ValueError(f"unknown parameter {k!r}")
@@ -324,7 +326,7 @@ class MarkovInbetweener:
         return self._features(key.rotations[None], key.root[None], previous=prev)[0]
 
     # ------------------------------------------------------------------------------------------ fit
-    def fit(self, graph, y=None) -> "MarkovInbetweener":
+    def fit(self, graph, y=None) -> MarkovInbetweener:
         from sklearn.cluster import KMeans
         from sklearn.decomposition import PCA
 

@@ -26,10 +26,10 @@ from ..motiongraph.blend import slerp
 class Keypose:
     rotations: np.ndarray  # (J, 4)
     root: np.ndarray  # (3,)
-    previous: "Keypose | None" = None
-    following: "Keypose | None" = None  # the frame one step after (velocity of an end key without a previous)
+    previous: Keypose | None = None
+    following: Keypose | None = None  # the frame one step after (velocity of an end key without a previous)
 
-    def placed(self, placement: Placement) -> "Keypose":
+    def placed(self, placement: Placement) -> Keypose:
         r, p = placement.apply_frames(self.rotations[None], self.root[None])
         prev = None if self.previous is None else self.previous.placed(placement)
         nxt = None if self.following is None else self.following.placed(placement)
