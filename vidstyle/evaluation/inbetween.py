@@ -129,9 +129,10 @@ def position_stats(wins: list[Motion]) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ---------------------------------------------------------------------------------------------- runs
-def score_methods(methods: dict, wins: list[Motion], gaps=GAPS, mean=None, std=None, n_past: int = N_PAST) -> dict:
+def score_methods(methods: dict, wins: list[Motion], gaps=GAPS, mean=None, std=None, n_past: int = N_PAST,
+                  per_window: bool = False) -> dict:
     """L2P, L2Q and milliseconds per request of each method (``name -> fitted in-betweener`` or ``None``
-    for slerp) on every window and gap."""
+    for slerp) on every window and gap (``per_window``: also each window's L2P and L2Q)."""
     from ..inbetween.keyframes import inbetween_pair
     from ..inbetween.poses import Keypose
 
@@ -161,6 +162,9 @@ def score_methods(methods: dict, wins: list[Motion], gaps=GAPS, mean=None, std=N
             pq, pp = np.stack(pq), np.stack(pp)
             res[name][str(n)] = {"l2p": l2p(pp, truth_p, mean, std), "l2q": l2q(pq, truth_q),
                                  "ms_per_request": 1000.0 * float(np.median(secs)), "windows": len(wins)}
+            if per_window:
+                res[name][str(n)]["per_window_l2p"] = [l2p(a, b, mean, std) for a, b in zip(pp, truth_p)]
+                res[name][str(n)]["per_window_l2q"] = [l2q(a, b) for a, b in zip(pq, truth_q)]
             log.info("gap %d %s: L2P %.3f L2Q %.3f (%.1f ms)", n, name, res[name][str(n)]["l2p"],
                      res[name][str(n)]["l2q"], res[name][str(n)]["ms_per_request"])
     return res
@@ -189,10 +193,12 @@ def prepare(folder: str | Path, library_subjects, eval_subjects, seed: int = 0, 
     train, _, _ = load_subject_motions(folder, library_subjects, graph.skeleton_)
     mean, std = position_stats([w for m in train for w in windows(m, TRAIN_WINDOW, TRAIN_OFFSET)])
     evals, names, _ = load_subject_motions(folder, eval_subjects, graph.skeleton_)
-    wins = [w for m in evals for w in windows(m)]
+    per_clip = [windows(m) for m in evals]
+    wins = [w for ws in per_clip for w in ws]
+    subject = [nm.split("_")[0] for nm, ws in zip(names, per_clip) for _ in ws]
     if not wins:
         raise ValueError("no evaluation windows")
-    return {"graph": graph, "wins": wins, "names": names, "mean": mean, "std": std,
+    return {"graph": graph, "wins": wins, "names": names, "mean": mean, "std": std, "subject": subject,
             "library_subjects": list(library_subjects), "eval_subjects": list(eval_subjects)}
 
 
@@ -214,7 +220,7 @@ def fit_methods(graph, methods, seed: int = 0, markov_params: dict | None = None
 
 
 def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed: int = 0,
-              markov_params: dict | None = None) -> dict:
+              markov_params: dict | None = None, per_window: bool = False) -> dict:
     """Scores of ``methods`` on prepared ``data`` (:func:`prepare`): the metrics document's body
     (``split``, ``gaps``, ``methods``, ``params``)."""
     models = fit_methods(data["graph"], methods, seed, markov_params)
@@ -223,7 +229,7 @@ def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed:
         "split": {"library_subjects": data["library_subjects"], "eval_subjects": data["eval_subjects"],
                   "eval_clips": data["names"], "windows": len(data["wins"]), "library_frames": int(data["graph"].n_frames)},
         "gaps": list(gaps),
-        "methods": score_methods(models, data["wins"], gaps, data["mean"], data["std"]),
+        "methods": score_methods(models, data["wins"], gaps, data["mean"], data["std"], per_window=per_window),
         "params": {"fps": FPS, "window": WINDOW, "offset": OFFSET, "n_past": N_PAST, "train_window": TRAIN_WINDOW,
                    "train_offset": TRAIN_OFFSET, **params},
     }
@@ -234,12 +240,24 @@ def evaluate(folder: str | Path, library_subjects=SPLIT["library"], test_subject
     """The in-betweening metrics document (``vidstyle.metrics.inbetween``, without its header): the
     methods at their defaults (:mod:`vidstyle.inbetween.defaults`) on the test subjects' windows."""
     data = prepare(folder, library_subjects, test_subjects, seed, graph_cache)
-    body = benchmark(data, methods, gaps, seed)
+    body = benchmark(data, methods, gaps, seed, per_window=True)
+    subj = np.array(data["subject"])
+    by_subject = {}
+    for s in sorted(set(data["subject"])):
+        sel = subj == s
+        by_subject[s] = {"windows": int(sel.sum()), **{
+            m: {str(g): {"l2p": float(np.mean(np.array(v[str(g)]["per_window_l2p"])[sel])),
+                         "l2q": float(np.mean(np.array(v[str(g)]["per_window_l2q"])[sel]))} for g in gaps}
+            for m, v in body["methods"].items()}}
+    for v in body["methods"].values():
+        for g in gaps:
+            v[str(g)].pop("per_window_l2p")
+            v[str(g)].pop("per_window_l2q")
     goal = {}
     if "markov" in body["methods"] and "slerp" in body["methods"]:
         goal = {f"markov_below_slerp_l2p_{g}": body["methods"]["markov"][str(g)]["l2p"]
                 < body["methods"]["slerp"][str(g)]["l2p"] for g in gaps}
-    return {"seed": seed, "command": command, **body, "goal": goal,
+    return {"seed": seed, "command": command, **body, "goal": goal, "by_subject": by_subject,
             "speed": {"unit": "ms per request (median over windows), one thread",
                       **{m: {str(g): v[str(g)]["ms_per_request"] for g in gaps} for m, v in body["methods"].items()}}}
 
@@ -254,4 +272,9 @@ def table(doc: dict) -> str:
         lines.append(f"{name:>8} | " + " ".join(f"{res[str(g)]['l2p']:7.3f}" for g in gaps) + " | "
                      + " ".join(f"{res[str(g)]['l2q']:7.3f}" for g in gaps) + " | "
                      + " ".join(f"{res[str(g)]['ms_per_request']:7.1f}" for g in gaps))
+    for s, block in doc.get("by_subject", {}).items():
+        lines.append(f"subject {s} ({block['windows']} windows):")
+        for name in doc["methods"]:
+            lines.append(f"{name:>8} | " + " ".join(f"{block[name][str(g)]['l2p']:7.3f}" for g in gaps) + " | "
+                         + " ".join(f"{block[name][str(g)]['l2q']:7.3f}" for g in gaps))
     return "\n".join(lines)
