@@ -48,3 +48,20 @@ def test_evaluate_inbetween_bad_arguments_exit_2(args, tmp_path, capsys):
     assert main(["evaluate", "inbetween", "--cmu", str(tmp_path), *args, "--out", str(out)]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_evaluate_inbetween_on_a_small_cmu_split(tmp_path):
+    from conftest import CMU_DIR
+
+    if not CMU_DIR.is_dir():
+        pytest.skip("../shared/data/mocap/cmu is absent")
+    out = tmp_path / "m.json"
+    assert main(["evaluate", "inbetween", "--cmu", str(CMU_DIR), "--library", "08", "--test", "07", "--gaps", "15",
+                 "--methods", "markov,slerp", "--out", str(out), "--graph-cache", str(tmp_path / "g.npz")]) == 0
+    m = read_metrics(out, INBETWEEN)
+    assert m.get("split", "eval_subjects") == ["07"] and m.get("gaps") == [15]
+    for name in ("markov", "slerp"):
+        block = m.get("methods", name, "15")
+        assert block["windows"] == m.get("by_subject", "07", "windows") > 5
+        assert 0 < block["l2p"] < 50 and 0 < block["l2q"] < 10
+    assert (tmp_path / "g.npz").is_file()
