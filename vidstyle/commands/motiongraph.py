@@ -10,6 +10,7 @@ from typing import List, Optional
 import typer
 
 from ..errors import InputError
+from ..inbetween import defaults as KD
 from ..motiongraph import defaults as D
 from ._evaluate import evaluate_app
 from ._numbers import jobs_option
@@ -76,8 +77,10 @@ def build_graph(
 
 def synthesize(
     graph_path: Path = typer.Option(..., "--graph", "-g", help="Graph file from build-graph."),
-    sequence: Path = typer.Option(..., "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
-    out: Path = typer.Option(..., "--out", "-o", help="Output BVH; <out stem>.labels.json is written beside it."),
+    sequence: Optional[Path] = typer.Option(None, "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
+    keyframes: Optional[Path] = typer.Option(None, "--keyframes", "-K", help="Instead of --sequence: keyframes JSON {\"keyframes\": [{\"clip\": BVH, \"frame\": i, \"time\": s}, ...]} (>= 2); the motion passes through each pose at its time (docs/keyframes.md)."),
+    method: Optional[str] = typer.Option(None, "--method", help=f"With --keyframes: {' | '.join(KD.METHODS)} (default {KD.METHOD}: Molina Tanco & Hilton's Markov chain over pose clusters; graph: the graph's shortest path; slerp: LERP+SLERP)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Output BVH; with --sequence, <out stem>.labels.json is written beside it."),
     preview: Optional[Path] = typer.Option(None, "--preview", help="Also render a preview video (.mp4)."),
     seconds: float = typer.Option(D.STEP_SECONDS, "--seconds", help="Duration of steps given without one."),
     mismatch_penalty: float = typer.Option(D.MISMATCH_PENALTY, "--mismatch-penalty", help="Cost of one output frame with a wrong label."),
@@ -85,12 +88,25 @@ def synthesize(
     strict: bool = typer.Option(D.STRICT, "--strict/--lenient", help="Fail when a step gets no frame of its action within its duration (default: warn, naming the step)."),
     foot_lock: bool = typer.Option(D.FOOT_LOCK, "--foot-lock/--no-foot-lock", help="Hold planted feet still across seams (two-bone leg IK)."),
     max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
+    seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="With --keyframes --method markov: seed of the pose clustering."),
 ) -> None:
-    """Walk the graph to realise an action sequence at minimum transition cost; write BVH (+ labels, preview)."""
+    """Walk the graph to realise an action sequence at minimum transition cost (--sequence), or make motion
+    from keyframe to keyframe (--keyframes); write BVH (+ labels, preview)."""
     from ..motiongraph import MotionGraph, save_synthesis
     from ..motiongraph import synthesize as synth
 
+    if (sequence is None) == (keyframes is None):
+        raise InputError("--sequence / --keyframes: give exactly one (an action sequence, or keyframes to pass through)")
+    if keyframes is None and method is not None:
+        raise InputError("--method: only with --keyframes (a sequence is always realised by the motion graph)")
     graph = MotionGraph.load(graph_path)
+    if keyframes is not None:
+        synthesize_from_keyframes(graph, keyframes, method or KD.METHOD, out, seed)
+        if preview is not None:
+            from ..mocap import read_bvh
+
+            write_preview(read_bvh(out), preview)
+        return
     with flag_names(_PLAN_FLAGS):
         result = synth(graph, sequence, bvh_name=out.name, seconds=seconds, mismatch_penalty=mismatch_penalty,
                        transition_penalty=transition_penalty, strict=strict, foot_lock=foot_lock,
@@ -101,6 +117,18 @@ def synthesize(
              motion.duration, len(result.walk.transitions_used), motion.duration / max(result.seconds, 1e-9))
     if preview is not None:
         write_preview(motion, preview)
+
+
+def synthesize_from_keyframes(graph, keyframes: Path, method: str, out: Path, seed: int) -> None:
+    """``synthesize --keyframes``: in-between every consecutive pair, write the BVH (atomically)."""
+    from ..inbetween import synthesize_keyframes
+    from ..mocap import write_bvh
+
+    with flag_names({"method": "--method"}):
+        result = synthesize_keyframes(graph, keyframes, method, random_state=seed)
+    write_bvh(result.motion, out)
+    log.info("wrote %s: %d frames (%.1f s) through %d keyframes (%s), %.0f ms", out, result.motion.n_frames,
+             result.motion.duration, len(result.key_frames), method, 1000 * result.seconds)
 
 
 def write_preview(motion, path: Path, fps: float = 30.0) -> None:
@@ -165,4 +193,48 @@ def evaluate_motion(
     if "synthesis_x_real_time" in summary:
         table.add_row("synthesis x real time", fmt(summary["synthesis_x_real_time"]), "", "", "")
     Console().print(table)
+    log.info("wrote %s", out)
+
+
+@evaluate_app.command("inbetween")
+def evaluate_inbetween(
+    cmu: Path = typer.Option(..., "--cmu", help="Folder of CMU BVH clips named <subject>_<trial>.bvh (with clips.csv)."),
+    library: str = typer.Option(",".join(KD.EVAL_SPLIT["library"]), "--library", help="Comma-separated subjects the methods learn from."),
+    test: str = typer.Option(",".join(KD.EVAL_SPLIT["test"]), "--test", help="Comma-separated held-out subjects whose windows are scored (none of --library)."),
+    gaps: str = typer.Option(",".join(map(str, KD.EVAL_GAPS)), "--gaps", help="Comma-separated gap lengths in frames at 30 fps."),
+    methods: str = typer.Option(",".join(KD.METHODS), "--methods", help=f"Comma-separated: {', '.join(KD.METHODS)}."),
+    graph_cache: Optional[Path] = typer.Option(None, "--graph-cache", help="Motion graph of the library: read when it exists, else built and written there."),
+    out: Path = typer.Option(Path("metrics/inbetween.json"), "--out", "-o", help="Metrics JSON."),
+    seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="Seed of the graph's threshold sample and the pose clustering."),
+) -> None:
+    """Keyframe in-betweening on held-out windows: LAFAN1's L2P and L2Q per gap and method, ms per request."""
+    from ..evaluation.inbetween import evaluate, table
+    from ..formats.metrics import INBETWEEN, write_metrics
+
+    lib = [s.strip() for s in library.split(",") if s.strip()]
+    held = [s.strip() for s in test.split(",") if s.strip()]
+    if set(lib) & set(held):
+        raise InputError(f"--test: subject(s) {', '.join(sorted(set(lib) & set(held)))} are also in --library")
+    try:
+        gap_list = [int(g) for g in gaps.split(",") if g.strip()]
+    except ValueError:
+        raise InputError(f"--gaps: expected comma-separated integers, got {gaps!r}") from None
+    if not gap_list or min(gap_list) < 1 or max(gap_list) > 54:
+        raise InputError(f"--gaps: each gap must be 1 .. 54 frames (windows are 65 frames), got {gaps!r}")
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    unknown = [m for m in names if m not in KD.METHODS]
+    if unknown or not names:
+        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.METHODS)}")
+    if not cmu.is_dir():
+        raise InputError(f"--cmu: {cmu} is not a folder")
+    for group, flag in ((lib, "--library"), (held, "--test")):
+        if not group or not any(any(cmu.glob(f"{s}_*.bvh")) for s in group):
+            raise InputError(f"{flag}: no clips <subject>_*.bvh of {', '.join(group) or 'no subject'} in {cmu}")
+    try:
+        doc = evaluate(cmu, lib, held, gap_list, names, seed, graph_cache,
+                       command=f"vidstyle evaluate inbetween --cmu {cmu} --library {','.join(lib)} --test {','.join(held)}")
+    except ValueError as e:
+        raise InputError(f"--test: {e}") from None
+    write_metrics(out, doc, kind=INBETWEEN)
+    typer.echo(table(doc))
     log.info("wrote %s", out)

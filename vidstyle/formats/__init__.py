@@ -15,6 +15,8 @@ style ``style.json``                       ``vidstyle.style`` (1)           :mod
 render ground truth ``<video>.truth.npz``  ``vidstyle.render_truth`` (2; 1) :mod:`vidstyle.formats.truth`
 synthesised motion ``<out>.labels.json``   ``vidstyle.labels`` (2) + walk   :mod:`vidstyle.formats.walk`
 (``vidstyle synthesize``)                  fields
+keyframes ``K.json`` (``synthesize         ``vidstyle.keyframes`` (1; 1 =   :mod:`vidstyle.formats.keyframes`
+--keyframes``)                             no header)
 metrics (recognition, style, motion,       ``vidstyle.metrics.<what>`` (1)  :mod:`vidstyle.formats.metrics`
 headline)
 =========================================  ===============================  ==================================

@@ -45,6 +45,10 @@ computed, e.g. video accuracy without single-action test videos):
   ``recognizers``, ``frames`` >= 0, ``family_counts`` (``punch``, ``kick``, ``other`` >= 0, summing to
   ``frames``) and ``family_accuracy`` in [0, 1] or null; ``overall`` an object per recognizer with
   ``family_accuracy`` in [0, 1] or null; ``params`` an object.
+* ``vidstyle.metrics.inbetween`` (``vidstyle evaluate inbetween``, ``scripts/eval_inbetween.py``): ``gaps`` a
+  non-empty list of integers >= 1; ``methods`` an object per method (``markov``, ``graph``, ``slerp``) with one
+  block per gap (its decimal string) holding ``l2p``, ``l2q``, ``ms_per_request`` >= 0 and ``windows`` >= 1;
+  ``split`` and ``params`` objects.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
@@ -68,6 +72,7 @@ from ._base import (
     FormatError,
     check_array,
     check_header,
+    check_int,
     check_leaves,
     read_json_document,
     write_json_document,
@@ -85,8 +90,9 @@ PEOPLE = "vidstyle.metrics.people"
 TIMING = "vidstyle.metrics.timing"
 RECONSTRUCT = "vidstyle.metrics.reconstruct"
 REAL_MOTION = "vidstyle.metrics.real_motion"
+INBETWEEN = "vidstyle.metrics.inbetween"
 KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
-         REAL_MOTION)
+         REAL_MOTION, INBETWEEN)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -218,6 +224,22 @@ def _real_motion(f: Fields) -> None:
     o = f.sub("overall")
     for name in names:
         _opt_number(o.sub(name), "family_accuracy", 0, 1)
+def _inbetween(f: Fields) -> None:
+    gaps = f.list("gaps", min_len=1)
+    for i, g in enumerate(gaps):
+        check_int(g, f.path, f"gaps[{i}]", 1)
+    methods = f.sub("methods")
+    if not methods.obj:
+        raise methods.fail(None, "no method")
+    for name in methods.obj:
+        m = methods.sub(name)
+        for g in gaps:
+            b = m.sub(str(int(g)))
+            for key in ("l2p", "l2q", "ms_per_request"):
+                b.number(key, min=0)
+            b.int("windows", min=1)
+    f.sub("split")
+    f.sub("params")
 
 
 def _augmg(f: Fields) -> None:
@@ -371,7 +393,7 @@ def _timing(f: Fields) -> None:
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
-           RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion}
+           RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion, INBETWEEN: _inbetween}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -408,6 +430,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 __all__ = [
     "AUGMG",
     "HEADLINE",
+    "INBETWEEN",
     "KINDS",
     "MOTION",
     "MULTIVIEW_POSE",

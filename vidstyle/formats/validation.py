@@ -10,6 +10,7 @@ kind                                          version   written by
 ``vidstyle.metrics.style_viterbi_prior``      1         ``scripts/style_viterbi_prior.py``
 ``vidstyle.validation.reconstruct_reference`` 1         ``scripts/real_reference.py``
 ``vidstyle.validation.pose_recognition``      1         ``scripts/pose_recognition_results.py``
+``vidstyle.validation.inbetween``             1         ``scripts/validate_inbetween.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -36,6 +37,7 @@ RECONSTRUCT_REFERENCE = "vidstyle.validation.reconstruct_reference"
 RECONSTRUCT_HELDOUT = "vidstyle.validation.reconstruct_heldout"
 RECONSTRUCT_DEFAULTS = "vidstyle.validation.reconstruct_defaults"
 POSE_RECOGNITION = "vidstyle.validation.pose_recognition"
+INBETWEEN = "vidstyle.validation.inbetween"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -47,6 +49,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     RECONSTRUCT_HELDOUT: (1, 1, True, False),
     RECONSTRUCT_DEFAULTS: (1, 1, True, False),
     POSE_RECOGNITION: (1, 1, True, False),
+    INBETWEEN: (1, 1, True, False),
 }
 
 

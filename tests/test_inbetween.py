@@ -1,0 +1,188 @@
+"""Keyframe in-betweening (``vidstyle.inbetween``, Molina Tanco & Hilton 2000 + baselines) against
+independent truth: brute-force enumeration of cluster paths, scipy's rotations, exact key poses."""
+
+from __future__ import annotations
+
+import itertools
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from bvh_samples import TWO_JOINT
+from scipy.spatial.transform import Rotation
+
+from vidstyle.inbetween import (
+    Keypose,
+    MarkovInbetweener,
+    best_cluster_path,
+    path_score,
+    pin,
+    segment_path,
+    slerp_inbetween,
+)
+from vidstyle.inbetween.markov import duration_tables, run_lengths
+from vidstyle.mocap import parse_bvh
+
+
+def _library(seed: int = 0, clips: int = 3, frames: int = 90):
+    """A tiny library on a 4-joint skeleton: smooth periodic joint angles, a root walking forward."""
+    sk = parse_bvh(TWO_JOINT).skeleton
+    rng = np.random.default_rng(seed)
+    rots, roots, clip = [], [], []
+    for c in range(clips):
+        t = np.arange(frames) / 30.0
+        f = 0.8 + 0.4 * c
+        ang = np.zeros((frames, sk.n_joints, 3))
+        for j in range(sk.n_joints):
+            ang[:, j] = 40 * np.sin(2 * np.pi * f * t[:, None] + rng.uniform(0, 6, 3)) * rng.uniform(0.3, 1, 3)
+        ang[:, 0, 1] += 20 * c  # some heading
+        q = Rotation.from_euler("ZYX", ang.reshape(-1, 3), degrees=True).as_quat().reshape(frames, sk.n_joints, 4)
+        r = np.stack([0.1 * np.sin(t), 3 + 0.2 * np.sin(4 * t), 1.5 * t], 1)
+        rots.append(q)
+        roots.append(r)
+        clip.append(np.full(frames, c))
+    return SimpleNamespace(skeleton_=sk, rotations_=np.concatenate(rots), root_positions_=np.concatenate(roots),
+                           frame_clip_=np.concatenate(clip), fps=30.0)
+
+
+def _brute_force(log_a, log_d, log_s, start, end, n, K):
+    best, arg = -np.inf, None
+    for mid in itertools.product(range(K), repeat=n - 2):
+        path = np.array([start, *mid, end]) if n > 1 else np.array([start])
+        s = path_score(path, log_a, log_d, log_s)
+        if s > best:
+            best, arg = s, path
+    return arg, best
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("n", [2, 3, 5, 6])
+def test_cluster_path_dp_equals_brute_force(seed, n):
+    rng = np.random.default_rng(seed)
+    K = 3
+    a = rng.random((K, K)) + 0.05
+    np.fill_diagonal(a, 0)
+    with np.errstate(divide="ignore"):
+        log_a = np.log(a / a.sum(1, keepdims=True))
+    np.fill_diagonal(log_a, -np.inf)
+    counts = rng.integers(0, 5, (K, 5)).astype(float)
+    log_d, log_s = duration_tables(counts, n, 0.1)
+    for start, end in [(0, 2), (1, 1), (2, 0)]:
+        path, score = best_cluster_path(log_a, start, end, n, log_d, log_s)
+        _ref, ref_score = _brute_force(log_a, log_d, log_s, start, end, n, K)
+        assert score == pytest.approx(ref_score)
+        assert path_score(path, log_a, log_d, log_s) == pytest.approx(ref_score)
+        assert path[0] == start and path[-1] == end and len(path) == n
+
+
+def test_duration_tables_are_distributions_and_survivals():
+    counts = np.array([[0, 3, 1, 0], [0, 0, 0, 4]], float)
+    log_d, log_s = duration_tables(counts, 6, 0.5)
+    p = np.exp(log_d[:, 1:])
+    # probabilities over 1..6 of the padded table: counts + 0.5 each, normalised over 1..max(L, n) = 6
+    assert np.allclose(p[0], (np.array([3, 1, 0, 0, 0, 0]) + 0.5) / 7.0)
+    assert np.allclose(np.exp(log_s[:, 1]), 1.0)
+    assert np.allclose(np.exp(log_s[0, 2]), 1 - p[0, 0])
+
+
+def test_run_lengths_split_at_clip_boundaries():
+    labels = np.array([0, 0, 1, 1, 1, 1, 2])
+    cont = np.array([False, True, True, True, False, True, True])  # a clip starts at frame 4
+    assert run_lengths(labels, cont) == [(0, 2), (1, 2), (1, 2), (2, 1)]
+
+
+def test_segment_path_equals_brute_force_on_a_tiny_library():
+    rng = np.random.default_rng(3)
+    labels = np.array([0, 1, 1, 2, 0, 2, 1])
+    cont = np.array([False, True, True, True, False, True, True])
+    N, n = len(labels), 4
+    path = np.array([0, 1, 2, 1])
+    first, last = rng.random(N), rng.random(N)
+    emission = rng.random((N, 3))
+    entry = np.where(cont, np.roll(labels, 1), labels)
+    for warp in (None, 0.3):
+        _frames, cost = segment_path(labels, cont, path, first, last, 0.7, 0.9, emission, warp)
+        best = np.inf
+        for seq in itertools.product(range(N), repeat=n):
+            c = first[seq[0]] + last[seq[-1]] + sum(0.7 * emission[seq[t], path[t]] for t in range(n))
+            for a, b in itertools.pairwise(seq):
+                steps = [0.0 if b == a + 1 and cont[b] else np.inf,
+                         0.9 if labels[a] == entry[b] else np.inf]
+                if warp is not None:
+                    steps += [warp if a == b else np.inf, warp if b == a + 2 and cont[b] and cont[b - 1] else np.inf]
+                c += min(steps)
+            best = min(best, c)
+        assert cost == pytest.approx(best)
+
+
+def test_slerp_midpoint_of_two_known_rotations():
+    J = 2
+    a = Rotation.from_euler("y", [[0], [0]], degrees=True).as_quat()
+    b = Rotation.from_euler("y", [[90], [30]], degrees=True).as_quat()
+    rot, root = slerp_inbetween(Keypose(a, np.zeros(3)), Keypose(b, np.array([2.0, 4.0, -6.0])), 3)
+    mid = Rotation.from_quat(rot[1]).as_euler("yxz", degrees=True)[:, 0]
+    assert mid == pytest.approx([45, 15])
+    assert root[1] == pytest.approx([1.0, 2.0, -3.0])
+    assert rot.shape == (3, J, 4)
+
+
+def test_pin_passes_exactly_through_both_keys():
+    lib = _library()
+    rot, root = lib.rotations_[:20], lib.root_positions_[:20]
+    s = Keypose(lib.rotations_[100], lib.root_positions_[100])
+    e = Keypose(lib.rotations_[150], lib.root_positions_[150] + 5)
+    out, r = pin(rot, root, s, e)
+    assert np.array_equal(out[0], s.rotations) and np.array_equal(r[0], s.root)
+    assert np.array_equal(out[-1], e.rotations) and np.array_equal(r[-1], e.root)
+    assert np.allclose(np.linalg.norm(out, axis=-1), 1.0)
+
+
+def test_pin_keeps_a_motion_that_already_meets_the_keys():
+    lib = _library()
+    rot, root = lib.rotations_[10:40], lib.root_positions_[10:40]
+    out, r = pin(rot, root, Keypose(rot[0], root[0]), Keypose(rot[-1], root[-1]))
+    assert np.allclose(np.abs(np.sum(out * rot, -1)), 1.0) and np.allclose(r, root)
+
+
+@pytest.mark.parametrize("gap", [5, 16, 31])
+def test_markov_output_passes_through_the_keys_at_their_frames(gap):
+    lib = _library()
+    model = MarkovInbetweener(n_clusters=6, n_components=4, random_state=0).fit(lib)
+    s = Keypose(lib.rotations_[95], lib.root_positions_[95], Keypose(lib.rotations_[94], lib.root_positions_[94]))
+    e = Keypose(lib.rotations_[200], lib.root_positions_[200] + np.array([1.0, 0.0, 2.0]))
+    rot, root = model.inbetween(s, e, gap + 2)
+    assert rot.shape == (gap + 2, lib.skeleton_.n_joints, 4) and root.shape == (gap + 2, 3)
+    assert np.allclose(rot[0], s.rotations) and np.allclose(root[0], s.root)
+    assert np.allclose(rot[-1], e.rotations) and np.allclose(root[-1], e.root)
+    assert np.isfinite(rot).all() and np.allclose(np.linalg.norm(rot, axis=-1), 1.0)
+
+
+def test_markov_reproduces_a_library_stretch_between_its_own_frames():
+    # without the sketch's mismatch cost and time warps, the library's own stretch between the two keys is the
+    # only zero-cost segment path: rendering and pinning must give it back exactly
+    lib = _library()
+    model = MarkovInbetweener(n_clusters=6, n_components=4, mismatch_cost=0.0, warp_cost=None, random_state=0).fit(lib)
+    a, b = 100, 130
+    s = Keypose(lib.rotations_[a], lib.root_positions_[a], Keypose(lib.rotations_[a - 1], lib.root_positions_[a - 1]))
+    e = Keypose(lib.rotations_[b], lib.root_positions_[b])
+    plan = model.plan(s, e, b - a + 1)
+    assert plan["frames"][0] == a and plan["frames"][-1] == b
+    rot, root = model.inbetween(s, e, b - a + 1)
+    assert np.allclose(np.abs(np.sum(rot * lib.rotations_[a : b + 1], -1)), 1.0, atol=1e-6)
+    assert np.allclose(root, lib.root_positions_[a : b + 1], atol=1e-6)
+
+
+def test_markov_follows_estimator_conventions_and_its_seed():
+    lib = _library()
+    m1 = MarkovInbetweener(n_clusters=5, n_components=3, random_state=7)
+    params = m1.get_params()
+    assert params["random_state"] == 7 and params["n_clusters"] == 5
+    assert not hasattr(m1, "labels_")
+    m1.fit(lib)
+    m2 = MarkovInbetweener(**params).fit(lib)
+    assert np.array_equal(m1.labels_, m2.labels_) and np.allclose(m1.transitions_, m2.transitions_)
+    assert np.allclose(m1.transitions_.sum(1), 1.0) and np.all(np.diag(m1.transitions_) == 0)
+    assert m1.set_params(n_clusters=4) is m1 and m1.n_clusters == 4
+    from sklearn.base import clone
+
+    assert clone(m2).get_params() == params

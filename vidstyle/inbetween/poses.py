@@ -1,0 +1,99 @@
+"""Key poses, the pose feature, and pinning a motion to its two key poses.
+
+A :class:`Keypose` is one frame on the library's skeleton: local joint rotations ``(J, 4)`` (x, y, z, w) and
+the root position ``(3,)``, optionally with the frame one step before it (``previous``, at the library's
+frame rate) or after it (``following``) for a velocity feature.
+
+Heading: the yaw of the root joint's local +Z axis (``atan2(z_x, z_z)``, the angle of
+:class:`~vidstyle.mocap.placement.Placement`). The pose feature removes it, so poses facing any
+direction compare equal (Molina Tanco & Hilton 2000, section 3.2: the model is invariant to where the
+action faces).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..mocap.placement import Placement, yaw_quat
+from ..mocap.quat import qmul
+from ..motiongraph.blend import slerp
+
+
+@dataclass
+class Keypose:
+    rotations: np.ndarray  # (J, 4)
+    root: np.ndarray  # (3,)
+    previous: Keypose | None = None
+    following: Keypose | None = None  # the frame one step after (velocity of an end key without a previous)
+
+    def placed(self, placement: Placement) -> Keypose:
+        r, p = placement.apply_frames(self.rotations[None], self.root[None])
+        prev = None if self.previous is None else self.previous.placed(placement)
+        nxt = None if self.following is None else self.following.placed(placement)
+        return Keypose(r[0], p[0], prev, nxt)
+
+
+def headings(root_rotations: np.ndarray) -> np.ndarray:
+    """(F,) yaw of the root's local +Z axis for root quaternions (F, 4)."""
+    z = Rotation.from_quat(root_rotations.reshape(-1, 4)).apply([0.0, 0.0, 1.0])
+    return np.arctan2(z[:, 0], z[:, 2])
+
+
+def placement_onto(rot_from: np.ndarray, root_from: np.ndarray, rot_to: np.ndarray, root_to: np.ndarray) -> Placement:
+    """The yaw + floor placement that puts a frame (root quaternion ``rot_from`` (4,), root ``root_from``)
+    onto another's heading and horizontal root position."""
+    theta = float(headings(rot_to[None])[0] - headings(rot_from[None])[0])
+    turned = Placement(theta).apply_points(root_from)
+    return Placement(theta, float(root_to[0] - turned[0]), float(root_to[2] - turned[2]))
+
+
+def pose_features(rotations: np.ndarray, root_positions: np.ndarray, leg: float, height_weight: float) -> np.ndarray:
+    """(F, 3J + 1): angle-axis vectors of every joint's local rotation (the root's with its heading
+    removed), then the root height in leg lengths times ``height_weight``."""
+    F, J, _ = rotations.shape
+    root = qmul(yaw_quat(-headings(rotations[:, 0])), rotations[:, 0])
+    q = rotations.copy()
+    q[:, 0] = root
+    rv = Rotation.from_quat(q.reshape(-1, 4)).as_rotvec().reshape(F, 3 * J)
+    h = root_positions[:, 1:2] / max(leg, 1e-12) * height_weight
+    return np.concatenate([rv, h], axis=1)
+
+
+def pin(rotations: np.ndarray, roots: np.ndarray, start: Keypose, end: Keypose) -> tuple[np.ndarray, np.ndarray]:
+    """Displace a motion (T+1 frames) so that frame 0 is exactly ``start`` and frame T exactly ``end``:
+    each joint's rotation is pre-multiplied by the slerp (weight t/T) of the two key corrections
+    ``key * frame^-1``, the root moved by the linear blend of the two position errors."""
+    T = len(rotations) - 1
+    conj = np.array([-1.0, -1.0, -1.0, 1.0])
+    d0 = qmul(start.rotations, rotations[0] * conj)
+    d1 = qmul(end.rotations, rotations[T] * conj)
+    w = np.arange(T + 1) / max(T, 1)
+    d = slerp(np.broadcast_to(d0, rotations.shape), np.broadcast_to(d1, rotations.shape),
+              np.broadcast_to(w[:, None], rotations.shape[:2]))
+    out = qmul(d, rotations)
+    e0, e1 = start.root - roots[0], end.root - roots[T]
+    root = roots + (1.0 - w)[:, None] * e0 + w[:, None] * e1
+    out[0], root[0] = start.rotations, start.root
+    out[T], root[T] = end.rotations, end.root
+    return out, root
+
+
+def slerp_inbetween(start: Keypose, end: Keypose, n_frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """LAFAN1's LERP+SLERP baseline over ``n_frames`` = T + 1 output frames (both keys included): every
+    local rotation by scipy's :class:`~scipy.spatial.transform.Slerp`, the root position linearly."""
+    from scipy.spatial.transform import Slerp
+
+    T = n_frames - 1
+    w = np.linspace(0.0, 1.0, n_frames)
+    J = start.rotations.shape[0]
+    rot = np.empty((n_frames, J, 4))
+    for j in range(J):
+        key = Rotation.from_quat(np.stack([start.rotations[j], end.rotations[j]]))
+        rot[:, j] = Slerp([0.0, 1.0], key)(w).as_quat()
+    root = start.root[None] + w[:, None] * (end.root - start.root)[None]
+    if T >= 1:
+        rot[0], rot[T] = start.rotations, end.rotations
+    return rot, root
