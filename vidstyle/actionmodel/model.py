@@ -299,7 +299,10 @@ class ActionModel(BaseEstimator):
         heights = []
         from ..reconstruct.footlock import leg_chains
 
-        self.ankles_ = [c[2] for c in leg_chains(self.skeleton_)]
+        try:
+            self.ankles_ = [c[2] for c in leg_chains(self.skeleton_)]
+        except ValueError as e:
+            raise InputError(f"clips: the skeleton has no two leg chains to plant ({e})") from None
         for inst in iset.instances:
             pos = self._positions(inst.motion.rotations, inst.motion.root_positions)
             for f, a in enumerate(self.ankles_):
@@ -524,16 +527,66 @@ class ActionModel(BaseEstimator):
         return [self.decode(z, label, pin=pin) for z in Z]
 
     # ------------------------------------------------------------------ persistence
+    def to_record(self):
+        """The fitted model as an :class:`~vidstyle.formats.actionmodel.ActionModelRecord`."""
+        from dataclasses import fields as dc_fields
+
+        from ..formats.actionmodel import LABEL_ARRAYS, ActionModelRecord
+
+        sk = self.skeleton_
+        models = {}
+        for label in self.labels_:
+            lm = self.models_[label]
+            arrays = {k: getattr(lm, k) for k in LABEL_ARRAYS}
+            meta = {f.name: getattr(lm, f.name) for f in dc_fields(lm) if f.name not in LABEL_ARRAYS and f.name != "label"}
+            models[label] = {**arrays, "meta": meta}
+        params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.get_params().items()}
+        return ActionModelRecord(params, self.fps_, self.contact_height_,
+                                 {"names": list(sk.names), "parents": sk.parents, "offsets": sk.offsets,
+                                  "channels": list(sk.channels), "end_sites": dict(sk.end_sites)},
+                                 self.reach_, list(self.labels_), models, list(self.sources_), dict(self.skipped_))
+
+    @classmethod
+    def from_record(cls, rec, path=None) -> "ActionModel":
+        """The fitted model of a record read by :func:`vidstyle.formats.actionmodel.read_actionmodel`
+        (FormatError naming ``path`` when its skeleton has no two legs)."""
+        from ..errors import FormatError
+        from ..mocap.skeleton import Skeleton
+        from ..reconstruct.footlock import leg_chains
+
+        model = cls(**rec.params)
+        sk = rec.skeleton
+        try:
+            model.skeleton_ = Skeleton(sk["names"], sk["parents"], sk["offsets"], sk["channels"], sk["end_sites"])
+            model.ankles_ = [c[2] for c in leg_chains(model.skeleton_)]
+        except (ValueError, InputError) as e:
+            raise FormatError(path, "skeleton_names", f"not a skeleton with two legs ({e})") from None
+        model.fps_ = rec.fps
+        model.contact_height_ = rec.contact_height
+        model.reach_ = np.asarray(rec.reach, dtype=np.float64)
+        model._dtw_w = _depth_weights(model.skeleton_.parents)
+        model.n_joints_ = model.skeleton_.n_joints
+        model.sources_ = list(rec.sources)
+        model.skipped_ = dict(rec.skipped)
+        model.models_ = {}
+        for label in rec.labels:
+            d = rec.models[label]
+            model.models_[label] = LabelModel(label, **{k: v for k, v in d.items() if k != "meta"}, **d["meta"])
+        model.labels_ = list(rec.labels)
+        return model
+
     def save(self, path) -> None:
+        """Write the model file (:mod:`vidstyle.formats.actionmodel`), atomically."""
         from ..formats.actionmodel import write_actionmodel
 
-        write_actionmodel(path, self)
+        write_actionmodel(path, self.to_record())
 
     @classmethod
     def load(cls, path) -> "ActionModel":
+        """Read a model file (every field checked: FormatError naming the file and field)."""
         from ..formats.actionmodel import read_actionmodel
 
-        return read_actionmodel(path)
+        return cls.from_record(read_actionmodel(path), path)
 
 
 class _Skip(Exception):
