@@ -15,5 +15,6 @@ MIN_RUN = 3  # contact runs shorter than this (frames) are absorbed by their nei
 MIN_PRIMITIVE = 3  # a primitive has at least this many frames (keyframes included)
 MIN_INSTANCES = 3  # a label with fewer instances (of its most common signature) is not modelled
 MEDOID_CANDIDATES = 40  # the medoid is searched among at most this many instances (seeded draw)
+WARP_SMOOTHING = 2.0  # Gaussian sigma (reference frames) of the DTW warp before its log-derivative
 BLEND_FRAMES = 3  # foot pinning: frames of blending either side of a contact run
 RANDOM_STATE = 0

@@ -186,7 +186,7 @@ class ActionModel(BaseEstimator):
                  max_components: int = D.MAX_COMPONENTS, covariance_type: str = D.COVARIANCE_TYPE,
                  min_frames: int = D.MIN_FRAMES, min_run: int = D.MIN_RUN, min_primitive: int = D.MIN_PRIMITIVE,
                  min_instances: int = D.MIN_INSTANCES, medoid_candidates: int = D.MEDOID_CANDIDATES,
-                 blend_frames: int = D.BLEND_FRAMES, labels: tuple[str, ...] | None = None,
+                 blend_frames: int = D.BLEND_FRAMES, warp_smoothing: float = D.WARP_SMOOTHING, labels: tuple[str, ...] | None = None,
                  random_state: int | None = D.RANDOM_STATE) -> None:
         self.variance = variance
         self.slope_limit = slope_limit
@@ -198,6 +198,7 @@ class ActionModel(BaseEstimator):
         self.min_instances = min_instances
         self.medoid_candidates = medoid_candidates
         self.blend_frames = blend_frames
+        self.warp_smoothing = warp_smoothing
         self.labels = labels
         self.random_state = random_state
 
@@ -211,6 +212,9 @@ class ActionModel(BaseEstimator):
             x = getattr(self, name)
             if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or x < lo:
                 raise ParameterError(name, f"must be an integer >= {lo}, got {x!r}")
+        ws = self.warp_smoothing
+        if isinstance(ws, bool) or not isinstance(ws, (int, float)) or not 0 <= float(ws) < 1e3:
+            raise ParameterError("warp_smoothing", f"must be a number >= 0 (reference frames), got {ws!r}")
         if self.covariance_type not in ("full", "diag"):
             raise ParameterError("covariance_type", f"must be full or diag, got {self.covariance_type!r}")
 
@@ -266,7 +270,7 @@ class ActionModel(BaseEstimator):
                 continue
             cost, path = dtw(C, self.slope_limit)
             total += cost
-            W[r0:r1 + 1] = i0 + path_to_warp(path, r1 - r0 + 1, i1 - i0 + 1)
+            W[r0:r1 + 1] = i0 + path_to_warp(path, r1 - r0 + 1, i1 - i0 + 1, smooth=self.warp_smoothing)
         return total, (None if cost_only else W)
 
     def _inst_feat(self, inst: Instance) -> np.ndarray:

@@ -62,6 +62,7 @@ META_NUMBERS = ("fit_seconds", "spatial_variance_kept", "temporal_variance_kept"
 PARAMS = {"variance": "fraction", "slope_limit": "int>=1", "max_components": "int>=1",
           "covariance_type": ("full", "diag"), "min_frames": "int>=2", "min_run": "int>=1", "min_primitive": "int>=2",
           "min_instances": "int>=2", "medoid_candidates": "int>=2", "blend_frames": "int>=0", "labels": "labels",
+          "warp_smoothing": "nonnegative",
           "random_state": "seed"}
 
 
@@ -178,6 +179,9 @@ def _check_params(params: dict, path) -> dict:
                 raise bad
         elif rule == "fraction":
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 1:
+                raise bad
+        elif rule == "nonnegative":
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1e3:
                 raise bad
         elif rule.startswith("int>="):
             if not is_int or v < int(rule[5:]):

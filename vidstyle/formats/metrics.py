@@ -40,6 +40,10 @@ computed, e.g. video accuracy without single-action test videos):
   with ``data``, ``source``, ``method`` and ``skeleton`` strings, ``frames`` >= 0, and ``mpjpe_mm``,
   ``mpjpe_root_relative_mm``, ``pa_mpjpe_mm``, ``acceleration_error_mm_per_frame2``,
   ``foot_skate_mm_per_frame`` each >= 0 or null; ``params`` and ``headline`` objects.
+* ``vidstyle.metrics.actionmodel`` (``scripts/eval_actionmodel.py``): ``command`` a string; ``labels`` a
+  non-empty object, per action label an object whose leaves are numbers, null, booleans or strings
+  (naturalness of samples and source clips, reconstruction MPJPE, fit and sample times); ``params``
+  and ``split`` objects.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
@@ -79,7 +83,9 @@ MULTIVIEW_POSE = "vidstyle.metrics.multiview_pose"
 PEOPLE = "vidstyle.metrics.people"
 TIMING = "vidstyle.metrics.timing"
 RECONSTRUCT = "vidstyle.metrics.reconstruct"
-KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT)
+ACTIONMODEL = "vidstyle.metrics.actionmodel"
+KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
+         ACTIONMODEL)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -188,6 +194,17 @@ def _reconstruct(f: Fields) -> None:
             _opt_number(r, key, 0, None)
     f.sub("params")
     f.sub("headline")
+
+
+def _actionmodel(f: Fields) -> None:
+    f.str("command", nonempty=True)
+    labels = f.sub("labels")
+    if not labels.obj:
+        raise labels.fail(None, "no label")
+    for name in labels.obj:
+        _numbers_or_null(labels, name)
+    f.sub("params")
+    f.sub("split")
 
 
 def _augmg(f: Fields) -> None:
@@ -341,7 +358,7 @@ def _timing(f: Fields) -> None:
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
-           RECONSTRUCT: _reconstruct}
+           RECONSTRUCT: _reconstruct, ACTIONMODEL: _actionmodel}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -376,6 +393,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 
 __all__ = [
+    "ACTIONMODEL",
     "AUGMG",
     "HEADLINE",
     "KINDS",

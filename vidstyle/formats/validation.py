@@ -9,6 +9,7 @@ kind                                          version   written by
 ``vidstyle.strikes_real_variety``             1         ``scripts/strikes_real_variety.py``
 ``vidstyle.metrics.style_viterbi_prior``      1         ``scripts/style_viterbi_prior.py``
 ``vidstyle.validation.reconstruct_reference`` 1         ``scripts/real_reference.py``
+``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -34,6 +35,7 @@ STYLE_VITERBI_PRIOR = "vidstyle.metrics.style_viterbi_prior"
 RECONSTRUCT_REFERENCE = "vidstyle.validation.reconstruct_reference"
 RECONSTRUCT_HELDOUT = "vidstyle.validation.reconstruct_heldout"
 RECONSTRUCT_DEFAULTS = "vidstyle.validation.reconstruct_defaults"
+ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -44,6 +46,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     RECONSTRUCT_REFERENCE: (1, 1, True, False),
     RECONSTRUCT_HELDOUT: (1, 1, True, False),
     RECONSTRUCT_DEFAULTS: (1, 1, True, False),
+    ACTIONMODEL_DEFAULTS: (1, 1, True, False),
 }
 
 
