@@ -194,9 +194,9 @@ def path_to_warp(path: np.ndarray, n_ref: int, n_inst: int, min_step: float = 0.
     """(n_ref,) strictly increasing warp ``w`` with ``w[0] = 0``, ``w[-1] = n_inst - 1`` (module text):
     ``w[i]`` the instance frame shown at reference frame ``i``. A one-frame reference gives ``[0]``.
 
-    ``smooth`` > 0: the mean-matched warp is smoothed with a Gaussian of that many reference frames
-    (ends held: the smoothed curve plus the straight line that puts its ends back) before the minimum
-    step is enforced. A DTW path is a staircase; its steps (0, 1, 2 instance frames per reference frame)
+    ``smooth`` > 0: the mean-matched warp's deviation from the straight line between its ends is smoothed
+    with a Gaussian of that many reference frames (zero beyond the ends, then the ends put back) before
+    the minimum step is enforced; a straight warp stays straight. A DTW path is a staircase; its steps (0, 1, 2 instance frames per reference frame)
     are quantisation, not timing, and their logarithms would dominate the temporal PCA."""
     p = np.asarray(path)
     sums = np.bincount(p[:, 0], weights=p[:, 1].astype(np.float64), minlength=n_ref)
@@ -205,9 +205,10 @@ def path_to_warp(path: np.ndarray, n_ref: int, n_inst: int, min_step: float = 0.
     if smooth > 0 and n_ref > 2:
         from scipy.ndimage import gaussian_filter1d
 
-        ws = gaussian_filter1d(w, float(smooth), mode="nearest")
-        line = np.linspace(w[0] - ws[0], w[-1] - ws[-1], n_ref)
-        w = np.maximum.accumulate(ws + line)
+        line = np.linspace(w[0], w[-1], n_ref)
+        r = gaussian_filter1d(w - line, float(smooth), mode="constant")  # the deviation from the straight warp
+        r -= np.linspace(r[0], r[-1], n_ref)  # ends held
+        w = np.maximum.accumulate(line + r)
     return make_increasing(w, n_inst - 1, min_step)
 
 

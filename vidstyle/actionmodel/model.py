@@ -381,37 +381,10 @@ class ActionModel(BaseEstimator):
         return lm
 
     def _gmm(self, Z: np.ndarray, rng: np.random.Generator):
-        from sklearn.mixture import GaussianMixture
-
-        N, d = Z.shape
-        best, bics = None, []
-        seed = int(rng.integers(2**31 - 1))
-        cov_type = self.covariance_type
-
-        def n_params(g: int, kind: str) -> int:
-            return g * d + g * (d * (d + 1) // 2 if kind == "full" else d) + g - 1
-
-        # a mixture is only tried while it has no more free parameters than there are instances (beyond
-        # that EM collapses components onto single instances and the likelihood, and BIC, are meaningless);
-        # with too few instances for one full covariance the label gets diagonal ones (in whitened PCA
-        # coordinates a single diagonal Gaussian is the PCA model itself)
-        if cov_type == "full" and n_params(1, "full") > N:
-            cov_type = "diag"
-        for g in range(1, self.max_components + 1):
-            if g > 1 and n_params(g, cov_type) > N:
-                break
-            gm = GaussianMixture(g, covariance_type=cov_type, random_state=seed, n_init=3,
-                                 reg_covar=1e-3).fit(Z)
-            b = float(gm.bic(Z))
-            bics.append(b)
-            if best is None or b < best[1]:
-                best = (gm, b)
-        gm = best[0]
-        cov = gm.covariances_
-        if cov_type == "diag":
-            cov = np.stack([np.diag(c) for c in cov])
-        self._last_cov_type = cov_type
-        return gm.weights_.copy(), gm.means_.copy(), np.asarray(cov, dtype=np.float64), np.array(bics)
+        w, mu, cov, bics, kind = fit_gmm_bic(Z, self.max_components, self.covariance_type,
+                                             int(rng.integers(2**31 - 1)))
+        self._last_cov_type = kind
+        return w, mu, cov, bics
 
     # ------------------------------------------------------------------ public API for later fitting
     def _model(self, label: str) -> LabelModel:
@@ -595,6 +568,43 @@ class ActionModel(BaseEstimator):
 
 class _Skip(Exception):
     pass
+
+
+def fit_gmm_bic(Z: np.ndarray, max_components: int = D.MAX_COMPONENTS, covariance_type: str = "full",
+                random_state: int = 0, reg_covar: float = 1e-3):
+    """GMMs of 1, 2, ... components on ``Z`` (N, d) (scikit-learn ``GaussianMixture``, 3 restarts each);
+    the one of least BIC. Returns ``(weights (G,), means (G, d), covariances (G, d, d), BIC of each
+    number tried, covariance type used)``.
+
+    A mixture is tried only while it has no more free parameters than there are rows (beyond that EM
+    collapses components onto single rows and the likelihood, and BIC, mean nothing); with too few rows
+    for one full covariance, diagonal covariances are used (on whitened PCA scores, one diagonal
+    Gaussian is the PCA model itself)."""
+    from sklearn.mixture import GaussianMixture
+
+    Z = np.asarray(Z, dtype=np.float64)
+    N, d = Z.shape
+
+    def n_params(g: int, kind: str) -> int:
+        return g * d + g * (d * (d + 1) // 2 if kind == "full" else d) + g - 1
+
+    kind = covariance_type
+    if kind == "full" and n_params(1, "full") > N:
+        kind = "diag"
+    best, bics = None, []
+    for g in range(1, int(max_components) + 1):
+        if g > 1 and (n_params(g, kind) > N or g > N):
+            break
+        gm = GaussianMixture(g, covariance_type=kind, random_state=random_state, n_init=3, reg_covar=reg_covar).fit(Z)
+        b = float(gm.bic(Z))
+        bics.append(b)
+        if best is None or b < best[1]:
+            best = (gm, b)
+    gm = best[0]
+    cov = gm.covariances_
+    if kind == "diag":
+        cov = np.stack([np.diag(c) for c in cov])
+    return gm.weights_.copy(), gm.means_.copy(), np.asarray(cov, dtype=np.float64), np.array(bics), kind
 
 
 def _sqdist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
