@@ -31,7 +31,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -286,7 +286,7 @@ class ActionModel(BaseEstimator):
         return Aligned(rot, root, W, inst.n_frames)
 
     # ------------------------------------------------------------------ fit
-    def fit(self, X, y=None) -> "ActionModel":
+    def fit(self, X, y=None) -> ActionModel:
         """Fit one model per label of ``X`` (clips or an :class:`InstanceSet`); ``y`` is ignored."""
         self.check_params()
         if isinstance(X, InstanceSet):
@@ -342,7 +342,7 @@ class ActionModel(BaseEstimator):
 
     def _fit_label(self, label: str, insts: list[Instance]) -> LabelModel:
         sigs = Counter(i.signature for i in insts)
-        sig, count = sigs.most_common(1)[0]
+        sig, _count = sigs.most_common(1)[0]
         keep = [i for i in insts if i.signature == sig]
         if len(keep) < self.min_instances:
             raise _Skip(f"{len(keep)} instance(s) of its most common contact signature (need {self.min_instances})")
@@ -415,7 +415,7 @@ class ActionModel(BaseEstimator):
 
     def encode(self, inst: Instance | Motion, label: str) -> np.ndarray:
         """Coefficients ``[spatial | temporal]`` (whitened PCA scores) of one instance of ``label``."""
-        lm = self._model(label)
+        self._model(label)
         al = self.align(inst, label)
         return self.encode_aligned(al, label)
 
@@ -524,7 +524,7 @@ class ActionModel(BaseEstimator):
                                  self.reach_, list(self.labels_), models, list(self.sources_), dict(self.skipped_))
 
     @classmethod
-    def from_record(cls, rec, path=None) -> "ActionModel":
+    def from_record(cls, rec, path=None) -> ActionModel:
         """The fitted model of a record read by :func:`vidstyle.formats.actionmodel.read_actionmodel`
         (FormatError naming ``path`` when its skeleton has no two legs)."""
         from ..errors import FormatError
@@ -559,7 +559,7 @@ class ActionModel(BaseEstimator):
         write_actionmodel(path, self.to_record())
 
     @classmethod
-    def load(cls, path) -> "ActionModel":
+    def load(cls, path) -> ActionModel:
         """Read a model file (every field checked: FormatError naming the file and field)."""
         from ..formats.actionmodel import read_actionmodel
 

@@ -87,7 +87,8 @@ def evaluate_performer(dataset: str | Path, performer: str, params: dict, unit_m
                        min_samples: int = 10, naturalness: bool = True) -> dict:
     """Fit on ``performer``'s takes but the last performance; per label figures (module text)."""
     from ..actionmodel import ActionModel
-    from ..actionmodel.metrics import FIGURES, naturalness as nat, pooled
+    from ..actionmodel.metrics import FIGURES, pooled
+    from ..actionmodel.metrics import naturalness as nat
 
     singles, perf = performer_takes(dataset, performer)
     train, held = singles + perf[:-1], perf[-1:]
