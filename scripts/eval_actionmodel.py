@@ -22,7 +22,9 @@ Issue goal: per label, every naturalness figure of the samples within 10 % of th
 
     python scripts/eval_actionmodel.py --dataset pipelines/kickboxing/out/dataset
 
-Writes ``--out`` (default ``pipelines/kickboxing/results/actionmodel_seed<seed>.json``, kind
+``--variance V`` overrides the default variance kept (a sensitivity run, written to
+``actionmodel_seed<seed>_variance<V>.json``). Writes ``--out`` (default
+``pipelines/kickboxing/results/actionmodel_seed<seed>.json``, kind
 ``vidstyle.metrics.actionmodel``) and prints the tables.
 """
 
@@ -56,9 +58,12 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dataset", type=Path, default=DATASET)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--variance", type=float, default=None,
+                    help="Override the default variance kept (a sensitivity run; output name gets _variance<V>).")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
-    out = args.out or ROOT / "pipelines" / "kickboxing" / "results" / f"actionmodel_seed{args.seed}.json"
+    suffix = "" if args.variance is None else f"_variance{args.variance:g}"
+    out = args.out or ROOT / "pipelines" / "kickboxing" / "results" / f"actionmodel_seed{args.seed}{suffix}.json"
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     log.setLevel(logging.INFO)
     from vidstyle.actionmodel import ActionModel
@@ -72,6 +77,8 @@ def main() -> int:
     train = sorted(groups["A"] + groups["B"])
     unit_mm = float(manifest["mocap_unit_m"]) * 1000.0
     params = {k: v for k, v in ActionModel().get_params().items() if k != "random_state"}
+    if args.variance is not None:
+        params["variance"] = args.variance
     per_perf = {}
     for p in train:
         per_perf[p] = evaluate_performer(args.dataset, p, params, unit_mm, seed=args.seed)
