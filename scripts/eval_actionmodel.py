@@ -104,6 +104,8 @@ def main() -> int:
             **{f"samples_unpinned_{k}": s["samples_unpinned"][k] for k in FIG},
             **{f"sources_{k}": s["sources"][k] for k in FIG},
             **{f"ratio_{k}": ratios[k] for k in FIG},
+            "sample_to_nearest_source_mm": _wmean([(r["sample_to_nearest_source_mm"], r["instances"]) for r in rows]),
+            "source_to_nearest_other_mm": _wmean([(r["source_to_nearest_other_mm"], r["instances"]) for r in rows]),
             "within_10pct": all(v is None or v <= 1 + TOLERANCE for v in ratios.values()),
             "heldout_instances": sum(r["heldout_instances"] for r in rows),
             "mpjpe_heldout_mm": _wmean([(r["mpjpe_heldout_mm"], r["heldout_instances"]) for r in rows]),
@@ -139,6 +141,10 @@ def main() -> int:
     print("\nUnpinned samples (what the foot pinning removes): slide mm/frame, contact height mm")
     for lab, r in summary.items():
         print(f"{lab:<15} {f(r['samples_unpinned_slide_mm_per_frame'])} {f(r['samples_unpinned_contact_height_error_mm'])}")
+    print("\nNovelty: median nearest-neighbour distance (mm, time-normalised joint positions)")
+    print(f"{'label':<15}{'sample->source':>15}{'source->other':>15}")
+    for lab, r in summary.items():
+        print(f"{lab:<15}{f(r['sample_to_nearest_source_mm']):>15}{f(r['source_to_nearest_other_mm']):>15}")
     print("\nReconstruction MPJPE (mm) through encode/decode; mean instance (z = 0) for reference")
     print(f"{'label':<15}{'held-out take':>14}{'(mean)':>8}{'n':>5}{'unseen perf.':>14}{'(mean)':>8}{'n':>5}"
           f"{'fit s/perf':>11}{'sample ms':>10}{'K':>4}{'G':>6}")

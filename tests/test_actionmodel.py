@@ -321,3 +321,27 @@ def test_cmu_clip_through_a_label_csv(tmp_path):
     assert all(x.n_frames > 2 for x in s)
     nat = naturalness(s[0], m.contact_height_)
     assert nat["slide_mm_per_frame"] is None or nat["slide_mm_per_frame"] < 0.5
+
+
+def test_naturalness_of_known_motions(model):
+    """A motionless stance: no slide, no velocity variance, feet at their height; a root gliding at constant
+    speed: every planted-foot step is that speed, velocity variance still 0 (constant velocity)."""
+    from vidstyle.actionmodel.metrics import naturalness, nearest_distances, time_normalised_positions
+    from vidstyle.mocap import Motion
+
+    inst = model.models_["Jab"]
+    rot = np.repeat(inst.ref_rotations[:1], 30, axis=0)
+    root = np.repeat(inst.ref_root[:1], 30, axis=0)
+    still = Motion(model.skeleton_, rot, None, 60.0, root_positions=root)
+    n = naturalness(still, model.contact_height_)
+    assert n["slide_mm_per_frame"] == pytest.approx(0.0, abs=1e-9)
+    assert n["velocity_variance_mm2"] == pytest.approx(0.0, abs=1e-12)
+    glide = Motion(model.skeleton_, rot, None, 60.0, root_positions=root + np.outer(np.arange(30), [0, 0, 0.01]))
+    g = naturalness(glide, model.contact_height_, unit_mm=10.0)
+    assert g["velocity_variance_mm2"] == pytest.approx(0.0, abs=1e-9)
+    if g["slide_mm_per_frame"] is not None:  # slow enough to count as planted
+        assert g["slide_mm_per_frame"] == pytest.approx(0.1, rel=1e-6)
+    a, b = time_normalised_positions(still), time_normalised_positions(glide)
+    d = nearest_distances([a, b], [a, b], leave_one_out=True)
+    assert d[0] == pytest.approx(d[1]) and d[0] > 0
+    assert nearest_distances([a], [a, b])[0] == 0

@@ -77,3 +77,29 @@ def mpjpe(a: Motion, b: Motion, unit_mm: float = 1.0) -> float:
     pa = forward_kinematics(a, return_matrices=False)[0]
     pb = forward_kinematics(b, return_matrices=False)[0]
     return float(np.linalg.norm(pa - pb, axis=-1).mean() * unit_mm)
+
+
+def time_normalised_positions(motion: Motion, frames: int = 32) -> np.ndarray:
+    """(frames, J, 3) joint positions of ``motion`` resampled linearly to ``frames`` frames."""
+    from ..mocap.kinematics import forward_kinematics
+
+    pos = forward_kinematics(motion, return_matrices=False)[0]
+    t = np.linspace(0, len(pos) - 1, frames)
+    i0 = np.floor(t).astype(int)
+    i1 = np.minimum(i0 + 1, len(pos) - 1)
+    a = (t - i0)[:, None, None]
+    return (1 - a) * pos[i0] + a * pos[i1]
+
+
+def nearest_distances(queries: list[np.ndarray], refs: list[np.ndarray], unit_mm: float = 1.0,
+                      leave_one_out: bool = False) -> np.ndarray:
+    """Per query, the least mean joint distance (mm) to any of ``refs`` (time-normalised positions,
+    :func:`time_normalised_positions`); ``leave_one_out``: queries are the refs, each skips itself.
+    Samples as far from their nearest source as a source is from its nearest other source are new
+    instances of the same spread, not copies (near 0) nor outliers (far above)."""
+    Q = np.stack(queries)
+    R = np.stack(refs)
+    d = np.linalg.norm(Q[:, None] - R[None], axis=-1).mean(axis=(2, 3)) * unit_mm
+    if leave_one_out:
+        np.fill_diagonal(d, np.inf)
+    return d.min(axis=1)

@@ -10,6 +10,9 @@ single-action takes and every performance take but the last, which is held out, 
   as the label has source instances (at least ``min_samples``), and of the source instances (the truth
   clips the motion graph is built from), and their ratios ``ratio_<figure>`` (samples / sources);
   ``samples_unpinned``: the same draws without foot pinning (what the pinning changes);
+  ``sample_to_nearest_source_mm`` / ``source_to_nearest_other_mm``: medians of the nearest-neighbour
+  distance (time-normalised joint positions) of each sample to the sources, and of each source to the
+  other sources (novelty: samples are not copies, nor outliers);
 * ``mpjpe_heldout_mm``: held-out instances (of the model's contact signature) through ``encode`` /
   ``decode`` at their own length; ``mpjpe_mean_mm``: the same instances against the decoded mean
   coefficients (z = 0) at their length, the error of knowing nothing about the instance.
@@ -87,7 +90,7 @@ def evaluate_performer(dataset: str | Path, performer: str, params: dict, unit_m
                        min_samples: int = 10, naturalness: bool = True) -> dict:
     """Fit on ``performer``'s takes but the last performance; per label figures (module text)."""
     from ..actionmodel import ActionModel
-    from ..actionmodel.metrics import FIGURES, pooled
+    from ..actionmodel.metrics import FIGURES, nearest_distances, pooled, time_normalised_positions
     from ..actionmodel.metrics import naturalness as nat
 
     singles, perf = performer_takes(dataset, performer)
@@ -114,6 +117,11 @@ def evaluate_performer(dataset: str | Path, performer: str, params: dict, unit_m
             raw = pooled([nat(m, model.contact_height_, unit_mm)
                           for m in model.sample(label, n, random_state=seed, pin=False)])
             row["samples"], row["samples_unpinned"], row["sources"] = s, raw, c
+            src_pos = [time_normalised_positions(i.motion) for i in srcs]
+            row["sample_to_nearest_source_mm"] = float(np.median(nearest_distances(
+                [time_normalised_positions(m) for m in samples], src_pos, unit_mm)))
+            row["source_to_nearest_other_mm"] = (float(np.median(nearest_distances(src_pos, src_pos, unit_mm, True)))
+                                                 if len(src_pos) > 1 else None)
             for k in FIGURES:
                 row[f"ratio_{k}"] = (s[k] / c[k]) if s[k] is not None and c[k] else None
         out[label] = row
