@@ -151,6 +151,8 @@ def test_bad_parameters_and_labels(model, iset):
         model.sample("Nope", 1)
     with pytest.raises(InputError):
         ActionModel(labels=("Nope",)).fit(iset)
+    with pytest.raises(ParameterError):
+        model.encode(iset.of("Jab")[0].motion[:1], "Jab")
 
 
 # ----------------------------------------------------------------------------- the model file

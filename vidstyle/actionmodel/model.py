@@ -409,6 +409,8 @@ class ActionModel(BaseEstimator):
         lm = self._model(label)
         if isinstance(inst, Motion):
             inst = self.instance(inst, label)
+        if inst.n_frames < 2:
+            raise ParameterError("instance", f"needs at least 2 frames, got {inst.n_frames}")
         ref_feat = self._frame_features(self._positions(lm.ref_rotations, lm.ref_root))
         _, W = self._align(inst, ref_feat, lm.keyframes)
         return self._resample(inst, W)
