@@ -347,3 +347,32 @@ def test_naturalness_of_known_motions(model):
     d = nearest_distances([a, b], [a, b], leave_one_out=True)
     assert d[0] == pytest.approx(d[1]) and d[0] > 0
     assert nearest_distances([a], [a, b])[0] == 0
+
+
+def test_cli_defaults_are_the_library_defaults(clips, tmp_path):
+    """fit-actions with no options writes the model ActionModel() fits (every array equal; only the
+    measured fit seconds differ)."""
+    from vidstyle.actionmodel import load_labelled
+    from vidstyle.mocap import write_bvh
+
+    bvh = tmp_path / "p00_jab.bvh"
+    write_bvh(clips[0].motion, bvh)
+    labels = clips[0].labels
+    csv = tmp_path / "c.csv"
+    s, rows = 0, []
+    for t in range(1, len(labels) + 1):
+        if t == len(labels) or labels[t] != labels[s]:
+            rows.append(f"p00_jab.bvh,{labels[s]},{s},{t}\n")
+            s = t
+    csv.write_text("file,label,start,end\n" + "".join(rows))
+    assert _main(["fit-actions", str(csv), "--out", str(tmp_path / "cli.npz")]) == 0
+    ActionModel().fit(load_labelled([csv])).save(tmp_path / "lib.npz")
+    a, b = read_actionmodel(tmp_path / "cli.npz"), read_actionmodel(tmp_path / "lib.npz")
+    assert a.params == b.params and a.labels == b.labels
+    for label in a.labels:
+        for k, v in a.models[label].items():
+            if k == "meta":
+                assert {x: y for x, y in v.items() if x != "fit_seconds"} == \
+                    {x: y for x, y in b.models[label]["meta"].items() if x != "fit_seconds"}
+            else:
+                np.testing.assert_array_equal(v, b.models[label][k])
