@@ -285,7 +285,7 @@ class StrikeEvalParams:
 POSE_INPUTS = ("ps", "blazepose", "true")
 
 
-def _pose_prediction(model, motion, video: Path, truth: dict, params: StrikeEvalParams) -> dict:
+def pose_prediction(model, motion, video: Path, truth: dict, params: StrikeEvalParams) -> dict:
     """``predict_video`` of a pose-sequence recognizer on a rendered clip: from the poses a pose backend
     finds in ``video`` (``params.pose_input`` ps / blazepose), or from the motion's true keypoints at the
     frames the video shows, projected through its camera (``"true"``, the upper bound)."""
@@ -343,7 +343,7 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
 
     truth = read_truth(side).to_arrays()
     if is_pose_model(model):
-        pred = _pose_prediction(model, motion, video, truth, params)
+        pred = pose_prediction(model, motion, video, truth, params)
     else:
         feats_path = work_dir / f"{camera.name}.npz"
         process_video(video, feats_path, variant=params.variant, salient=SalientParams(n_points=params.points))

@@ -147,7 +147,7 @@ class Recognizers:
 def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: StrikeEvalParams,
              work: Path, name: str) -> dict[str, dict]:
     """Each recognizer's ``predict_video`` of one render (same frames: the video's decoded frames)."""
-    from .realmocap import _pose_prediction
+    from .realmocap import pose_prediction
 
     out = {}
     if recs.sift is not None:
@@ -159,7 +159,7 @@ def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: Strike
         process_video(video, feats, variant=params.variant, salient=SalientParams(n_points=params.points))
         out["sift"] = recs.sift.predict_video(load_features(feats))
     if recs.pose is not None:
-        out["pose"] = _pose_prediction(recs.pose, motion, video, truth, params)
+        out["pose"] = pose_prediction(recs.pose, motion, video, truth, params)
     for fname, w in recs.weights().items():
         from ..recognition.fusion import fuse_scores
 

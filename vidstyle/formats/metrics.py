@@ -49,6 +49,10 @@ computed, e.g. video accuracy without single-action test videos):
   non-empty list of integers >= 1; ``methods`` an object per method (``markov``, ``graph``, ``slerp``) with one
   block per gap (its decimal string) holding ``l2p``, ``l2q``, ``ms_per_request`` >= 0 and ``windows`` >= 1;
   ``split`` and ``params`` objects.
+* ``vidstyle.metrics.actionmodel`` (``scripts/eval_actionmodel.py``): ``command`` a string; ``labels`` a
+  non-empty object, per action label an object whose leaves are numbers, null, booleans or strings
+  (naturalness of samples and source clips, reconstruction MPJPE, fit and sample times); ``params``
+  and ``split`` objects.
 * ``vidstyle.metrics.headline`` (``vidstyle report --metrics``): ``recognition``, ``style``, ``motion``:
   flat objects of numbers or null (and ``augmg``, ``reconstruct`` when present).
 * ``vidstyle.metrics.timing`` (``vidstyle timing``; no seed): the pipeline's stage-time table. ``records_dir``
@@ -91,8 +95,9 @@ TIMING = "vidstyle.metrics.timing"
 RECONSTRUCT = "vidstyle.metrics.reconstruct"
 REAL_MOTION = "vidstyle.metrics.real_motion"
 INBETWEEN = "vidstyle.metrics.inbetween"
+ACTIONMODEL = "vidstyle.metrics.actionmodel"
 KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
-         REAL_MOTION, INBETWEEN)
+         REAL_MOTION, INBETWEEN, ACTIONMODEL)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -224,6 +229,8 @@ def _real_motion(f: Fields) -> None:
     o = f.sub("overall")
     for name in names:
         _opt_number(o.sub(name), "family_accuracy", 0, 1)
+
+
 def _inbetween(f: Fields) -> None:
     gaps = f.list("gaps", min_len=1)
     for i, g in enumerate(gaps):
@@ -240,6 +247,17 @@ def _inbetween(f: Fields) -> None:
             b.int("windows", min=1)
     f.sub("split")
     f.sub("params")
+
+
+def _actionmodel(f: Fields) -> None:
+    f.str("command", nonempty=True)
+    labels = f.sub("labels")
+    if not labels.obj:
+        raise labels.fail(None, "no label")
+    for name in labels.obj:
+        _numbers_or_null(labels, name)
+    f.sub("params")
+    f.sub("split")
 
 
 def _augmg(f: Fields) -> None:
@@ -393,7 +411,8 @@ def _timing(f: Fields) -> None:
 
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
-           RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion, INBETWEEN: _inbetween}
+           RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion, INBETWEEN: _inbetween,
+           ACTIONMODEL: _actionmodel}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -428,6 +447,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 
 __all__ = [
+    "ACTIONMODEL",
     "AUGMG",
     "HEADLINE",
     "INBETWEEN",
@@ -436,8 +456,9 @@ __all__ = [
     "MULTIVIEW_POSE",
     "PEOPLE",
     "POSE",
-    "RECONSTRUCT",
+    "REAL_MOTION",
     "RECOGNITION",
+    "RECONSTRUCT",
     "STRIKES",
     "STYLE",
     "TIMING",

@@ -11,6 +11,7 @@ kind                                          version   written by
 ``vidstyle.validation.reconstruct_reference`` 1         ``scripts/real_reference.py``
 ``vidstyle.validation.pose_recognition``      1         ``scripts/pose_recognition_results.py``
 ``vidstyle.validation.inbetween``             1         ``scripts/validate_inbetween.py``
+``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -38,6 +39,7 @@ RECONSTRUCT_HELDOUT = "vidstyle.validation.reconstruct_heldout"
 RECONSTRUCT_DEFAULTS = "vidstyle.validation.reconstruct_defaults"
 POSE_RECOGNITION = "vidstyle.validation.pose_recognition"
 INBETWEEN = "vidstyle.validation.inbetween"
+ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -50,6 +52,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     RECONSTRUCT_DEFAULTS: (1, 1, True, False),
     POSE_RECOGNITION: (1, 1, True, False),
     INBETWEEN: (1, 1, True, False),
+    ACTIONMODEL_DEFAULTS: (1, 1, True, False),
 }
 
 

@@ -213,13 +213,15 @@ def _leg_ik(pos: np.ndarray, glob: Rotation, parent_of: dict, chain: tuple[int, 
 
 
 def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float | None = None,
-             max_offset: float | None = None):
+             max_offset: float | None = None, height: float | None = None):
     """A new :class:`~vidstyle.mocap.motion.Motion` whose planted ankles stay where they were planted
     (module docstring); ``motion`` is not modified.
 
     ``contacts`` (T, 2) bool (or 0 / 1): left / right foot planted per frame; ``blend_frames`` >= 0
     frames of blending either side of a run; ``floor`` the lowest target ankle height (None: no limit);
-    ``max_offset`` the leash (step 4; None: none), in the motion's length units. ValueError on a
+    ``max_offset`` the leash (step 4; None: none), in the motion's length units; ``height`` (None: the
+    run's median, step 1) the target ankle height of every run instead (the planted ankle height of a
+    generated motion: :mod:`vidstyle.actionmodel`). ValueError on a
     ``contacts`` of the wrong shape or values, a bad ``blend_frames``, ``floor`` or ``max_offset``, or a
     skeleton without two leg chains (:func:`leg_chains`).
     """
@@ -238,6 +240,8 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
         raise ValueError(f"blend_frames must be an integer >= 0, got {blend_frames!r}")
     if floor is not None and not math.isfinite(float(floor)):
         raise ValueError(f"floor must be a finite number or None, got {floor!r}")
+    if height is not None and not math.isfinite(float(height)):
+        raise ValueError(f"height must be a finite number or None, got {height!r}")
     if max_offset is not None and not (float(max_offset) >= 0 and math.isfinite(float(max_offset))):
         raise ValueError(f"max_offset must be a finite number >= 0 or None, got {max_offset!r}")
     rotations = motion.rotations.copy()
@@ -260,7 +264,7 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
         ankle = chain[2]
         starts, ends = _runs(planted)
         targets = pos[starts, ankle].copy()
-        targets[:, 1] = _run_medians(pos[:, ankle, 1], starts, ends)
+        targets[:, 1] = _run_medians(pos[:, ankle, 1], starts, ends) if height is None else float(height)
         if floor is not None:
             targets[:, 1] = np.maximum(targets[:, 1], float(floor))
         w, P = _schedule(planted, pos[:, ankle], targets, starts, ends, blend_frames)

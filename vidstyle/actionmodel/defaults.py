@@ -1,0 +1,20 @@
+"""Defaults of :class:`vidstyle.actionmodel.ActionModel` and ``vidstyle fit-actions`` / ``sample-action``.
+
+``VARIANCE`` and ``WARP_SMOOTHING`` were chosen by ``scripts/validate_actionmodel.py`` on the validation
+performers of the demo (split seed 0; never the test performers): ``pipelines/kickboxing/validation/actionmodel.json`` holds the
+candidates, their scores and the rule. The others are Du's (2014) values or plain choices, documented in
+``docs/actionmodel.md``.
+"""
+
+VARIANCE = 1.0  # fraction of variance each functional PCA keeps (spatial, temporal); validation/actionmodel.json
+SLOPE_LIMIT = 5  # DTW: at most 5 consecutive horizontal or vertical steps (Du 3.2.2)
+MAX_COMPONENTS = 6  # GMM components tried (1..MAX_COMPONENTS), the number chosen by BIC
+COVARIANCE_TYPE = "full"
+MIN_FRAMES = 6  # an instance has at least this many frames
+MIN_RUN = 3  # contact runs shorter than this (frames) are absorbed by their neighbours
+MIN_PRIMITIVE = 3  # a primitive has at least this many frames (keyframes included)
+MIN_INSTANCES = 3  # a label with fewer instances (of its most common signature) is not modelled
+MEDOID_CANDIDATES = 40  # the medoid is searched among at most this many instances (seeded draw)
+WARP_SMOOTHING = 4.0  # Gaussian sigma (reference frames) of the DTW warp's deviation; validation/actionmodel.json
+BLEND_FRAMES = 3  # foot pinning: frames of blending either side of a contact run
+RANDOM_STATE = 0
