@@ -543,6 +543,39 @@ def pose_recognition_validation_table(items, root: Path) -> list[str]:
     return lines
 
 
+def inbetween_table(items, root: Path) -> list[str]:
+    """Keyframe in-betweening on held-out CMU windows (``scripts/eval_inbetween.py``)."""
+    lines = []
+    for p, d in items:
+        gaps = [str(g) for g in d["gaps"]]
+        sp = d.get("split") or {}
+        lines += [f"Library subjects {', '.join(map(str, sp.get('library_subjects', [])))}, test subjects "
+                  f"{', '.join(map(str, sp.get('eval_subjects', [])))}, {sp.get('windows')} windows (`{_rel(p, root)}`, seed {d.get('seed')}); lower is better.", "",
+                  "| method | " + " | ".join(f"L2P@{g}" for g in gaps) + " | " + " | ".join(f"L2Q@{g}" for g in gaps)
+                  + " | ms per request |", "|---|" + "---:|" * (2 * len(gaps) + 1)]
+        for name, m in d["methods"].items():
+            ms = max(m[g]["ms_per_request"] for g in gaps)
+            lines.append(f"| {name} | " + " | ".join(f"{m[g]['l2p']:.2f}" for g in gaps) + " | "
+                         + " | ".join(f"{m[g]['l2q']:.2f}" for g in gaps) + f" | {ms:.0f} |")
+        lines.append("")
+    return lines[:-1]
+
+
+def actionmodel_table(items, root: Path) -> list[str]:
+    """Statistical action models: naturalness of samples against the source clips, reconstruction."""
+    lines = ["| file | action | instances | velocity variance, samples / sources | acceleration, samples / sources | "
+             "encode-decode MPJPE, held-out take (mm) | unseen performers (mm) | sample ms |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for p, d in sorted(items, key=lambda t: str(t[0])):
+        for label, v in d["labels"].items():
+            lines.append(f"| `{_rel(p, root)}` | {label} | {v.get('instances')} | "
+                         f"{v.get('ratio_velocity_variance_mm2', float('nan')):.2f} | "
+                         f"{v.get('ratio_acceleration_mm_per_frame2', float('nan')):.2f} | "
+                         f"{_mm(v.get('mpjpe_heldout_mm'))} | {_mm(v.get('mpjpe_unseen_performers_mm'))} | "
+                         f"{_mm(v.get('sample_ms_per_instance'))} |")
+    return lines
+
+
 def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
     docs = load_documents(root)
     EXTRA_ROOTS[:] = list(extra)
@@ -572,6 +605,10 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
                 ("vidstyle.metrics.people", "Following one performer among several people (`vidstyle evaluate people`)",
                  people_table),
                 ("vidstyle.metrics.augmg", "AugMG (`vidstyle evaluate augmg`, held-out performers' marks)", augmg_table),
+                ("vidstyle.metrics.inbetween", "Keyframe in-betweening (`vidstyle evaluate inbetween`, LAFAN1's "
+                 "L2P / L2Q on held-out CMU windows)", inbetween_table),
+                ("vidstyle.metrics.actionmodel", "Statistical action models (`scripts/eval_actionmodel.py`, Du 2014)",
+                 actionmodel_table),
                 ("vidstyle.metrics.reconstruct", "Whole video to 3D (`vidstyle evaluate reconstruct`)", reconstruct_table),
                 ("vidstyle.validation.reconstruct_heldout", "Whole video to 3D beyond the demo", reconstruct_heldout_table),
                 ("vidstyle.validation.reconstruct_defaults",
