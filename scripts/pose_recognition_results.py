@@ -180,6 +180,9 @@ def main() -> None:
     summary = {}
     for kind, tag, d, tds, feats, poses in splits:
         sp = make_split(d, kind, seed=seed, test_dataset=tds)
+        missing = [i for i in sp.test if not (Path(poses) / f"{i}.poses.json").exists()]
+        if missing:  # every test video is scored, or none: no partial test set
+            raise SystemExit(f"{poses}: no poses of {len(missing)} test videos (e.g. {missing[0]})")
         runs = [("pose_true2d", None, None), ("pose_ps", poses, None)]
         if 0.0 < best["weight_pose"] < 1.0:
             runs.append(("fusion_ps", poses, (sift, feats, best["weight_pose"])))

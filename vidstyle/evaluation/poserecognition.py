@@ -136,7 +136,7 @@ def pose_track_of(score_ds: Dataset, video_id: str, poses_dir: str | Path | None
 
 def sift_outputs(model, features_dir: str | Path, ids: list[str]) -> list[dict]:
     """The 3D SIFT recognizer ``model``'s ``predict_video`` of each video's ``<features_dir>/<id>.npz``."""
-    from ..formats.features import load_features
+    from ..recognition.io import load_features
 
     out = []
     for i in ids:
