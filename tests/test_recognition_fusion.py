@@ -64,3 +64,16 @@ def test_noise_calibration_recovers_known_noise():
     assert got.outlier_rate == pytest.approx(0.1 * np.exp(-1 / 32), rel=0.05)
     assert got.outlier_sigma == pytest.approx(2.0, rel=0.1)
     assert got.sigma < 0.03
+
+
+def test_the_fusion_default_is_the_validated_choice():
+    import json
+    from pathlib import Path
+
+    from vidstyle.recognition import defaults as D
+
+    doc = json.loads((Path(__file__).resolve().parents[1] / "pipelines/kickboxing/validation/pose_recognition_seed0.json")
+                     .read_text())
+    assert doc["scored_set"] == "V" and D.FUSION_WEIGHT == doc["chosen"]["weight_pose"]
+    best = max(doc["rows"], key=lambda r: r["score"])
+    assert best["score"] == doc["chosen"]["score"]

@@ -37,7 +37,11 @@ EMISSION_WEIGHT = 1.0          # validated
 MIRROR = True                  # also train on mirror images (scovanner2007 descriptors only)
 
 # ------------------------------------------------------------------ late fusion with the pose recognizer
-FUSION_WEIGHT = 0.5            # weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model)
+# the weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model): chosen by
+# scripts/pose_recognition_results.py on seed 0's validation performers and the real-motion validation clips
+# (pipelines/kickboxing/validation/pose_recognition_seed0.json, with pictorial-structures 2D and training
+# noise calibrated to it)
+FUSION_WEIGHT = 0.5
 
 # ------------------------------------------------------------------ runs
 SPLIT = "unseen-performer"     # unseen-performer | unseen-view | unseen-camera
