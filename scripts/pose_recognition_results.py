@@ -82,13 +82,16 @@ def main() -> None:
     ap.add_argument("--validation-out", type=Path)
     ap.add_argument("--real-val", type=Path, default=ROOT / "pipelines/kickboxing/realmotion_val.csv",
                     help="real-motion validation clips (vidstyle evaluate real-motion --clips)")
+    ap.add_argument("--clips", type=Path, nargs="*", default=[], help="also train on these labelled mocap clips")
+    ap.add_argument("--clip-labels", type=Path, nargs="*", default=[], help="their labels (label CSV / JSON)")
+    ap.add_argument("--tag", default="", help="suffix of the output names (e.g. _cmuwalks)")
     ap.add_argument("--model-out", type=Path, help="also save the chosen pose recognizer (a recognizer model file)")
     ap.add_argument("--results-dir", type=Path, default=ROOT / "pipelines/kickboxing/results")
     a = ap.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(message)s")
     command = "python scripts/pose_recognition_results.py " + " ".join(sys.argv[1:])
     seed = a.seed
-    val_out = a.validation_out or ROOT / f"pipelines/kickboxing/validation/pose_recognition_seed{seed}.json"
+    val_out = a.validation_out or ROOT / f"pipelines/kickboxing/validation/pose_recognition{a.tag}_seed{seed}.json"
     ds = read_dataset(a.dataset / "dataset.json")
     split = make_split(ds, "unseen-performer", seed=seed)
     params = {"C": a.C, "max_frames_per_class": a.cap, "n_jobs": 1}
@@ -99,9 +102,14 @@ def main() -> None:
     log.info("pose error on validation: %s", {k: v for k, v in error.items() if k != "videos"})
 
     # 2. one recognizer per noise
+    extra = []
+    if a.clips:
+        from vidstyle.recognition.posetraining import clip_motions
+
+        extra = clip_motions(a.clips, a.clip_labels, ds.fps, classes=ds.classes or None)
     recs = {}
     for name, noise in noises.items():
-        rec, training = train_for_split(ds, split, seed, a.views, noise, params)
+        rec, training = train_for_split(ds, split, seed, a.views, noise, params, extra_motions=extra)
         training["seed"] = seed
         recs[name] = (rec, training)
         log.info("trained %s in %.0f s", name, training["train_s"])
@@ -159,7 +167,8 @@ def main() -> None:
     doc = {**validation_header(POSE_RECOGNITION), "seed": seed,
            "command": command, "split": split.to_dict(), "scored_set": "V",
            "pose_error_on_validation": error, "noises": {k: v.to_dict() for k, v in noises.items()},
-           "views": a.views, "params": params, "sift_model": str(a.sift_model),
+           "views": a.views, "params": params, "extra_clips": [str(c) for c in a.clips],
+           "clip_labels": [str(c) for c in a.clip_labels], "sift_model": str(a.sift_model),
            "rows": rows, "chosen": best,
            "real_motion_val": str(a.real_val) if real is not None else None,
            "rule": "highest score on V: the mean of the smoothed frame accuracy on the validation performers and "
@@ -193,7 +202,7 @@ def main() -> None:
             m = score_pose_recognizer(rec, training, d, sp, tds, pdir, "test", fuse, a.input_name)
             m.update(seed=seed, command=command, validation=str(val_out.relative_to(ROOT)) if val_out.is_relative_to(ROOT) else str(val_out),
                      chosen=best)
-            out = a.results_dir / f"recognition_{name}_{tag}_seed{seed}.json"
+            out = a.results_dir / f"recognition_{name}{a.tag}_{tag}_seed{seed}.json"
             write_metrics(out, m)
             summary[f"{name}/{tag}"] = _acc(m)
             log.info("test %s %s: %s (%.0f s)", name, tag, summary[f"{name}/{tag}"], time.perf_counter() - t0)

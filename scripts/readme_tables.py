@@ -387,13 +387,15 @@ def augmg_table(items, root: Path) -> list[str]:
 def strikes_table(items, root: Path) -> list[str]:
     from vidstyle.evaluation.realmocap import strikes_rows
 
-    lines = ["| clip, camera | action frames | punch (smoothed) | kick (smoothed) | punch share smoothed | raw | file |",
-             "|---|---:|---:|---:|---:|---:|---|"]
+    lines = ["| clip, camera | recognizer | action frames | punch (smoothed) | kick (smoothed) | punch share smoothed | raw | file |",
+             "|---|---|---:|---:|---:|---:|---:|---|"]
     for p, d in items:
         clip = Path(str(d.get("bvh") or "?")).stem
+        is_pose = "velocity_steps" in ((d.get("model") or {}).get("params") or {})
+        rec = f"pose sequences ({(d.get('params') or {}).get('pose_input')} 2D)" if is_pose else "3D SIFT"
         for r in strikes_rows(d):
             sm, raw = r["smoothed"], r["raw"]
-            lines.append(f"| {clip}, {r['name']} | {r['action_video_frames']} | {sm.get('punch')} | {sm.get('kick')} | "
+            lines.append(f"| {clip}, {r['name']} | {rec} | {r['action_video_frames']} | {sm.get('punch')} | {sm.get('kick')} | "
                          f"{_pct(sm.get('punch_fraction'))} | {_pct(raw.get('punch_fraction'))} | `{_rel(p, root)}` |")
     return lines
 

@@ -105,18 +105,20 @@ def noise_from_error(error: dict[str, Any]) -> KeypointNoise:
 
 
 def train_for_split(dataset: Dataset, split, seed: int, n_views: int, noise: KeypointNoise | None,
-                    recognizer_params: dict | None = None, phases=(0,)) -> tuple[PoseRecognizer, dict]:
+                    recognizer_params: dict | None = None, phases=(0,), extra_motions=()) -> tuple[PoseRecognizer, dict]:
     """A :class:`PoseRecognizer` trained on the mocap takes of ``split``'s training performers (sets A and
-    B) seen from ``n_views`` virtual cameras with ``noise``; and what the metrics record of the training."""
+    B) and on ``extra_motions`` (labelled clips, :func:`~vidstyle.recognition.posetraining.clip_motions`),
+    seen from ``n_views`` virtual cameras with ``noise``; and what the metrics record of the training."""
     train_perf = sorted(set(split.vocab_performers) | set(split.train_performers))
     t0 = time.perf_counter()
-    motions = dataset_motions(dataset, train_perf, dataset.fps, phases)
+    motions = dataset_motions(dataset, train_perf, dataset.fps, phases) + list(extra_motions)
     params = {"random_state": seed, "fps": dataset.fps, **(recognizer_params or {})}
     rec = PoseRecognizer(**params)
     check_training_memory(rec, sum(len(m.points) for m in motions) * n_views)
     tracks, labels = virtual_views(motions, n_views, seed, noise)
     rec.fit(tracks, labels, classes=dataset.classes or None)
     return rec, {"performers": train_perf, "n_motions": len(motions), "n_views": n_views,
+                 "extra_clips": sorted({m.name.split("[")[0] for m in extra_motions}),
                  "phases": list(phases), "noise": noise.to_dict() if noise else None,
                  "train_s": time.perf_counter() - t0}
 
