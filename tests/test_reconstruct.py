@@ -114,7 +114,8 @@ def test_cli_writes_bvh_record_labels_and_preview_that_read_back(tmp_path, libra
 
 @pytest.mark.parametrize("args, flag", [
     (["--k", "0"], "--k"), (["--blend", "40", "--k", "32"], "--blend"), (["--method", "magic"], "--method"),
-    (["--window", "-1"], "--window"), (["--focal", "0"], "--focal")])
+    (["--window", "-1"], "--window"), (["--focal", "0"], "--focal"),
+    (["--focal", "900", "--estimate-focal"], "--estimate-focal")])
 def test_bad_parameters_exit_2_naming_the_flag_before_any_work(tmp_path, args, flag, capsys):
     from vidstyle.cli import main
 
@@ -272,3 +273,27 @@ def test_the_index_cache_returns_the_same_library_and_notices_changed_clips(tmp_
     c = cached_library(ReconstructionLibrary(n_views=4), [clips], cache_dir=cache)
     np.testing.assert_array_equal(c.rotations_, a.rotations_)
     assert len(files[0].read_bytes()) > 1000
+
+
+def test_estimated_focal_length_finds_a_wide_lens_close_up(library):
+    """focal_px="auto": a clip filmed close up through a lens far from the default (a 100-degree wide
+    angle) gets its focal length back within 15 %, and the root path's depth follows; the default lens's
+    clip keeps (about) the default."""
+    from vidstyle.reconstruct import camera as C
+
+    clip = sorted(library.glob("*jab*.bvh"))[0]
+    own = sorted(library.glob(clip.name.split("_")[0] + "_*.bvh"))
+    wide = C.focal_from_fov(W, H, 100.0)
+    pts, uv, az = filmed(clip, yaw=2.5, place=np.array([3.0, 40.0]), focal=wide)
+    obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    r = Reconstructor(n_blend=1, foot_lock=False, smooth_frames=0, root_smooth_frames=0, n_views=72, focal_px="auto").fit(own)
+    rec = r.reconstruct(obs)
+    assert r.focal_estimated_ == pytest.approx(wide, rel=0.15)
+    fixed = Reconstructor(n_blend=1, foot_lock=False, smooth_frames=0, root_smooth_frames=0, n_views=72).fit_library(r.library_)
+    wrong = fixed.reconstruct(obs)  # the default lens: the performer comes out at the wrong distance
+    err_auto = np.linalg.norm(rec.points - pts, axis=-1).mean()
+    err_default = np.linalg.norm(wrong.points - pts, axis=-1).mean()
+    assert err_auto < 0.5 * err_default, (err_auto, err_default)
+    pts, uv, az = filmed(clip, yaw=2.5, place=np.array([3.0, 70.0]))
+    r.reconstruct(Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H)))
+    assert r.focal_estimated_ == pytest.approx(C.focal_from_fov(W, H, 60.0), rel=0.1)

@@ -77,6 +77,9 @@ def reconstruct(
     views: int = number(12, "--views", lo=1, hi=360, help="Azimuths the library is projected at."),
     focal: float | None = number(None, "--focal", integer=False, lo=0, lo_open=True,
                                     help="Focal length in pixels (default: a 60-degree lens across the longer side)."),
+    estimate_focal: bool = typer.Option(False, "--estimate-focal", help="Estimate the focal length from the "
+                                        "perspective within the poses (kept at the default lens unless the data "
+                                        "clearly prefer another; a performer close to the camera tells most)."),
     elevation: float | None = number(None, "--elevation", integer=False, lo=-80, hi=80,
                                         help="Camera pitch in degrees, down positive (default: the library "
                                         "projection's, 10)."),
@@ -101,6 +104,8 @@ def reconstruct(
         raise InputError("reconstruct: give VIDEO, --poses, or both")
     if blend > k:
         raise InputError(f"--blend: must be at most --k ({k}), got {blend}")
+    if estimate_focal and focal is not None:
+        raise InputError("--estimate-focal: not with --focal (a known focal length)")
     wh = None
     if size is not None:
         try:
@@ -115,7 +120,7 @@ def reconstruct(
                       fps=fps, size=wh,
                       skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
                       k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
-                      refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px=focal, elevation_deg=elevation,
+                      refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px="auto" if estimate_focal else focal, elevation_deg=elevation,
                       foot_lock=foot_lock, cache_dir=index_cache)
 
 

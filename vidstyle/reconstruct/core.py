@@ -312,14 +312,15 @@ class Reconstructor:
     searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
     camera's root path; ``foot_lock`` and ``relax_s`` (the root lock) and ``pin_max_offset`` (the leg
     IK's reach from the pose, in leg lengths; None: unlimited) of step 7; ``focal_px`` (None: the default
-    intrinsics); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
+    intrinsics; ``"auto"``: estimated from the keypoints and the blended poses, :func:`.camera.estimate_focal`,
+    which keeps the default unless the data clearly prefer another lens); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
     ``library_elevation_deg`` and ``target_fps`` of the library index
     (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
 
     def __init__(self, k: int = D.K, window_s: float = D.WINDOW_S, n_blend: int = D.N_BLEND, method: str = D.METHOD,
                  use_azimuth: bool = True, spread: int = 1, smooth_frames: float = D.SMOOTH_FRAMES,
                  root_smooth_frames: float = 3.0, foot_lock: bool = True, relax_s: float = 2.0,
-                 focal_px: float | None = None, elevation_deg: float | None = None, n_views: int = 12,
+                 focal_px: float | str | None = None, elevation_deg: float | None = None, n_views: int = 12,
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
                  pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
@@ -388,8 +389,9 @@ class Reconstructor:
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
         if not 0 <= int(self.spread) <= self.n_views // 2:
             raise ParameterError("spread", f"must be in 0..{self.n_views // 2}, got {self.spread}")
-        if self.focal_px is not None and not (self.focal_px > 0 and math.isfinite(self.focal_px)):
-            raise ParameterError("focal_px", f"must be a finite number > 0, got {self.focal_px}")
+        if self.focal_px is not None and self.focal_px != "auto" and not (
+                isinstance(self.focal_px, (int, float)) and self.focal_px > 0 and math.isfinite(self.focal_px)):
+            raise ParameterError("focal_px", f"must be a finite number > 0 or 'auto', got {self.focal_px}")
         if self.elevation_deg is not None and not -80 <= self.elevation_deg <= 80:
             raise ParameterError("elevation_deg", f"must be in -80..80 degrees, got {self.elevation_deg}")
 
@@ -603,8 +605,16 @@ class Reconstructor:
         # world orientation: the character faces pi - azimuth
         Rc = camera_rotation(elevation)
         W, H = obs.size
-        K = cam.default_intrinsics(W, H) if self.focal_px is None else cam.intrinsics_for_focal(W, H, self.focal_px)
         wts = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0)
+        if self.focal_px == "auto":  # the lens from the perspective within the poses (camera.estimate_focal)
+            qf = qb.copy()
+            qf[:, 0] = qmul(yaw_quat(math.pi - np.radians(az)), qb[:, 0])
+            rel0 = self._keypoints(Motion(skeleton, qf, fps=obs.fps, root_positions=np.zeros((T, 3))))
+            use_w = np.where(ok[:, None], wts, 0.0)
+            self.focal_estimated_ = cam.estimate_focal(rel0 @ Rc.T, np.nan_to_num(obs.xy), use_w, W, H)
+            K = cam.intrinsics_for_focal(W, H, self.focal_estimated_)
+        else:
+            K = cam.default_intrinsics(W, H) if self.focal_px is None else cam.intrinsics_for_focal(W, H, self.focal_px)
         off_axis = np.zeros(T)
         for _ in range(2):  # the second pass turns the facing by the performer's angle off the optical axis
             facing = math.pi - np.radians(az) + off_axis
