@@ -173,6 +173,16 @@ class GlobalStyleEstimator(BaseEstimator):
     def __init__(self, lead_threshold: float = 0.0):
         self.lead_threshold = lead_threshold
 
+    @classmethod
+    def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
+        """An estimator without a population: guard / stance / crouch are the raw figures (stance the ankle
+        ratio itself), tempo relative to the action model's mean instance length (``mean_frames`` at the
+        model's rate, converted to ``video_fps``)."""
+        est = cls(**kw)
+        est.population_ = {}
+        est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
+        return est
+
     def fit(self, videos, y=None) -> GlobalStyleEstimator:
         per_view: dict[str, dict[str, list[float]]] = {}
         dur: dict[str, list[int]] = {}
@@ -197,8 +207,10 @@ class GlobalStyleEstimator(BaseEstimator):
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
             pop = self.population_.get(str(view))
-            if pop is None:  # a view the population lacks: pool over its views
+            if pop is None and self.population_:  # a view the population lacks: pool over its views
                 pop = {k: float(np.nanmean([p[k] for p in self.population_.values()])) for k in ("guard", "stance", "extension")}
+            elif pop is None:  # no population: raw figures
+                pop = {"guard": 0.0, "stance": 1.0, "extension": 0.0}
             if "guard" in f:
                 g.append(f["guard"] - pop["guard"])
                 s.append(f["stance"] / pop["stance"])
@@ -400,6 +412,32 @@ class ActionStyle:
     model: str = ""  # the action model file it refers to
     params: dict = field(default_factory=dict)
 
+    def to_record(self):
+        from ..formats.style import ActionStyleRecord
+
+        g = self.global_style.to_dict()
+        return ActionStyleRecord(self.model, dict(self.params), g,
+                                 {k: (np.asarray(self.coefficients[k], dtype=np.float64),
+                                      np.asarray(self.spread.get(k, np.zeros_like(self.coefficients[k])), dtype=np.float64),
+                                      int(self.counts.get(k, 1))) for k in self.coefficients})
+
+    @classmethod
+    def from_record(cls, rec) -> ActionStyle:
+        gs = GlobalStyle.from_dict(rec.global_style)
+        return cls(gs, {k: v[0] for k, v in rec.labels.items()}, {k: v[2] for k, v in rec.labels.items()},
+                   {k: v[1] for k, v in rec.labels.items()}, rec.model, dict(rec.params))
+
+    def check_model(self, model, path=None) -> None:
+        """Raise ``FormatError`` (naming ``path``) unless every label's coefficients fit ``model``."""
+        from ..errors import FormatError
+
+        for k, z in self.coefficients.items():
+            if k not in model.models_:
+                raise FormatError(path, f"action_style.labels.{k}", "the action model has no such label")
+            if len(z) != model.models_[k].n_coefficients:
+                raise FormatError(path, f"action_style.labels.{k}.coefficients",
+                                  f"{len(z)} coefficients, the action model has {model.models_[k].n_coefficients}")
+
     def realise(self, model, label: str, n_frames: int | None = None, sample: bool = False, random_state=None):
         """The performer's way of doing ``label``: the decoded mean coefficients (``sample``: a draw from a
         Gaussian of the fitted segments' spread around it), mirrored back for a southpaw."""
@@ -445,3 +483,48 @@ def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dic
             spread[label] = Z.std(0)
             counts[label] = len(Z)
     return ActionStyle(gs, coeffs, counts, spread, params=params)
+
+
+def learn_action_style(label_paths, poses_dir, model_path, population=None, population_performers=None,
+                       seed: int = 0) -> ActionStyle:
+    """``learn-style --poses-dir``: the action-level style of one performer from label files (true or
+    recognised; their ``video`` names the pose file ``<poses_dir>/<video stem>.poses.json``, their ``view``
+    the view, default ``front``) and an action model file. Bad input raises a one-line error naming the
+    file (missing pose file, damaged model, a label file without a video)."""
+    from pathlib import Path
+
+    from ..errors import InputError
+    from ..formats.labels import read_labels
+    from ..formats.poses import read_poses
+    from ..recognition.posefeatures import track_from_poses
+    from .model import ActionModel
+
+    model = ActionModel.load(model_path)
+    videos = []
+    for p in label_paths:
+        fl = read_labels(p)
+        if not fl.video:
+            raise InputError(f"{p}: the label file names no video, so no pose file can be found for it")
+        pf = Path(poses_dir) / f"{Path(fl.video).stem}.poses.json"
+        if not pf.is_file():
+            raise InputError(f"{pf}: pose file not found (for {p})")
+        xy = track_from_poses(read_poses(pf), fl.fps, fl.n_frames).xy
+        videos.append((xy, fl.labels, fl.view or "front"))
+    if population is not None:
+        from ..evaluation.actionstyle import performer_videos
+        from ..formats.dataset import read_dataset
+
+        ds = read_dataset(Path(population) / "dataset.json")
+        import json
+
+        manifest = json.loads((Path(population) / "dataset.json").read_text())
+        perf = population_performers or [p["id"] for p in manifest["performers"]]
+        est = GlobalStyleEstimator().fit([x for q in perf for x in performer_videos(ds, manifest, q, "true")])
+    else:
+        est = GlobalStyleEstimator.from_model(model, videos and read_labels(label_paths[0]).fps or 20.0)
+    style = fit_action_style(model, est, videos, random_state=seed)
+    style.model = str(model_path)
+    style.check_model(model, model_path)
+    log.info("action style: %s, guard %.3f, stance %.3f; coefficients of %s", style.global_style.lead,
+             style.global_style.guard_height, style.global_style.stance_width, ", ".join(sorted(style.coefficients)))
+    return style
