@@ -266,3 +266,23 @@ def test_learn_style_bad_input_exits_2(tmp_path, model, capsys):
                   "--modes", "1", "--n-init", "1"]) == 2
     assert "poses.json" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_sample_action_with_style(style, model, tmp_path, capsys):
+    from vidstyle.mocap import read_bvh
+
+    mp, sp = tmp_path / "m.npz", tmp_path / "style.json"
+    model.save(mp)
+    style.save(sp)
+    assert _main(["sample-action", str(mp), "--label", "Jab", "-n", "2", "--seed", "0", "--style", str(sp),
+                  "--out-dir", str(tmp_path / "s")]) == 0
+    m = read_bvh(tmp_path / "s" / "Jab_000.bvh")
+    assert m.n_frames > 5
+    plain = tmp_path / "plain.json"
+    doc = style.to_dict()
+    doc["action_style"] = None
+    from vidstyle.style.artifact import Style
+
+    Style.from_dict(doc).save(plain)
+    assert _main(["sample-action", str(mp), "--label", "Jab", "--style", str(plain), "--out-dir", str(tmp_path / "t")]) == 2
+    assert "no action-level style" in capsys.readouterr().err

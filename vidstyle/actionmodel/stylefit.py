@@ -438,14 +438,16 @@ class ActionStyle:
                 raise FormatError(path, f"action_style.labels.{k}.coefficients",
                                   f"{len(z)} coefficients, the action model has {model.models_[k].n_coefficients}")
 
-    def realise(self, model, label: str, n_frames: int | None = None, sample: bool = False, random_state=None):
+    def realise(self, model, label: str, n_frames: int | None = None, sample: bool = False, random_state=None,
+                pin: bool = False):
         """The performer's way of doing ``label``: the decoded mean coefficients (``sample``: a draw from a
-        Gaussian of the fitted segments' spread around it), mirrored back for a southpaw."""
+        Gaussian of the fitted segments' spread around it), planted feet held (``pin``, in the orthodox
+        frame), mirrored back for a southpaw."""
         z = np.asarray(self.coefficients[label], dtype=np.float64)
         if sample:
             rng = np.random.default_rng(random_state)
             z = z + rng.standard_normal(len(z)) * np.asarray(self.spread.get(label, np.zeros_like(z)))
-        m = model.decode(z, label, n_frames=n_frames)
+        m = model.decode(z, label, n_frames=n_frames, pin=pin)
         return m.mirror() if self.global_style.lead == "southpaw" else m
 
 

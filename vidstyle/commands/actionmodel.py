@@ -66,6 +66,9 @@ def sample_action(
     seed: int = typer.Option(0, "--seed", help="Seed of the draws."),
     out_dir: Path = typer.Option(..., "--out-dir", "-o", help="Directory for <label>_<k>.bvh and <label>_<k>.labels.json."),
     pin: bool = typer.Option(True, "--pin/--no-pin", help="Hold planted feet on the floor (leg IK)."),
+    style: Path = typer.Option(None, "--style", help="A style.json with an action-level part (learn-style "
+                               "--poses-dir): draw this performer's way of doing the action (instance 0 their mean, "
+                               "others from the spread of their fitted segments; a southpaw stays southpaw)."),
 ) -> None:
     """Draw new instances of an action from a fitted model; write them as BVH on the source skeleton, with per-frame labels."""
     from ..actionmodel import ActionModel
@@ -79,7 +82,18 @@ def sample_action(
         raise ParameterError("--label", f"no model for {label!r} in {model_path} (labels: {', '.join(model.labels_)})")
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: not a directory")
-    motions = model.sample(label, n, random_state=seed, pin=pin)
+    if style is not None:
+        from ..style.artifact import Style
+
+        ast = Style.load(style).action_style
+        if ast is None:
+            raise InputError(f"{style}: no action-level style (learn it with learn-style --poses-dir --action-model)")
+        ast.check_model(model, style)
+        if label not in ast.coefficients:
+            raise ParameterError("--label", f"{style} has no fitted {label!r} (fitted: {', '.join(sorted(ast.coefficients))})")
+        motions = [ast.realise(model, label, sample=k > 0, random_state=[seed, k], pin=pin) for k in range(n)]
+    else:
+        motions = model.sample(label, n, random_state=seed, pin=pin)
     for k, m in enumerate(motions):
         bvh = out_dir / f"{label}_{k:03d}.bvh"
         write_bvh(m, bvh)
