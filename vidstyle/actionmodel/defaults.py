@@ -21,9 +21,9 @@ RANDOM_STATE = 0
 
 # --- fitting a performer from 2D (vidstyle.actionmodel.stylefit); STYLE_PRIOR_WEIGHT and STYLE_LOSS_SCALE
 # chosen by scripts/validate_action_style.py on the validation performers (validation/action_style.json)
-STYLE_N_FIT = 12  # spatial coefficients fitted per segment (the leading ones; the rest at the prior mean)
-STYLE_PRIOR_WEIGHT = 1.0  # weight of the GMM prior (whitened squared distance) against the 2D data term
-STYLE_LOSS_SCALE = 0.1  # Cauchy loss scale, torso lengths
+STYLE_N_FIT = 30  # spatial coefficients fitted per segment (the leading ones; the rest at the prior mean); validation/action_style.json
+STYLE_PRIOR_WEIGHT = 0.01  # weight of the GMM prior (whitened squared distance) against the 2D data term; validation/action_style.json
+STYLE_LOSS_SCALE = 0.05  # Cauchy loss scale, torso lengths; validation/action_style.json
 STYLE_ELEVATION_DEG = 10.0  # assumed camera elevation (the demo's cameras)
 STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
 STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
