@@ -10,10 +10,16 @@ performer's facing, known from the calibrated camera; the figures are normalised
 training population, so only the view's identity is used, never its angle).
 
 * **lead**: which hand throws the jabs. Per Jab segment, the largest image displacement of each wrist
-  from where it was at the segment's start, in torso lengths; ``lead_score`` is the mean of
-  ``(left - right) / (left + right)`` over segments: > 0 the left hand leads (orthodox). Viewpoint-free
-  (any view shows the jabbing arm moving more than the guarding one) and blind to the depth ambiguity of
-  a single view that a pose-based test (which foot is nearer the camera) would face.
+  from where it was at the segment's start; the wrist that moves more is the jabbing one.
+  *Label-free rule* (used when there are ``min_front_jabs`` or more Jab segments in front views): the side
+  of the neck (image x) on which the jabbing wrist travels; which side is orthodox is learned from the
+  training population (``orthodox_side_``, the sign agreeing with their labelled jab hand); the score is
+  ``2 * share of orthodox-side jabs - 1``. It assumes the performer faces the front camera (a single view
+  cannot tell an orthodox fighter facing the camera from a southpaw facing away), and does not trust
+  the pose stage's left/right labels, which pictorial structures often swap (on the validation
+  performers' estimated poses the labelled jab hand was at chance in front views and inverted in one
+  side view each). *Labelled rule* (otherwise): the mean of ``(left - right) / (left + right)`` of the
+  two wrists' displacements, > 0 the left hand leads (orthodox), viewpoint-free.
 * **stance width**: ankle distance over leg length (hip-knee + knee-ankle, the 90th percentile over the
   video) in Guard frames; **guard height**: mean (shoulder - wrist) image height in arm lengths (90th
   percentile of upper + forearm image length); **crouch**: (hip - ankle) height over leg length,
@@ -116,7 +122,7 @@ def video_figures(xy: np.ndarray, labels) -> dict:
         hip_y = 0.5 * (G[:, LHIP, 1] + G[:, RHIP, 1])
         an_y = 0.5 * (G[:, LAN, 1] + G[:, RAN, 1])
         out["extension"] = _nanmedian((an_y - hip_y) / leg_len)
-    jab, durations = [], {}
+    jab, side, durations = [], [], {}
     for label, s, e in label_runs(labels):
         if label in NON_ACTIONS:
             continue
@@ -127,7 +133,12 @@ def video_figures(xy: np.ndarray, labels) -> dict:
                  and np.isfinite(seg[0, w]).all() else math.nan for w in (LWR, RWR)]
             if all(np.isfinite(d)) and sum(d) > 0:
                 jab.append((d[0] - d[1]) / (d[0] + d[1]))
+                w = (LWR, RWR)[int(np.argmax(d))]
+                ok = np.isfinite(seg[:, w]).all(-1) & np.isfinite(seg[:, NECK]).all(-1)
+                if ok.any():
+                    side.append(float(np.mean(seg[ok, w, 0] - seg[ok, NECK, 0]) / torso))
     out["jab_scores"] = jab
+    out["jab_sides"] = side
     out["durations"] = durations
     return out
 
@@ -170,8 +181,9 @@ class GlobalStyleEstimator(BaseEstimator):
     ``population_`` (view -> mean guard / stance / extension of the training videos), ``durations_``
     (action -> median segment length, frames)."""
 
-    def __init__(self, lead_threshold: float = 0.0):
+    def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5):
         self.lead_threshold = lead_threshold
+        self.min_front_jabs = min_front_jabs
 
     @classmethod
     def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
@@ -180,14 +192,18 @@ class GlobalStyleEstimator(BaseEstimator):
         model's rate, converted to ``video_fps``)."""
         est = cls(**kw)
         est.population_ = {}
+        est.orthodox_side_ = 0.0  # unknown without a population: the labelled jab hand decides
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
         return est
 
     def fit(self, videos, y=None) -> GlobalStyleEstimator:
         per_view: dict[str, dict[str, list[float]]] = {}
         dur: dict[str, list[int]] = {}
+        front = []
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
+            if str(view) == "front":
+                front.append(f)
             pv = per_view.setdefault(str(view), {"guard": [], "stance": [], "extension": []})
             for k in pv:
                 if k in f and np.isfinite(f[k]):
@@ -197,15 +213,20 @@ class GlobalStyleEstimator(BaseEstimator):
         if not per_view:
             raise ParameterError("videos", "no training video")
         self.population_ = {v: {k: (float(np.mean(x)) if x else math.nan) for k, x in d.items()} for v, d in per_view.items()}
+        # the image side of an orthodox jab in front views, from the labelled jab hand of the population
+        prod = [np.mean(f["jab_scores"]) * np.mean(f["jab_sides"]) for f in front if f["jab_scores"] and f["jab_sides"]]
+        self.orthodox_side_ = float(np.sign(np.sum(prod))) if prod else 0.0
         self.durations_ = {a: float(np.median(d)) for a, d in dur.items() if d}
         return self
 
     def estimate(self, videos) -> GlobalStyle:
         if not hasattr(self, "population_"):
             raise ParameterError("estimator", "not fitted")
-        g, s, c, jab, dur = [], [], [], [], {}
+        g, s, c, jab, sides, dur = [], [], [], [], [], {}
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
+            if str(view) == "front":
+                sides += f["jab_sides"]
             pop = self.population_.get(str(view))
             if pop is None and self.population_:  # a view the population lacks: pool over its views
                 pop = {k: float(np.nanmean([p[k] for p in self.population_.values()])) for k in ("guard", "stance", "extension")}
@@ -218,7 +239,13 @@ class GlobalStyleEstimator(BaseEstimator):
             jab += f["jab_scores"]
             for a, ds in f["durations"].items():
                 dur.setdefault(a, []).extend(ds)
-        score = float(np.mean(jab)) if jab else 0.0
+        side = getattr(self, "orthodox_side_", 0.0)
+        if side != 0.0 and len(sides) >= self.min_front_jabs:
+            # label-free: the share of front-view jabs thrown from the orthodox side of the neck, as a score in [-1, 1]
+            score = float(2 * np.mean(np.sign(sides) == side) - 1)
+            jab = sides
+        else:
+            score = float(np.mean(jab)) if jab else 0.0
         tempo = {a: float(np.median(d)) / self.durations_[a] for a, d in dur.items() if a in self.durations_ and d}
         mt = float(np.mean(list(tempo.values()))) if tempo else math.nan
         return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
