@@ -286,3 +286,32 @@ def test_sample_action_with_style(style, model, tmp_path, capsys):
     Style.from_dict(doc).save(plain)
     assert _main(["sample-action", str(mp), "--label", "Jab", "--style", str(plain), "--out-dir", str(tmp_path / "t")]) == 2
     assert "no action-level style" in capsys.readouterr().err
+
+
+def test_learn_style_with_poses_end_to_end(tmp_path, model):
+    """learn-style LABELS --poses-dir --action-model: the style file gains the action-level part, and a
+    southpaw's jabs come out southpaw."""
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+    from vidstyle.style.artifact import Style
+
+    labs = []
+    for a in ("Jab", "Hook"):
+        _, take = _take(a, 0, lead="southpaw")
+        xy, labels, _ = _video(take, "front")
+        stem = f"p00_{a.lower()}_front"
+        labs.append(tmp_path / f"{stem}.json")
+        write_labels(labs[-1], label_document(labels, 20.0, take.chain, video=f"videos/{stem}.mp4", performer="p00",
+                                              view="front"))
+        pts = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1)
+        write_poses(tmp_path / f"{stem}.poses.json",
+                    Poses(f"videos/{stem}.mp4", "ps", [PoseFrame(i, "front", p) for i, p in enumerate(pts)]))
+    mp = tmp_path / "m.npz"
+    model.save(mp)
+    out = tmp_path / "style.json"
+    assert _main(["learn-style", *map(str, labs), "--out", str(out), "--poses-dir", str(tmp_path),
+                  "--action-model", str(mp), "--modes", "1", "--n-init", "1"]) == 0
+    s = Style.load(out)
+    assert s.action_style is not None and "Jab" in s.action_style.coefficients
+    assert s.action_style.global_style.lead == "southpaw"  # labelled rule: no population given
