@@ -186,7 +186,7 @@ def _motion(f: Fields) -> None:
 def _headline(f: Fields) -> None:
     for key in ("recognition", "style", "motion"):
         _numbers_or_null(f, key)
-    for key in ("augmg", "reconstruct"):
+    for key in ("augmg", "reconstruct", "action_style"):
         if f.obj.get(key) is not None:
             _numbers_or_null(f, key)
 
