@@ -514,12 +514,13 @@ def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dic
     return ActionStyle(gs, coeffs, counts, spread, params=params)
 
 
-def learn_action_style(label_paths, poses_dir, model_path, population=None, population_performers=None,
+def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyleEstimator | None = None,
                        seed: int = 0) -> ActionStyle:
     """``learn-style --poses-dir``: the action-level style of one performer from label files (true or
     recognised; their ``video`` names the pose file ``<poses_dir>/<video stem>.poses.json``, their ``view``
-    the view, default ``front``) and an action model file. Bad input raises a one-line error naming the
-    file (missing pose file, damaged model, a label file without a video)."""
+    the view, default ``front``) and an action model file. ``estimator``: a fitted
+    :class:`GlobalStyleEstimator` (default: :meth:`GlobalStyleEstimator.from_model`). Bad input raises a
+    one-line error naming the file (missing pose file, damaged model, a label file without a video)."""
     from pathlib import Path
 
     from ..errors import InputError
@@ -530,8 +531,10 @@ def learn_action_style(label_paths, poses_dir, model_path, population=None, popu
 
     model = ActionModel.load(model_path)
     videos = []
+    fps = 20.0
     for p in label_paths:
         fl = read_labels(p)
+        fps = fl.fps
         if not fl.video:
             raise InputError(f"{p}: the label file names no video, so no pose file can be found for it")
         pf = Path(poses_dir) / f"{Path(fl.video).stem}.poses.json"
@@ -539,18 +542,7 @@ def learn_action_style(label_paths, poses_dir, model_path, population=None, popu
             raise InputError(f"{pf}: pose file not found (for {p})")
         xy = track_from_poses(read_poses(pf), fl.fps, fl.n_frames).xy
         videos.append((xy, fl.labels, fl.view or "front"))
-    if population is not None:
-        from ..evaluation.actionstyle import performer_videos
-        from ..formats.dataset import read_dataset
-
-        ds = read_dataset(Path(population) / "dataset.json")
-        import json
-
-        manifest = json.loads((Path(population) / "dataset.json").read_text())
-        perf = population_performers or [p["id"] for p in manifest["performers"]]
-        est = GlobalStyleEstimator().fit([x for q in perf for x in performer_videos(ds, manifest, q, "true")])
-    else:
-        est = GlobalStyleEstimator.from_model(model, videos and read_labels(label_paths[0]).fps or 20.0)
+    est = estimator if estimator is not None else GlobalStyleEstimator.from_model(model, fps)
     style = fit_action_style(model, est, videos, random_state=seed)
     style.model = str(model_path)
     style.check_model(model, model_path)
