@@ -315,3 +315,31 @@ def test_learn_style_with_poses_end_to_end(tmp_path, model):
     s = Style.load(out)
     assert s.action_style is not None and "Jab" in s.action_style.coefficients
     assert s.action_style.global_style.lead == "southpaw"  # labelled rule: no population given
+
+
+def test_restyle_motion_replaces_actions_only(style, model):
+    """synthesize --style's core: action runs become the performer's way (a southpaw here), other frames stay."""
+    from vidstyle.actionmodel.stylefit import restyle_motion
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    _, take = _take("Jab", 1, lead="orthodox")  # an orthodox performer's take stands in for a graph walk
+    m = take.motion
+    labels = list(take.labels)
+    out, runs = restyle_motion(m, labels, style.action_style, model)
+    assert out.n_frames == m.n_frames and runs and all(lab == "Jab" for lab, _, _ in runs)
+    inside = np.zeros(m.n_frames, bool)
+    for _, s, e in runs:
+        inside[s:e] = True
+    assert np.allclose(out.rotations[~inside], m.rotations[~inside])
+    assert not np.allclose(out.rotations[inside], m.rotations[inside])
+    # the replaced jabs are thrown with the right hand (southpaw), the originals with the left
+    a, b = keypoint_positions(m), keypoint_positions(out)
+    _, s, e = runs[0]
+    travel = lambda p, w: np.linalg.norm(p[s:e, w] - p[s, w], axis=-1).max()  # noqa: E731
+    assert travel(a, 7) > travel(a, 8) and travel(b, 8) > travel(b, 7)
+
+
+def test_synthesize_style_bad_input_exits_2(tmp_path, capsys):
+    assert _main(["synthesize", "--graph", str(tmp_path / "g.npz"), "--sequence", str(tmp_path / "s.json"),
+                  "--out", str(tmp_path / "o.bvh"), "--style", str(tmp_path / "style.json")]) == 2
+    assert "--action-model" in capsys.readouterr().err

@@ -28,3 +28,4 @@ STYLE_ELEVATION_DEG = 10.0  # assumed camera elevation (the demo's cameras)
 STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
 STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
 STYLE_ROUNDS = 2  # linearisations of the decoded keypoints per segment (Gauss-Newton rounds)
+STYLE_BLEND_FRAMES = 4  # synthesize --style: frames cross-faded at either end of a restyled action

@@ -549,3 +549,46 @@ def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyl
     log.info("action style: %s, guard %.3f, stance %.3f; coefficients of %s", style.global_style.lead,
              style.global_style.guard_height, style.global_style.stance_width, ", ".join(sorted(style.coefficients)))
     return style
+
+
+def restyle_motion(motion, labels, action_style: ActionStyle, model, blend: int = D.STYLE_BLEND_FRAMES):
+    """``motion`` (e.g. ``synthesize``'s graph walk) with every run of frames labelled with an action the
+    style has coefficients for replaced by this performer's way of doing it (:meth:`ActionStyle.realise`,
+    decoded at the run's length, feet pinned, mirrored for a southpaw), retargeted onto ``motion``'s
+    skeleton (rotations kept, root path scaled by leg length), turned to the facing and moved to the root
+    position of the run's first frame, and cross-faded with the original over ``blend`` frames at either
+    end (rotations by normalised quaternion interpolation, root linearly). Returns ``(motion, replaced
+    runs [(label, start, end)])``."""
+    from ..mocap import Motion
+    from ..mocap.retarget import retarget
+
+    labels = list(labels)
+    if len(labels) != motion.n_frames:
+        raise ParameterError("labels", f"{len(labels)} labels for {motion.n_frames} frames")
+    rot = motion.rotations.copy()
+    root = motion.root_positions.copy()
+    angles = motion.facing_angles()
+    done = []
+    for label, s, e in label_runs(labels):
+        n = e - s
+        if label not in action_style.coefficients or n < 3:
+            continue
+        inst = action_style.realise(model, label, n_frames=n, pin=True)
+        inst, _ = retarget(inst, motion.skeleton, f"{label} of the style")
+        inst = inst.normalize_facing(0, float(angles[s]), origin=True)
+        r = inst.root_positions.copy()
+        r[:, 0] += root[s, 0]
+        r[:, 2] += root[s, 2]
+        b = int(min(blend, n // 2))
+        w = np.ones(n)
+        if b > 0:
+            ramp = np.arange(1, b + 1) / (b + 1)
+            w[:b] = ramp
+            w[n - b:] = ramp[::-1]
+        q0, q1 = rot[s:e], inst.rotations
+        q1 = np.where(np.sum(q0 * q1, -1, keepdims=True) < 0, -q1, q1)
+        q = (1 - w)[:, None, None] * q0 + w[:, None, None] * q1
+        rot[s:e] = q / np.linalg.norm(q, axis=-1, keepdims=True)
+        root[s:e] = (1 - w)[:, None] * root[s:e] + w[:, None] * r
+        done.append((label, s, e))
+    return Motion(motion.skeleton, rot, None, motion.fps, root_positions=root), done
