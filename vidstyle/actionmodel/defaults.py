@@ -29,3 +29,4 @@ STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
 STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
 STYLE_ROUNDS = 2  # linearisations of the decoded keypoints per segment (Gauss-Newton rounds)
 STYLE_BLEND_FRAMES = 4  # synthesize --style: frames cross-faded at either end of a restyled action
+STYLE_MIN_FRACTION = 0.6  # synthesize --style: runs shorter than this share of the mean instance keep the graph frames

@@ -551,14 +551,17 @@ def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyl
     return style
 
 
-def restyle_motion(motion, labels, action_style: ActionStyle, model, blend: int = D.STYLE_BLEND_FRAMES):
+def restyle_motion(motion, labels, action_style: ActionStyle, model, blend: int = D.STYLE_BLEND_FRAMES,
+                   min_fraction: float = D.STYLE_MIN_FRACTION):
     """``motion`` (e.g. ``synthesize``'s graph walk) with every run of frames labelled with an action the
     style has coefficients for replaced by this performer's way of doing it (:meth:`ActionStyle.realise`,
     decoded at the run's length, feet pinned, mirrored for a southpaw), retargeted onto ``motion``'s
     skeleton (rotations kept, root path scaled by leg length), turned to the facing and moved to the root
     position of the run's first frame, and cross-faded with the original over ``blend`` frames at either
     end (rotations by normalised quaternion interpolation, root linearly). Returns ``(motion, replaced
-    runs [(label, start, end)])``."""
+    runs [(label, start, end)])``. A run shorter than ``min_fraction`` of the label's mean instance length
+    (in ``motion``'s frame rate) keeps the graph's frames: squeezing a whole kick into a few frames would
+    move far faster than any source."""
     from ..mocap import Motion
     from ..mocap.retarget import retarget
 
@@ -572,6 +575,10 @@ def restyle_motion(motion, labels, action_style: ActionStyle, model, blend: int 
     for label, s, e in label_runs(labels):
         n = e - s
         if label not in action_style.coefficients or n < 3:
+            continue
+        if n < min_fraction * model.models_[label].mean_frames * motion.fps / model.fps_:
+            log.info("restyle: %s at frames %d-%d kept (%d frames, under %.0f %% of its mean length)", label, s, e, n,
+                     100 * min_fraction)
             continue
         inst = action_style.realise(model, label, n_frames=n, pin=True)
         inst, _ = retarget(inst, motion.skeleton, f"{label} of the style")
