@@ -343,3 +343,23 @@ def test_synthesize_style_bad_input_exits_2(tmp_path, capsys):
     assert _main(["synthesize", "--graph", str(tmp_path / "g.npz"), "--sequence", str(tmp_path / "s.json"),
                   "--out", str(tmp_path / "o.bvh"), "--style", str(tmp_path / "style.json")]) == 2
     assert "--action-model" in capsys.readouterr().err
+
+
+def test_fit_actions_mirror_makes_an_orthodox_model(tmp_path):
+    """fit-actions --mirror p01: a southpaw's jabs enter the model mirrored (left hand leads in its mean)."""
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.mocap import write_bvh
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    for name, lead in (("p00_jab", "orthodox"), ("p01_jab", "southpaw")):
+        _, take = _take("Jab", 0, lead=lead)
+        write_bvh(take.motion, tmp_path / f"{name}.bvh")
+        write_labels(tmp_path / f"{name}.labels.json", label_document(list(take.labels), 60.0, take.chain, bvh=f"{name}.bvh"))
+    out = tmp_path / "m.npz"
+    assert _main(["fit-actions", str(tmp_path / "p00_jab.bvh"), str(tmp_path / "p01_jab.bvh"), "--mirror", "p01",
+                  "--only", "Jab", "--out", str(out)]) == 0
+    m = ActionModel.load(out)
+    pts = keypoint_positions(m.decode(m.models_["Jab"].gmm_means[0], "Jab"))
+    travel = [np.linalg.norm(pts[:, w] - pts[0, w], axis=-1).max() for w in (7, 8)]
+    assert travel[0] > 1.5 * travel[1]

@@ -33,6 +33,9 @@ def fit_actions(
     max_components: int = typer.Option(D.MAX_COMPONENTS, "--max-components", help="Most GMM components tried (the number is chosen by BIC)."),
     slope_limit: int = typer.Option(D.SLOPE_LIMIT, "--slope-limit", help="DTW: most consecutive horizontal or vertical steps."),
     only: str = typer.Option("", "--only", help="Comma-separated labels to model (default: every action label)."),
+    mirror: str = typer.Option("", "--mirror", help="Comma-separated performers (clip-name prefix pXX_) whose clips are "
+                               "mirrored left/right before fitting: the southpaws, for the orthodox model that "
+                               "learn-style --poses-dir fits (docs/actionmodel.md)."),
 ) -> None:
     """Learn one statistical model per action label (DTW to the medoid, functional PCA, GMM by BIC) from labelled mocap clips."""
     from ..actionmodel import ActionModel, load_labelled
@@ -49,6 +52,11 @@ def fit_actions(
     except ParameterError as e:
         raise ParameterError("--" + e.param.replace("_", "-"), e.problem) from None
     loaded = load_labelled(clips, labels)
+    south = {x.strip() for x in mirror.split(",") if x.strip()}
+    if south:
+        from ..actionmodel.stylefit import orthodox_clips
+
+        loaded = orthodox_clips(loaded, south)
     model.fit(loaded)
     model.save(out)
     for label in model.labels_:
