@@ -418,7 +418,7 @@ def fit_segment(model, label: str, xy: np.ndarray, **kw) -> dict:
 
 def noisy_track(xy: np.ndarray, rng: np.random.Generator, sigma: float = 0.05, outliers: float = 0.05) -> np.ndarray:
     """A noisy copy of a track: Gaussian noise of ``sigma`` torso lengths on every coordinate, and a share
-    ``outliers`` of keypoints moved uniformly within one torso length... times 2 of where they are."""
+    ``outliers`` of keypoints moved by a uniform offset of up to 2 torso lengths in x and in y."""
     xy = np.array(xy, dtype=np.float64)
     torso = _torso(xy)
     out = xy + rng.normal(0.0, sigma * torso, xy.shape)
