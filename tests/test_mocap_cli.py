@@ -75,7 +75,7 @@ def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
     out = capsys.readouterr().out
     listed = re.findall(r"^│ ([a-z][a-z-]+) ", out, flags=re.M)
     stages = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
-              "synthesize", "train-pose", "pose", "match-pose", "augment", "reconstruct"]
+              "synthesize", "fit-actions", "sample-action", "train-pose", "pose", "match-pose", "augment", "reconstruct"]
     assert listed[: len(stages)] == stages
     assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "timing", "mocap", "init"}
     for command in listed:  # every listed command answers --help

@@ -30,7 +30,8 @@ def style_file(dataset, tmp_path_factory):
 
 def test_style_file_schema(style_file, dataset):
     doc = json.loads(style_file.read_text())
-    assert doc["schema_version"] == 1 and doc["kind"] == "vidstyle.style" and doc["seed"] == 0
+    assert doc["schema_version"] == 2 and doc["kind"] == "vidstyle.style" and doc["seed"] == 0
+    assert doc["action_style"] is None  # schema 2: fitted only with --poses-dir
     assert doc["actions"] == list(CLASSES[:6]) and doc["classes"] == list(CLASSES)
     assert doc["params"]["events"]["ignore"] == ["Guard", "Step"]
     assert doc["performer"] == "p00" and len(doc["sources"]) == 2

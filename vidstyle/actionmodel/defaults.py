@@ -18,3 +18,15 @@ MEDOID_CANDIDATES = 40  # the medoid is searched among at most this many instanc
 WARP_SMOOTHING = 4.0  # Gaussian sigma (reference frames) of the DTW warp's deviation; validation/actionmodel.json
 BLEND_FRAMES = 3  # foot pinning: frames of blending either side of a contact run
 RANDOM_STATE = 0
+
+# --- fitting a performer from 2D (vidstyle.actionmodel.stylefit); STYLE_PRIOR_WEIGHT and STYLE_LOSS_SCALE
+# chosen by scripts/validate_action_style.py on the validation performers (validation/action_style.json)
+STYLE_N_FIT = 30  # spatial coefficients fitted per segment (the leading ones; the rest at the prior mean); validation/action_style.json
+STYLE_PRIOR_WEIGHT = 0.01  # weight of the GMM prior (whitened squared distance) against the 2D data term; validation/action_style.json
+STYLE_LOSS_SCALE = 0.05  # Cauchy loss scale, torso lengths; validation/action_style.json
+STYLE_ELEVATION_DEG = 10.0  # assumed camera elevation (the demo's cameras)
+STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
+STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
+STYLE_ROUNDS = 2  # linearisations of the decoded keypoints per segment (Gauss-Newton rounds)
+STYLE_BLEND_FRAMES = 4  # synthesize --style: frames cross-faded at either end of a restyled action
+STYLE_MIN_FRACTION = 0.6  # synthesize --style: runs shorter than this share of the mean instance keep the graph frames

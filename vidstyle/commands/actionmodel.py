@@ -33,6 +33,9 @@ def fit_actions(
     max_components: int = typer.Option(D.MAX_COMPONENTS, "--max-components", help="Most GMM components tried (the number is chosen by BIC)."),
     slope_limit: int = typer.Option(D.SLOPE_LIMIT, "--slope-limit", help="DTW: most consecutive horizontal or vertical steps."),
     only: str = typer.Option("", "--only", help="Comma-separated labels to model (default: every action label)."),
+    mirror: str = typer.Option("", "--mirror", help="Comma-separated performers (clip-name prefix pXX_) whose clips are "
+                               "mirrored left/right before fitting: the southpaws, for the orthodox model that "
+                               "learn-style --poses-dir fits (docs/actionmodel.md)."),
 ) -> None:
     """Learn one statistical model per action label (DTW to the medoid, functional PCA, GMM by BIC) from labelled mocap clips."""
     from ..actionmodel import ActionModel, load_labelled
@@ -49,6 +52,11 @@ def fit_actions(
     except ParameterError as e:
         raise ParameterError("--" + e.param.replace("_", "-"), e.problem) from None
     loaded = load_labelled(clips, labels)
+    south = {x.strip() for x in mirror.split(",") if x.strip()}
+    if south:
+        from ..actionmodel.stylefit import orthodox_clips
+
+        loaded = orthodox_clips(loaded, south)
     model.fit(loaded)
     model.save(out)
     for label in model.labels_:
@@ -66,6 +74,9 @@ def sample_action(
     seed: int = typer.Option(0, "--seed", help="Seed of the draws."),
     out_dir: Path = typer.Option(..., "--out-dir", "-o", help="Directory for <label>_<k>.bvh and <label>_<k>.labels.json."),
     pin: bool = typer.Option(True, "--pin/--no-pin", help="Hold planted feet on the floor (leg IK)."),
+    style: Path = typer.Option(None, "--style", help="A style.json with an action-level part (learn-style "
+                               "--poses-dir): draw this performer's way of doing the action (instance 0 their mean, "
+                               "others from the spread of their fitted segments; a southpaw stays southpaw)."),
 ) -> None:
     """Draw new instances of an action from a fitted model; write them as BVH on the source skeleton, with per-frame labels."""
     from ..actionmodel import ActionModel
@@ -79,7 +90,18 @@ def sample_action(
         raise ParameterError("--label", f"no model for {label!r} in {model_path} (labels: {', '.join(model.labels_)})")
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"{out_dir}: not a directory")
-    motions = model.sample(label, n, random_state=seed, pin=pin)
+    if style is not None:
+        from ..style.artifact import Style
+
+        ast = Style.load(style).action_style
+        if ast is None:
+            raise InputError(f"{style}: no action-level style (learn it with learn-style --poses-dir --action-model)")
+        ast.check_model(model, style)
+        if label not in ast.coefficients:
+            raise ParameterError("--label", f"{style} has no fitted {label!r} (fitted: {', '.join(sorted(ast.coefficients))})")
+        motions = [ast.realise(model, label, sample=k > 0, random_state=[seed, k], pin=pin) for k in range(n)]
+    else:
+        motions = model.sample(label, n, random_state=seed, pin=pin)
     for k, m in enumerate(motions):
         bvh = out_dir / f"{label}_{k:03d}.bvh"
         write_bvh(m, bvh)

@@ -89,6 +89,11 @@ def synthesize(
     foot_lock: bool = typer.Option(D.FOOT_LOCK, "--foot-lock/--no-foot-lock", help="Hold planted feet still across seams (two-bone leg IK)."),
     max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
     seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="With --keyframes --method markov: seed of the pose clustering."),
+    style: Optional[Path] = typer.Option(None, "--style", help="With --sequence: a style.json with an action-level part "
+                                         "(learn-style --poses-dir): every action of the walk is replaced by this "
+                                         "performer's way of doing it (needs --action-model; docs/actionmodel.md)."),
+    action_model: Optional[Path] = typer.Option(None, "--action-model", help="With --style: the action model its "
+                                                "coefficients belong to (fit-actions)."),
 ) -> None:
     """Walk the graph to realise an action sequence at minimum transition cost (--sequence), or make motion
     from keyframe to keyframe (--keyframes); write BVH (+ labels, preview)."""
@@ -99,6 +104,21 @@ def synthesize(
         raise InputError("--sequence / --keyframes: give exactly one (an action sequence, or keyframes to pass through)")
     if keyframes is None and method is not None:
         raise InputError("--method: only with --keyframes (a sequence is always realised by the motion graph)")
+    if (style is None) != (action_model is None):
+        raise InputError("--style / --action-model: give both (the performer's action style and its action model) or neither")
+    if style is not None and keyframes is not None:
+        raise InputError("--style: only with --sequence")
+    restyle = None
+    if style is not None:  # read before the walk: a bad file fails fast
+        from ..actionmodel import ActionModel
+        from ..style.artifact import Style
+
+        amodel = ActionModel.load(action_model)
+        ast = Style.load(style).action_style
+        if ast is None:
+            raise InputError(f"{style}: no action-level style (learn it with learn-style --poses-dir --action-model)")
+        ast.check_model(amodel, style)
+        restyle = (ast, amodel)
     graph = MotionGraph.load(graph_path)
     if keyframes is not None:
         synthesize_from_keyframes(graph, keyframes, method or KD.METHOD, out, seed)
@@ -111,6 +131,14 @@ def synthesize(
         result = synth(graph, sequence, bvh_name=out.name, seconds=seconds, mismatch_penalty=mismatch_penalty,
                        transition_penalty=transition_penalty, strict=strict, foot_lock=foot_lock,
                        max_in_degree=max_in_degree)
+    if restyle is not None:
+        import dataclasses
+
+        from ..actionmodel.stylefit import restyle_motion
+
+        m2, runs = restyle_motion(result.motion, result.labels["labels"], *restyle)
+        result = dataclasses.replace(result, motion=m2)
+        log.info("restyled %d action(s) with %s (%s)", len(runs), style, restyle[0].global_style.lead)
     save_synthesis(result, out)
     motion = result.motion
     log.info("wrote %s: %d frames (%.1f s) with %d transitions, %.0fx real time", out, motion.n_frames,

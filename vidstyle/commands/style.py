@@ -75,6 +75,15 @@ def learn_style(
     emission_prior: float = _E_PRIOR,
     modes: str = _MODES,
     mode_criterion: str = _CRIT,
+    poses_dir: Path = typer.Option(None, "--poses-dir", help="With LABELS: 2D poses <video stem>.poses.json of the "
+                                   "labelled videos; fits the action-level style (needs --action-model)."),
+    action_model: Path = typer.Option(None, "--action-model", help="With --poses-dir: the action model "
+                                      "(vidstyle fit-actions, orthodox) whose coefficients are fitted."),
+    population: Path = typer.Option(None, "--population", help="With --poses-dir: a dataset directory whose "
+                                    "videos' true 2D and labels give the population's guard / stance / crouch per "
+                                    "view and action durations (default: raw figures, durations of the model)."),
+    population_performers: str = typer.Option(None, "--population-performers",
+                                              help="With --population: only these performers (comma-separated)."),
 ) -> None:
     """Learn a performer's action style (HMMs + durations) from frame labels.
 
@@ -92,7 +101,28 @@ def learn_style(
     elif labels or out is not None or out_dir is None:
         raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
     wanted = None if views is None else [v.strip() for v in views.split(",") if v.strip()]
+    if (poses_dir is None) != (action_model is None):
+        raise InputError("learn-style: --poses-dir and --action-model go together")
+    if poses_dir is not None and dataset is not None:
+        raise InputError("learn-style: --poses-dir works with LABELS... --out (one performer), not --dataset")
     learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params)
+    if poses_dir is not None:
+        from ..actionmodel.stylefit import learn_action_style
+
+        est = None
+        if population is not None:  # the population's true 2D (dataset truth sidecars) and labels
+            import json
+
+            from ..actionmodel.stylefit import GlobalStyleEstimator
+            from ..evaluation.actionstyle import performer_videos
+            from ..formats.dataset import read_dataset
+
+            ds = read_dataset(Path(population) / "dataset.json")
+            manifest = json.loads((Path(population) / "dataset.json").read_text())
+            pop = ([p.strip() for p in population_performers.split(",") if p.strip()] if population_performers
+                   else [p["id"] for p in manifest["performers"]])
+            est = GlobalStyleEstimator().fit([x for q in pop for x in performer_videos(ds, manifest, q, "true")])
+        learned[0][1].action_style = learn_action_style(labels, poses_dir, action_model, est, seed)
     styles = [(out if pid is None else Path(out_dir) / f"{pid}.json", style) for pid, style in learned]
     from ..fileio import output_dir
 

@@ -96,8 +96,9 @@ RECONSTRUCT = "vidstyle.metrics.reconstruct"
 REAL_MOTION = "vidstyle.metrics.real_motion"
 INBETWEEN = "vidstyle.metrics.inbetween"
 ACTIONMODEL = "vidstyle.metrics.actionmodel"
+ACTION_STYLE = "vidstyle.metrics.action_style"
 KINDS = (RECOGNITION, STYLE, MOTION, HEADLINE, AUGMG, STRIKES, POSE, MULTIVIEW_POSE, PEOPLE, TIMING, RECONSTRUCT,
-         REAL_MOTION, INBETWEEN, ACTIONMODEL)
+         REAL_MOTION, INBETWEEN, ACTIONMODEL, ACTION_STYLE)
 SCHEMA_VERSION = 1
 #: a stage's status in the timing table: its records show it ran (all exit 0) or failed (one did not); it is
 #: the stage of the ``vidstyle timing`` run itself (running); no record of it while records were kept (skipped:
@@ -185,7 +186,7 @@ def _motion(f: Fields) -> None:
 def _headline(f: Fields) -> None:
     for key in ("recognition", "style", "motion"):
         _numbers_or_null(f, key)
-    for key in ("augmg", "reconstruct"):
+    for key in ("augmg", "reconstruct", "action_style"):
         if f.obj.get(key) is not None:
             _numbers_or_null(f, key)
 
@@ -258,6 +259,22 @@ def _actionmodel(f: Fields) -> None:
         _numbers_or_null(labels, name)
     f.sub("params")
     f.sub("split")
+
+
+def _action_style(f: Fields) -> None:
+    """``scripts/eval_action_style.py``: ``by_input`` (input kind -> summary over test performers),
+    ``action_style`` (the headline figures: ``lead_accuracy``, ``mpjpe_reduction``)."""
+    f.str("command", nonempty=True)
+    by = f.sub("by_input")
+    if not by.obj:
+        raise by.fail(None, "no input kind")
+    for name in by.obj:
+        s = by.sub(name)
+        s.int("performers", min=0)
+    a = f.sub("action_style")
+    a.number("lead_accuracy", min=0, max=1)
+    a.number("mpjpe_reduction", max=1)
+    f.sub("params")
 
 
 def _augmg(f: Fields) -> None:
@@ -412,7 +429,7 @@ def _timing(f: Fields) -> None:
 _CHECKS = {RECOGNITION: _recognition, STYLE: _style, MOTION: _motion, HEADLINE: _headline, AUGMG: _augmg,
            STRIKES: _strikes, POSE: _pose, MULTIVIEW_POSE: _multiview_pose, PEOPLE: _people, TIMING: _timing,
            RECONSTRUCT: _reconstruct, REAL_MOTION: _real_motion, INBETWEEN: _inbetween,
-           ACTIONMODEL: _actionmodel}
+           ACTIONMODEL: _actionmodel, ACTION_STYLE: _action_style}
 
 
 def parse_metrics(doc: Any, path: str | os.PathLike | None = None, kind: str | None = None) -> Metrics:
@@ -448,6 +465,7 @@ def write_metrics(path: str | os.PathLike, doc: dict[str, Any] | Metrics, kind: 
 
 __all__ = [
     "ACTIONMODEL",
+    "ACTION_STYLE",
     "AUGMG",
     "HEADLINE",
     "INBETWEEN",

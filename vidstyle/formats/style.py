@@ -1,6 +1,7 @@
 """A performer's learned style (``style.json``, ``vidstyle learn-style``): the owner of its schema.
 
-Schema (``kind`` ``"vidstyle.style"``, ``schema_version`` 1; matrices are row-stochastic lists of lists,
+Schema (``kind`` ``"vidstyle.style"``, ``schema_version`` 2; version 1 files, which lack
+``action_style``, still load; matrices are row-stochastic lists of lists,
 rows and columns in the order of ``actions``; modes of model (b) are rows of its matrices)::
 
     {
@@ -25,7 +26,15 @@ rows and columns in the order of ``actions``; modes of model (b) are rows of its
                   "action_transition": [A][A]},
       "bigram": {"type": "bigram", "start": [A], "transition": [A][A], "log_likelihood": float},
       "durations": {action: {"distribution": "lognormal", "mu", "sigma", "n", "mean_frames" | null,
-                             "sd_frames" | null}}
+                             "sd_frames" | null}},
+      "action_style": null | {         # version 2: the action-level style fitted from 2D
+          "model": path,               # the action model file (vidstyle fit-actions) the coefficients are of
+          "params": {...},             # the fit's parameters (prior_weight, loss_scale, n_fit, ...)
+          "global": {"lead": "orthodox" | "southpaw", "lead_score", "guard_height", "stance_width",
+                     "crouch" (numbers or null), "tempo": {action: factor}, "relative_tempo": {action: x},
+                     "n_videos", "n_jabs"},
+          "labels": {label: {"coefficients": [k], "spread": [k], "segments": n}}   # orthodox frame
+      }
     }
 
 Log-likelihoods are natural logs over the training events. The owner reads and writes a
@@ -58,7 +67,8 @@ from ._base import (
 )
 
 KIND = "vidstyle.style"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+READABLE_VERSIONS = (1, 2)
 
 
 @dataclass
@@ -124,6 +134,19 @@ class StyleRecord:
     sources: list[dict] = field(default_factory=list)
     n_sequences: int = 0
     action_counts: Any = None
+    action_style: ActionStyleRecord | None = None
+
+
+@dataclass
+class ActionStyleRecord:
+    """``action_style`` of a version-2 file (:class:`vidstyle.actionmodel.stylefit.ActionStyle` builds itself
+    from one). ``global_style``: the checked ``global`` object; ``labels``: label -> (coefficients (k,),
+    spread (k,), segments)."""
+
+    model: str
+    params: dict[str, Any]
+    global_style: dict[str, Any]
+    labels: dict[str, tuple[np.ndarray, np.ndarray, int]]
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -173,7 +196,52 @@ def style_to_dict(rec: StyleRecord) -> dict[str, Any]:
                 "sd_frames": _finite_or_none(d.sd_frames[i])}
             for i, n in enumerate(rec.actions)
         },
+        "action_style": None if rec.action_style is None else _action_style_dict(rec.action_style),
     }
+
+
+def _action_style_dict(r: ActionStyleRecord) -> dict[str, Any]:
+    g = dict(r.global_style)
+    for k in ("lead_score", "guard_height", "stance_width", "crouch"):
+        g[k] = None if g.get(k) is None else _finite_or_none(g[k])
+    for k in ("tempo", "relative_tempo"):
+        g[k] = {a: _finite_or_none(v) for a, v in (g.get(k) or {}).items()}
+    return {"model": r.model, "params": r.params, "global": g,
+            "labels": {lab: {"coefficients": [float(x) for x in c], "spread": [float(x) for x in sp], "segments": int(n)}
+                       for lab, (c, sp, n) in r.labels.items()}}
+
+
+def _opt_number(f: Fields, key: str) -> float:
+    return float("nan") if f.obj.get(key) is None else f.number(key)
+
+
+def _parse_action_style(f: Fields) -> ActionStyleRecord:
+    model = f.str("model", required=False, default="")
+    params = f.sub("params").obj
+    for k, v in params.items():
+        if isinstance(v, float) and not math.isfinite(v):
+            raise f.fail("params", f"{k}: must be finite")
+    g = f.sub("global")
+    glob: dict[str, Any] = {"lead": g.str("lead", choices=("orthodox", "southpaw"))}
+    for k in ("lead_score", "guard_height", "stance_width", "crouch"):
+        glob[k] = _opt_number(g, k)
+    for k in ("tempo", "relative_tempo"):
+        t = g.sub(k, required=False)
+        glob[k] = {} if t is None else {a: _opt_number(t, a) for a in t.obj}
+    glob["n_videos"] = g.int("n_videos", required=False, default=0, min=0)
+    glob["n_jabs"] = g.int("n_jabs", required=False, default=0, min=0)
+    labs = f.sub("labels")
+    labels = {}
+    for lab in labs.obj:
+        lf = labs.sub(lab)
+        c = lf.array("coefficients")
+        sp = lf.array("spread")
+        if c.ndim != 1 or c.size == 0 or sp.shape != c.shape:
+            raise lf.fail("spread", f"coefficients and spread must be non-empty vectors of one length, got {c.shape} and {sp.shape}")
+        if (sp < 0).any():
+            raise lf.fail("spread", "must be non-negative")
+        labels[lab] = (c, sp, lf.int("segments", min=1))
+    return ActionStyleRecord(model, dict(params), glob, labels)
 
 
 def _stochastic(f: Fields, key: str, shape: tuple[int, ...]) -> np.ndarray:
@@ -227,7 +295,7 @@ def _int_item(p: Fields, key: str, i: int, x: Any) -> int:
 
 def parse_style(doc: Any, path: str | os.PathLike | None = None) -> StyleRecord:
     """Validate a style document and return its :class:`StyleRecord`."""
-    check_header(doc, path, KIND, (SCHEMA_VERSION,))
+    check_header(doc, path, KIND, READABLE_VERSIONS)
     f = Fields(doc, path)
     actions = f.str_list("actions", unique=True, min_len=2)
     classes = f.str_list("classes", required=False, unique=True) or list(actions)
@@ -302,8 +370,11 @@ def parse_style(doc: Any, path: str | os.PathLike | None = None) -> StyleRecord:
         sd_frames=np.array([np.nan if r.obj.get("sd_frames") is None else r.number("sd_frames", min=0)
                             for r in rows]),
     )
+    ast = None
+    if doc.get("action_style") is not None:
+        ast = _parse_action_style(f.sub("action_style"))
     return StyleRecord(actions, classes, params, params["seed"], a, b, g, d, fps=fps, performer=performer,
-                       sources=sources, n_sequences=n_sequences, action_counts=counts)
+                       sources=sources, n_sequences=n_sequences, action_counts=counts, action_style=ast)
 
 
 def read_style(path: str | os.PathLike) -> StyleRecord:

@@ -29,7 +29,8 @@ import numpy as np
 from ..errors import InputError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from ..formats.metrics import AUGMG, HEADLINE, MOTION, RECOGNITION, RECONSTRUCT, STYLE, TIMING, read_metrics
+from ..formats.metrics import (ACTION_STYLE, AUGMG, HEADLINE, MOTION, RECOGNITION, RECONSTRUCT, STYLE, TIMING,
+                               read_metrics)
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
@@ -485,6 +486,10 @@ def headline_metrics(run: Path) -> dict:
         for key in ("retrieval_mpjpe", "transition_error_augmg"):
             if h.get(f"augmg.blazepose.{key}") is not None:
                 out["augmg"][f"blazepose_{key}"] = h[f"augmg.blazepose.{key}"]
+    ast = _metrics(run / "metrics" / "action_style.json", ACTION_STYLE)
+    if ast is not None:  # scripts/eval_action_style.py (issue 30 item 2)
+        a = ast.get("action_style") or {}
+        out["action_style"] = {"lead_accuracy": a.get("lead_accuracy"), "mpjpe_reduction": a.get("mpjpe_reduction")}
     rc = _metrics(run / "metrics" / "reconstruct.json", RECONSTRUCT)
     if rc is not None:
         h = rc.get("headline") or {}

@@ -108,6 +108,7 @@ class Style:
         self.fps = float(fps)
         self.sources = sources or []
         self.performer = performer
+        self.action_style = None  # vidstyle.actionmodel.stylefit.ActionStyle, when fitted from 2D (learn-style --poses-dir)
         self.action_counts = (
             np.zeros(len(self.actions), dtype=np.int64) if action_counts is None else np.asarray(action_counts)
         )
@@ -241,6 +242,7 @@ class Style:
             durations=DurationsRecord(d.mu_, d.sigma_, d.count_, d.mean_frames_, d.sd_frames_),
             fps=self.fps, performer=self.performer, sources=self.sources, n_sequences=self.n_sequences,
             action_counts=self.action_counts,
+            action_style=None if getattr(self, "action_style", None) is None else self.action_style.to_record(),
         )
 
     @classmethod
@@ -280,8 +282,13 @@ class Style:
         d = DurationModel(n_actions=A)
         d.n_actions_ = A
         d.mu_, d.sigma_, d.count_, d.mean_frames_, d.sd_frames_ = rd.mu, rd.sigma, rd.count, rd.mean_frames, rd.sd_frames
-        return cls(rec.actions, rec.classes, params, a, b, g, d, fps=rec.fps, sources=rec.sources,
-                   performer=rec.performer, action_counts=rec.action_counts, n_sequences=rec.n_sequences)
+        style = cls(rec.actions, rec.classes, params, a, b, g, d, fps=rec.fps, sources=rec.sources,
+                    performer=rec.performer, action_counts=rec.action_counts, n_sequences=rec.n_sequences)
+        if rec.action_style is not None:  # schema 2: the action-level style fitted from 2D
+            from ..actionmodel.stylefit import ActionStyle
+
+            style.action_style = ActionStyle.from_record(rec.action_style)
+        return style
 
     def to_dict(self) -> dict[str, Any]:
         return style_format.style_to_dict(self.to_record())

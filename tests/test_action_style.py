@@ -1,0 +1,365 @@
+"""Fitting a performer's action-level style from 2D (vidstyle.actionmodel.stylefit): global parameters of
+demo performers rendered through a known camera, coefficients recovered from a noiseless projected
+decode, the prior's pull, the style artifact's action-level part (round trip, schema 1 still loads,
+fuzzed reader) and the CLI's exit status on bad input."""
+
+from __future__ import annotations
+
+import copy
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from vidstyle.actionmodel import ActionModel, cut_instances
+from vidstyle.actionmodel.stylefit import (
+    GlobalStyleEstimator,
+    SegmentFitter,
+    fit_action_style,
+    mirror_track,
+    project,
+)
+from vidstyle.formats import FormatError
+
+
+def _take(action: str, index: int = 0, **style):
+    from vidstyle.demo.dataset import DatasetParams, make_performer
+    from vidstyle.demo.timeline import build_take, single_action_plan
+
+    p = make_performer(DatasetParams(seed=0, mocap_fps=60), index)
+    if "speed" in style:  # durations were drawn with the old speed: rescale them
+        k = p.style.speed / style["speed"]
+        p = replace(p, chain=replace(p.chain, duration_frames={a: (m * k, sd * k) for a, (m, sd) in p.chain.duration_frames.items()}))
+    p = replace(p, style=replace(p.style, **style))
+    rng = np.random.default_rng(7)
+    return p, build_take(p, single_action_plan(p, action, 100, rng), rng, video_fps=20, ratio=3)
+
+
+def _video(take, view: str):
+    """(xy (F, 15, 2) at 20 fps through a known camera at ``view``, labels, view)."""
+    from vidstyle.mocap.keypoints import keypoint_positions
+    from vidstyle.render.camera import Camera
+
+    cam = Camera.for_view(take.motion, view, elevation_deg=10.0)
+    pts = keypoint_positions(take.motion)[::3]
+    uv, _ = cam.project(pts)
+    return np.asarray(uv, float), list(take.labels[::3])[: len(pts)], view
+
+
+@pytest.fixture(scope="module")
+def videos():
+    out = {}
+    base = dict(guard_height=0.0, stance_width=1.0, lead="orthodox", speed=1.0, amplitude=1.0, crouch=0.0)
+    for name, st in (("population", base),
+                     ("narrow", dict(base, stance_width=0.85, guard_height=-0.06)),
+                     ("wide_southpaw", dict(base, stance_width=1.2, guard_height=0.05, lead="southpaw"))):
+        _, take = _take("Jab", 0, **st)
+        out[name] = [_video(take, v) for v in ("front", "left", "right")]
+    return out
+
+
+def test_global_style_recovers_lead_stance_and_guard(videos):
+    est = GlobalStyleEstimator().fit(videos["population"])
+    a = est.estimate(videos["narrow"])
+    b = est.estimate(videos["wide_southpaw"])
+    assert a.lead == "orthodox" and b.lead == "southpaw"
+    assert a.lead_score > 0.2 and b.lead_score < -0.2
+    assert a.stance_width < 1.0 < b.stance_width
+    assert a.guard_height < 0.0 < b.guard_height
+    # the population itself: neutral
+    p = est.estimate(videos["population"])
+    assert p.stance_width == pytest.approx(1.0, abs=0.02) and p.guard_height == pytest.approx(0.0, abs=0.01)
+
+
+def test_tempo_is_duration_relative_to_the_population(videos):
+    est = GlobalStyleEstimator().fit(videos["population"])
+    _, slow = _take("Jab", 0, speed=0.7)
+    g = est.estimate([_video(slow, "front")])
+    assert g.tempo["Jab"] > 1.2
+
+
+def test_mirror_track_is_an_involution():
+    xy = np.random.default_rng(0).normal(size=(4, 15, 2))
+    assert np.allclose(mirror_track(mirror_track(xy)), xy)
+
+
+@pytest.fixture(scope="module")
+def model():
+    from vidstyle.motiongraph.graph import Clip
+
+    clips = []
+    for i in (0, 2):
+        _, take = _take("Jab", i, lead="orthodox")
+        clips.append(Clip(f"p{i:02d}_Jab", take.motion, take.labels))
+    return ActionModel(random_state=0, labels=("Jab",)).fit(cut_instances(clips))
+
+
+def test_coefficients_recovered_from_a_noiseless_projected_decode(model):
+    f = SegmentFitter(model, "Jab", n_fit=3, prior_weight=0.0, loss_scale=0.5, max_nfev=60)
+    f._g = 0
+    z_true = np.array([1.2, -0.8, 0.6])
+    n = 12
+    P3 = f.keypoints(f.full(z_true), n)
+    xy = project(P3, 0.4, 30.0, np.array([80.0, 60.0]), f.elevation)
+    r = f.fit(xy, rounds=3)
+    assert np.abs(r["z"][:3] - z_true).max() < 0.15
+    assert abs(r["yaw"] - 0.4) < 0.05 and abs(r["scale"] - 30.0) < 1.0
+
+
+def test_missing_keypoints_are_ignored(model):
+    f = SegmentFitter(model, "Jab", n_fit=3, prior_weight=0.0, loss_scale=0.5, max_nfev=60)
+    f._g = 0
+    z_true = np.array([1.0, 0.5, -0.5])
+    P3 = f.keypoints(f.full(z_true), 12)
+    xy = project(P3, -0.3, 30.0, np.array([80.0, 60.0]), f.elevation)
+    rng = np.random.default_rng(1)
+    xy[rng.random(xy.shape[:2]) < 0.2] = np.nan
+    xy[rng.random(xy.shape[:2]) < 0.03] += 40.0  # outliers: the Cauchy loss holds
+    r = f.fit(xy, rounds=3)
+    assert np.abs(r["z"][:3] - z_true).max() < 0.3
+
+
+def test_prior_pulls_toward_the_mean_as_its_weight_grows(model):
+    z_true = np.array([2.0, -1.5, 1.0])
+    base = SegmentFitter(model, "Jab", n_fit=3, prior_weight=0.0)
+    base._g = 0
+    xy = project(base.keypoints(base.full(z_true), 12), 0.0, 30.0, np.array([80.0, 60.0]), base.elevation)
+    mu = model.models_["Jab"].gmm_means[0][:3]
+    d = [np.linalg.norm(SegmentFitter(model, "Jab", n_fit=3, prior_weight=w).fit(xy)["z"][:3] - mu)
+         for w in (0.0, 0.01, 1.0, 100.0)]
+    assert all(a >= b - 1e-6 for a, b in zip(d, d[1:])), d
+    assert d[-1] < 0.2 * d[0]
+
+
+# ----------------------------------------------------------------------------- the style artifact
+@pytest.fixture(scope="module")
+def style(model, videos):
+    from vidstyle.formats.framelabels import FrameLabels
+    from vidstyle.style.artifact import Style
+    from vidstyle.style.learn import style_params
+
+    _, t1 = _take("Jab", 0)
+    _, t2 = _take("Hook", 0)
+    tracks = [FrameLabels(list(t.labels[::3]), ("Jab", "Hook", "Guard", "Step"), 20.0) for t in (t1, t2)]
+    s = Style.from_tracks(tracks, style_params(n_init=1, n_iter=5, modes="1"))
+    est = GlobalStyleEstimator().fit(videos["population"])
+    s.action_style = fit_action_style(model, est, videos["wide_southpaw"], {"n_fit": 3}, max_segments=2)
+    s.action_style.model = "model.npz"
+    return s
+
+
+def test_style_round_trip_with_action_style(style, tmp_path):
+    from vidstyle.style.artifact import Style
+
+    p = tmp_path / "style.json"
+    style.save(p)
+    doc = json.loads(p.read_text())
+    assert doc["schema_version"] == 2 and doc["action_style"]["global"]["lead"] == "southpaw"
+    back = Style.load(p)
+    a, b = style.action_style, back.action_style
+    assert b.global_style.lead == "southpaw"
+    assert b.global_style.stance_width == pytest.approx(a.global_style.stance_width, abs=1e-6)
+    assert np.allclose(b.coefficients["Jab"], a.coefficients["Jab"])
+    assert b.counts == a.counts
+
+
+def test_schema_1_file_still_loads(style):
+    from vidstyle.style.artifact import Style
+
+    doc = style.to_dict()
+    doc["schema_version"] = 1
+    doc.pop("action_style")
+    s = Style.from_dict(doc)
+    assert s.action_style is None and s.actions == style.actions
+
+
+def _mutations(doc, rng):
+    a = doc["action_style"]
+    yield lambda d: d["action_style"]["global"].__setitem__("lead", "lefty")
+    yield lambda d: d["action_style"]["global"].__setitem__("stance_width", "wide")
+    yield lambda d: d["action_style"].__setitem__("labels", [])
+    lab = next(iter(a["labels"]))
+    yield lambda d: d["action_style"]["labels"][lab].__setitem__("coefficients", [])
+    yield lambda d: d["action_style"]["labels"][lab].__setitem__("spread", [1.0])
+    yield lambda d: d["action_style"]["labels"][lab].__setitem__("spread", [-1.0] * len(a["labels"][lab]["coefficients"]))
+    yield lambda d: d["action_style"]["labels"][lab].__setitem__("segments", 0)
+    yield lambda d: d["action_style"]["labels"][lab].__setitem__("coefficients", ["x"] * len(a["labels"][lab]["coefficients"]))
+    yield lambda d: d["action_style"].pop("global")
+    yield lambda d: d.__setitem__("schema_version", 3)
+    for _ in range(20):  # random keys replaced by junk
+        path = [k for k in ("model", "params", "global", "labels")]
+        k = path[int(rng.integers(len(path)))]
+        junk = [None, 3, "s", [1, 2], {"a": 1}][int(rng.integers(5))]
+        if k == "model" and (junk is None or isinstance(junk, str)):
+            continue
+        if k == "params" and isinstance(junk, dict):
+            continue
+        yield lambda d, k=k, junk=junk: d["action_style"].__setitem__(k, junk)
+
+
+def test_fuzzed_action_style_raises_format_error(style):
+    from vidstyle.formats.style import parse_style
+
+    from vidstyle.fileio import json_default
+
+    doc = json.loads(json.dumps(style.to_dict(), default=json_default))
+    parse_style(doc, "ok.json")
+    rng = np.random.default_rng(0)
+    for mutate in _mutations(doc, rng):
+        d = copy.deepcopy(doc)
+        mutate(d)
+        with pytest.raises(FormatError) as e:
+            parse_style(d, "bad.json")
+        assert "bad.json" in str(e.value)
+
+
+def test_realise_keeps_a_southpaw_southpaw(style, model):
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    m = style.action_style.realise(model, "Jab", 20)
+    pts = keypoint_positions(m)
+    # the jab: the right wrist (a southpaw's lead) travels further than the left
+    travel = [np.linalg.norm(pts[:, w] - pts[0, w], axis=-1).max() for w in (7, 8)]
+    assert travel[1] > travel[0]
+
+
+# ----------------------------------------------------------------------------- the CLI
+def _main(args):
+    from vidstyle.cli import main
+
+    return main(args)
+
+
+def test_learn_style_bad_input_exits_2(tmp_path, model, capsys):
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+
+    labs = []
+    for a in ("Jab", "Hook"):
+        _, take = _take(a, 0)
+        labs.append(tmp_path / f"p00_{a.lower()}_front.json")
+        write_labels(labs[-1], label_document(list(take.labels[::3]), 20.0, take.chain,
+                                              video=f"videos/p00_{a.lower()}_front.mp4", performer="p00"))
+    lab = labs[0]
+    (tmp_path / "p00_hook_front.poses.json").write_text("{}")
+    out = tmp_path / "style.json"
+    # --poses-dir without --action-model
+    assert _main(["learn-style", str(lab), "--out", str(out), "--poses-dir", str(tmp_path)]) == 2
+    # a missing pose file
+    mp = tmp_path / "m.npz"
+    model.save(mp)
+    capsys.readouterr()
+    assert _main(["learn-style", *map(str, labs), "--out", str(out), "--poses-dir", str(tmp_path), "--action-model", str(mp),
+                  "--modes", "1", "--n-init", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "pose file not found" in err and err.count("error:") == 1
+    # a damaged action model
+    (tmp_path / "p00_jab_front.poses.json").write_text("{}")
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip")
+    assert _main(["learn-style", *map(str, labs), "--out", str(out), "--poses-dir", str(tmp_path), "--action-model", str(bad),
+                  "--modes", "1", "--n-init", "1"]) == 2
+    assert "bad.npz" in capsys.readouterr().err
+    # a damaged pose file
+    assert _main(["learn-style", *map(str, labs), "--out", str(out), "--poses-dir", str(tmp_path), "--action-model", str(mp),
+                  "--modes", "1", "--n-init", "1"]) == 2
+    assert "poses.json" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_sample_action_with_style(style, model, tmp_path, capsys):
+    from vidstyle.mocap import read_bvh
+
+    mp, sp = tmp_path / "m.npz", tmp_path / "style.json"
+    model.save(mp)
+    style.save(sp)
+    assert _main(["sample-action", str(mp), "--label", "Jab", "-n", "2", "--seed", "0", "--style", str(sp),
+                  "--out-dir", str(tmp_path / "s")]) == 0
+    m = read_bvh(tmp_path / "s" / "Jab_000.bvh")
+    assert m.n_frames > 5
+    plain = tmp_path / "plain.json"
+    doc = style.to_dict()
+    doc["action_style"] = None
+    from vidstyle.style.artifact import Style
+
+    Style.from_dict(doc).save(plain)
+    assert _main(["sample-action", str(mp), "--label", "Jab", "--style", str(plain), "--out-dir", str(tmp_path / "t")]) == 2
+    assert "no action-level style" in capsys.readouterr().err
+
+
+def test_learn_style_with_poses_end_to_end(tmp_path, model):
+    """learn-style LABELS --poses-dir --action-model: the style file gains the action-level part, and a
+    southpaw's jabs come out southpaw."""
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+    from vidstyle.style.artifact import Style
+
+    labs = []
+    for a in ("Jab", "Hook"):
+        _, take = _take(a, 0, lead="southpaw")
+        xy, labels, _ = _video(take, "front")
+        stem = f"p00_{a.lower()}_front"
+        labs.append(tmp_path / f"{stem}.json")
+        write_labels(labs[-1], label_document(labels, 20.0, take.chain, video=f"videos/{stem}.mp4", performer="p00",
+                                              view="front"))
+        pts = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1)
+        write_poses(tmp_path / f"{stem}.poses.json",
+                    Poses(f"videos/{stem}.mp4", "ps", [PoseFrame(i, "front", p) for i, p in enumerate(pts)]))
+    mp = tmp_path / "m.npz"
+    model.save(mp)
+    out = tmp_path / "style.json"
+    assert _main(["learn-style", *map(str, labs), "--out", str(out), "--poses-dir", str(tmp_path),
+                  "--action-model", str(mp), "--modes", "1", "--n-init", "1"]) == 0
+    s = Style.load(out)
+    assert s.action_style is not None and "Jab" in s.action_style.coefficients
+    assert s.action_style.global_style.lead == "southpaw"  # labelled rule: no population given
+
+
+def test_restyle_motion_replaces_actions_only(style, model):
+    """synthesize --style's core: action runs become the performer's way (a southpaw here), other frames stay."""
+    from vidstyle.actionmodel.stylefit import restyle_motion
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    _, take = _take("Jab", 1, lead="orthodox")  # an orthodox performer's take stands in for a graph walk
+    m = take.motion
+    labels = list(take.labels)
+    out, runs = restyle_motion(m, labels, style.action_style, model)
+    assert out.n_frames == m.n_frames and runs and all(lab == "Jab" for lab, _, _ in runs)
+    inside = np.zeros(m.n_frames, bool)
+    for _, s, e in runs:
+        inside[s:e] = True
+    assert np.allclose(out.rotations[~inside], m.rotations[~inside])
+    assert not np.allclose(out.rotations[inside], m.rotations[inside])
+    # the replaced jabs are thrown with the right hand (southpaw), the originals with the left
+    a, b = keypoint_positions(m), keypoint_positions(out)
+    _, s, e = runs[0]
+    travel = lambda p, w: np.linalg.norm(p[s:e, w] - p[s, w], axis=-1).max()  # noqa: E731
+    assert travel(a, 7) > travel(a, 8) and travel(b, 8) > travel(b, 7)
+
+
+def test_synthesize_style_bad_input_exits_2(tmp_path, capsys):
+    assert _main(["synthesize", "--graph", str(tmp_path / "g.npz"), "--sequence", str(tmp_path / "s.json"),
+                  "--out", str(tmp_path / "o.bvh"), "--style", str(tmp_path / "style.json")]) == 2
+    assert "--action-model" in capsys.readouterr().err
+
+
+def test_fit_actions_mirror_makes_an_orthodox_model(tmp_path):
+    """fit-actions --mirror p01: a southpaw's jabs enter the model mirrored (left hand leads in its mean)."""
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.mocap import write_bvh
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    for name, lead in (("p00_jab", "orthodox"), ("p01_jab", "southpaw")):
+        _, take = _take("Jab", 0, lead=lead)
+        write_bvh(take.motion, tmp_path / f"{name}.bvh")
+        write_labels(tmp_path / f"{name}.labels.json", label_document(list(take.labels), 60.0, take.chain, bvh=f"{name}.bvh"))
+    out = tmp_path / "m.npz"
+    assert _main(["fit-actions", str(tmp_path / "p00_jab.bvh"), str(tmp_path / "p01_jab.bvh"), "--mirror", "p01",
+                  "--only", "Jab", "--out", str(out)]) == 0
+    m = ActionModel.load(out)
+    pts = keypoint_positions(m.decode(m.models_["Jab"].gmm_means[0], "Jab"))
+    travel = [np.linalg.norm(pts[:, w] - pts[0, w], axis=-1).max() for w in (7, 8)]
+    assert travel[0] > 1.5 * travel[1]

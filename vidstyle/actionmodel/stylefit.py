@@ -1,0 +1,601 @@
+"""Fit a performer's action-level style from 2D keypoint tracks (issue 30 item 2; Du 2014 models).
+
+Two parts (``docs/actionmodel.md``, "Fitting a performer"):
+
+**Global style** (:class:`GlobalStyleEstimator`, scikit-learn conventions: ``fit`` on the training
+performers' videos learns the population's per-view figures, ``estimate`` a performer's style). Input per
+video: a (F, 15, 2) track (image pixels, y down; NaN = missing), per-frame action labels (true or
+recognised) and the view name (``front``/``left``/``right``: the camera's azimuth relative to the
+performer's facing, known from the calibrated camera; the figures are normalised per view by the
+training population, so only the view's identity is used, never its angle).
+
+* **lead**: which hand throws the jabs. Per Jab segment, the largest image displacement of each wrist
+  from where it was at the segment's start; the wrist that moves more is the jabbing one.
+  *Label-free rule* (used when there are ``min_front_jabs`` or more Jab segments in front views): the side
+  of the neck (image x) on which the jabbing wrist travels; which side is orthodox is learned from the
+  training population (``orthodox_side_``, the sign agreeing with their labelled jab hand); the score is
+  ``2 * share of orthodox-side jabs - 1``. It assumes the performer faces the front camera (a single view
+  cannot tell an orthodox fighter facing the camera from a southpaw facing away), and does not trust
+  the pose stage's left/right labels, which pictorial structures often swap (on the validation
+  performers' estimated poses the labelled jab hand was at chance in front views and inverted in one
+  side view each). *Labelled rule* (otherwise): the mean of ``(left - right) / (left + right)`` of the
+  two wrists' displacements, > 0 the left hand leads (orthodox), viewpoint-free.
+* **stance width**: ankle distance over leg length (hip-knee + knee-ankle, the 90th percentile over the
+  video) in Guard frames; **guard height**: mean (shoulder - wrist) image height in arm lengths (90th
+  percentile of upper + forearm image length); **crouch**: (hip - ankle) height over leg length,
+  negated. Each is the performer's median over their videos of (figure - the training population's mean
+  at that view), plus 1 for the stance (a ratio to the population's mean, as ``stance_width`` is).
+* **tempo**: per action the performer's median segment length (frames) over the population's median: the
+  observable duration factor ``tempo[a] / speed`` of :class:`vidstyle.demo.performer.MovementTraits`;
+  ``relative_tempo`` divides by its mean over actions (``tempo[a] / mean tempo``).
+
+**Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
+coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
+component's mean; temporal coefficients at the mean, since a segment's own duration already fixes its
+time) and a weak-perspective camera (yaw about the vertical, scale, image translation; the elevation is
+assumed known, 10 degrees on the demo) minimise
+
+    sum_{frames, keypoints} rho(|x_proj - x_track| / torso)  +  prior_weight * |L_g^-1 (z - mu_g)|^2
+
+with ``rho`` the Cauchy loss of scale ``loss_scale`` torso lengths (missing keypoints drop out) and
+``g`` the GMM component of highest responsibility at the start (the ``log_prior`` of the label's GMM
+up to that choice). ``scipy.optimize.least_squares`` (trf) on residuals whose data part is
+``sign(r) f sqrt(log(1 + (r/f)^2))`` so the prior terms stay quadratic. The yaw starts from the best of
+12 yaws for the model's mean pose (closed-form scale and translation). A southpaw's tracks are mirrored
+(image x negated, left/right swapped) before fitting an orthodox model, and the model itself is fitted on
+orthodox-mirrored clips (:func:`orthodox_clips`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from sklearn.base import BaseEstimator
+
+from ..errors import ParameterError
+from . import defaults as D
+
+log = logging.getLogger(__name__)
+
+# keypoint indices (vidstyle.formats.keypoints.KEYPOINTS order)
+HEAD, NECK, PELVIS, LSH, RSH, LEL, REL, LWR, RWR, LHIP, RHIP, LKN, RKN, LAN, RAN = range(15)
+NON_ACTIONS = ("Guard", "Step", "unlabelled", "other")
+VIEW_NAMES = ("front", "left", "right")
+
+
+# ----------------------------------------------------------------------------- small helpers
+def label_runs(labels) -> list[tuple[str, int, int]]:
+    out, s = [], 0
+    labels = list(labels)
+    for t in range(1, len(labels) + 1):
+        if t == len(labels) or labels[t] != labels[s]:
+            out.append((str(labels[s]), s, t))
+            s = t
+    return out
+
+
+def _nanmedian(x) -> float:
+    x = np.asarray(x, dtype=np.float64)
+    x = x[np.isfinite(x)]
+    return float(np.median(x)) if x.size else math.nan
+
+
+def _torso(xy: np.ndarray) -> float:
+    t = np.linalg.norm(xy[:, NECK] - xy[:, PELVIS], axis=-1)
+    m = _nanmedian(t)
+    return m if np.isfinite(m) and m > 1e-9 else math.nan
+
+
+def mirror_track(xy: np.ndarray) -> np.ndarray:
+    """Left/right mirror image of a track (image x negated, left and right keypoints swapped)."""
+    from ..recognition.posefeatures import mirror_track as mt
+
+    return mt(xy)
+
+
+def video_figures(xy: np.ndarray, labels) -> dict:
+    """Raw per-video figures of a track (module text): guard height (arm lengths), stance ratio, leg
+    extension, the jab-hand scores and the action segment lengths."""
+    xy = np.asarray(xy, dtype=np.float64)
+    labels = list(labels)[: len(xy)]
+    if len(labels) < len(xy):
+        labels += ["unlabelled"] * (len(xy) - len(labels))
+    lab = np.array(labels)
+    torso = _torso(xy)
+    leg = np.concatenate([np.linalg.norm(xy[:, h] - xy[:, k], axis=-1) + np.linalg.norm(xy[:, k] - xy[:, a], axis=-1)
+                          for h, k, a in ((LHIP, LKN, LAN), (RHIP, RKN, RAN))])
+    arm = np.concatenate([np.linalg.norm(xy[:, s] - xy[:, e], axis=-1) + np.linalg.norm(xy[:, e] - xy[:, w], axis=-1)
+                          for s, e, w in ((LSH, LEL, LWR), (RSH, REL, RWR))])
+    leg_len = float(np.nanpercentile(leg, 90)) if np.isfinite(leg).any() else math.nan
+    arm_len = float(np.nanpercentile(arm, 90)) if np.isfinite(arm).any() else math.nan
+    g = lab == "Guard"
+    out = {"frames": len(xy), "guard_frames": int(g.sum()), "torso": torso}
+    if g.sum() and np.isfinite(leg_len) and np.isfinite(arm_len):
+        G = xy[g]
+        sh_y = 0.5 * (G[:, LSH, 1] + G[:, RSH, 1])
+        wr_y = 0.5 * (G[:, LWR, 1] + G[:, RWR, 1])
+        out["guard"] = _nanmedian((sh_y - wr_y) / arm_len)
+        out["stance"] = _nanmedian(np.linalg.norm(G[:, LAN] - G[:, RAN], axis=-1) / leg_len)
+        hip_y = 0.5 * (G[:, LHIP, 1] + G[:, RHIP, 1])
+        an_y = 0.5 * (G[:, LAN, 1] + G[:, RAN, 1])
+        out["extension"] = _nanmedian((an_y - hip_y) / leg_len)
+    jab, side, durations = [], [], {}
+    for label, s, e in label_runs(labels):
+        if label in NON_ACTIONS:
+            continue
+        durations.setdefault(label, []).append(e - s)
+        if label == "Jab" and np.isfinite(torso):
+            seg = xy[s:e]
+            d = [np.nanmax(np.linalg.norm(seg[:, w] - seg[0, w], axis=-1)) if np.isfinite(seg[:, w]).all(-1).any()
+                 and np.isfinite(seg[0, w]).all() else math.nan for w in (LWR, RWR)]
+            if all(np.isfinite(d)) and sum(d) > 0:
+                jab.append((d[0] - d[1]) / (d[0] + d[1]))
+                w = (LWR, RWR)[int(np.argmax(d))]
+                ok = np.isfinite(seg[:, w]).all(-1) & np.isfinite(seg[:, NECK]).all(-1)
+                if ok.any():
+                    side.append(float(np.mean(seg[ok, w, 0] - seg[ok, NECK, 0]) / torso))
+    out["jab_scores"] = jab
+    out["jab_sides"] = side
+    out["durations"] = durations
+    return out
+
+
+@dataclass
+class GlobalStyle:
+    """A performer's estimated global style (module text)."""
+
+    lead: str
+    lead_score: float
+    guard_height: float
+    stance_width: float
+    crouch: float
+    tempo: dict[str, float] = field(default_factory=dict)  # duration factor tempo/speed per action
+    relative_tempo: dict[str, float] = field(default_factory=dict)
+    n_videos: int = 0
+    n_jabs: int = 0
+
+    def to_dict(self) -> dict:
+        f = lambda x: None if x is None or not np.isfinite(x) else round(float(x), 6)  # noqa: E731
+        return {"lead": self.lead, "lead_score": f(self.lead_score), "guard_height": f(self.guard_height),
+                "stance_width": f(self.stance_width), "crouch": f(self.crouch),
+                "tempo": {k: f(v) for k, v in self.tempo.items()},
+                "relative_tempo": {k: f(v) for k, v in self.relative_tempo.items()},
+                "n_videos": int(self.n_videos), "n_jabs": int(self.n_jabs)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GlobalStyle:
+        n = lambda x: math.nan if x is None else float(x)  # noqa: E731
+        return cls(str(d["lead"]), n(d.get("lead_score")), n(d.get("guard_height")), n(d.get("stance_width")),
+                   n(d.get("crouch")), {k: n(v) for k, v in d.get("tempo", {}).items()},
+                   {k: n(v) for k, v in d.get("relative_tempo", {}).items()}, int(d.get("n_videos", 0)),
+                   int(d.get("n_jabs", 0)))
+
+
+class GlobalStyleEstimator(BaseEstimator):
+    """Population figures per view from training performers (``fit``), a performer's style (``estimate``).
+
+    ``fit(videos)`` / ``estimate(videos)``: ``videos`` a list of ``(xy (F, 15, 2), labels, view)``. Learned:
+    ``population_`` (view -> mean guard / stance / extension of the training videos), ``durations_``
+    (action -> median segment length, frames)."""
+
+    def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5):
+        self.lead_threshold = lead_threshold
+        self.min_front_jabs = min_front_jabs
+
+    @classmethod
+    def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
+        """An estimator without a population: guard / stance / crouch are the raw figures (stance the ankle
+        ratio itself), tempo relative to the action model's mean instance length (``mean_frames`` at the
+        model's rate, converted to ``video_fps``)."""
+        est = cls(**kw)
+        est.population_ = {}
+        est.orthodox_side_ = 0.0  # unknown without a population: the labelled jab hand decides
+        est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
+        return est
+
+    def fit(self, videos, y=None) -> GlobalStyleEstimator:
+        per_view: dict[str, dict[str, list[float]]] = {}
+        dur: dict[str, list[int]] = {}
+        front = []
+        for xy, labels, view in videos:
+            f = video_figures(xy, labels)
+            if str(view) == "front":
+                front.append(f)
+            pv = per_view.setdefault(str(view), {"guard": [], "stance": [], "extension": []})
+            for k in pv:
+                if k in f and np.isfinite(f[k]):
+                    pv[k].append(f[k])
+            for a, ds in f["durations"].items():
+                dur.setdefault(a, []).extend(ds)
+        if not per_view:
+            raise ParameterError("videos", "no training video")
+        self.population_ = {v: {k: (float(np.mean(x)) if x else math.nan) for k, x in d.items()} for v, d in per_view.items()}
+        # the image side of an orthodox jab in front views, from the labelled jab hand of the population
+        prod = [np.mean(f["jab_scores"]) * np.mean(f["jab_sides"]) for f in front if f["jab_scores"] and f["jab_sides"]]
+        self.orthodox_side_ = float(np.sign(np.sum(prod))) if prod else 0.0
+        self.durations_ = {a: float(np.median(d)) for a, d in dur.items() if d}
+        return self
+
+    def estimate(self, videos) -> GlobalStyle:
+        if not hasattr(self, "population_"):
+            raise ParameterError("estimator", "not fitted")
+        g, s, c, jab, sides, dur = [], [], [], [], [], {}
+        for xy, labels, view in videos:
+            f = video_figures(xy, labels)
+            if str(view) == "front":
+                sides += f["jab_sides"]
+            pop = self.population_.get(str(view))
+            if pop is None and self.population_:  # a view the population lacks: pool over its views
+                pop = {k: float(np.nanmean([p[k] for p in self.population_.values()])) for k in ("guard", "stance", "extension")}
+            elif pop is None:  # no population: raw figures
+                pop = {"guard": 0.0, "stance": 1.0, "extension": 0.0}
+            if "guard" in f:
+                g.append(f["guard"] - pop["guard"])
+                s.append(f["stance"] / pop["stance"])
+                c.append(pop["extension"] - f["extension"])
+            jab += f["jab_scores"]
+            for a, ds in f["durations"].items():
+                dur.setdefault(a, []).extend(ds)
+        side = getattr(self, "orthodox_side_", 0.0)
+        if side != 0.0 and len(sides) >= self.min_front_jabs:
+            # label-free: the share of front-view jabs thrown from the orthodox side of the neck, as a score in [-1, 1]
+            score = float(2 * np.mean(np.sign(sides) == side) - 1)
+            jab = sides
+        else:
+            score = float(np.mean(jab)) if jab else 0.0
+        tempo = {a: float(np.median(d)) / self.durations_[a] for a, d in dur.items() if a in self.durations_ and d}
+        mt = float(np.mean(list(tempo.values()))) if tempo else math.nan
+        return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
+                           _nanmedian(s), _nanmedian(c), tempo, {a: v / mt for a, v in tempo.items()},
+                           len(videos), len(jab))
+
+
+# ----------------------------------------------------------------------------- orthodox clips for the model
+def orthodox_clips(clips, southpaw: set[str]):
+    """Clips with those of ``southpaw`` performers (name prefix ``pXX_``) mirrored to orthodox."""
+    from ..motiongraph.graph import Clip
+
+    out = []
+    for c in clips:
+        perf = c.name.split("_")[0]
+        out.append(Clip(c.name, c.motion.mirror(), c.labels, c.path, c.sha256) if perf in southpaw else c)
+    return out
+
+
+# ----------------------------------------------------------------------------- projection and fitting
+def _rot(yaw: float, elevation: float) -> np.ndarray:
+    """(2, 3) weak-perspective projection rows: yaw about +Y (the performer turned by ``yaw``), a camera
+    looking down by ``elevation``; image x = +X of a performer facing the camera, image y down."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    ce, se = math.cos(elevation), math.sin(elevation)
+    # camera: x right, y down; tilt about x
+    P = np.array([[1.0, 0, 0], [0, -ce, se]])
+    return P @ Ry
+
+
+def project(points: np.ndarray, yaw: float, scale: float, shift: np.ndarray, elevation: float) -> np.ndarray:
+    """(F, K, 2) weak-perspective image of (F, K, 3) points."""
+    return scale * points @ _rot(yaw, elevation).T + shift
+
+
+class SegmentFitter:
+    """Fits coefficients of one label of a fitted :class:`~vidstyle.actionmodel.ActionModel` to 2D tracks
+    (module text). ``n_fit`` spatial coefficients are free; ``prior_weight`` scales the GMM prior;
+    ``loss_scale`` is the Cauchy scale in torso lengths; ``elevation_deg`` the assumed camera elevation."""
+
+    def __init__(self, model, label: str, n_fit: int = D.STYLE_N_FIT, prior_weight: float = D.STYLE_PRIOR_WEIGHT,
+                 loss_scale: float = D.STYLE_LOSS_SCALE, elevation_deg: float = D.STYLE_ELEVATION_DEG,
+                 max_nfev: int = D.STYLE_MAX_NFEV):
+        self.model = model
+        self.label = label
+        lm = model._model(label)
+        self.lm = lm
+        self.n_fit = int(min(n_fit, lm.n_spatial))
+        self.prior_weight = float(prior_weight)
+        self.loss_scale = float(loss_scale)
+        self.elevation = math.radians(float(elevation_deg))
+        self.max_nfev = int(max_nfev)
+        if self.prior_weight < 0 or self.loss_scale <= 0:
+            raise ParameterError("prior_weight/loss_scale", "prior_weight >= 0 and loss_scale > 0 required")
+
+    # the full coefficient vector of the free ones, the others at the component's mean
+    def full(self, zf: np.ndarray, g: int | None = None) -> np.ndarray:
+        lm = self.lm
+        z = np.array(lm.gmm_means[self._g if g is None else g], dtype=np.float64)
+        z[: self.n_fit] = zf
+        return z
+
+    def keypoints(self, z: np.ndarray, n_frames: int) -> np.ndarray:
+        """(n_frames, 15, 3) keypoints of the decoded coefficients, time-normalised to ``n_frames``."""
+        from ..mocap.keypoints import keypoint_positions
+
+        return keypoint_positions(self.model.decode(z, self.label, n_frames=n_frames))
+
+    def initial_camera(self, P3: np.ndarray, xy: np.ndarray) -> tuple[float, float, np.ndarray]:
+        best = None
+        m = np.isfinite(xy).all(-1)
+        for yaw in np.linspace(-math.pi, math.pi, 12, endpoint=False):
+            q = P3 @ _rot(yaw, self.elevation).T
+            qc = q[m] - q[m].mean(0)
+            xc = xy[m] - xy[m].mean(0)
+            s = max(float((qc * xc).sum() / max((qc * qc).sum(), 1e-12)), 1e-6)
+            t = xy[m].mean(0) - s * q[m].mean(0)
+            r = float(np.sum((s * q[m] + t - xy[m]) ** 2))
+            if best is None or r < best[0]:
+                best = (r, yaw, s, t)
+        return best[1], best[2], best[3]
+
+    def linearisation(self, zf: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Keypoints (n, 15, 3) of the free coefficients ``zf`` and their Jacobian (n*15*3, n_fit) by forward
+        differences (step 0.05 whitened units); cached per (n, zf)."""
+        key = (int(n), tuple(np.round(zf, 9)))
+        cache = self.__dict__.setdefault("_lin", {})
+        if key not in cache:
+            K0 = self.keypoints(self.full(zf), n)
+            J = np.empty((K0.size, self.n_fit))
+            h = 0.05
+            for i in range(self.n_fit):
+                z = zf.copy()
+                z[i] += h
+                J[:, i] = (self.keypoints(self.full(z), n) - K0).ravel() / h
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = (K0, J)
+        return cache[key]
+
+    def fit(self, xy: np.ndarray, z0: np.ndarray | None = None, rounds: int = D.STYLE_ROUNDS) -> dict:
+        """Fit one segment's track ``xy`` (n, 15, 2; NaN missing). Returns ``z`` (full coefficients), the
+        camera (yaw, scale, shift), the robust data cost per visible keypoint, and ``n_visible``.
+
+        The decoded keypoints are linearised in the free coefficients (:meth:`linearisation`) around the
+        start and, for each further round, around the previous solution (Gauss-Newton on the body model;
+        the camera stays exact)."""
+        from scipy.optimize import least_squares
+
+        xy = np.asarray(xy, dtype=np.float64)
+        n = len(xy)
+        torso = _torso(xy)
+        vis = np.isfinite(xy).all(-1)
+        if n < 2 or not np.isfinite(torso) or vis.sum() < 6:
+            raise ParameterError("track", f"segment of {n} frames with {int(vis.sum())} visible keypoints: too little to fit")
+        lm = self.lm
+        if z0 is None:
+            self._g = int(np.argmax(lm.gmm_weights))
+        else:
+            self._g = int(np.argmax([self._comp_logpdf(z0, g) for g in range(lm.n_components)]))
+        L = np.linalg.cholesky(lm.gmm_covariances[self._g])
+        Linv = np.linalg.inv(L)
+        mu = lm.gmm_means[self._g]
+        zf = (mu if z0 is None else z0)[: self.n_fit].copy()
+        K0, _ = self.linearisation(zf, n)
+        yaw, s, t = self.initial_camera(K0, xy)
+        target = np.where(vis[..., None], xy, 0.0)
+        f = self.loss_scale
+        w = math.sqrt(self.prior_weight)
+        nf = self.n_fit
+        p = np.concatenate([zf, [yaw, math.log(s)], t])
+        nfev = 0
+        for _ in range(max(1, int(rounds))):
+            zc = p[:nf].copy()
+            K0, J = self.linearisation(zc, n)
+
+            def resid(q):
+                dz = q[:nf] - zc
+                P3 = K0 + (J @ dz).reshape(K0.shape)
+                pr = project(P3, q[nf], math.exp(q[nf + 1]), q[nf + 2:nf + 4], self.elevation)
+                r = ((pr - target) / torso)[vis].ravel()
+                r = np.sign(r) * f * np.sqrt(np.log1p((r / f) ** 2))
+                return np.concatenate([r, w * (Linv @ (self.full(q[:nf]) - mu))])
+
+            res = least_squares(resid, p, method="trf", max_nfev=self.max_nfev)
+            p = res.x
+            nfev += int(res.nfev)
+        z = self.full(p[:nf])
+        # the exact data cost at the solution
+        P3 = self.keypoints(z, n)
+        pr = project(P3, p[nf], math.exp(p[nf + 1]), p[nf + 2:nf + 4], self.elevation)
+        r = ((pr - target) / torso)[vis].ravel()
+        r = f * np.sqrt(np.log1p((r / f) ** 2))
+        nv = int(vis.sum())
+        return {"z": z, "yaw": float(p[nf]), "scale": float(math.exp(p[nf + 1])), "shift": p[nf + 2:nf + 4].copy(),
+                "cost": float(np.sum(r ** 2) / max(nv, 1)), "n_visible": nv, "component": self._g, "nfev": nfev}
+
+    def _comp_logpdf(self, z, g) -> float:
+        lm = self.lm
+        L = np.linalg.cholesky(lm.gmm_covariances[g])
+        y = np.linalg.solve(L, z - lm.gmm_means[g])
+        return float(np.log(lm.gmm_weights[g]) - 0.5 * y @ y - np.log(np.diag(L)).sum())
+
+
+def fit_segment(model, label: str, xy: np.ndarray, **kw) -> dict:
+    """:meth:`SegmentFitter.fit` of one segment with the defaults (or ``kw``)."""
+    return SegmentFitter(model, label, **kw).fit(xy)
+
+
+def noisy_track(xy: np.ndarray, rng: np.random.Generator, sigma: float = 0.05, outliers: float = 0.05) -> np.ndarray:
+    """A noisy copy of a track: Gaussian noise of ``sigma`` torso lengths on every coordinate, and a share
+    ``outliers`` of keypoints moved by a uniform offset of up to 2 torso lengths in x and in y."""
+    xy = np.array(xy, dtype=np.float64)
+    torso = _torso(xy)
+    out = xy + rng.normal(0.0, sigma * torso, xy.shape)
+    m = rng.random(xy.shape[:2]) < outliers
+    out[m] += rng.uniform(-2 * torso, 2 * torso, (int(m.sum()), 2))
+    return out
+
+
+@dataclass
+class ActionStyle:
+    """The action-level part of a learned style: global style and per label the mean fitted coefficients
+    (in the orthodox frame of the model), their count and spread."""
+
+    global_style: GlobalStyle
+    coefficients: dict[str, np.ndarray] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
+    spread: dict[str, np.ndarray] = field(default_factory=dict)  # per-coefficient sd of the fitted segments
+    model: str = ""  # the action model file it refers to
+    params: dict = field(default_factory=dict)
+
+    def to_record(self):
+        from ..formats.style import ActionStyleRecord
+
+        g = self.global_style.to_dict()
+        return ActionStyleRecord(self.model, dict(self.params), g,
+                                 {k: (np.asarray(self.coefficients[k], dtype=np.float64),
+                                      np.asarray(self.spread.get(k, np.zeros_like(self.coefficients[k])), dtype=np.float64),
+                                      int(self.counts.get(k, 1))) for k in self.coefficients})
+
+    @classmethod
+    def from_record(cls, rec) -> ActionStyle:
+        gs = GlobalStyle.from_dict(rec.global_style)
+        return cls(gs, {k: v[0] for k, v in rec.labels.items()}, {k: v[2] for k, v in rec.labels.items()},
+                   {k: v[1] for k, v in rec.labels.items()}, rec.model, dict(rec.params))
+
+    def check_model(self, model, path=None) -> None:
+        """Raise ``FormatError`` (naming ``path``) unless every label's coefficients fit ``model``."""
+        from ..errors import FormatError
+
+        for k, z in self.coefficients.items():
+            if k not in model.models_:
+                raise FormatError(path, f"action_style.labels.{k}", "the action model has no such label")
+            if len(z) != model.models_[k].n_coefficients:
+                raise FormatError(path, f"action_style.labels.{k}.coefficients",
+                                  f"{len(z)} coefficients, the action model has {model.models_[k].n_coefficients}")
+
+    def realise(self, model, label: str, n_frames: int | None = None, sample: bool = False, random_state=None,
+                pin: bool = False):
+        """The performer's way of doing ``label``: the decoded mean coefficients (``sample``: a draw from a
+        Gaussian of the fitted segments' spread around it), planted feet held (``pin``, in the orthodox
+        frame), mirrored back for a southpaw."""
+        z = np.asarray(self.coefficients[label], dtype=np.float64)
+        if sample:
+            rng = np.random.default_rng(random_state)
+            z = z + rng.standard_normal(len(z)) * np.asarray(self.spread.get(label, np.zeros_like(z)))
+        m = model.decode(z, label, n_frames=n_frames, pin=pin)
+        return m.mirror() if self.global_style.lead == "southpaw" else m
+
+
+def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dict | None = None,
+                     max_segments: int = D.STYLE_MAX_SEGMENTS, random_state: int = 0) -> ActionStyle:
+    """A performer's :class:`ActionStyle` from ``videos`` (``(xy, labels, view)``): global style, then per
+    modelled label up to ``max_segments`` segments (a seeded even spread over all) fitted with
+    :class:`SegmentFitter` after mirroring a southpaw's tracks."""
+    params = dict(params or {})
+    gs = estimator.estimate(videos)
+    segs: dict[str, list[np.ndarray]] = {}
+    for xy, labels, _view in videos:
+        xy = np.asarray(xy, dtype=np.float64)
+        if gs.lead == "southpaw":
+            xy = mirror_track(xy)
+        for label, s, e in label_runs(list(labels)[: len(xy)]):
+            if label in model.models_ and e - s >= 3:
+                segs.setdefault(label, []).append(xy[s:e])
+    rng = np.random.default_rng(random_state)
+    coeffs, counts, spread = {}, {}, {}
+    for label, lst in sorted(segs.items()):
+        if len(lst) > max_segments:
+            idx = sorted(rng.choice(len(lst), max_segments, replace=False))
+            lst = [lst[i] for i in idx]
+        fitter = SegmentFitter(model, label, **params)
+        Z = []
+        for xy in lst:
+            try:
+                Z.append(fitter.fit(xy)["z"])
+            except ParameterError as e:
+                log.info("style fit: %s segment skipped: %s", label, e)
+        if Z:
+            Z = np.array(Z)
+            coeffs[label] = Z.mean(0)
+            spread[label] = Z.std(0)
+            counts[label] = len(Z)
+    return ActionStyle(gs, coeffs, counts, spread, params=params)
+
+
+def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyleEstimator | None = None,
+                       seed: int = 0) -> ActionStyle:
+    """``learn-style --poses-dir``: the action-level style of one performer from label files (true or
+    recognised; their ``video`` names the pose file ``<poses_dir>/<video stem>.poses.json``, their ``view``
+    the view, default ``front``) and an action model file. ``estimator``: a fitted
+    :class:`GlobalStyleEstimator` (default: :meth:`GlobalStyleEstimator.from_model`). Bad input raises a
+    one-line error naming the file (missing pose file, damaged model, a label file without a video)."""
+    from pathlib import Path
+
+    from ..errors import InputError
+    from ..formats.labels import read_labels
+    from ..formats.poses import read_poses
+    from ..recognition.posefeatures import track_from_poses
+    from .model import ActionModel
+
+    model = ActionModel.load(model_path)
+    videos = []
+    fps = 20.0
+    for p in label_paths:
+        fl = read_labels(p)
+        fps = fl.fps
+        if not fl.video:
+            raise InputError(f"{p}: the label file names no video, so no pose file can be found for it")
+        pf = Path(poses_dir) / f"{Path(fl.video).stem}.poses.json"
+        if not pf.is_file():
+            raise InputError(f"{pf}: pose file not found (for {p})")
+        xy = track_from_poses(read_poses(pf), fl.fps, fl.n_frames).xy
+        videos.append((xy, fl.labels, fl.view or "front"))
+    est = estimator if estimator is not None else GlobalStyleEstimator.from_model(model, fps)
+    style = fit_action_style(model, est, videos, random_state=seed)
+    style.model = str(model_path)
+    style.check_model(model, model_path)
+    log.info("action style: %s, guard %.3f, stance %.3f; coefficients of %s", style.global_style.lead,
+             style.global_style.guard_height, style.global_style.stance_width, ", ".join(sorted(style.coefficients)))
+    return style
+
+
+def restyle_motion(motion, labels, action_style: ActionStyle, model, blend: int = D.STYLE_BLEND_FRAMES,
+                   min_fraction: float = D.STYLE_MIN_FRACTION):
+    """``motion`` (e.g. ``synthesize``'s graph walk) with every run of frames labelled with an action the
+    style has coefficients for replaced by this performer's way of doing it (:meth:`ActionStyle.realise`,
+    decoded at the run's length, feet pinned, mirrored for a southpaw), retargeted onto ``motion``'s
+    skeleton (rotations kept, root path scaled by leg length), turned to the facing and moved to the root
+    position of the run's first frame, and cross-faded with the original over ``blend`` frames at either
+    end (rotations by normalised quaternion interpolation, root linearly). Returns ``(motion, replaced
+    runs [(label, start, end)])``. A run shorter than ``min_fraction`` of the label's mean instance length
+    (in ``motion``'s frame rate) keeps the graph's frames: squeezing a whole kick into a few frames would
+    move far faster than any source."""
+    from ..mocap import Motion
+    from ..mocap.retarget import retarget
+
+    labels = list(labels)
+    if len(labels) != motion.n_frames:
+        raise ParameterError("labels", f"{len(labels)} labels for {motion.n_frames} frames")
+    rot = motion.rotations.copy()
+    root = motion.root_positions.copy()
+    angles = motion.facing_angles()
+    done = []
+    for label, s, e in label_runs(labels):
+        n = e - s
+        if label not in action_style.coefficients or n < 3:
+            continue
+        if n < min_fraction * model.models_[label].mean_frames * motion.fps / model.fps_:
+            log.info("restyle: %s at frames %d-%d kept (%d frames, under %.0f %% of its mean length)", label, s, e, n,
+                     100 * min_fraction)
+            continue
+        inst = action_style.realise(model, label, n_frames=n, pin=True)
+        inst, _ = retarget(inst, motion.skeleton, f"{label} of the style")
+        inst = inst.normalize_facing(0, float(angles[s]), origin=True)
+        r = inst.root_positions.copy()
+        r[:, 0] += root[s, 0]
+        r[:, 2] += root[s, 2]
+        b = int(min(blend, n // 2))
+        w = np.ones(n)
+        if b > 0:
+            ramp = np.arange(1, b + 1) / (b + 1)
+            w[:b] = ramp
+            w[n - b:] = ramp[::-1]
+        q0, q1 = rot[s:e], inst.rotations
+        q1 = np.where(np.sum(q0 * q1, -1, keepdims=True) < 0, -q1, q1)
+        q = (1 - w)[:, None, None] * q0 + w[:, None, None] * q1
+        rot[s:e] = q / np.linalg.norm(q, axis=-1, keepdims=True)
+        root[s:e] = (1 - w)[:, None] * root[s:e] + w[:, None] * r
+        done.append((label, s, e))
+    return Motion(motion.skeleton, rot, None, motion.fps, root_positions=root), done
