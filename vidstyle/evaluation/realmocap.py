@@ -24,6 +24,7 @@ The clip never trains, tunes or selects anything: the recognizer is used as give
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
 import math
@@ -369,6 +370,18 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     return out
 
 
+@contextlib.contextmanager
+def work_directory(work_dir: str | os.PathLike | None, prefix: str):
+    """``work_dir`` (made if missing, kept afterwards), or a temporary directory removed afterwards."""
+    if work_dir is not None:
+        work = Path(work_dir)
+        work.mkdir(parents=True, exist_ok=True)
+        yield work
+        return
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        yield Path(tmp)
+
+
 def is_pose_model(model) -> bool:
     from ..recognition.poserecognizer import PoseRecognizer
 
@@ -421,20 +434,10 @@ def evaluate_strikes(bvh: str | os.PathLike, model_path: str | os.PathLike, came
     missing = [c for c in PUNCHES + KICKS if c not in set(map(str, model.classes_))]
     if missing:
         raise ParameterError("model", f"{model_path}: the recognizer has no class {missing[0]!r}")
-    tmp = None
-    if work_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="vidstyle-strikes-")
-        work = Path(tmp.name)
-    else:
-        work = Path(work_dir)
-        work.mkdir(parents=True, exist_ok=True)
-    try:
+    with work_directory(work_dir, "vidstyle-strikes-") as work:
         per_camera = []
         for i, cam in progress(list(enumerate(cameras)), "strike cameras"):
             per_camera.append(evaluate_camera(motion, mask, cam, model, params, seed, work, i))
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
     classes = [str(c) for c in model.classes_]
     overall: dict[str, Any] = {}
     for key in ("smoothed", "raw"):

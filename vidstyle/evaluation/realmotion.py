@@ -26,7 +26,6 @@ from __future__ import annotations
 import csv
 import logging
 import os
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ParameterError
-from .realmocap import KICKS, PUNCHES, StrikeCamera, StrikeEvalParams, action_frames
+from .realmocap import KICKS, PUNCHES, StrikeCamera, StrikeEvalParams, action_frames, work_directory
 
 log = logging.getLogger(__name__)
 
@@ -195,15 +194,8 @@ def evaluate_real_motion(clips: Sequence[RealClip], recs: Recognizers,
     recs.check()
     params = params or StrikeEvalParams()
     names = recs.names()
-    tmp = None
-    if work_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="vidstyle-realmotion-")
-        work = Path(tmp.name)
-    else:
-        work = Path(work_dir)
-        work.mkdir(parents=True, exist_ok=True)
     rows = []
-    try:
+    with work_directory(work_dir, "vidstyle-realmotion-") as work:
         jobs = [(ci, clip, ki, cam) for ci, clip in enumerate(clips) for ki, cam in enumerate(cameras)]
         motions: dict[int, tuple] = {}
         for ci, clip, ki, cam in progress(jobs, "real-motion renders"):
@@ -233,9 +225,6 @@ def evaluate_real_motion(clips: Sequence[RealClip], recs: Recognizers,
                 rows.append({"clip": clip.name, "family": clip.family, "frames_set": clip.frames,
                              "camera": cam.name, "recognizer": rname, "appearance": appearance.to_dict(),
                              **_score(model.classes_, outs[rname]["smoothed"], vmask, clip.family)})
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
     return {"seed": int(seed), "params": params.to_dict(), "recognizers": names,
             "fusion_weight": recs.fusion_weight, "cameras": [c.to_dict() for c in cameras],
             "clips": [{"clip": c.name, "bvh": str(c.bvh), "family": c.family, "frames": c.frames,

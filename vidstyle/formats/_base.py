@@ -266,6 +266,22 @@ def npz_scalar(z: dict, path, key: str, kind: str, required: bool = True):
     return str(v)
 
 
+def npz_json(z: dict, path, key: str, typ: type, required: bool = True) -> Any:
+    """The JSON text stored as the string scalar ``z[key]`` of an ``.npz`` owner's file, parsed and checked
+    to be a ``typ`` (dict, list, ...); a missing optional key gives ``typ()``. :class:`FormatError` naming
+    the key for a missing (``required``), non-JSON or mistyped one."""
+    text = npz_scalar(z, path, key, "str", required)
+    if text is None:
+        return typ()
+    try:
+        v = json.loads(text)
+    except ValueError:
+        raise FormatError(path, key, "not valid JSON") from None
+    if not isinstance(v, typ):
+        raise FormatError(path, key, f"expected a JSON {typ.__name__}, got {type(v).__name__}")
+    return v
+
+
 #: Serialises np.load's .npy header parsing across threads: numpy parses each header with
 #: ``ast.literal_eval``, and CPython 3.11's AST construction is not thread-safe (python/cpython#106905:
 #: a spurious "SystemError: AST constructor recursion depth mismatch" when threads parse at once, seen

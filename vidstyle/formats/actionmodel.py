@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import write_npz
-from ._base import FormatError, load_npz, npz_scalar, npz_version
+from ._base import FormatError, load_npz, npz_json, npz_scalar, npz_version
 
 KIND = "vidstyle.actionmodel"
 SCHEMA_VERSION = 1
@@ -135,16 +135,6 @@ def read_actionmodel(path: str | os.PathLike) -> ActionModelRecord:
     return parse_actionmodel(load_npz(path, "action model"), path)
 
 
-def _json(z: dict, path, key: str, typ: type) -> Any:
-    text = npz_scalar(z, path, key, "str")
-    try:
-        v = json.loads(text)
-    except ValueError:
-        raise FormatError(path, key, "not valid JSON") from None
-    if not isinstance(v, typ):
-        raise FormatError(path, key, f"expected a JSON {typ.__name__}, got {type(v).__name__}")
-    return v
-
 
 def _arr(z: dict, path, key: str, shape: tuple, kind: str = "f") -> np.ndarray:
     if key not in z:
@@ -200,21 +190,21 @@ def parse_actionmodel(z: dict, path=None) -> ActionModelRecord:
     npz_version(z, path, KIND, VERSIONS)
     if "kind" not in z:
         raise FormatError(path, "kind", "missing")
-    params = _check_params(_json(z, path, "params", dict), path)
+    params = _check_params(npz_json(z, path, "params", dict), path)
     fps = npz_scalar(z, path, "fps", "float")
     if fps <= 0:
         raise FormatError(path, "fps", f"must be > 0, got {fps}")
     contact_height = npz_scalar(z, path, "contact_height", "float")
-    names = _json(z, path, "skeleton_names", list)
+    names = npz_json(z, path, "skeleton_names", list)
     if not names or not all(isinstance(n, str) for n in names):
         raise FormatError(path, "skeleton_names", "expected a non-empty list of strings")
     J = len(names)
     parents = _arr(z, path, "skeleton_parents", (J,), "i").astype(np.int64)
     offsets = _arr(z, path, "skeleton_offsets", (J, 3))
-    channels = _json(z, path, "skeleton_channels", list)
+    channels = npz_json(z, path, "skeleton_channels", list)
     if len(channels) != J or not all(isinstance(c, list) and all(isinstance(x, str) for x in c) for c in channels):
         raise FormatError(path, "skeleton_channels", f"expected {J} lists of channel names")
-    ends = _json(z, path, "skeleton_end_sites", dict)
+    ends = npz_json(z, path, "skeleton_end_sites", dict)
     end_sites = {}
     for k, v in ends.items():
         if not (k.isdigit() and int(k) < J and isinstance(v, list) and len(v) == 3
@@ -230,16 +220,16 @@ def parse_actionmodel(z: dict, path=None) -> ActionModelRecord:
     reach = _arr(z, path, "reach", (J,))
     if np.any(reach <= 0):
         raise FormatError(path, "reach", "must be > 0")
-    labels = _json(z, path, "labels", list)
+    labels = npz_json(z, path, "labels", list)
     if not labels or not all(isinstance(x, str) and x for x in labels) or len(set(labels)) != len(labels):
         raise FormatError(path, "labels", "expected a non-empty list of unique names")
-    sources = _json(z, path, "sources", list)
+    sources = npz_json(z, path, "sources", list)
     if not all(isinstance(s, str) for s in sources):
         raise FormatError(path, "sources", "expected a list of strings")
-    skipped = _json(z, path, "skipped", dict)
+    skipped = npz_json(z, path, "skipped", dict)
     if not all(isinstance(v, str) for v in skipped.values()):
         raise FormatError(path, "skipped", "expected an object of strings")
-    meta = _json(z, path, "label_meta", list)
+    meta = npz_json(z, path, "label_meta", list)
     if len(meta) != len(labels):
         raise FormatError(path, "label_meta", f"expected {len(labels)} objects, got {len(meta)}")
     models = {}

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import write_npz
-from ._base import FormatError, load_npz, npz_scalar, npz_version
+from ._base import FormatError, load_npz, npz_json, npz_scalar, npz_version
 
 KIND = "vidstyle.vocabulary"
 SCHEMA_VERSION = 1
@@ -77,18 +77,6 @@ def write_vocabulary(path: str | os.PathLike, record: VocabularyRecord) -> None:
     write_npz(path, **arrays)
 
 
-def _json(z: dict, path: Path, key: str, typ: type, required: bool = True) -> Any:
-    text = npz_scalar(z, path, key, "str", required)
-    if text is None:
-        return typ()
-    try:
-        v = json.loads(text)
-    except ValueError:
-        raise FormatError(path, key, "not valid JSON") from None
-    if not isinstance(v, typ):
-        raise FormatError(path, key, f"expected a JSON {typ.__name__}, got {type(v).__name__}")
-    return v
-
 
 def read_vocabulary(path: str | os.PathLike) -> VocabularyRecord:
     """Read and check a vocabulary ``.npz`` (with or without the schema header)."""
@@ -106,8 +94,8 @@ def read_vocabulary(path: str | os.PathLike) -> VocabularyRecord:
     dim = npz_scalar(z, path, "dim", "int")
     if centres.shape[1] != dim:
         raise FormatError(path, "centres", f"has shape {centres.shape}, but dim is {dim}")
-    params = _json(z, path, "params", dict)
-    files = _json(z, path, "training_files", list)
+    params = npz_json(z, path, "params", dict)
+    files = npz_json(z, path, "training_files", list)
     if not all(isinstance(f, str) for f in files):
         raise FormatError(path, "training_files", "expected a list of strings")
     n_desc = npz_scalar(z, path, "n_descriptors", "int")
@@ -120,7 +108,7 @@ def read_vocabulary(path: str | os.PathLike) -> VocabularyRecord:
     return VocabularyRecord(
         centres=centres.astype(np.float32), params=params, dim=dim,
         descriptor_dtype=npz_scalar(z, path, "descriptor_dtype", "str"), n_descriptors=n_desc,
-        training_files=files, extra=_json(z, path, "extra", dict, required=False),
+        training_files=files, extra=npz_json(z, path, "extra", dict, required=False),
         seed=None if seed is None or seed < 0 else seed, tree=tree or None,
         method=npz_scalar(z, path, "method", "str", required=False) or str(params.get("method", "")),
         schema_version=version,
