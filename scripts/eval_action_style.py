@@ -82,8 +82,14 @@ def main() -> int:
     from vidstyle.actionmodel import defaults as D
     from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
     from vidstyle.evaluation.actionmodel import read_manifest, split_groups
-    from vidstyle.evaluation.actionstyle import (evaluate_performer, orthodox_model, performer_videos, row_json,
-                                                 summarise, true_instances)
+    from vidstyle.evaluation.actionstyle import (
+        evaluate_performer,
+        orthodox_model,
+        performer_videos,
+        row_json,
+        summarise,
+        true_instances,
+    )
     from vidstyle.formats.dataset import read_dataset
     from vidstyle.formats.metrics import ACTION_STYLE, write_metrics
 

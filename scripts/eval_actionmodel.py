@@ -68,7 +68,12 @@ def main() -> int:
     log.setLevel(logging.INFO)
     from vidstyle.actionmodel import ActionModel
     from vidstyle.actionmodel import defaults as D
-    from vidstyle.evaluation.actionmodel import evaluate_performer, evaluate_pooled, read_manifest, split_groups
+    from vidstyle.evaluation.actionmodel import (
+        evaluate_performer,
+        evaluate_pooled,
+        read_manifest,
+        split_groups,
+    )
     from vidstyle.formats.metrics import ACTIONMODEL, write_metrics
 
     t_start = time.perf_counter()

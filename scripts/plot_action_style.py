@@ -44,7 +44,7 @@ def main() -> int:
     from vidstyle.evaluation.actionmodel import read_manifest, split_groups
     from vidstyle.evaluation.actionstyle import orthodox_model, performer_videos, true_instances
     from vidstyle.formats.dataset import read_dataset
-    from vidstyle.mocap.keypoints import PARTS, KEYPOINT_INDEX, keypoint_positions
+    from vidstyle.mocap.keypoints import KEYPOINT_INDEX, PARTS, keypoint_positions
 
     manifest = read_manifest(args.dataset)
     ds = read_dataset(args.dataset / "dataset.json")

@@ -586,7 +586,7 @@ def action_style_table(items, root: Path) -> list[str]:
     lines = ["| file | input | performers | lead accuracy | guard r | stance r | duration factor r | relative tempo r | "
              "MPJPE fitted (mm) | unfitted (mm) | unfitted, true lead (mm) | reduction | reduction vs true lead |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    f = lambda x, d=2: "-" if x is None else f"{x:.{d}f}"  # noqa: E731
+    f = lambda x, d=2: "-" if x is None else f"{x:.{d}f}"
     for p, d in sorted(items, key=lambda t: str(t[0])):
         for name, v in d["by_input"].items():
             lines.append(f"| `{_rel(p, root)}` | {name} | {v.get('performers')} | {f(v.get('lead_accuracy'))} | "

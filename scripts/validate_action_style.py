@@ -46,7 +46,13 @@ def main() -> int:
 
     from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
     from vidstyle.evaluation.actionmodel import read_manifest, split_groups
-    from vidstyle.evaluation.actionstyle import evaluate_performer, orthodox_model, performer_videos, summarise, true_instances
+    from vidstyle.evaluation.actionstyle import (
+        evaluate_performer,
+        orthodox_model,
+        performer_videos,
+        summarise,
+        true_instances,
+    )
     from vidstyle.fileio import json_default
     from vidstyle.formats._base import write_json_document
     from vidstyle.formats.dataset import read_dataset

@@ -30,7 +30,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_
     os.environ.setdefault(_v, "1")  # one core
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.formats.validation import ACTIONMODEL_DEFAULTS, validation_header, write_validation  # noqa: E402
+from vidstyle.formats.validation import ACTIONMODEL_DEFAULTS, validation_header, write_validation
 
 log = logging.getLogger("validate_actionmodel")
 ROOT = Path(__file__).resolve().parents[1]

@@ -199,9 +199,8 @@ def _mutations(doc, rng):
 
 
 def test_fuzzed_action_style_raises_format_error(style):
-    from vidstyle.formats.style import parse_style
-
     from vidstyle.fileio import json_default
+    from vidstyle.formats.style import parse_style
 
     doc = json.loads(json.dumps(style.to_dict(), default=json_default))
     parse_style(doc, "ok.json")
@@ -335,7 +334,7 @@ def test_restyle_motion_replaces_actions_only(style, model):
     # the replaced jabs are thrown with the right hand (southpaw), the originals with the left
     a, b = keypoint_positions(m), keypoint_positions(out)
     _, s, e = runs[0]
-    travel = lambda p, w: np.linalg.norm(p[s:e, w] - p[s, w], axis=-1).max()  # noqa: E731
+    travel = lambda p, w: np.linalg.norm(p[s:e, w] - p[s, w], axis=-1).max()
     assert travel(a, 7) > travel(a, 8) and travel(b, 8) > travel(b, 7)
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 import numpy as np
-
 from bvh_samples import TWO_JOINT
+
 from vidstyle.cli import main
 from vidstyle.mocap import end_site_positions, global_positions, parse_bvh, read_bvh
 

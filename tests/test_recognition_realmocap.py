@@ -12,7 +12,6 @@ from scipy.spatial.transform import Rotation
 
 from vidstyle.cli import main
 from vidstyle.demo.skeleton import build_skeleton
-from vidstyle.mocap import Motion
 from vidstyle.evaluation.realmocap import (
     KICKS,
     PUNCHES,
@@ -23,6 +22,7 @@ from vidstyle.evaluation.realmocap import (
     parse_cameras,
     segments,
 )
+from vidstyle.mocap import Motion
 
 REPO = Path(__file__).resolve().parents[1]
 FPS = 120.0
@@ -209,8 +209,8 @@ def test_command_bad_input(tmp_path, cmu_dir):
 def test_labelled_action_frames(tmp_path):
     from vidstyle.demo.dataset import label_document
     from vidstyle.errors import InputError
-    from vidstyle.formats.labels import write_labels
     from vidstyle.evaluation.realmocap import labelled_action_frames
+    from vidstyle.formats.labels import write_labels
 
     labels = ["Guard"] * 5 + ["Jab"] * 4 + ["Guard"] * 3 + ["LowKick"] * 2 + ["Uppercut"] * 3
     write_labels(tmp_path / "l.json", label_document(labels, 60.0, ["Jab", "LowKick", "Uppercut"], bvh="t.bvh"))

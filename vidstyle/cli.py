@@ -217,7 +217,7 @@ def _command_path(argv: list[str]) -> str:
                 break
             words.append(tok)
             cmd = sub[tok]
-    except Exception:  # noqa: BLE001 - the record then names no command; the run itself is unaffected
+    except Exception:
         return ""
     return " ".join(words)
 

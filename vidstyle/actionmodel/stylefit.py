@@ -158,7 +158,7 @@ class GlobalStyle:
     n_jabs: int = 0
 
     def to_dict(self) -> dict:
-        f = lambda x: None if x is None or not np.isfinite(x) else round(float(x), 6)  # noqa: E731
+        f = lambda x: None if x is None or not np.isfinite(x) else round(float(x), 6)
         return {"lead": self.lead, "lead_score": f(self.lead_score), "guard_height": f(self.guard_height),
                 "stance_width": f(self.stance_width), "crouch": f(self.crouch),
                 "tempo": {k: f(v) for k, v in self.tempo.items()},
@@ -167,7 +167,7 @@ class GlobalStyle:
 
     @classmethod
     def from_dict(cls, d: dict) -> GlobalStyle:
-        n = lambda x: math.nan if x is None else float(x)  # noqa: E731
+        n = lambda x: math.nan if x is None else float(x)
         return cls(str(d["lead"]), n(d.get("lead_score")), n(d.get("guard_height")), n(d.get("stance_width")),
                    n(d.get("crouch")), {k: n(v) for k, v in d.get("tempo", {}).items()},
                    {k: n(v) for k, v in d.get("relative_tempo", {}).items()}, int(d.get("n_videos", 0)),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 from contextlib import contextmanager
 from pathlib import Path
-from typing import List, Optional
+from typing import List
 
 import typer
 
@@ -48,14 +48,14 @@ def build_graph(
     out: Path = typer.Option(..., "--out", "-o", help="Graph file (.npz)."),
     window: int = typer.Option(D.WINDOW, "--window", "-k", help="Comparison and blend window in frames."),
     fps: float = typer.Option(D.FPS, "--fps", help="Frame rate of the graph (clips are resampled)."),
-    threshold: Optional[float] = typer.Option(None, "--threshold", help="RMS distance for transitions (clip length unit); default: --quantile of random pairs."),
+    threshold: float | None = typer.Option(None, "--threshold", help="RMS distance for transitions (clip length unit); default: --quantile of random pairs."),
     quantile: float = typer.Option(D.THRESHOLD_QUANTILE, "--quantile", help="Quantile of the pair distance used as default threshold."),
-    min_gap: Optional[int] = typer.Option(None, "--min-gap", help="No transitions within one clip between windows closer than this (frames; default 2*window)."),
+    min_gap: int | None = typer.Option(None, "--min-gap", help="No transitions within one clip between windows closer than this (frames; default 2*window)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror", help="Add the mirror image of every clip."),
     tile: int = typer.Option(D.TILE, "--tile", help="Tile size of the all-pairs pass."),
     dtype: str = typer.Option(D.DTYPE, "--dtype", help="GEMM precision: float32 (candidates refined in float64) or float64."),
     jobs: int = jobs_option(D.N_JOBS, help="1 (the default, unlike other commands): this process, one thread per core sharing one copy of the windows; N or -1 = all cores: joblib worker processes, each with its own copy."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
+    scheduler: str | None = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port)."),
     seed: int = typer.Option(D.RANDOM_STATE, "--seed", help="Seed of the threshold sample."),
     require_classes: str = typer.Option("", "--require-classes", help="Comma-separated actions the graph must have frames of (e.g. your annotations' classes): checked before the build, which is refused naming the missing ones."),
 ) -> None:
@@ -77,22 +77,22 @@ def build_graph(
 
 def synthesize(
     graph_path: Path = typer.Option(..., "--graph", "-g", help="Graph file from build-graph."),
-    sequence: Optional[Path] = typer.Option(None, "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
-    keyframes: Optional[Path] = typer.Option(None, "--keyframes", "-K", help="Instead of --sequence: keyframes JSON {\"keyframes\": [{\"clip\": BVH, \"frame\": i, \"time\": s}, ...]} (>= 2); the motion passes through each pose at its time (docs/keyframes.md)."),
-    method: Optional[str] = typer.Option(None, "--method", help=f"With --keyframes: {' | '.join(KD.METHODS)} (default {KD.METHOD}: Molina Tanco & Hilton's Markov chain over pose clusters; graph: the graph's shortest path; slerp: LERP+SLERP)."),
+    sequence: Path | None = typer.Option(None, "--sequence", "-s", help="Sequence JSON (from vidstyle generate) or a JSON list of actions."),
+    keyframes: Path | None = typer.Option(None, "--keyframes", "-K", help="Instead of --sequence: keyframes JSON {\"keyframes\": [{\"clip\": BVH, \"frame\": i, \"time\": s}, ...]} (>= 2); the motion passes through each pose at its time (docs/keyframes.md)."),
+    method: str | None = typer.Option(None, "--method", help=f"With --keyframes: {' | '.join(KD.METHODS)} (default {KD.METHOD}: Molina Tanco & Hilton's Markov chain over pose clusters; graph: the graph's shortest path; slerp: LERP+SLERP)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output BVH; with --sequence, <out stem>.labels.json is written beside it."),
-    preview: Optional[Path] = typer.Option(None, "--preview", help="Also render a preview video (.mp4)."),
+    preview: Path | None = typer.Option(None, "--preview", help="Also render a preview video (.mp4)."),
     seconds: float = typer.Option(D.STEP_SECONDS, "--seconds", help="Duration of steps given without one."),
     mismatch_penalty: float = typer.Option(D.MISMATCH_PENALTY, "--mismatch-penalty", help="Cost of one output frame with a wrong label."),
     transition_penalty: float = typer.Option(D.TRANSITION_PENALTY, "--transition-penalty", help="Cost added to every transition (in threshold units)."),
     strict: bool = typer.Option(D.STRICT, "--strict/--lenient", help="Fail when a step gets no frame of its action within its duration (default: warn, naming the step)."),
     foot_lock: bool = typer.Option(D.FOOT_LOCK, "--foot-lock/--no-foot-lock", help="Hold planted feet still across seams (two-bone leg IK)."),
-    max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
+    max_in_degree: int | None = typer.Option(None, "--max-in-degree", help="Approximate: walk only the N cheapest transitions into each frame per source label (default: exact DP)."),
     seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="With --keyframes --method markov: seed of the pose clustering."),
-    style: Optional[Path] = typer.Option(None, "--style", help="With --sequence: a style.json with an action-level part "
+    style: Path | None = typer.Option(None, "--style", help="With --sequence: a style.json with an action-level part "
                                          "(learn-style --poses-dir): every action of the walk is replaced by this "
                                          "performer's way of doing it (needs --action-model; docs/actionmodel.md)."),
-    action_model: Optional[Path] = typer.Option(None, "--action-model", help="With --style: the action model its "
+    action_model: Path | None = typer.Option(None, "--action-model", help="With --style: the action model its "
                                                 "coefficients belong to (fit-actions)."),
 ) -> None:
     """Walk the graph to realise an action sequence at minimum transition cost (--sequence), or make motion
@@ -176,13 +176,13 @@ def evaluate_motion(
     out: Path = typer.Option(Path("metrics/motion.json"), "--out", "-o", help="Metrics JSON."),
     walks: int = typer.Option(D.EVAL_WALKS, "--walks", help="Random sequences to synthesise when no motions are given."),
     steps: int = typer.Option(D.EVAL_STEPS, "--steps", help="Steps per random sequence."),
-    actions: Optional[str] = typer.Option(None, "--actions", help="Comma-separated actions for random sequences (default: every label with >= 2 s of frames)."),
+    actions: str | None = typer.Option(None, "--actions", help="Comma-separated actions for random sequences (default: every label with >= 2 s of frames)."),
     min_seconds: float = typer.Option(D.EVAL_MIN_SECONDS, "--min-seconds", help="Shortest random step."),
     max_seconds: float = typer.Option(D.EVAL_MAX_SECONDS, "--max-seconds", help="Longest random step."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random sequences."),
     foot_lock: bool = typer.Option(D.FOOT_LOCK, "--foot-lock/--no-foot-lock", help="Render random walks with foot locking (compare both)."),
-    sequence: Optional[Path] = typer.Option(None, "--sequence", "-s", help="Synthesise this sequence file (e.g. from vidstyle generate) instead of random ones."),
-    max_in_degree: Optional[int] = typer.Option(None, "--max-in-degree", help="Approximate planning (see synthesize); default exact."),
+    sequence: Path | None = typer.Option(None, "--sequence", "-s", help="Synthesise this sequence file (e.g. from vidstyle generate) instead of random ones."),
+    max_in_degree: int | None = typer.Option(None, "--max-in-degree", help="Approximate planning (see synthesize); default exact."),
 ) -> None:
     """Seam quality, foot skid, label fidelity and transitions used of synthesised motion."""
     from rich.console import Console
@@ -209,7 +209,7 @@ def evaluate_motion(
     table = Table(title=f"motion graph: {graph_path.name}")
     for col in ("metric", "seam", "inside output", "original clips", "seam / original"):
         table.add_column(col)
-    fmt = lambda v: "-" if v is None else f"{v:.3g}"  # noqa: E731
+    fmt = lambda v: "-" if v is None else f"{v:.3g}"
     for metric in ("velocity_jump", "jerk", "foot_skid"):
         if metric in summary:
             r = summary[metric]
@@ -231,7 +231,7 @@ def evaluate_inbetween(
     test: str = typer.Option(",".join(KD.EVAL_SPLIT["test"]), "--test", help="Comma-separated held-out subjects whose windows are scored (none of --library)."),
     gaps: str = typer.Option(",".join(map(str, KD.EVAL_GAPS)), "--gaps", help="Comma-separated gap lengths in frames at 30 fps."),
     methods: str = typer.Option(",".join(KD.METHODS), "--methods", help=f"Comma-separated: {', '.join(KD.METHODS)}."),
-    graph_cache: Optional[Path] = typer.Option(None, "--graph-cache", help="Motion graph of the library: read when it exists, else built and written there."),
+    graph_cache: Path | None = typer.Option(None, "--graph-cache", help="Motion graph of the library: read when it exists, else built and written there."),
     out: Path = typer.Option(Path("metrics/inbetween.json"), "--out", "-o", help="Metrics JSON."),
     seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="Seed of the graph's threshold sample and the pose clustering."),
 ) -> None:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import logging
 import time
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -36,10 +35,10 @@ def vocabulary(
     method: str = typer.Option(D.VOCAB_METHOD, "--method", help="minibatch | hierarchical | kmeans."),
     branching: int = number(D.BRANCHING, "--branching", lo=2, hi=10000, help="Children per node of the hierarchical tree."),
     max_descriptors: int = number(D.MAX_DESCRIPTORS, "--max-descriptors", lo=1, help="Fit on at most this many (sampled)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: learn on its vocabulary videos (chosen by --split)."),
-    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="dataset.json: learn on its vocabulary videos (chosen by --split)."),
+    features_dir: Path | None = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
-    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
+    test_view: str | None = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (sampling, k-means, split)."),
     jobs: int = jobs_option(-1, help="Parallel file loading (-1 = all cores)."),
 ) -> None:
@@ -69,7 +68,7 @@ def train_recognizer(
         None, "--annotations",
         help="Annotations file(s) from `vidstyle annotate`: train on the action segments of your own videos "
              "(with their FEATURES files, or --features-dir holding <video stem>.npz). Unlabelled frames are left out."),
-    vocab: Optional[Path] = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (learned on other videos); required with --features sift3d."),
+    vocab: Path | None = typer.Option(None, "--vocab", help="vocab.npz from `vidstyle vocabulary` (learned on other videos); required with --features sift3d."),
     features_kind: str = typer.Option("sift3d", "--features", help="sift3d (3D SIFT words from FEATURES files, the default) | pose (2D pose sequences: trains on the mocap takes of --dataset's training performers (the vocabulary and classifier videos of --split), seen from --views virtual cameras)."),
     views: int = number(8, "--views", lo=1, hi=360, help="--features pose: virtual cameras per mocap take (azimuth 0-360, elevation -10..45 deg, 2.5-6 body heights)."),
     noise_sigma: float = number(0.05, "--noise-sigma", lo=0, hi=10, help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
@@ -79,10 +78,10 @@ def train_recognizer(
     clip_labels: list[Path] = typer.Option(None, "--clip-labels", help="--features pose: labels of --clips: a CSV file,label[,start,end] (BVH frame numbers, end exclusive), a demo labels JSON, or a CMU clips.csv. Unlabelled frames do not train."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
     onnx: bool = typer.Option(False, "--onnx", help="Also write <out>.onnx (onnxruntime-ready)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="dataset.json: train on its classifier videos (chosen by --split)."),
-    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="dataset.json: train on its classifier videos (chosen by --split)."),
+    features_dir: Path | None = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
-    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
+    test_view: str | None = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
     context: int = number(D.CONTEXT, "--context", lo=0, hi=D.MAX_CONTEXT, help="Frames each side in a frame's histogram (thesis 2)."),
     coarse_context: int = number(D.COARSE_CONTEXT, "--coarse-context", lo=0, hi=D.MAX_CONTEXT, help="Frames each side of a second, coarser histogram appended to each frame's (multi-scale context; 0 = off, the thesis)."),
     grouping: bool = typer.Option(D.GROUPING, "--grouping/--no-grouping", help="Word grouping (Scovanner)."),
@@ -163,21 +162,21 @@ def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate
 def recognize(
     inputs: list[Path] = typer.Argument(..., help="Features .npz of videos (or the videos themselves)."),
     model: Path = typer.Option(..., "--model", "-m", help="Model .joblib from train-recognizer."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output labels JSON (one input)."),
-    out_dir: Optional[Path] = typer.Option(
+    out: Path | None = typer.Option(None, "--out", "-o", help="Output labels JSON (one input)."),
+    out_dir: Path | None = typer.Option(
         None, "--out-dir", help="Output directory: <input stem>.json per input (any number of inputs)."
     ),
-    window: Optional[int] = number(None, "--window", integer=True, lo=1, hi=D.MAX_WINDOW, help="Smoothing window (default: the model's)."),
-    smoothing: Optional[str] = typer.Option(None, "--smoothing", help="vote | mean | viterbi | duration (default: the model's)."),
-    emission_weight: Optional[float] = number(None, "--emission-weight", integer=False, lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: the model's)."),
-    fps: Optional[float] = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000, help="Frame rate to record (default: from the features, else 20)."),
+    window: int | None = number(None, "--window", integer=True, lo=1, hi=D.MAX_WINDOW, help="Smoothing window (default: the model's)."),
+    smoothing: str | None = typer.Option(None, "--smoothing", help="vote | mean | viterbi | duration (default: the model's)."),
+    emission_weight: float | None = number(None, "--emission-weight", integer=False, lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: the model's)."),
+    fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000, help="Frame rate to record (default: from the features, else 20)."),
     jobs: int = jobs_option(-1, help="Inputs recognised in parallel (-1 = all cores; each worker loads the model once)."),
-    scheduler: Optional[str] = typer.Option(
+    scheduler: str | None = typer.Option(
         None, "--scheduler", help="Dask scheduler address (tcp://HOST:PORT): recognise on that cluster; its workers must see the same paths."
     ),
-    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="Late fusion with this pose-sequence "
+    pose_model: Path | None = typer.Option(None, "--pose-model", help="Late fusion with this pose-sequence "
                                               "recognizer (train-recognizer --features pose) on --poses-dir."),
-    poses_dir: Optional[Path] = typer.Option(None, "--poses-dir", help="With --pose-model: <input stem>.poses.json "
+    poses_dir: Path | None = typer.Option(None, "--poses-dir", help="With --pose-model: <input stem>.poses.json "
                                              "per input (vidstyle pose VIDEOS --out-dir)."),
     fusion_weight: float = number(D.FUSION_WEIGHT, "--fusion-weight", integer=False, lo=0, hi=1,
                                   help="With --pose-model: the weight of the pose recognizer's scores (the rest is the "
@@ -200,9 +199,9 @@ def recognize(
     if (pose_model is None) != (poses_dir is None):
         raise InputError("recognize: --pose-model and --poses-dir go together (late fusion)")
     poses = None if poses_dir is None else [poses_dir / f"{p.stem}.poses.json" for p in inputs]
-    from ._flags import as_flags
-
     import contextlib
+
+    from ._flags import as_flags
 
     # --out-dir: created if missing (removed again if the run fails and it is empty), with the temporaries
     # a killed run left for these outputs swept
@@ -217,16 +216,16 @@ def recognize(
 @evaluate_app.command("recognition")
 def evaluate_recognition(
     dataset: Path = typer.Option(..., "--dataset", help="dataset.json (or its directory)."),
-    features_dir: Optional[Path] = typer.Option(None, "--features-dir", help="Directory of <video id>.npz (train and test here)."),
-    labels_dir: Optional[Path] = typer.Option(
+    features_dir: Path | None = typer.Option(None, "--features-dir", help="Directory of <video id>.npz (train and test here)."),
+    labels_dir: Path | None = typer.Option(
         None, "--labels-dir", help="Score these <video id>.json from `vidstyle recognize` instead (no training)."
     ),
-    model: Optional[Path] = typer.Option(
+    model: Path | None = typer.Option(
         None, "--model", "-m", help="With --labels-dir: the model that made them (its split names the test videos)."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output metrics JSON (a PNG confusion matrix goes beside it)."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
-    test_view: Optional[str] = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
+    test_view: str | None = typer.Option(None, "--test-view", help="Held-out view (unseen-view; default: seeded draw)."),
     ablation: str = typer.Option("none", "--ablation", help="none | no-grouping | no-context | no-smoothing | no-mirror."),
     words: int = number(D.N_WORDS, "--words", lo=2, hi=100000, help="Vocabulary size (ablation: 500/1000/1500)."),
     vocab_method: str = typer.Option(D.VOCAB_METHOD, "--vocab-method", help="minibatch | hierarchical | kmeans."),
@@ -241,10 +240,10 @@ def evaluate_recognition(
     c: float = number(D.C, "--C", lo=0, lo_open=True, hi=1e6, help="SVM cost (default: chosen on validation performers, pipelines/kickboxing/validation/recognition.json)."),
     emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on mirror images (scovanner2007)."),
-    test_dataset: Optional[Path] = typer.Option(
+    test_dataset: Path | None = typer.Option(
         None, "--test-dataset", help="unseen-camera: dataset.json of the test performers filmed from new cameras "
         "(vidstyle demo make-dataset --unseen-camera)."),
-    test_features_dir: Optional[Path] = typer.Option(
+    test_features_dir: Path | None = typer.Option(
         None, "--test-features-dir", help="unseen-camera: features directory of --test-dataset's videos."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (split, vocabulary, sampling)."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),

@@ -65,9 +65,6 @@ def evaluate_strikes_cmd(
     the mocap alone (an arm extended and reaching forward; vidstyle.evaluation.realmocap), never from
     the recognizer; the clip trains, tunes and selects nothing. Prints a Markdown table."""
     from ..errors import InputError, ParameterError
-    from ..formats.labels import write_labels
-    from ..formats.metrics import STRIKES, write_metrics
-    from ..mocap import read_bvh
     from ..evaluation.realmocap import (
         StrikeEvalParams,
         StrikeRule,
@@ -78,6 +75,9 @@ def evaluate_strikes_cmd(
         plot_action_frames,
         strikes_table,
     )
+    from ..formats.labels import write_labels
+    from ..formats.metrics import STRIKES, write_metrics
+    from ..mocap import read_bvh
 
     try:
         cams = parse_cameras(cameras)

@@ -213,8 +213,8 @@ def evaluate_style(
     mode_criterion: str = _CRIT,
 ) -> None:
     """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
-    from ..formats.metrics import write_metrics
     from ..evaluation.style import EvalParams, evaluate_dataset
+    from ..formats.metrics import write_metrics
 
     if labels_dir is not None and not labels_dir.is_dir():
         raise InputError(f"{labels_dir}: --labels-dir is not a directory")

@@ -265,7 +265,7 @@ class StrikeEvalParams:
 
     @classmethod
     def for_model(cls, model_path: str | os.PathLike, variant: str | None = None, points: int | None = None,
-                  start: int = 1, stop: int | None = None, pose_input: str = "ps") -> "StrikeEvalParams":
+                  start: int = 1, stop: int | None = None, pose_input: str = "ps") -> StrikeEvalParams:
         """Checked parameters for the recognizer ``model_path``: ``variant`` / ``points`` default to those
         its training features were extracted with (its header), else scovanner2007 / 10; ``stop`` 0 or
         None is the end of the clip."""
@@ -330,8 +330,8 @@ def evaluate_camera(motion, mask: np.ndarray, camera: StrikeCamera, model, param
     frames that show an action frame of the motion (``mask``, per motion frame)."""
     from ..features.extract import process_video
     from ..features.salient import SalientParams
-    from ..render import Appearance, render_to_file
     from ..recognition.io import load_features
+    from ..render import Appearance, render_to_file
 
     look_seed = int(np.random.SeedSequence([seed, index, 3]).generate_state(1)[0])
     render_seed = int(np.random.SeedSequence([seed, index, 2]).generate_state(1)[0])

@@ -22,7 +22,15 @@ headline)
 =========================================  ===============================  ==================================
 """
 
-from ._base import FormatError, Fields, check_array, check_header, header, read_json_document, write_json_document
+from ._base import (
+           Fields,
+           FormatError,
+           check_array,
+           check_header,
+           header,
+           read_json_document,
+           write_json_document,
+)
 
 __all__ = ["FormatError", "Fields", "check_array", "check_header", "header", "read_json_document",
            "write_json_document"]

@@ -159,7 +159,7 @@ class Fields:
             raise self.fail(key, f"{dup!r} appears more than once"[:200])
         return v
 
-    def sub(self, key: str, required: bool = True) -> "Fields | None":
+    def sub(self, key: str, required: bool = True) -> Fields | None:
         v = self.get(key, required)
         if v is None and not required:
             return None
@@ -311,7 +311,7 @@ def load_npz(path, what: str) -> dict:
         raise FormatError(path, None, "not a readable .npz (an array's declared size is too large)") from None
     except (zipfile.BadZipFile, zipfile.LargeZipFile) as e:
         raise FormatError(path, None, f"not a readable .npz ({type(e).__name__})") from None
-    except Exception as e:  # noqa: BLE001 - np.load on damaged bytes (zip, zlib, .npy header): a bad file
+    except Exception as e:
         raise FormatError(path, None, f"not a readable .npz ({type(e).__name__}: {' '.join(str(e).split())[:200]})") from None
 
 

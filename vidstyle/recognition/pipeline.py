@@ -12,7 +12,7 @@ import functools
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -47,7 +47,7 @@ class TrainingRun:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-def dataset_split(dataset: PathLike, split: str = D.SPLIT, seed: int = D.SEED, test_view: Optional[str] = None):
+def dataset_split(dataset: PathLike, split: str = D.SPLIT, seed: int = D.SEED, test_view: str | None = None):
     """``(dataset, Split)`` of a ``dataset.json``. Sets A and B of ``unseen-camera`` are those of
     ``unseen-performer`` (its test videos come from another dataset, which training does not need)."""
     from ..formats.dataset import read_dataset
@@ -88,10 +88,10 @@ def _check_sources(features: Sequence, features_dir, dataset, what: str) -> None
 def train_vocabulary(
     features: Sequence[PathLike] = (),
     *,
-    dataset: Optional[PathLike] = None,
-    features_dir: Optional[PathLike] = None,
+    dataset: PathLike | None = None,
+    features_dir: PathLike | None = None,
     split: str = D.SPLIT,
-    test_view: Optional[str] = None,
+    test_view: str | None = None,
     words: int = D.N_WORDS,
     method: str = D.VOCAB_METHOD,
     branching: int = D.BRANCHING,
@@ -140,7 +140,7 @@ def _same_video(recorded: str, path: Path) -> bool:
 
 
 def annotated_training(annotations: Sequence[PathLike], features: Sequence[PathLike] = (),
-                       features_dir: Optional[PathLike] = None):
+                       features_dir: PathLike | None = None):
     """Training pieces from annotation files (``vidstyle annotate``): for every annotated video with
     segments, its features file (the one of ``features`` whose recorded video is that video, or
     ``<features_dir>/<video stem>.npz``) cut into the runs of labelled frames, with the per-frame labels
@@ -202,10 +202,10 @@ def train(
     *,
     labels: Sequence[PathLike] = (),
     annotations: Sequence[PathLike] = (),
-    dataset: Optional[PathLike] = None,
-    features_dir: Optional[PathLike] = None,
+    dataset: PathLike | None = None,
+    features_dir: PathLike | None = None,
     split: str = D.SPLIT,
-    test_view: Optional[str] = None,
+    test_view: str | None = None,
     context: int = D.CONTEXT,
     coarse_context: int = D.COARSE_CONTEXT,
     grouping: bool = D.GROUPING,
@@ -327,8 +327,8 @@ def video_features(path: PathLike, header: dict) -> VideoFeatures:
         return load_features(tmp)
 
 
-def load_recognizer(model: PathLike, window: Optional[int] = None, smoothing: Optional[str] = None,
-                    emission_weight: Optional[float] = None) -> tuple[ActionRecognizer, dict]:
+def load_recognizer(model: PathLike, window: int | None = None, smoothing: str | None = None,
+                    emission_weight: float | None = None) -> tuple[ActionRecognizer, dict]:
     """``(recognizer, header)`` of a model file with the smoothing overrides applied (None keeps the
     model's). Loaded once per process and file version (a retrained file at the same path reloads)."""
     try:
@@ -339,8 +339,8 @@ def load_recognizer(model: PathLike, window: Optional[int] = None, smoothing: Op
 
 
 @functools.lru_cache(maxsize=2)
-def _load_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], smoothing: Optional[str],
-                 emission_weight: Optional[float]):
+def _load_cached(model: str, _mtime_ns: int, _size: int, window: int | None, smoothing: str | None,
+                 emission_weight: float | None):
     rec, header = load_model(Path(model))
     if window is not None:
         rec.smoothing_window = window
@@ -352,7 +352,7 @@ def _load_cached(model: str, _mtime_ns: int, _size: int, window: Optional[int], 
     return rec, header
 
 
-def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: Optional[float] = None,
+def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: float | None = None,
                    model_path: PathLike | None = None, fusion: tuple | None = None):
     """Per-frame labels of one features ``.npz`` (or video: its features are computed as the model's
     training files were) as a :class:`~vidstyle.formats.recognised.RecognisedLabels`: raw and smoothed
@@ -443,9 +443,9 @@ def _recognize_task(item: tuple) -> None:
 
 
 def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[PathLike], *,
-              window: Optional[int] = None, smoothing: Optional[str] = None,
-              emission_weight: Optional[float] = None, fps: Optional[float] = None, jobs: int = 1,
-              scheduler: Optional[str] = None, pose_model: PathLike | None = None,
+              window: int | None = None, smoothing: str | None = None,
+              emission_weight: float | None = None, fps: float | None = None, jobs: int = 1,
+              scheduler: str | None = None, pose_model: PathLike | None = None,
               poses: Sequence[PathLike] | None = None, fusion_weight: float | None = None) -> None:
     """Recognise every input (features ``.npz`` or video) with the model file ``model`` and write its
     labels JSON to the matching target, in parallel (``jobs`` workers or a Dask ``scheduler``; each worker

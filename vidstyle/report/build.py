@@ -29,8 +29,17 @@ import numpy as np
 from ..errors import InputError
 from ..formats.dataset import Dataset, read_dataset
 from ..formats.labels import read_labels
-from ..formats.metrics import (ACTION_STYLE, AUGMG, HEADLINE, MOTION, RECOGNITION, RECONSTRUCT, STYLE, TIMING,
-                               read_metrics)
+from ..formats.metrics import (
+    ACTION_STYLE,
+    AUGMG,
+    HEADLINE,
+    MOTION,
+    RECOGNITION,
+    RECONSTRUCT,
+    STYLE,
+    TIMING,
+    read_metrics,
+)
 from ..formats.recognised import read_recognised
 from ..formats.sequence import read_sequence
 from ..formats.style import read_style
