@@ -81,8 +81,9 @@ def main() -> int:
 
     from vidstyle.actionmodel import defaults as D
     from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
-    from vidstyle.evaluation.actionmodel import read_manifest, split_groups
+    from vidstyle.evaluation.actionmodel import split_groups
     from vidstyle.evaluation.actionstyle import (
+        demo_truth,
         evaluate_performer,
         orthodox_model,
         performer_videos,
@@ -90,15 +91,11 @@ def main() -> int:
         summarise,
         true_instances,
     )
-    from vidstyle.formats.dataset import read_dataset
     from vidstyle.formats.metrics import ACTION_STYLE, write_metrics
 
     t_start = time.perf_counter()
-    manifest = read_manifest(args.dataset)
-    ds = read_dataset(args.dataset / "dataset.json")
-    unit_mm = float(manifest["mocap_unit_m"]) * 1000.0
-    actions = list(manifest["actions"])
-    truth_style = {p["id"]: p["style"] for p in manifest["performers"]}
+    demo = demo_truth(args.dataset)
+    manifest, ds, unit_mm, actions, truth_style = (demo[k] for k in ("manifest", "dataset", "unit_mm", "actions", "style"))
     cache: dict = {}
     rows: dict[str, list] = {k: [] for k in args.inputs}
     splits = {}

@@ -37,7 +37,7 @@ DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_inbetween"
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cmu", type=Path, default=DEFAULT_CMU if DEFAULT_CMU.is_dir() else Path("/work/shared/data/mocap/cmu"))
+    ap.add_argument("--cmu", type=Path, default=DEFAULT_CMU, help="CMU BVH clips (default: ../shared beside the repository)")
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE, help="Where the library's motion graph is kept.")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)

@@ -41,9 +41,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from vidstyle.errors import InputError
 from vidstyle.evaluation.poserecognition import (
     measure_pose_error,
     noise_from_error,
+    predict_pose_set,
     score_pose_recognizer,
     train_for_split,
 )
@@ -115,12 +117,16 @@ def main() -> None:
         log.info("trained %s in %.0f s", name, training["train_s"])
     sift, _ = load_recognizer(a.sift_model)
 
-    # 3. validation
+    # 3. validation: each recognizer predicts the validation videos once, the 3D SIFT recognizer too; every
+    # fusion weight scores those predictions
     rows = []
+    sift_cache: dict = {}
     for name, (rec, training) in recs.items():
+        predicted = predict_pose_set(rec, ds, split, None, a.poses_dir, "val")
         for w in a.weights:
             fuse = None if w == 1.0 else (sift, a.features, w)
-            m = score_pose_recognizer(rec, training, ds, split, None, a.poses_dir, "val", fuse, a.input_name)
+            m = score_pose_recognizer(rec, training, ds, split, None, a.poses_dir, "val", fuse, a.input_name,
+                                      predicted=predicted, sift_cache=sift_cache)
             rows.append({"noise": name, "weight_pose": w, **_acc(m)})
             log.info("val %s w=%.2f: %s", name, w, rows[-1])
     # the real-motion validation set: CMU clips of a subject no test list uses, at the validation camera
@@ -136,7 +142,7 @@ def main() -> None:
 
         try:
             clips = read_clip_list(a.real_val)
-        except Exception as e:  # ../shared absent: the choice falls back to the demo's validation alone
+        except InputError as e:  # ../shared absent: the choice falls back to the demo's validation alone
             log.warning("real-motion validation skipped: %s", e)
             clips = None
         if clips:
@@ -194,12 +200,14 @@ def main() -> None:
         missing = [i for i in sp.test if not (Path(poses) / f"{i}.poses.json").exists()]
         if missing:  # every test video is scored, or none: no partial test set
             raise SystemExit(f"{poses}: no poses of {len(missing)} test videos (e.g. {missing[0]})")
-        runs = [("pose_ps", poses, None)]
+        runs = [("pose_ps", None)]
         if 0.0 < best["weight_pose"] < 1.0:
-            runs.append(("fusion_ps", poses, (sift, feats, best["weight_pose"])))
-        for name, pdir, fuse in runs:
+            runs.append(("fusion_ps", (sift, feats, best["weight_pose"])))
+        predicted = predict_pose_set(rec, d, sp, tds, poses, "test")  # once for both runs
+        for name, fuse in runs:
             t0 = time.perf_counter()
-            m = score_pose_recognizer(rec, training, d, sp, tds, pdir, "test", fuse, a.input_name)
+            m = score_pose_recognizer(rec, training, d, sp, tds, poses, "test", fuse, a.input_name,
+                                      predicted=predicted)
             m.update(seed=seed, command=command, validation=str(val_out.relative_to(ROOT)) if val_out.is_relative_to(ROOT) else str(val_out),
                      chosen=best)
             out = a.results_dir / f"recognition_{name}{a.tag}_{tag}_seed{seed}.json"

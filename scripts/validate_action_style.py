@@ -45,8 +45,9 @@ def main() -> int:
     import numpy as np
 
     from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
-    from vidstyle.evaluation.actionmodel import read_manifest, split_groups
+    from vidstyle.evaluation.actionmodel import split_groups
     from vidstyle.evaluation.actionstyle import (
+        demo_truth,
         evaluate_performer,
         orthodox_model,
         performer_videos,
@@ -55,14 +56,10 @@ def main() -> int:
     )
     from vidstyle.fileio import json_default
     from vidstyle.formats._base import write_json_document
-    from vidstyle.formats.dataset import read_dataset
 
     t_start = time.perf_counter()
-    manifest = read_manifest(args.dataset)
-    ds = read_dataset(args.dataset / "dataset.json")
-    unit_mm = float(manifest["mocap_unit_m"]) * 1000.0
-    actions = list(manifest["actions"])
-    truth_style = {p["id"]: p["style"] for p in manifest["performers"]}
+    demo = demo_truth(args.dataset)
+    manifest, ds, unit_mm, actions, truth_style = (demo[k] for k in ("manifest", "dataset", "unit_mm", "actions", "style"))
     g = split_groups(manifest, args.seed)
     train = sorted(g["A"] + g["B"])
     model = orthodox_model(args.dataset, manifest, train, args.seed)

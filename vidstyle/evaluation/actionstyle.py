@@ -25,6 +25,18 @@ import numpy as np
 log = logging.getLogger(__name__)
 
 
+def demo_truth(dataset: str | Path) -> dict:
+    """What the action-style scripts read of a demo dataset: its ``manifest``, the ``dataset`` record, the
+    mocap unit in millimetres (``unit_mm``), the ``actions`` and each performer's true ``style``."""
+    from ..formats.dataset import read_dataset
+    from .actionmodel import read_manifest
+
+    manifest = read_manifest(dataset)
+    return {"manifest": manifest, "dataset": read_dataset(Path(dataset) / "dataset.json"),
+            "unit_mm": float(manifest["mocap_unit_m"]) * 1000.0, "actions": list(manifest["actions"]),
+            "style": {p["id"]: p["style"] for p in manifest["performers"]}}
+
+
 def southpaws(manifest: dict) -> set[str]:
     return {p["id"] for p in manifest["performers"] if p["style"]["lead"] == "southpaw"}
 

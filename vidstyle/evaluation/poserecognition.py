@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -136,17 +137,20 @@ def pose_track_of(score_ds: Dataset, video_id: str, poses_dir: str | Path | None
     return track_from_poses(read_poses(p), score_ds.fps, n_frames)
 
 
-def sift_outputs(model, features_dir: str | Path, ids: list[str]) -> list[dict]:
-    """The 3D SIFT recognizer ``model``'s ``predict_video`` of each video's ``<features_dir>/<id>.npz``."""
+def sift_outputs(model, features_dir: str | Path, ids: list[str], cache: dict | None = None) -> list[dict]:
+    """The 3D SIFT recognizer ``model``'s ``predict_video`` of each video's ``<features_dir>/<id>.npz``;
+    ``cache`` (video id -> output, filled here) keeps them for the next call with the same model."""
     from ..recognition.io import load_features
 
-    out = []
+    cache = {} if cache is None else cache
     for i in ids:
+        if i in cache:
+            continue
         p = Path(features_dir) / f"{i}.npz"
         if not p.exists():
             raise InputError(f"{p}: no features of the video {i}")
-        out.append(model.predict_video(load_features(p)))
-    return out
+        cache[i] = model.predict_video(load_features(p))
+    return [cache[i] for i in ids]
 
 
 def fused_outputs(pose_rec: PoseRecognizer, pose_outs: list[dict], sift_model, sift_outs: list[dict],
@@ -180,15 +184,25 @@ def evaluate_pose_recognition(dataset: Dataset, split_kind: str = "unseen-perfor
     return score_pose_recognizer(rec, training, dataset, split, test_dataset, poses_dir, score_set)
 
 
-def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset, split,
-                          test_dataset: Dataset | None = None, poses_dir: str | Path | None = None,
-                          score_set: str = "test", sift: tuple | None = None,
-                          input_name: str | None = None) -> dict[str, Any]:
-    """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
-    or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight)``, of its late fusion
-    with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT recognizer alone, smoothed
-    by the pose recognizer's smoother). ``input_name``: what the metrics call the pose files' source
-    (default ``poses:<poses_dir>``)."""
+@dataclass
+class PredictedSet:
+    """A pose recognizer's ``predict_video`` of the videos of a scored set (:func:`predict_pose_set`): the
+    videos that had a pose track (``used``) with their outputs and true labels, those without
+    (``skipped``), the frames predicted and the seconds it took."""
+
+    score_ds: Dataset
+    used: list[str]
+    outputs: list[dict]
+    truths: list[list[str]]
+    skipped: list[str]
+    n_frames: int
+    seconds: float
+
+
+def predict_pose_set(rec: PoseRecognizer, dataset: Dataset, split, test_dataset: Dataset | None = None,
+                     poses_dir: str | Path | None = None, score_set: str = "test") -> PredictedSet:
+    """Run ``rec`` on ``split``'s test set (or ``score_set="val"``) from true 2D or the pose files in
+    ``poses_dir`` (:func:`pose_track_of`)."""
     if score_set == "val":
         ids, score_ds = split.val, dataset
     else:
@@ -207,25 +221,43 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
         n_pred_frames += track.n_frames
         used.append(i)
         truths.append(truth.labels)
-    t_pred = time.perf_counter() - t0
     if not used:
         raise InputError(f"{poses_dir}: no pose file of any test video")
+    return PredictedSet(score_ds, used, outputs, truths, skipped, n_pred_frames, time.perf_counter() - t0)
+
+
+def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset, split,
+                          test_dataset: Dataset | None = None, poses_dir: str | Path | None = None,
+                          score_set: str = "test", sift: tuple | None = None,
+                          input_name: str | None = None, predicted: PredictedSet | None = None,
+                          sift_cache: dict | None = None) -> dict[str, Any]:
+    """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
+    or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight)``, of its late fusion
+    with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT recognizer alone, smoothed
+    by the pose recognizer's smoother). ``input_name``: what the metrics call the pose files' source
+    (default ``poses:<poses_dir>``). ``predicted``: :func:`predict_pose_set` of the same arguments, already
+    run (several fusion weights score one prediction); ``sift_cache``: of :func:`sift_outputs`."""
+    if predicted is None:
+        predicted = predict_pose_set(rec, dataset, split, test_dataset, poses_dir, score_set)
+    used, outputs, truths = predicted.used, predicted.outputs, predicted.truths
+    by_id = predicted.score_ds.by_id()
     fusion = None
     if sift is not None:
         model, features_dir, weight = sift
-        outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used), weight)
+        outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used, sift_cache), weight)
         truths = [t[: len(o["raw"])] for t, o in zip(truths, outputs)]
         fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir)}
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in used]
     metrics = score_videos(rec.classes_, truths, outputs, used, actions)
+    t_pred = predicted.seconds
     return {
         "kind": "vidstyle.metrics.recognition", "schema_version": 1,
         "recognizer": "pose" if fusion is None else ("sift" if fusion["weight_pose"] == 0 else "pose+sift"),
         "seed": training.get("seed", rec.random_state), "split": split.to_dict(),
         "scored_set": "V" if score_set == "val" else "T",
         "input": "true-2d" if poses_dir is None else (input_name or f"poses:{poses_dir}"), "fusion": fusion,
-        "scored_videos": used, "skipped_videos": skipped, "training": training,
+        "scored_videos": used, "skipped_videos": predicted.skipped, "training": training,
         "params": rec.public_params(), "model": rec.summary(), **metrics,
         "timing_s": {"train": training.get("train_s"), "predict": t_pred,
-                     "predict_frames_per_s": n_pred_frames / t_pred if t_pred > 0 else None},
+                     "predict_frames_per_s": predicted.n_frames / t_pred if t_pred > 0 else None},
     }
