@@ -72,3 +72,22 @@ def test_quaternion_helpers_match_scipy(rng):
         ang = rng.uniform(-180, 180, size=(40, 3))
         q = from_intrinsic_euler(seq, ang)
         assert np.allclose(Rotation.from_quat(q).as_matrix(), Rotation.from_euler(seq, ang, degrees=True).as_matrix(), atol=1e-12)
+
+
+def test_compose_and_normalise_equal_scipy_to_the_bit(rng):
+    # compose replaces Rotation.__mul__ in hot loops on the promise that outputs stay byte-identical:
+    # every component must equal scipy's exactly (not approximately), broadcasting included
+    from vidstyle.mocap.quat import compose, normalise
+
+    a = Rotation.random(5000, random_state=int(rng.integers(1 << 30)))
+    b = Rotation.random(5000, random_state=int(rng.integers(1 << 30)))
+    assert np.array_equal(compose(a.as_quat(), b.as_quat()), (a * b).as_quat())
+    assert np.array_equal(compose(a.as_quat()[:1], b.as_quat()), (a[0] * b).as_quat())
+    grid = compose(a.as_quat()[:7, None], b.as_quat()[None, :3])
+    assert grid.shape == (7, 3, 4)
+    assert np.array_equal(grid[4], (a[4] * b[:3]).as_quat())
+    raw = rng.normal(size=(2000, 4)) * rng.uniform(0.1, 10, size=(2000, 1))
+    assert np.array_equal(normalise(raw), Rotation.from_quat(raw).as_quat())
+    # the product is the rotation of b followed by a (independent truth: the matrices)
+    assert np.allclose(Rotation.from_quat(compose(a.as_quat(), b.as_quat())).as_matrix(),
+                       a.as_matrix() @ b.as_matrix(), atol=1e-12)

@@ -182,9 +182,7 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
     estimated source (true 2D without one), the library skeleton and ``olng`` (else the last of ``methods``)."""
     from ..evaluation.augmg import mocap_unit_mm
     from ..formats.dataset import read_dataset
-    from ..formats.poses import read_poses
-    from ..mocap import read_bvh
-    from ..reconstruct.core import METHODS, Observation, Reconstructor
+    from ..reconstruct.core import METHODS, Reconstructor
     from ..reconstruct.library import ReconstructionLibrary
 
     for m in methods:
@@ -201,57 +199,24 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
     for v in videos:
         if v not in known:
             raise InputError(f"{dataset_dir}: no video {v!r}")
+        for d in poses_dirs:
+            if not (Path(d) / f"{v}.poses.json").is_file():
+                raise InputError(f"{Path(d) / f'{v}.poses.json'}: no poses for video {v} (run vidstyle pose on it)")
     base = Reconstructor(jobs=jobs, **params)
     base.check_params()
     fps0 = float(dataset.fps)
     lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, jobs).fit(library)
-    runs: list[dict] = []
-    for vid in videos:
-        true_pts, uv, az, size, fps, bvh = _truth(dataset, vid, max_frames)
-        T = len(true_pts)
-        true_mm = true_pts * mm
-        sources = {"true2d": Observation(uv, np.ones((T, 15)), az, fps, size, source=f"{vid} (true 2D)")}
-        world = {}
-        for d in poses_dirs:
-            path = Path(d) / f"{vid}.poses.json"
-            if not path.is_file():
-                raise InputError(f"{path}: no poses for video {vid} (run vidstyle pose on it)")
-            doc = read_poses(path)
-            name = str(doc.backend)
-            sources[name] = Observation.from_poses(doc, fps, size, T)
-            w = blazepose_world_points(doc, T, base.elevation_deg if base.elevation_deg is not None
-                                       else base.library_elevation_deg)
-            if w is not None:
-                world[name] = w
-        performer_lib = None
-        for skel in skeletons:
-            if skel == "library":
-                use = lib
-            else:
-                if performer_lib is None:
-                    performer_lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, jobs).fit(
-                        library, skeleton=read_bvh(bvh).skeleton)
-                use = performer_lib
-            rec = Reconstructor(jobs=jobs, **params).fit_library(use)
-            for src, obs in sources.items():
-                for method in methods:
-                    rec.set_params(method=method)
-                    t0 = time.perf_counter()
-                    out = rec.reconstruct(obs)
-                    seconds = time.perf_counter() - t0
-                    row = {"data": f"demo:{vid}", "source": src, "method": method, "skeleton": skel,
-                           **_figures(out.points * mm, true_mm, fps),
-                           "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
-                    runs.append(row)
-                    shown = "olng" if "olng" in methods else methods[-1]
-                    if (animation is not None and vid == videos[0] and skel == skeletons[0] and method == shown
-                            and src == list(sources)[min(1, len(sources) - 1)]):
-                        write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")
-                    log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
-                             row["mpjpe_root_relative_mm"] or float("nan"), row["pa_mpjpe_mm"] or float("nan"))
-        for src, w in world.items():
-            runs.append({"data": f"demo:{vid}", "source": src, "method": "blazepose-world", "skeleton": "blazepose",
-                         **_hip_centred(_figures(w, true_mm, fps))})
+    # every (video, skeleton) in parallel, one worker each (the library's index built once, here): their
+    # rows depend on nothing but their own inputs, so the document is the same for any number of workers,
+    # in the same order (frames_per_second is each run's own time, measured with the other workers busy)
+    from ..parallel import parallel_map
+
+    items = [(dataset, vid, max_frames, mm, tuple(str(d) for d in poses_dirs), tuple(methods), skel,
+              lib if skel == "library" else None, library, params, fps0,
+              str(animation) if animation is not None and vid == videos[0] and skel == skeletons[0] else None,
+              skel == skeletons[-1]) for vid in videos for skel in skeletons]
+    runs: list[dict] = [row for rows in parallel_map(_evaluate_video, items, jobs=jobs, description="videos")
+                        for row in rows]
     pooled = []
     keys = sorted({(r["source"], r["method"], r["skeleton"]) for r in runs})
     for src, method, skel in keys:
@@ -281,6 +246,61 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
                        "max_frames": max_frames, "library": [str(p) for p in library], "library_frames": lib.n_frames,
                        "unit_mm": mm},
             "headline": headline, "seed": seed}
+
+
+def _evaluate_video(item) -> list[dict]:
+    """The rows of one video and skeleton of :func:`evaluate` (every source and method; BlazePose's world
+    landmarks when ``world_rows``); writes the comparison animation when ``animation`` is given. ``lib``:
+    the library's index for the skeleton ``library``; the performer's own is built here."""
+    from ..formats.poses import read_poses
+    from ..mocap import read_bvh
+    from ..reconstruct.core import Observation, Reconstructor
+    from ..reconstruct.library import ReconstructionLibrary
+
+    (dataset, vid, max_frames, mm, poses_dirs, methods, skel, lib, library, params, fps0, animation,
+     world_rows) = item
+    base = Reconstructor(jobs=1, **params)
+    runs: list[dict] = []
+    true_pts, uv, az, size, fps, bvh = _truth(dataset, vid, max_frames)
+    T = len(true_pts)
+    true_mm = true_pts * mm
+    sources = {"true2d": Observation(uv, np.ones((T, 15)), az, fps, size, source=f"{vid} (true 2D)")}
+    world = {}
+    for d in poses_dirs:
+        path = Path(d) / f"{vid}.poses.json"
+        if not path.is_file():
+            raise InputError(f"{path}: no poses for video {vid} (run vidstyle pose on it)")
+        doc = read_poses(path)
+        name = str(doc.backend)
+        sources[name] = Observation.from_poses(doc, fps, size, T)
+        w = blazepose_world_points(doc, T, base.elevation_deg if base.elevation_deg is not None
+                                   else base.library_elevation_deg)
+        if w is not None:
+            world[name] = w
+    shown = "olng" if "olng" in methods else methods[-1]
+    if lib is None:
+        lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, 1).fit(
+            library, skeleton=read_bvh(bvh).skeleton)
+    rec = Reconstructor(jobs=1, **params).fit_library(lib)
+    for src, obs in sources.items():
+        for method in methods:
+            rec.set_params(method=method)
+            t0 = time.perf_counter()
+            out = rec.reconstruct(obs)
+            seconds = time.perf_counter() - t0
+            row = {"data": f"demo:{vid}", "source": src, "method": method, "skeleton": skel,
+                   **_figures(out.points * mm, true_mm, fps),
+                   "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
+            runs.append(row)
+            if (animation is not None and method == shown
+                    and src == list(sources)[min(1, len(sources) - 1)]):
+                write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")
+            log.info("%s %s %s %s: root-relative MPJPE %.1f mm, PA %.1f mm", vid, src, method, skel,
+                     row["mpjpe_root_relative_mm"] or float("nan"), row["pa_mpjpe_mm"] or float("nan"))
+    for src, w in world.items() if world_rows else ():
+        runs.append({"data": f"demo:{vid}", "source": src, "method": "blazepose-world", "skeleton": "blazepose",
+                     **_hip_centred(_figures(w, true_mm, fps))})
+    return runs
 
 
 # ------------------------------------------------------------------------------------------ beyond the demo

@@ -27,6 +27,69 @@ def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+def compose(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``(Rotation.from_quat(p, normalize=False) * Rotation.from_quat(q)).as_quat()`` for unit quaternions
+    ``p`` and ``q`` (..., 4), broadcasting, equal to scipy's to the last bit: its product (vector part
+    ``p_w q_v + q_w p_v + p_v x q_v``, summed in that order; scalar ``p_w q_w - p_x q_x - p_y q_y - p_z q_z``)
+    and its normalisation (divide by the square root of the squares summed x, y, z, w), some 30 times
+    faster than scipy 1.17's ``Rotation.__mul__`` on a few thousand rotations. Inputs that came from
+    ``Rotation.from_quat`` of non-unit quaternions must be normalised the same way first (:func:`normalise`)."""
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    px, py, pz, pw = np.moveaxis(p, -1, 0)
+    qx, qy, qz, qw = np.moveaxis(q, -1, 0)
+    out = np.stack(
+        [
+            pw * qx + qw * px + (py * qz - pz * qy),
+            pw * qy + qw * py + (pz * qx - px * qz),
+            pw * qz + qw * pz + (px * qy - py * qx),
+            pw * qw - px * qx - py * qy - pz * qz,
+        ],
+        axis=-1,
+    )
+    return normalise(out)
+
+
+def normalise(q: np.ndarray) -> np.ndarray:
+    """``q`` (..., 4) divided by its norm as scipy's ``Rotation`` normalises (the squares summed x, y, z, w
+    in that order, then the square root), to the last bit."""
+    q = np.asarray(q, dtype=np.float64)
+    x, y, z, w = np.moveaxis(q, -1, 0)
+    return q / np.sqrt(x * x + y * y + z * z + w * w)[..., None]
+
+
+def slerp(times: np.ndarray, quats: np.ndarray, new_times: np.ndarray) -> np.ndarray:
+    """(len(new_times), J, 4): per joint, ``Slerp(times, Rotation.from_quat(quats[:, j]))(new_times).as_quat()``
+    for ``quats`` (F, J, 4), all joints at once, equal to scipy's to the last bit (scipy's steps: the
+    normalised key rotations, the rotation vector of ``inv(r[k]) * r[k+1]``, the interval of each new time
+    by ``searchsorted`` with the first time included, ``alpha = (t - t[k]) / (t[k+1] - t[k])``, then
+    ``r[k] * from_rotvec(alpha * rotvec[k])``), with :func:`compose` in place of scipy's slow products.
+    ``new_times`` must lie within ``[times[0], times[-1]]``; ``times`` strictly increasing."""
+    from scipy.spatial.transform import Rotation
+
+    times = np.asarray(times, dtype=np.float64)
+    new_times = np.atleast_1d(np.asarray(new_times, dtype=np.float64))
+    q = np.asarray(quats, dtype=np.float64)
+    F, J = q.shape[:2]
+    if times.shape != (F,) or F < 2:
+        raise ValueError(f"slerp: need at least 2 key times matching the {F} key rotations, got {times.shape}")
+    delta = np.diff(times)
+    if np.any(delta <= 0):
+        raise ValueError("slerp: times must be in strictly increasing order")
+    r = normalise(q)
+    inv = r[:-1].copy()
+    inv[..., :3] *= -1
+    rel = compose(inv, r[1:]).reshape(-1, 4)
+    rotvecs = Rotation(rel, normalize=False, copy=False).as_rotvec().reshape(F - 1, J, 3)
+    ind = np.searchsorted(times, new_times) - 1
+    ind[new_times == times[0]] = 0
+    if np.any((ind < 0) | (ind > F - 2)):
+        raise ValueError(f"slerp: times must be within [{times[0]}, {times[-1]}]")
+    alpha = (new_times - times[ind]) / delta[ind]
+    step = Rotation.from_rotvec((rotvecs[ind] * alpha[:, None, None]).reshape(-1, 3)).as_quat()
+    return compose(r[ind], step.reshape(len(new_times), J, 4))
+
+
 def _qmul_parts(a: tuple, b: tuple) -> tuple:
     """:func:`qmul` on quaternions given as 4 components, each an array or the float ``0.0``.
 

@@ -51,6 +51,7 @@ def refine_poses(skeleton, q_blend: np.ndarray, q_neighbours: np.ndarray, active
     Frames whose weights are all zero keep the blend."""
     from scipy.spatial.transform import Rotation
 
+    from ..mocap.quat import compose
     from .core import view_rotations
 
     q_blend = np.asarray(q_blend, dtype=np.float64)
@@ -69,10 +70,11 @@ def refine_poses(skeleton, q_blend: np.ndarray, q_neighbours: np.ndarray, active
     d = (rn * rb_rep.inv()).as_rotvec().reshape(T, I, J, 3)
     d = np.where(active[:, :, None, None], d, 0.0)
     R = view_rotations(azimuth_deg, elevation_deg)
+    qb = rb.as_quat()
 
     def pose(a: np.ndarray) -> np.ndarray:
         delta = Rotation.from_rotvec(np.einsum("ti,tijk->tjk", a, d).reshape(-1, 3))
-        return (delta * rb).as_quat().reshape(T, J, 4)
+        return compose(delta.as_quat(), qb).reshape(T, J, 4)  # (delta * rb).as_quat(), to the bit
 
     sp = np.sqrt(max(float(prior), 0.0))
 
