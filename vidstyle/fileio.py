@@ -432,11 +432,14 @@ def read_json(path: str | os.PathLike) -> Any:
     return read_json_document(path)
 
 
-def write_npz(path: str | os.PathLike, **arrays: Any) -> None:
+def write_npz(path: str | os.PathLike, *, compressed: bool = True, **arrays: Any) -> None:
+    """``arrays`` to the ``.npz`` ``path`` atomically: deflated (``np.savez_compressed``), or stored as they
+    are with ``compressed=False`` (``np.savez``: for arrays that barely compress, where deflate would cost
+    more time than it saves space, e.g. 3D SIFT descriptors)."""
     import numpy as np  # here, not at the top: the CLI imports this module at start-up
 
     with atomic_path(path, suffix=".npz") as tmp:
-        np.savez_compressed(tmp, **arrays)
+        (np.savez_compressed if compressed else np.savez)(tmp, **arrays)
 
 
 def write_npy(path: str | os.PathLike, array: np.ndarray) -> None:

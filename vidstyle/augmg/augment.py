@@ -92,7 +92,7 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
     from ..mocap.retarget import retarget
     from ..motiongraph.graph import EdgeKind
     from ..render.camera import parse_view
-    from .enhance import enhanced_distance, enhancement_nodes
+    from .enhance import enhanced_sides, enhancement_nodes
     from .index import PoseIndex, library_clips, window_query
     from .keypoints import keypoint_positions
 
@@ -144,22 +144,13 @@ def augment_graph(graph, marks: list[dict], poses: dict, library_paths, k: int =
                 motions[c] = (lm, keypoint_positions(lm))
             lm, lpts = motions[c]
             z = int(round(index.time_of(np.array([cand]))[0] * graph.fps))
-            # h = 0: the edge blends A's last k frames with w_{z-k+1}..w_z and w_z.. with B's first k
-            d_in, d_out, xs, ys = [], [], [], []
-            for i in ends_a:
-                e = enhanced_distance(gpts, int(i), lpts, z, gpts, int(i), 0, k=gk, max_x=max_x, max_y=0,
-                                      lam=lam, fps=graph.fps)
-                d_in.append(np.inf if e is None else e.into)
-                xs.append(0 if e is None else e.x)
-            for j in starts_b:
-                e = enhanced_distance(gpts, int(j), lpts, z, gpts, int(j), 0, k=gk, max_x=0, max_y=max_y,
-                                      lam=lam, fps=graph.fps)
-                d_out.append(np.inf if e is None else e.out)
-                ys.append(0 if e is None else e.y)
-            d_in, d_out = np.array(d_in), np.array(d_out)
+            # h = 0: the edge blends A's last k frames with w_{z-k+1}..w_z and w_z.. with B's first k; every
+            # run end and start at once (enhanced_sides: enhanced_distance per i and per j, batched)
+            d_in, xs, d_out, ys = enhanced_sides(gpts, ends_a, lpts, z, gpts, starts_b, 0, k=gk, max_x=max_x,
+                                                 max_y=max_y, lam=lam, fps=graph.fps)
             total = d_in.min() + d_out.min()
             if np.isfinite(total) and (best is None or total < best[0]):
-                best = (total, cand, c, z, d_in, d_out, np.array(xs), np.array(ys))
+                best = (total, cand, c, z, d_in, d_out, xs, ys)
         if best is None:
             log.warning("%s frame %d: no candidate fits the graph's windows; plain transition kept", m["video"], m["frame"])
             continue

