@@ -162,3 +162,21 @@ def test_kill_9_during_a_write_then_a_rerun_leaves_nothing_beside_the_file(tmp_p
     assert len(hidden) == 1 and hidden[0].startswith(f".metrics.{proc.pid}-") and not out.exists()
     write_json(out, [1])
     assert [p.name for p in tmp_path.iterdir()] == ["metrics.json"]
+
+
+def test_errors_with_fields_survive_pickling():
+    # parallel_map's workers send their exceptions to the parent by pickle: an error class whose __init__
+    # takes more than the message failed to unpickle there, and the user got joblib's traceback instead of
+    # the one-line error naming the file
+    import pickle
+
+    from vidstyle.errors import FormatError, ParameterError
+    from vidstyle.mocap.bvh import BVHError
+
+    for err in (FormatError("a.json", "frames", "must be a list"), FormatError(None, None, "empty"),
+                ParameterError("window", "must be >= 1"), BVHError("x.bvh", 7, "bad channel count"),
+                BVHError(None, None, "empty")):
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is type(err)
+        assert str(back) == str(err)
+        assert back.__dict__ == err.__dict__

@@ -27,6 +27,9 @@ class FormatError(InputError):
         what = f"{field}: " if field else ""
         super().__init__(f"{where}{what}{problem}")
 
+    def __reduce__(self):  # picklable (a worker process's error reaches the parent intact)
+        return type(self), (self.path, self.field, self.problem)
+
 
 class ParameterError(InputError):
     """A library parameter with a value it cannot take. The message names the parameter as the library
@@ -36,6 +39,9 @@ class ParameterError(InputError):
         self.param = param
         self.problem = problem
         super().__init__(f"{param}: {problem}")
+
+    def __reduce__(self):  # picklable, as FormatError
+        return type(self), (self.param, self.problem)
 
 
 class ResourceError(VidstyleError):

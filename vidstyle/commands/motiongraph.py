@@ -82,6 +82,7 @@ def synthesize(
     method: str | None = typer.Option(None, "--method", help=f"With --keyframes: {' | '.join(KD.METHODS)} (default {KD.METHOD}: Molina Tanco & Hilton's Markov chain over pose clusters; graph: the graph's shortest path; slerp: LERP+SLERP)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output BVH; with --sequence, <out stem>.labels.json is written beside it."),
     preview: Path | None = typer.Option(None, "--preview", help="Also render a preview video (.mp4)."),
+    preview_size: str = typer.Option("640x480", "--preview-size", help="WIDTHxHEIGHT of the --preview video."),
     seconds: float = typer.Option(D.STEP_SECONDS, "--seconds", help="Duration of steps given without one."),
     mismatch_penalty: float = typer.Option(D.MISMATCH_PENALTY, "--mismatch-penalty", help="Cost of one output frame with a wrong label."),
     transition_penalty: float = typer.Option(D.TRANSITION_PENALTY, "--transition-penalty", help="Cost added to every transition (in threshold units)."),
@@ -100,6 +101,9 @@ def synthesize(
     from ..motiongraph import MotionGraph, save_synthesis
     from ..motiongraph import synthesize as synth
 
+    from .render import parse_size
+
+    psize = parse_size(preview_size, "--preview-size")
     if (sequence is None) == (keyframes is None):
         raise InputError("--sequence / --keyframes: give exactly one (an action sequence, or keyframes to pass through)")
     if keyframes is None and method is not None:
@@ -125,7 +129,7 @@ def synthesize(
         if preview is not None:
             from ..mocap import read_bvh
 
-            write_preview(read_bvh(out), preview)
+            write_preview(read_bvh(out), preview, size=psize)
         return
     with flag_names(_PLAN_FLAGS):
         result = synth(graph, sequence, bvh_name=out.name, seconds=seconds, mismatch_penalty=mismatch_penalty,
@@ -144,7 +148,7 @@ def synthesize(
     log.info("wrote %s: %d frames (%.1f s) with %d transitions, %.0fx real time", out, motion.n_frames,
              motion.duration, len(result.walk.transitions_used), motion.duration / max(result.seconds, 1e-9))
     if preview is not None:
-        write_preview(motion, preview)
+        write_preview(motion, preview, size=psize)
 
 
 def synthesize_from_keyframes(graph, keyframes: Path, method: str, out: Path, seed: int) -> None:
@@ -159,13 +163,13 @@ def synthesize_from_keyframes(graph, keyframes: Path, method: str, out: Path, se
              result.motion.duration, len(result.key_frames), method, 1000 * result.seconds)
 
 
-def write_preview(motion, path: Path, fps: float = 30.0) -> None:
+def write_preview(motion, path: Path, fps: float = 30.0, size: tuple[int, int] = (640, 480)) -> None:
     try:
         from ..render import render_to_file
     except ImportError:
         raise InputError("--preview: the renderer (vidstyle.render.render_to_file) is not available") from None
-    # one 640x480 preview: x264 on a thread of its own while the frames are drawn (the same file)
-    render_to_file(motion, str(path), view="front", size=(640, 480), fps=fps, background_encode=True)
+    # one preview (640x480 by default): x264 on a thread of its own while the frames are drawn (the same file)
+    render_to_file(motion, str(path), view="front", size=size, fps=fps, background_encode=True)
     log.info("wrote preview %s", path)
 
 

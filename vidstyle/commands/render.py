@@ -18,14 +18,14 @@ def register(app: typer.Typer) -> None:
     app.command("render")(render)
 
 
-def parse_size(text: str) -> tuple[int, int]:
-    """``"160x120"`` -> ``(160, 120)``."""
+def parse_size(text: str, flag: str = "--size") -> tuple[int, int]:
+    """``"160x120"`` -> ``(160, 120)``; errors name ``flag``."""
     m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text or "")
     if not m:
-        raise InputError(f"--size: expected WIDTHxHEIGHT such as 160x120, got {text!r}")
+        raise InputError(f"{flag}: expected WIDTHxHEIGHT such as 160x120, got {text!r}")
     w, h = int(m.group(1)), int(m.group(2))
     if not (2 <= w <= 8192 and 2 <= h <= 8192):
-        raise InputError(f"--size: {w}x{h} is out of range (2..8192 per side)")
+        raise InputError(f"{flag}: {w}x{h} is out of range (2..8192 per side)")
     return w, h
 
 

@@ -16,6 +16,7 @@ import typer
 from ..errors import InputError
 from ..style import defaults as D
 from ._evaluate import evaluate_app
+from ._numbers import jobs_option
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +85,8 @@ def learn_style(
                                     "view and action durations (default: raw figures, durations of the model)."),
     population_performers: str = typer.Option(None, "--population-performers",
                                               help="With --population: only these performers (comma-separated)."),
+    jobs: int = jobs_option(-1, help="With --dataset: performers learned in parallel (-1 = all cores; the "
+                            "styles do not depend on it)."),
 ) -> None:
     """Learn a performer's action style (HMMs + durations) from frame labels.
 
@@ -105,7 +108,7 @@ def learn_style(
         raise InputError("learn-style: --poses-dir and --action-model go together")
     if poses_dir is not None and dataset is not None:
         raise InputError("learn-style: --poses-dir works with LABELS... --out (one performer), not --dataset")
-    learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params)
+    learned = learn(labels or [], dataset=dataset, labels_dir=labels_dir, views=wanted, params=params, jobs=jobs)
     if poses_dir is not None:
         from ..actionmodel.stylefit import learn_action_style
 
@@ -211,6 +214,7 @@ def evaluate_style(
     emission_prior: float = _E_PRIOR,
     modes: str = _MODES,
     mode_criterion: str = _CRIT,
+    jobs: int = jobs_option(-1, help="Styles fitted in parallel (-1 = all cores; the metrics do not depend on it)."),
 ) -> None:
     """Style metrics on performers with known chains: transition error, JSD, identification, likelihood."""
     from ..evaluation.style import EvalParams, evaluate_dataset
@@ -237,7 +241,7 @@ def evaluate_style(
             chosen = [p.strip() for p in performers.split(",") if p.strip()]
     elif model is not None or performers is not None:
         raise InputError("--model/--performers: only used with --labels-dir")
-    metrics = evaluate_dataset(dataset, params, labels_dir, chosen)
+    metrics = evaluate_dataset(dataset, params, labels_dir, chosen, jobs=jobs)
     if out is not None:
         write_metrics(out, metrics)
     _print_table(metrics)

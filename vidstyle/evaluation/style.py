@@ -158,18 +158,27 @@ def _mean(xs) -> float | None:
     return float(np.mean(xs)) if xs else None
 
 
-def evaluate_performers(perfs: list[PerformerData], params: EvalParams) -> dict[str, Any]:
-    """All style metrics for one label source (see the module docstring)."""
+def _fit_style(item) -> Style:
+    """The style of one performer's training sequences (a worker's item of :func:`evaluate_dataset`)."""
+    p, style_params = item
+    return Style.fit(p.train, style_params, what=f"performer {p.pid} training labels")
+
+
+def evaluate_performers(perfs: list[PerformerData], params: EvalParams,
+                        styles: dict[str, Style] | None = None) -> dict[str, Any]:
+    """All style metrics for one label source (see the module docstring). ``styles``: the performers'
+    styles already fitted on their training sequences (:func:`_fit_style`), else fitted here."""
     if len(perfs) < 2:
         raise InputError(f"dataset: need at least 2 performers with events, got {len(perfs)}")
     seed = params.style.seed
-    styles: dict[str, Style] = {}
+    given = styles or {}
+    styles = {}
     rows: list[dict[str, Any]] = []
     generated: dict[str, dict[str, list[np.ndarray]]] = {}
     for i, p in enumerate(perfs):
         if not p.heldout:
             raise InputError(f"performer {p.pid}: too few events to hold any out")
-        st = Style.fit(p.train, params.style, what=f"performer {p.pid} training labels")
+        st = given[p.pid] if p.pid in given else _fit_style((p, params.style))
         styles[p.pid] = st
         held = [s.actions for s in p.heldout]
         n_held = int(sum(len(h) for h in held))
@@ -289,7 +298,7 @@ def evaluate_performers(perfs: list[PerformerData], params: EvalParams) -> dict[
 
 def evaluate_dataset(
     dataset_dir: str | Path, params: EvalParams, labels_dir: str | Path | None = None,
-    performers: list[str] | None = None,
+    performers: list[str] | None = None, jobs: int = 1,
 ) -> dict[str, Any]:
     """Metrics document: ground-truth labels of every performer, and with ``labels_dir`` the recognised
     labels of ``performers`` (required then: the recognizer's test performers) beside their ground truth."""
@@ -302,7 +311,15 @@ def evaluate_dataset(
     if labels_dir is not None:
         inputs["ground_truth_test_performers"] = load_performers(manifest, params, None, performers)
         inputs["recognised"] = load_performers(manifest, params, labels_dir, performers)
-    sources = {name: evaluate_performers(perfs, params) for name, perfs in inputs.items()}
+    # every source's styles fitted first, ``jobs`` at a time (each is the same for any number of workers)
+    from ..parallel import parallel_map
+
+    items = [(name, p) for name, perfs in inputs.items() for p in perfs if p.heldout]
+    fitted = parallel_map(_fit_style, [(p, params.style) for _, p in items], jobs=jobs, description="styles")
+    styles: dict[str, dict[str, Style]] = {name: {} for name in inputs}
+    for (name, p), st in zip(items, fitted):
+        styles[name][p.pid] = st
+    sources = {name: evaluate_performers(perfs, params, styles[name]) for name, perfs in inputs.items()}
     return {
         "kind": "vidstyle.metrics.style",
         "schema_version": 1,

@@ -51,6 +51,9 @@ class BVHError(VidstyleError):
         where = f"{self.path}:{line}" if line else self.path
         super().__init__(f"{where}: {problem}")
 
+    def __reduce__(self):  # picklable (a worker process's error reaches the parent intact)
+        return type(self), (self.path, self.line, self.problem)
+
 
 # --------------------------------------------------------------------------- reading
 def read_bvh(path: str | os.PathLike) -> Motion:

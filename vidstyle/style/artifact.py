@@ -307,26 +307,40 @@ class Style:
         style_format.write_style(path, self.to_record())
 
 
-def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None) -> list[tuple[str, Style]]:
-    """One style per performer of ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`), learned from
-    the labels of its performance videos: ground truth, or with ``labels_dir`` the recognised labels.
-    ``views``: only these views. Every performer needs at least one performance video."""
+def _performer_style(item) -> tuple[str, Style | InputError]:
+    """One performer's style of :func:`dataset_styles` (a worker's item): the style, or the
+    :class:`InputError` that learning it raised."""
     from ..formats.labels import read_labels
 
-    out = []
+    pid, files, params = item
+    try:
+        return pid, Style.from_tracks([read_labels(p) for p in files], params)
+    except InputError as e:
+        return pid, e
+
+
+def dataset_styles(dataset, params: StyleParams, labels_dir=None, views=None, jobs: int = 1) -> list[tuple[str, Style]]:
+    """One style per performer of ``dataset`` (a :class:`~vidstyle.formats.dataset.Dataset`), learned from
+    the labels of its performance videos: ground truth, or with ``labels_dir`` the recognised labels.
+    ``views``: only these views. Every performer needs at least one performance video. ``jobs``: performers
+    learned in parallel (-1: all cores; each style is the same for any number)."""
+    from ..parallel import parallel_map
+
+    items = []
     for pid in dataset.performer_ids():
         files = dataset.performer_label_files(pid, labels_dir, views)
         if not files:
             raise InputError(f"{dataset.path or dataset.root}: performer {pid} has no performance video"
                              + (f" in views {','.join(views)}" if views else ""))
-        try:
-            style = Style.from_tracks([read_labels(p) for _, p in files], params)
-        except InputError as e:
+        items.append((pid, [p for _, p in files], params))
+    out = []
+    for pid, style in parallel_map(_performer_style, items, jobs=jobs, description="styles"):
+        if isinstance(style, InputError):
             if labels_dir is None:  # ground truth always holds a chain
-                raise
+                raise style
             # recognised labels may hold too few events (a weak recognizer): no style for this performer,
             # the others are still learned
-            log.warning("performer %s: no style learned from its recognised labels (%s)", pid, e)
+            log.warning("performer %s: no style learned from its recognised labels (%s)", pid, style)
             continue
         style.performer = pid  # recognised label files do not name their performer; the dataset does
         out.append((pid, style))

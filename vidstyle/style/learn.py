@@ -52,11 +52,13 @@ def learn(
     labels_dir: PathLike | None = None,
     views: Sequence[str] | None = None,
     params: StyleParams | None = None,
+    jobs: int = 1,
 ) -> list[tuple[str | None, Style]]:
     """Learn styles (HMMs + durations) from frame labels: one from the label files ``labels`` of one
     performer (returned as ``[(None, style)]``), or one per performer of ``dataset`` from its performance
     videos (``[(performer, style), ...]``; ground truth, or the recognised ``<video id>.json`` of
-    ``labels_dir``; ``views``: only these). ``params``: :func:`style_params` (default: all defaults).
+    ``labels_dir``; ``views``: only these; ``jobs``: performers in parallel, -1 all cores). ``params``:
+    :func:`style_params` (default: all defaults).
     Everything is learned before anything is returned, so a bad file leaves nothing half-done."""
     from ..formats.dataset import read_dataset
     from ..formats.labels import read_labels
@@ -69,7 +71,7 @@ def learn(
     if labels:
         raise InputError("learn-style: with --dataset give --out-dir (and no LABELS or --out)")
     return list(dataset_styles(read_dataset(dataset), params, Path(labels_dir) if labels_dir else None,
-                               list(views) if views is not None else None))
+                               list(views) if views is not None else None, jobs=jobs))
 
 
 def generate_sequence(style: Style, length: int = D.GENERATE_LENGTH, start: str | None = None, seed: int = D.SEED,
