@@ -18,10 +18,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-from sklearn.linear_model import LogisticRegression
-from sklearn.multiclass import OneVsRestClassifier
-from sklearn.preprocessing import StandardScaler
-from sklearn.svm import SVC
 
 from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame
@@ -56,6 +52,10 @@ class ViewpointSVM:
         return feats["parts"][[VIEW_NAMES.index(v) * N_PARTS for v in VIEW_NAMES]][None]
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> ViewpointSVM:
+        from sklearn.multiclass import OneVsRestClassifier  # here: inference needs no scikit-learn (~1.2 s to import)
+        from sklearn.preprocessing import StandardScaler
+        from sklearn.svm import SVC
+
         self.scaler_ = StandardScaler().fit(X)
         Z = self.scaler_.transform(X)
         self.classes_ = np.array(VIEW_NAMES)
@@ -105,6 +105,9 @@ class ViewpointLogistic(ViewpointSVM):
         return feats["parts"][None]
 
     def fit(self, X, y):
+        from sklearn.linear_model import LogisticRegression
+        from sklearn.preprocessing import StandardScaler
+
         self.scaler_ = StandardScaler().fit(X)
         self.classes_ = np.array(VIEW_NAMES)
         self.clf_ = LogisticRegression(C=self.C, max_iter=2000).fit(self.scaler_.transform(X),
@@ -421,6 +424,8 @@ class HogParts:
         for j, (P, Nn) in enumerate(data):
             X = np.vstack([P, Nn])
             y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            from sklearn.linear_model import LogisticRegression
+
             clf = LogisticRegression(C=model.C, max_iter=300, class_weight="balanced").fit(X, y)
             h, w = m.sizes_[j]
             m.templates_.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))

@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from sklearn.linear_model import LogisticRegression
 
 from ..mocap.keypoints import KEYPOINTS, PART_KEYPOINTS, PART_NAMES, PART_PARENT_INDEX
 from .dt import BIG, brute_dt2d, dt2d, min_plus
@@ -191,6 +190,8 @@ class PictorialStructures:
                 Nn.extend(n)
             X = np.vstack(P + Nn)
             y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            from sklearn.linear_model import LogisticRegression  # here: inference needs no scikit-learn
+
             clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced")
             clf.fit(X, y)
             h, w = self.sizes_[j]
@@ -227,6 +228,8 @@ class PictorialStructures:
                     continue
                 X = np.vstack([pos, Nn, far])
                 y = np.r_[np.ones(len(pos)), np.zeros(len(Nn) + len(far))]
+                from sklearn.linear_model import LogisticRegression
+
                 clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced").fit(X, y)
                 temps.append(clf.coef_[0].reshape(h, w, -1).astype(np.float32))
                 self.bias_[j, k] = float(clf.intercept_[0])
@@ -262,6 +265,8 @@ class PictorialStructures:
                         Nn.append(win)
             X = np.vstack(P + Nn)
             y = np.r_[np.ones(len(P)), np.zeros(len(Nn))]
+            from sklearn.linear_model import LogisticRegression  # here: inference needs no scikit-learn
+
             clf = LogisticRegression(C=self.C, max_iter=300, class_weight="balanced")
             clf.fit(X, y)
             self.templates_[j] = clf.coef_[0].reshape(h, w, -1).astype(np.float32)
