@@ -305,3 +305,20 @@ def test_tpose_detection():
     rot = m.rotations.copy()
     rot[0] = [0, 0, 0, 1]
     assert has_tpose_first_frame(Motion(m.skeleton, rot, m.translations, m.fps))
+
+
+def test_inverse_placements_equal_the_objects_to_the_bit():
+    # the graph's blend alignments are computed in one pass instead of one Placement per candidate pair,
+    # on the promise that the stored numbers stay the same: every one must be equal, not close
+    from vidstyle.mocap.placement import Placement, inverse_placements
+
+    rng = np.random.default_rng(7)
+    t, x, z = rng.uniform(-4, 4, 3000), rng.normal(scale=50, size=3000), rng.normal(scale=50, size=3000)
+    ref = np.array([Placement(a, b, c).inverse().as_array() for a, b, c in zip(t, x, z)])
+    got = inverse_placements(t, x, z)
+    assert got.shape == (3000, 3)
+    assert np.array_equal(got, ref)
+    # and an inverse undoes its placement (independent truth)
+    pts = rng.normal(size=(5, 3))
+    p = Placement(*ref[0]).then(Placement(t[0], x[0], z[0]))
+    assert np.allclose(p.apply_points(pts), pts, atol=1e-9)

@@ -87,3 +87,16 @@ class Placement:
         # rotate about the pivot: T(p) = R (p - pivot) + pivot, then optionally - pivot
         moved = turn.apply_points(-pivot) + (0.0 if origin else pivot)
         return cls(turn.theta, float(moved[0]), float(moved[2]))
+
+
+def inverse_placements(theta, x0, z0) -> np.ndarray:
+    """(n, 3) ``Placement(t, x, z).inverse().as_array()`` of every ``(t, x, z)``, the same numbers to the
+    bit (the sines and cosines by :mod:`math`, as :meth:`Placement.inverse`, the rest element-wise in the
+    same order) without an object per placement."""
+    theta = np.asarray(theta, dtype=np.float64).reshape(-1)
+    x0 = np.asarray(x0, dtype=np.float64).reshape(-1)
+    z0 = np.asarray(z0, dtype=np.float64).reshape(-1)
+    c = np.array([math.cos(-t) for t in theta.tolist()], dtype=np.float64)
+    s = np.array([math.sin(-t) for t in theta.tolist()], dtype=np.float64)
+    return np.stack([-theta, -(c * x0 + s * z0), -(-s * x0 + c * z0)], axis=1).reshape(-1, 3)
+

@@ -372,13 +372,13 @@ class MotionGraph:
 
     def _init_edges(self, ws: WindowSet, cand) -> None:
         """Playback edges and the Kovar blends of the candidate window pairs (both directions)."""
-        from ..mocap.placement import Placement
+        from ..mocap.placement import inverse_placements
 
         k = ws.k
         W = ws.total_weight
         a_f, b_f = ws.starts[cand.a], ws.starts[cand.b]
         cost = np.sqrt(np.maximum(cand.D, 0) / W)
-        inv = np.array([Placement(t, x, z).inverse().as_array() for t, x, z in zip(cand.theta, cand.x0, cand.z0)]).reshape(-1, 3)
+        inv = inverse_placements(cand.theta, cand.x0, cand.z0)
         # window a (frames a_f..a_f+k-1) blends into window b (b_f..b_f+k-1) and vice versa
         src = np.concatenate([a_f, b_f]) - 1
         dst = np.concatenate([b_f, a_f]) + k - 1
