@@ -25,8 +25,10 @@ VERSIONS = (1,)
 
 
 def write_recognizer_model(path: str | os.PathLike, model: Any, header: dict[str, Any]) -> dict[str, Any]:
-    """Write the fitted recognizer ``model`` with ``header`` atomically; return the header as written."""
-    return write_model_file(path, KIND, SCHEMA_VERSION, header, model)
+    """Write the fitted recognizer ``model`` with ``header`` atomically; return the header as written.
+    Not compressed: the float64 support vectors deflate only from 35 to 32 MB on the demo, at 1.3 s to
+    write and 0.2 s more to every read."""
+    return write_model_file(path, KIND, SCHEMA_VERSION, header, model, compress=0)
 
 
 def read_recognizer_model(path: str | os.PathLike, model_type: type | tuple[type, ...] = object) -> tuple[Any, dict[str, Any]]:
