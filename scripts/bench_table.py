@@ -94,16 +94,31 @@ def motiongraph(d: dict) -> list[tuple]:
 
 
 def demo_timing(d: dict) -> list[tuple]:
-    """``vidstyle timing``'s table of a fresh ``make demo`` (out/metrics/timing.json, copied here)."""
+    """``vidstyle timing``'s table of fresh ``make demo`` runs (scripts/bench_demo.py: the median run's
+    document, with every run in ``runs``; older files hold one run)."""
     import datetime
 
     slow = sorted(d["stages"], key=lambda r: -r["wall_seconds"])[:3]
     top = ", ".join(f"{r['stage']} {r['wall_seconds']:.0f} s" for r in slow)
     when = datetime.datetime.fromtimestamp(d["started"], datetime.UTC).strftime("%Y-%m-%d")
     d.setdefault("when", when)
-    return [("`make demo`'s pipeline (`dvc repro`) on a fresh clone",
-             f"{d['run_wall_seconds']:.0f} s wall, {d['cpu_seconds']:.0f} s CPU (slowest: {top})", "<= 390 s",
-             _met(d["run_wall_seconds"] <= 390))]
+    runs = d.get("runs") or []
+    if len(runs) > 1:
+        walls = sorted(r["run_wall_seconds"] for r in runs)
+        wall = d["median_run_wall_seconds"]
+        fig = (f"median {wall:.0f} s wall of {len(runs)} fresh runs ({walls[0]:.0f}-{walls[-1]:.0f} s); the median "
+               f"run: {d['cpu_seconds']:.0f} s CPU (slowest: {top})")
+    else:
+        wall = d["run_wall_seconds"]
+        fig = f"{wall:.0f} s wall, {d['cpu_seconds']:.0f} s CPU (slowest: {top})"
+    rows = [("`make demo`'s pipeline (`dvc repro`) on a fresh clone", fig, "<= 390 s", _met(wall <= 390))]
+    totals = sorted(r["make_demo_seconds"] for r in runs if r.get("make_demo_seconds") is not None)
+    if totals:
+        med = d.get("median_make_demo_seconds")
+        rows.append(("`make demo` on a fresh clone, install included (pip's cache warm)",
+                     f"median {med:.0f} s of {len(totals)} runs ({totals[0]:.0f}-{totals[-1]:.0f} s)", "<= 600 s",
+                     _met(med <= 600)))
+    return rows
 
 
 def reconstruct(d: dict) -> list[tuple]:
