@@ -266,11 +266,8 @@ def _evaluate_video(item) -> list[dict]:
     true_mm = true_pts * mm
     sources = {"true2d": Observation(uv, np.ones((T, 15)), az, fps, size, source=f"{vid} (true 2D)")}
     world = {}
-    for d in poses_dirs:
-        path = Path(d) / f"{vid}.poses.json"
-        if not path.is_file():
-            raise InputError(f"{path}: no poses for video {vid} (run vidstyle pose on it)")
-        doc = read_poses(path)
+    for d in poses_dirs:  # evaluate() checked that every file exists
+        doc = read_poses(Path(d) / f"{vid}.poses.json")
         name = str(doc.backend)
         sources[name] = Observation.from_poses(doc, fps, size, T)
         w = blazepose_world_points(doc, T, base.elevation_deg if base.elevation_deg is not None
