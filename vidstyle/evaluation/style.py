@@ -165,20 +165,20 @@ def _fit_style(item) -> Style:
 
 
 def evaluate_performers(perfs: list[PerformerData], params: EvalParams,
-                        styles: dict[str, Style] | None = None) -> dict[str, Any]:
-    """All style metrics for one label source (see the module docstring). ``styles``: the performers'
-    styles already fitted on their training sequences (:func:`_fit_style`), else fitted here."""
+                        fitted: dict[str, Style] | None = None) -> dict[str, Any]:
+    """All style metrics for one label source (see the module docstring). ``fitted``: performer id ->
+    style already fitted on their training sequences (:func:`_fit_style`); the others are fitted here."""
     if len(perfs) < 2:
         raise InputError(f"dataset: need at least 2 performers with events, got {len(perfs)}")
     seed = params.style.seed
-    given = styles or {}
-    styles = {}
+    fitted = fitted or {}
+    styles: dict[str, Style] = {}
     rows: list[dict[str, Any]] = []
     generated: dict[str, dict[str, list[np.ndarray]]] = {}
     for i, p in enumerate(perfs):
         if not p.heldout:
             raise InputError(f"performer {p.pid}: too few events to hold any out")
-        st = given[p.pid] if p.pid in given else _fit_style((p, params.style))
+        st = fitted[p.pid] if p.pid in fitted else _fit_style((p, params.style))
         styles[p.pid] = st
         held = [s.actions for s in p.heldout]
         n_held = int(sum(len(h) for h in held))
@@ -315,9 +315,9 @@ def evaluate_dataset(
     from ..parallel import parallel_map
 
     items = [(name, p) for name, perfs in inputs.items() for p in perfs if p.heldout]
-    fitted = parallel_map(_fit_style, [(p, params.style) for _, p in items], jobs=jobs, description="styles")
+    done = parallel_map(_fit_style, [(p, params.style) for _, p in items], jobs=jobs, description="styles")
     styles: dict[str, dict[str, Style]] = {name: {} for name in inputs}
-    for (name, p), st in zip(items, fitted):
+    for (name, p), st in zip(items, done):
         styles[name][p.pid] = st
     sources = {name: evaluate_performers(perfs, params, styles[name]) for name, perfs in inputs.items()}
     return {
