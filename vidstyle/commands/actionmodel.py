@@ -3,6 +3,7 @@
     vidstyle fit-actions clips.csv --out model.npz --variance 0.95 --seed 0
     vidstyle fit-actions mocap/p00_*.bvh --out p00.npz        # labels from <stem>.labels.json beside each
     vidstyle sample-action model.npz --label Jab -n 5 --seed 0 --out-dir samples/
+    vidstyle evaluate action-style --dataset out/dataset --poses-dir P --labels-dir R --out-dir D --out m.json
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import typer
 
 from ..actionmodel import defaults as D
 from ..errors import InputError, ParameterError
+from ._evaluate import evaluate_app
+from ._numbers import jobs_option
 
 log = logging.getLogger(__name__)
 
@@ -109,3 +112,87 @@ def sample_action(
                      {"bvh": bvh.name, "fps": m.fps, "classes": [label], "labels": [label] * m.n_frames,
                       "model": str(model_path), "seed": seed, "index": k})
     log.info("wrote %d %s instance(s) to %s", len(motions), label, out_dir)
+
+
+@evaluate_app.command("action-style")
+def evaluate_action_style(
+    dataset: Path = typer.Option(..., "--dataset", help="Demo dataset directory (vidstyle demo make-dataset: mocap, truth, labels)."),
+    seed: int = typer.Option(0, "--seed", help="Split seed: the unseen-performer groups (training A+B, test) it names."),
+    poses_dir: Path | None = typer.Option(None, "--poses-dir", help="<video id>.poses.json of the pose stage: the "
+                                          "'estimated' input (the frames they cover), with --labels-dir."),
+    labels_dir: Path | None = typer.Option(None, "--labels-dir", help="Recognised labels <video id>.json (vidstyle recognize) for the estimated input."),
+    inputs: str = typer.Option("true,estimated", "--inputs", help="Comma-separated: true (true 2D of every video, "
+                               "true labels), estimated (--poses-dir with --labels-dir)."),
+    style_dir: Path | None = typer.Option(None, "--style-dir", help="learn-style's <performer>.json: with --out-dir, "
+                                          "each test performer's style is written there with its action-level part."),
+    out_dir: Path | None = typer.Option(None, "--out-dir", help="Writes actions.npz (the orthodox model of the training "
+                                        "performers), <label>.png (true, fitted and unfitted instance per test "
+                                        "performer) and, with --style-dir, <performer>.json."),
+    label: str = typer.Option("Jab", "--label", help="The action the figure shows."),
+    out: Path = typer.Option(Path("metrics/action_style.json"), "--out", "-o", help="Metrics JSON (vidstyle.metrics.action_style)."),
+    jobs: int = jobs_option(-1, help="Test performers x inputs fitted in parallel (-1 = all cores; the fits do not depend on it)."),
+) -> None:
+    """A performer's action-level style fitted from 2D (lead, guard, stance, tempo, the action model's
+    coefficients) on a split's test performers, against their truth: lead accuracy, correlations and the
+    generated actions' MPJPE against the unfitted model's."""
+    import contextlib
+
+    from ..evaluation.actionstyle import SPLIT_INPUTS, evaluate_split, figure_png
+    from ..fileio import atomic_path, check_writable, output_dir
+    from ..formats.metrics import ACTION_STYLE, write_metrics
+
+    kinds = [k.strip() for k in inputs.split(",") if k.strip()]
+    bad = [k for k in kinds if k not in SPLIT_INPUTS]
+    if bad or not kinds:
+        raise InputError(f"--inputs: {', '.join(bad) or 'none given'}: expected some of {', '.join(SPLIT_INPUTS)}")
+    if "estimated" in kinds and (poses_dir is None or labels_dir is None):
+        raise InputError("--inputs estimated needs --poses-dir and --labels-dir")
+    if style_dir is not None and out_dir is None:
+        raise InputError("--style-dir goes with --out-dir (where the styles are written)")
+    if not (Path(dataset) / "dataset.json").is_file():
+        raise InputError(f"{dataset}: not a demo dataset (no dataset.json)")
+    check_writable(out)
+    styles_in = {}
+    res = evaluate_split(dataset, seed, poses_dir, labels_dir, kinds, jobs, label)
+    doc = res["doc"]
+    # the style files carry what the run's video gives (the pose stage's 2D) when that input ran
+    style_kind = "estimated" if res["styles"].get("estimated") else doc["action_style"]["input"]
+    doc["styles_input"] = style_kind
+    if style_dir is not None:  # read every style before writing anything
+        from ..style import Style
+
+        for p in res["styles"][style_kind]:
+            f = Path(style_dir) / f"{p}.json"
+            if not f.is_file():
+                raise InputError(f"{f}: style file not found (--style-dir)")
+            styles_in[p] = Style.load(f)
+    doc["command"] = (f"vidstyle evaluate action-style --dataset {dataset} --seed {seed} --inputs {','.join(kinds)}"
+                      + (f" --poses-dir {poses_dir} --labels-dir {labels_dir}" if "estimated" in kinds else ""))
+    into = output_dir(out_dir, ["actions.npz", f"{label}.png", *(f"{p}.json" for p in styles_in)]) \
+        if out_dir is not None else contextlib.nullcontext()
+    with into:
+        if out_dir is not None:
+            model_path = Path(out_dir) / "actions.npz"
+            res["model"].save(model_path)
+            if res["figure"]:
+                png = figure_png(res["figure"], label, f"{label} of split {seed}'s test performers "
+                                 f"({res['figure_input']} 2D): true, fitted, unfitted")
+                with atomic_path(Path(out_dir) / f"{label}.png") as tmp:
+                    tmp.write_bytes(png)
+            for p, st in styles_in.items():
+                ast = res["styles"][style_kind][p]
+                ast.model = str(model_path)
+                st.action_style = ast
+                st.save(Path(out_dir) / f"{p}.json")
+        write_metrics(out, doc, kind=ACTION_STYLE)
+    for kind, s in doc["by_input"].items():
+        typer.echo(f"{kind:10s} performers {s['performers']}  lead accuracy {s.get('lead_accuracy', 0):.3f}  "
+                   f"guard r {_fmt(s.get('guard_height_r'))}  stance r {_fmt(s.get('stance_width_r'))}  "
+                   f"MPJPE fitted {_fmt(s.get('fitted_mean_mm'), 1)} mm, unfitted {_fmt(s.get('unfitted_mean_mm'), 1)} mm "
+                   f"(with the true lead {_fmt(s.get('unfitted_mean_true_lead_mm'), 1)}), reduction "
+                   f"{_fmt(s.get('mpjpe_reduction'))}")
+    log.info("wrote %s", out)
+
+
+def _fmt(x, d: int = 3) -> str:
+    return "-" if x is None else f"{x:.{d}f}"

@@ -230,3 +230,175 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
 
 def row_json(r: dict) -> dict:
     return {k: v for k, v in r.items() if k != "style"}
+
+
+# ---------------------------------------------------------------------------------------------- the pipeline's run
+#: input kinds of :func:`evaluate_split`: true 2D with the true labels (every video of the performer), and the
+#: pose stage's 2D (``poses_dir``: the videos that have a pose file) with the recognised labels (``labels_dir``)
+SPLIT_INPUTS = ("true", "estimated")
+
+
+def _split_worker(item) -> dict:
+    """One (performer, input) fit and its scores (a process of :func:`evaluate_split`)."""
+    model, est, vids, truth_style, truth, actions, unit_mm, seed = item
+    return evaluate_performer(model, est, vids, truth_style, truth, actions, unit_mm, seed=seed)
+
+
+def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | None = None,
+                   labels_dir: str | Path | None = None, inputs=SPLIT_INPUTS, jobs: int = 1,
+                   figure_label: str = "Jab") -> dict:
+    """The action-level style of split ``seed``'s test performers (``unseen-performer`` groups), as the
+    pipeline runs it: the orthodox model and the population figures on the training performers (sets A
+    and B) only, then every test performer fitted from each input of ``inputs`` (:data:`SPLIT_INPUTS`)
+    and scored (:func:`evaluate_performer`). A performer without a pose file for ``estimated`` has no
+    row for it. Returns ``doc`` (the metrics body), ``model``, ``styles`` (input -> performer ->
+    :class:`~vidstyle.actionmodel.stylefit.ActionStyle`) and ``figure`` (per performer of the first
+    input with rows: its true, fitted and unfitted ``figure_label`` as keypoint positions)."""
+    import time
+
+    from ..actionmodel import defaults as D
+    from ..actionmodel.stylefit import GlobalStyleEstimator
+    from ..errors import InputError
+    from ..mocap.keypoints import keypoint_positions
+    from ..parallel import parallel_map
+    from .actionmodel import split_groups
+
+    t_start = time.perf_counter()
+    unknown = [k for k in inputs if k not in SPLIT_INPUTS]
+    if unknown or not inputs:
+        raise InputError(f"inputs: {', '.join(unknown) or 'none given'}: expected some of {', '.join(SPLIT_INPUTS)}")
+    if "estimated" in inputs and (poses_dir is None or labels_dir is None):
+        raise InputError("the estimated input needs a poses directory and a recognised labels directory")
+    for d in (poses_dir, labels_dir):
+        if d is not None and not Path(d).is_dir():
+            raise InputError(f"{d}: directory not found")
+    demo = demo_truth(dataset)
+    manifest, ds, unit_mm, actions = demo["manifest"], demo["dataset"], demo["unit_mm"], demo["actions"]
+    groups = split_groups(manifest, seed)
+    train = sorted(groups["A"] + groups["B"])
+    t0 = time.perf_counter()
+    model = orthodox_model(dataset, manifest, train, seed)
+    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true")])
+    fit_model_s = time.perf_counter() - t0
+    log.info("action style: orthodox model and population on %s (%.1f s)", ", ".join(train), fit_model_s)
+    items, keys, truths = [], [], {}
+    for p in groups["T"]:
+        truths[p] = true_instances(dataset, p, model, seed=seed)
+        for kind in inputs:
+            if kind == "true":
+                vids = performer_videos(ds, manifest, p, "true")
+            else:
+                vids = [v for v in performer_videos(ds, manifest, p, "estimated", poses_dir=Path(poses_dir),
+                                                    labels_dir=Path(labels_dir)) if np.isfinite(v[0]).any()]
+            if not vids:
+                log.warning("action style: %s has no %s input (no pose file or labels)", p, kind)
+                continue
+            items.append((model, est, vids, demo["style"][p], truths[p], actions, unit_mm, seed))
+            keys.append((p, kind))
+    rows = parallel_map(_split_worker, items, jobs=jobs, description="action styles")
+    by_kind: dict[str, list] = {k: [] for k in inputs}
+    styles: dict[str, dict] = {k: {} for k in inputs}
+    for (p, kind), r in zip(keys, rows):
+        r.update(seed=seed, performer=p, input=kind)
+        by_kind[kind].append(r)
+        styles[kind][p] = r["style"]
+    by_input = {k: summarise(v, actions) for k, v in by_kind.items() if v}
+    if not by_input:
+        raise InputError("no test performer has any input to fit")
+    figure = {}
+    first = next(k for k in inputs if by_kind[k])
+    lm = model.models_.get(figure_label)
+    if lm is not None:
+        mu = lm.gmm_means[int(np.argmax(lm.gmm_weights))]
+        for p, st in styles[first].items():
+            true_m = true_instances(dataset, p, model, max_per_label=1, seed=seed).get(figure_label)
+            if not true_m or figure_label not in st.coefficients:
+                continue
+            n = true_m[0].n_frames
+            figure[p] = {"lead": demo["style"][p]["lead"], "fitted_lead": st.global_style.lead,
+                         "true": keypoint_positions(true_m[0]),
+                         "fitted": keypoint_positions(st.realise(model, figure_label, n)),
+                         "unfitted": keypoint_positions(model.decode(mu, figure_label, n_frames=n))}
+    # the headline: true 2D first (the fit itself, as scripts/eval_action_style.py reports it), then the
+    # pose stage's 2D (what the run's own video gives) as estimated_*
+    head_kind = "true" if "true" in by_input else first
+    head = by_input[head_kind]
+    headline = {"lead_accuracy": head.get("lead_accuracy", 0.0), "mpjpe_reduction": head.get("mpjpe_reduction", 0.0),
+                "mpjpe_reduction_vs_true_lead": head.get("mpjpe_reduction_vs_true_lead"),
+                "performers": head.get("performers"), "input": head_kind}
+    if "estimated" in by_input and head_kind != "estimated":
+        e = by_input["estimated"]
+        headline.update(estimated_lead_accuracy=e.get("lead_accuracy"), estimated_mpjpe_reduction=e.get("mpjpe_reduction"))
+    doc = {
+        "seed": seed, "seeds": [seed], "dataset": str(dataset), "mm_per_unit": unit_mm,
+        "splits": {str(seed): groups},
+        "params": {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
+                   "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS,
+                   "rounds": D.STYLE_ROUNDS, "validation": "pipelines/kickboxing/validation/action_style.json"},
+        "inputs_note": {"true": "true 2D keypoints of every video of the performer, true labels",
+                        "estimated": f"pose files of {poses_dir} (the frames they cover), labels of {labels_dir}"},
+        "by_input": by_input,
+        "rows": {k: [row_json(r) for r in v] for k, v in by_kind.items() if v},
+        "action_style": headline,
+        "model_seconds": fit_model_s, "wall_seconds": time.perf_counter() - t_start,
+    }
+    return {"doc": doc, "model": model, "styles": styles, "figure": figure, "figure_label": figure_label,
+            "figure_input": first}
+
+
+def figure_png(figure: dict, label: str, title: str = "") -> bytes:
+    """PNG of :func:`evaluate_split`'s ``figure``: one row per performer, their true (black), fitted (blue)
+    and unfitted (red) ``label`` as stick figures from above and from the side at the start, middle and
+    end of the true instance (the generated ones at the frames DTW aligns with those), side by side."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..actionmodel.dtw import dtw
+    from ..mocap.keypoints import KEYPOINT_INDEX, PARTS
+
+    bones = [(KEYPOINT_INDEX[a], KEYPOINT_INDEX[b]) for a, b in PARTS.values()]
+    bones += [(KEYPOINT_INDEX["neck"], KEYPOINT_INDEX[s]) for s in ("left_shoulder", "right_shoulder")]
+    bones += [(KEYPOINT_INDEX["pelvis"], KEYPOINT_INDEX[s]) for s in ("left_hip", "right_hip")]
+    colours = {"true": "k", "fitted": "tab:blue", "unfitted": "tab:red"}
+    perfs = sorted(figure)
+    fig, axes = plt.subplots(max(len(perfs), 1), 2, figsize=(9, 2.6 * max(len(perfs), 1)), squeeze=False)
+    for row, p in enumerate(perfs):
+        seqs = {k: np.asarray(figure[p][k]) for k in colours}
+        truth = seqs["true"]
+        n = len(truth)
+        height = float(np.ptp(truth[..., 1])) or 1.0
+        step = 1.2 * height
+        marks = np.linspace(0, n - 1, 3).astype(int)
+        for col, (view, (a, b)) in enumerate((("from above", (0, 2)), ("from the side", (2, 1)))):
+            ax = axes[row, col]
+            for name, pts in seqs.items():
+                if name == "true":
+                    idx = marks
+                else:
+                    C = np.linalg.norm(pts[:, None] - truth[None], axis=-1).mean(-1)
+                    path = np.asarray(dtw(C, 5)[1])
+                    idx = [int(path[path[:, 1] == t][0, 0]) for t in marks]
+                for k, f in enumerate(idx):
+                    for bi, (i, j) in enumerate(bones):
+                        q = pts[f, [i, j]]
+                        ax.plot(q[:, a] + k * step, q[:, b], colours[name], lw=1.2, alpha=0.85,
+                                label=name if bi == 0 and k == 0 and row == 0 and col == 0 else None)
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"{p} ({figure[p]['lead']}, fitted {figure[p]['fitted_lead']}): {label} {view}, "
+                         "start / middle / end", fontsize=8)
+    if perfs:
+        handles, names = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, names, fontsize=7, loc="lower center", ncol=3, frameon=False)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return buf.getvalue()

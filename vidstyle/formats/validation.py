@@ -40,6 +40,7 @@ RECONSTRUCT_DEFAULTS = "vidstyle.validation.reconstruct_defaults"
 POSE_RECOGNITION = "vidstyle.validation.pose_recognition"
 INBETWEEN = "vidstyle.validation.inbetween"
 ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
+ACTION_STYLE_POSES = "vidstyle.validation.action_style_poses"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -53,6 +54,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     POSE_RECOGNITION: (1, 1, True, False),
     INBETWEEN: (1, 1, True, False),
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
+    ACTION_STYLE_POSES: (1, 1, True, False),
 }
 
 

@@ -11,6 +11,7 @@ It reads the run directory written by the kickboxing pipeline (``pipelines/kickb
     RUN/graph/graph.npz               vidstyle build-graph
     RUN/motion/<performer>.mp4        vidstyle synthesize --preview
     RUN/metrics/motion.json           vidstyle evaluate motion
+    RUN/metrics/action_style.json     vidstyle evaluate action-style (and RUN/action_style/<label>.png)
     RUN/metrics/timing.json           vidstyle timing (the stage-time table; make demo writes it)
 
 Every section whose inputs are missing says so on the page (the report is also useful on a partial
@@ -445,6 +446,58 @@ def _reconstruct_section(page: Page, run: Path) -> None:
     page.add(title, "".join(body))
 
 
+def _action_style_section(page: Page, run: Path) -> None:
+    """Each test performer's action-level style (``vidstyle evaluate action-style``): the summary per input
+    and the per-performer fits (metrics/action_style.json), and one action of each performer: true, from
+    their fitted style, and the unfitted model's (RUN/action_style/<label>.png)."""
+    title = "How each performer does an action (action-level style)"
+    path = run / "metrics" / "action_style.json"
+    m = _metrics(path, ACTION_STYLE)
+    if m is None:
+        page.add(title, _missing("action-style metrics", path))
+        return
+    names = {"true": "true 2D, true labels", "estimated": "pose-stage 2D, recognised labels"}
+
+    def mm(x):
+        return None if x is None else round(float(x), 1)
+
+    rows = [[names.get(k, k), s.get("performers"), s.get("lead_accuracy"), s.get("guard_height_r"),
+             s.get("stance_width_r"), s.get("duration_factor_r"), mm(s.get("fitted_mean_mm")),
+             mm(s.get("unfitted_mean_mm")), mm(s.get("unfitted_mean_true_lead_mm")), s.get("mpjpe_reduction")]
+            for k, s in (m.get("by_input") or {}).items()]
+    body = [table(rows, ["input", "performers", "lead accuracy", "guard height r", "stance width r",
+                         "duration factor r", "generated MPJPE: fitted (mm)", "unfitted (mm)",
+                         "unfitted, true lead (mm)", "reduction"])]
+    prow = []
+    for k, rs in (m.get("rows") or {}).items():
+        for r in rs:
+            labs = (r.get("labels") or {}).values()
+            fit = [v["fitted_mean_mm"] for v in labs if v.get("fitted_mean_mm") is not None]
+            unf = [v["unfitted_mean_mm"] for v in labs if v.get("unfitted_mean_mm") is not None]
+            prow.append([r.get("performer"), names.get(k, k), r.get("videos"), f"{r.get('lead')} ({r.get('lead_true')})",
+                         f"{r.get('guard_height', float('nan')):.3f} ({r.get('guard_height_true', float('nan')):.3f})",
+                         f"{r.get('stance_width', float('nan')):.3f} ({r.get('stance_width_true', float('nan')):.3f})",
+                         sum((r.get("segments") or {}).values()),
+                         mm(np.mean(fit)) if fit else None, mm(np.mean(unf)) if unf else None])
+    body.append(table(prow, ["performer", "input", "videos", "lead (true)", "guard height (true)",
+                             "stance width (true)", "segments fitted", "fitted MPJPE (mm)", "unfitted MPJPE (mm)"]))
+    split = (m.get("splits") or {}).get(str(m.get("seed")), {})
+    body.append(f'<p class="note">Test performers {esc(", ".join(split.get("T", [])))} of split seed '
+                f'{esc(str(m.get("seed")))}; the orthodox action model and the population figures come from the '
+                f'training performers {esc(", ".join(sorted(split.get("A", []) + split.get("B", []))))} only. '
+                'Generated MPJPE: the performer\'s action generated from their fitted style (or the unfitted model\'s '
+                'mean; "true lead": that mean mirrored for a southpaw) against their true instances of the same '
+                'action, after DTW alignment, mean over actions. Guard and stance are relative to the training '
+                'population (metrics/action_style.json)</p>')
+    folder = run / "action_style"
+    for png in sorted(folder.glob("*.png"))[:1]:
+        body.append(f'<figure><img alt="{esc(png.stem)}" style="max-width:100%" '
+                    f'src="{data_uri(png.read_bytes(), "image/png")}"><figcaption>{esc(png.stem)} of each test '
+                    'performer from above and from the side: true (black), generated from their fitted style (blue), '
+                    'the unfitted model (red)</figcaption></figure>')
+    page.add(title, "".join(body))
+
+
 def _get(doc: dict | None, *keys):
     for k in keys:
         if not isinstance(doc, dict) or k not in doc:
@@ -499,9 +552,11 @@ def headline_metrics(run: Path) -> dict:
             if h.get(f"augmg.blazepose.{key}") is not None:
                 out["augmg"][f"blazepose_{key}"] = h[f"augmg.blazepose.{key}"]
     ast = _metrics(run / "metrics" / "action_style.json", ACTION_STYLE)
-    if ast is not None:  # scripts/eval_action_style.py (issue 30 item 2)
+    if ast is not None:  # vidstyle evaluate action-style (issue 30 item 2)
         a = ast.get("action_style") or {}
-        out["action_style"] = {"lead_accuracy": a.get("lead_accuracy"), "mpjpe_reduction": a.get("mpjpe_reduction")}
+        out["action_style"] = {k: a.get(k) for k in ("lead_accuracy", "mpjpe_reduction", "mpjpe_reduction_vs_true_lead",
+                                                      "estimated_lead_accuracy", "estimated_mpjpe_reduction", "input")
+                               if k in a}
     rc = _metrics(run / "metrics" / "reconstruct.json", RECONSTRUCT)
     if rc is not None:
         h = rc.get("headline") or {}
@@ -525,5 +580,6 @@ def build_report(run: Path) -> str:
     _motion_section(page, run)
     _augmg_section(page, run, dataset)
     _reconstruct_section(page, run)
+    _action_style_section(page, run)
     timing_section(page, run)
     return page.render()

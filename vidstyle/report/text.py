@@ -82,6 +82,14 @@ GROUPS: list[tuple[str, str, list[tuple[str, str, str]]]] = [
         ("source", "2D:", ""),
         ("method", "method:", ""),
     ]),
+    ("action_style", "action style", [
+        ("lead_accuracy", "lead accuracy", ""),
+        ("mpjpe_reduction", "MPJPE below the unfitted model", ""),
+        ("mpjpe_reduction_vs_true_lead", "below it given the lead", ""),
+        ("estimated_lead_accuracy", "pose-stage 2D: lead accuracy", ""),
+        ("estimated_mpjpe_reduction", "MPJPE below unfitted", ""),
+        ("input", "2D:", ""),
+    ]),
 ]
 
 

@@ -1,0 +1,113 @@
+#!/usr/bin/env python
+"""Which pose backend the pipeline's ``action_style`` stage fits from, chosen on the *validation* performers
+(set V of split seed 0; never the test performers).
+
+The pipeline estimates 2D poses of the first ``--frames`` frames of one performance take per test performer
+(``reconstruct_poses``, both backends) and fits each performer's action-level style from them with the
+recognised labels (``vidstyle evaluate action-style --poses-dir``). Here the same is done for the
+validation performers' first take: ``vidstyle pose`` with each backend on the same frames, the orthodox
+model and population on the training performers (A+B), the fit from those poses with the pipeline's
+recognised labels (``--labels-dir``), scored against the performers' truth. Rule: the backend of least
+mean DTW-aligned MPJPE of the fitted mean over the validation performers (lead accuracy reported beside).
+
+    python scripts/validate_action_style_poses.py --run pipelines/kickboxing/out
+
+Writes ``--out`` (default ``pipelines/kickboxing/validation/action_style_poses.json``); logs on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+log = logging.getLogger("validate_action_style_poses")
+BACKENDS = ("ps", "blazepose")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--run", type=Path, default=ROOT / "pipelines" / "kickboxing" / "out",
+                    help="The pipeline's run directory (dataset/, recognized/).")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--frames", type=int, default=200, help="First frames of each take (params.yaml reconstruct.frames).")
+    ap.add_argument("--poses", type=Path, default=None, help="Keep the pose files here (default: a temporary directory).")
+    ap.add_argument("--out", type=Path, default=ROOT / "pipelines" / "kickboxing" / "validation" / "action_style_poses.json")
+    args = ap.parse_args()
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
+    log.setLevel(logging.INFO)
+    import numpy as np
+
+    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
+    from vidstyle.evaluation.actionmodel import split_groups
+    from vidstyle.evaluation.actionstyle import (
+        demo_truth,
+        evaluate_performer,
+        orthodox_model,
+        performer_videos,
+        row_json,
+        summarise,
+        true_instances,
+    )
+    from vidstyle.formats.validation import validation_header, write_validation
+
+    t_start = time.perf_counter()
+    dataset = args.run / "dataset"
+    demo = demo_truth(dataset)
+    manifest, ds = demo["manifest"], demo["dataset"]
+    g = split_groups(manifest, args.seed)
+    train = sorted(g["A"] + g["B"])
+    videos = [f"{p}_perf0_front" for p in g["V"]]
+    poses_root = args.poses or Path(tempfile.mkdtemp(prefix="vidstyle_asp_"))
+    frames = ",".join(map(str, range(args.frames)))
+    for b in BACKENDS:
+        out = poses_root / f"poses_{b}"
+        if all((out / f"{v}.poses.json").is_file() for v in videos):
+            continue
+        cmd = [sys.executable, "-m", "vidstyle", "pose", *(str(dataset / "videos" / f"{v}.mp4") for v in videos),
+               "--backend", b, "--out-dir", str(out), "--frames", frames, "--jobs", "1"]
+        log.info("%s", " ".join(cmd[:3] + ["..."]))
+        subprocess.run(cmd, check=True, cwd=ROOT)
+    model = orthodox_model(dataset, manifest, train, args.seed)
+    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true")])
+    rows, by_backend = {}, {}
+    for b in BACKENDS:
+        rs = []
+        for p in g["V"]:
+            vids = [v for v in performer_videos(ds, manifest, p, "estimated", poses_dir=poses_root / f"poses_{b}",
+                                                labels_dir=args.run / "recognized") if np.isfinite(v[0]).any()]
+            truth = true_instances(dataset, p, model, seed=args.seed)
+            r = evaluate_performer(model, est, vids, demo["style"][p], truth, demo["actions"], demo["unit_mm"],
+                                   seed=args.seed)
+            r.update(performer=p, input=b)
+            rs.append(r)
+            log.info("%s %s: lead %s (true %s), MPJPE fitted %.1f mm", b, p, r["lead"], r["lead_true"],
+                     np.mean([v["fitted_mean_mm"] for v in r["labels"].values()]))
+        rows[b] = [row_json(r) for r in rs]
+        by_backend[b] = summarise(rs, demo["actions"])
+    best = min(BACKENDS, key=lambda b: by_backend[b]["fitted_mean_mm"])
+    doc = {**validation_header("vidstyle.validation.action_style_poses"), "seed": args.seed,
+           "command": "python scripts/validate_action_style_poses.py " + " ".join(sys.argv[1:]),
+           "split": g, "videos": videos, "frames": args.frames,
+           "rule": "least mean DTW-aligned MPJPE of the fitted mean over the validation performers",
+           "by_backend": by_backend, "rows": rows, "chosen": best, "wall_seconds": time.perf_counter() - t_start}
+    write_validation(args.out, doc)
+    print(f"{'backend':>10s} {'lead acc':>8s} {'fitted mm':>9s} {'unfitted mm':>11s} {'unfitted, true lead mm':>22s}")
+    for b, s in by_backend.items():
+        print(f"{b:>10s} {s['lead_accuracy']:8.3f} {s['fitted_mean_mm']:9.1f} {s['unfitted_mean_mm']:11.1f} "
+              f"{s['unfitted_mean_true_lead_mm']:22.1f}" + ("  <- chosen" if b == best else ""))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
