@@ -362,3 +362,92 @@ def test_fit_actions_mirror_makes_an_orthodox_model(tmp_path):
     pts = keypoint_positions(m.decode(m.models_["Jab"].gmm_means[0], "Jab"))
     travel = [np.linalg.norm(pts[:, w] - pts[0, w], axis=-1).max() for w in (7, 8)]
     assert travel[0] > 1.5 * travel[1]
+
+
+@pytest.fixture(scope="module")
+def action_style_run(tmp_path_factory):
+    """A small demo dataset (4 performers: one per recognition set; split seed 0), its styles, pose files
+    that hold each video's true 2D and recognised-label files that hold the true labels."""
+    import shutil
+
+    from vidstyle.demo.dataset import DatasetParams, make_dataset
+    from vidstyle.evaluation.poserecognition import true_keypoints
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+
+    root = tmp_path_factory.mktemp("action_style_run")
+    ds_dir = root / "dataset"
+    make_dataset(ds_dir, DatasetParams.small(performances=1, performance_seconds=20.0), jobs=2)
+    ds = read_dataset(ds_dir / "dataset.json")
+    (root / "poses").mkdir()
+    (root / "recognized").mkdir()
+    for v in json.loads((ds_dir / "dataset.json").read_text())["videos"]:
+        xy = true_keypoints(ds, v["id"])
+        pts = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1)
+        write_poses(root / "poses" / f"{v['id']}.poses.json",
+                    Poses(v["video"], "ps", [PoseFrame(i, v["view"], p) for i, p in enumerate(pts)]))
+        shutil.copy(ds_dir / v["labels"], root / "recognized" / f"{v['id']}.json")
+    assert _main(["learn-style", "--dataset", str(ds_dir), "--out-dir", str(root / "style"), "--modes", "1",
+                  "--n-init", "1", "--jobs", "1"]) == 0
+    return root
+
+
+@pytest.mark.slow
+def test_evaluate_action_style_end_to_end(action_style_run, tmp_path):
+    """vidstyle evaluate action-style: pose files that hold the true 2D (to the file's 0.001 px) with the true
+    labels fit what the true input fits (the pose-file path reads the same tracks, frame for frame); the metrics file is valid and the headline
+    has the action_style figures; the written style carries the action-level part and names the model
+    written beside it, which loads; the figure is a PNG."""
+    from vidstyle.actionmodel import ActionModel
+    from vidstyle.formats.metrics import ACTION_STYLE, read_metrics
+    from vidstyle.report.build import headline_metrics
+    from vidstyle.style.artifact import Style
+
+    run = action_style_run
+    out = tmp_path / "run" / "metrics" / "action_style.json"
+    od = tmp_path / "run" / "action_style"
+    assert _main(["evaluate", "action-style", "--dataset", str(run / "dataset"), "--seed", "0",
+                  "--poses-dir", str(run / "poses"), "--labels-dir", str(run / "recognized"),
+                  "--style-dir", str(run / "style"), "--out-dir", str(od), "--out", str(out), "--jobs", "1"]) == 0
+    doc = read_metrics(out, ACTION_STYLE).doc
+    t, e = doc["rows"]["true"], doc["rows"]["estimated"]
+    assert [r["performer"] for r in t] == [r["performer"] for r in e] == doc["splits"]["0"]["T"]
+    for a, b in zip(t, e):
+        assert a["lead"] == b["lead"] == a["lead_true"]
+        assert a["guard_height"] == pytest.approx(b["guard_height"], rel=1e-2)
+        assert a["stance_width"] == pytest.approx(b["stance_width"], rel=1e-3)
+        assert a["segments"] == b["segments"]
+        for label in a["labels"]:
+            assert a["labels"][label]["fitted_mean_mm"] == pytest.approx(b["labels"][label]["fitted_mean_mm"], rel=2e-2)
+            assert a["labels"][label]["fitted_mean_mm"] < a["labels"][label]["unfitted_mean_true_lead_mm"] * 5
+    assert doc["action_style"]["lead_accuracy"] == 1.0 and doc["action_style"]["input"] == "true"
+    assert doc["styles_input"] == "estimated"
+    head = headline_metrics(tmp_path / "run")
+    assert head["action_style"]["lead_accuracy"] == 1.0
+    assert head["action_style"]["estimated_lead_accuracy"] == 1.0
+    p = doc["splits"]["0"]["T"][0]
+    s = Style.load(od / f"{p}.json")
+    assert s.action_style is not None and s.action_style.model == str(od / "actions.npz")
+    s.action_style.check_model(ActionModel.load(od / "actions.npz"))
+    assert (od / "Jab.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--inputs", "estimated"], "--poses-dir"),
+    (["--inputs", "sideways"], "--inputs"),
+    (["--inputs", "true", "--style-dir", "x"], "--out-dir"),
+])
+def test_evaluate_action_style_bad_options_exit_2(tmp_path, capsys, args, needle):
+    (tmp_path / "dataset").mkdir()
+    (tmp_path / "dataset" / "dataset.json").write_text("{}")
+    assert _main(["evaluate", "action-style", "--dataset", str(tmp_path / "dataset"), *args,
+                  "--out", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_evaluate_action_style_missing_dataset_exits_2(tmp_path, capsys):
+    assert _main(["evaluate", "action-style", "--dataset", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
+    assert "dataset.json" in capsys.readouterr().err
+    assert not (tmp_path / "m.json").exists()

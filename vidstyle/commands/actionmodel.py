@@ -121,8 +121,8 @@ def evaluate_action_style(
     poses_dir: Path | None = typer.Option(None, "--poses-dir", help="<video id>.poses.json of the pose stage: the "
                                           "'estimated' input (the frames they cover), with --labels-dir."),
     labels_dir: Path | None = typer.Option(None, "--labels-dir", help="Recognised labels <video id>.json (vidstyle recognize) for the estimated input."),
-    inputs: str = typer.Option("true,estimated", "--inputs", help="Comma-separated: true (true 2D of every video, "
-                               "true labels), estimated (--poses-dir with --labels-dir)."),
+    inputs: str = typer.Option("", "--inputs", help="Comma-separated: true (true 2D of every video, true labels), "
+                               "estimated (--poses-dir with --labels-dir). Default: true, and estimated with --poses-dir."),
     style_dir: Path | None = typer.Option(None, "--style-dir", help="learn-style's <performer>.json: with --out-dir, "
                                           "each test performer's style is written there with its action-level part."),
     out_dir: Path | None = typer.Option(None, "--out-dir", help="Writes actions.npz (the orthodox model of the training "
@@ -141,7 +141,7 @@ def evaluate_action_style(
     from ..fileio import atomic_path, check_writable, output_dir
     from ..formats.metrics import ACTION_STYLE, write_metrics
 
-    kinds = [k.strip() for k in inputs.split(",") if k.strip()]
+    kinds = [k.strip() for k in inputs.split(",") if k.strip()] or ["true", *(["estimated"] if poses_dir else [])]
     bad = [k for k in kinds if k not in SPLIT_INPUTS]
     if bad or not kinds:
         raise InputError(f"--inputs: {', '.join(bad) or 'none given'}: expected some of {', '.join(SPLIT_INPUTS)}")
