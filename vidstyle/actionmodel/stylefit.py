@@ -478,12 +478,10 @@ class ActionStyle:
         return m.mirror() if self.global_style.lead == "southpaw" else m
 
 
-def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dict | None = None,
-                     max_segments: int = D.STYLE_MAX_SEGMENTS, random_state: int = 0) -> ActionStyle:
-    """A performer's :class:`ActionStyle` from ``videos`` (``(xy, labels, view)``): global style, then per
-    modelled label up to ``max_segments`` segments (a seeded even spread over all) fitted with
-    :class:`SegmentFitter` after mirroring a southpaw's tracks."""
-    params = dict(params or {})
+def plan_action_style(model, estimator: GlobalStyleEstimator, videos, max_segments: int = D.STYLE_MAX_SEGMENTS,
+                      random_state: int = 0) -> tuple[GlobalStyle, dict[str, list[np.ndarray]]]:
+    """The first half of :func:`fit_action_style`: the global style of ``videos`` and, per modelled label,
+    the segments to fit (a southpaw's tracks mirrored; up to ``max_segments``, a seeded even spread)."""
     gs = estimator.estimate(videos)
     segs: dict[str, list[np.ndarray]] = {}
     for xy, labels, _view in videos:
@@ -494,24 +492,51 @@ def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dic
             if label in model.models_ and e - s >= 3:
                 segs.setdefault(label, []).append(xy[s:e])
     rng = np.random.default_rng(random_state)
-    coeffs, counts, spread = {}, {}, {}
+    chosen = {}
     for label, lst in sorted(segs.items()):
         if len(lst) > max_segments:
             idx = sorted(rng.choice(len(lst), max_segments, replace=False))
             lst = [lst[i] for i in idx]
-        fitter = SegmentFitter(model, label, **params)
-        Z = []
-        for xy in lst:
-            try:
-                Z.append(fitter.fit(xy)["z"])
-            except ParameterError as e:
-                log.info("style fit: %s segment skipped: %s", label, e)
-        if Z:
-            Z = np.array(Z)
-            coeffs[label] = Z.mean(0)
-            spread[label] = Z.std(0)
-            counts[label] = len(Z)
-    return ActionStyle(gs, coeffs, counts, spread, params=params)
+        chosen[label] = lst
+    return gs, chosen
+
+
+def fit_label_segments(model, label: str, segments, params: dict | None = None) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """The second half of :func:`fit_action_style` for one label: every segment fitted with one
+    :class:`SegmentFitter`; (mean, per-coefficient sd, count) of the fitted coefficients, or None when no
+    segment could be fitted."""
+    fitter = SegmentFitter(model, label, **dict(params or {}))
+    Z = []
+    for xy in segments:
+        try:
+            Z.append(fitter.fit(xy)["z"])
+        except ParameterError as e:
+            log.info("style fit: %s segment skipped: %s", label, e)
+    if not Z:
+        return None
+    Z = np.array(Z)
+    return Z.mean(0), Z.std(0), len(Z)
+
+
+def fit_action_style(model, estimator: GlobalStyleEstimator, videos, params: dict | None = None,
+                     max_segments: int = D.STYLE_MAX_SEGMENTS, random_state: int = 0) -> ActionStyle:
+    """A performer's :class:`ActionStyle` from ``videos`` (``(xy, labels, view)``): global style, then per
+    modelled label up to ``max_segments`` segments (a seeded even spread over all) fitted with
+    :class:`SegmentFitter` after mirroring a southpaw's tracks (:func:`plan_action_style`, then
+    :func:`fit_label_segments` per label: the labels are independent, so they may run in parallel)."""
+    params = dict(params or {})
+    gs, segs = plan_action_style(model, estimator, videos, max_segments, random_state)
+    fits = {label: fit_label_segments(model, label, lst, params) for label, lst in segs.items()}
+    return assemble_action_style(gs, fits, params)
+
+
+def assemble_action_style(gs: GlobalStyle, fits: dict, params: dict | None = None) -> ActionStyle:
+    """:class:`ActionStyle` of a global style and ``label -> fit_label_segments(...)`` results."""
+    coeffs, counts, spread = {}, {}, {}
+    for label, fit in sorted(fits.items()):
+        if fit is not None:
+            coeffs[label], spread[label], counts[label] = fit
+    return ActionStyle(gs, coeffs, counts, spread, params=dict(params or {}))
 
 
 def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyleEstimator | None = None,

@@ -163,7 +163,13 @@ def evaluate_performer(model, estimator, videos, truth_style: dict, truth: dict,
     t0 = time.perf_counter()
     style = fit_action_style(model, estimator, videos, params,
                              D.STYLE_MAX_SEGMENTS if max_segments is None else max_segments, seed)
-    fit_s = time.perf_counter() - t0
+    return score_performer(model, style, len(videos), truth_style, truth, actions, unit_mm,
+                           time.perf_counter() - t0, seed)
+
+
+def score_performer(model, style, n_videos: int, truth_style: dict, truth: dict, actions: list[str], unit_mm: float,
+                    fit_s: float = 0.0, seed: int = 0) -> dict:
+    """The scores of :func:`evaluate_performer` for an already fitted ``style`` (its row, ``style`` kept)."""
     gs = style.global_style
     ts = truth_style
     row = {"lead_true": ts["lead"], "lead": gs.lead, "lead_score": gs.lead_score,
@@ -173,7 +179,7 @@ def evaluate_performer(model, estimator, videos, truth_style: dict, truth: dict,
            "tempo_true": {a: ts["tempo"][k] for k, a in enumerate(actions)},
            "duration_factor_true": {a: ts["tempo"][k] / ts["speed"] for k, a in enumerate(actions)},
            "tempo": gs.tempo, "relative_tempo": gs.relative_tempo,
-           "videos": len(videos), "fit_seconds": fit_s, "segments": dict(style.counts), "labels": {}}
+           "videos": n_videos, "fit_seconds": fit_s, "segments": dict(style.counts), "labels": {}}
     rng = np.random.default_rng(seed)
     true_south = ts["lead"] == "southpaw"
     for label, motions in truth.items():
@@ -238,10 +244,32 @@ def row_json(r: dict) -> dict:
 SPLIT_INPUTS = ("true", "estimated")
 
 
-def _split_worker(item) -> dict:
-    """One (performer, input) fit and its scores (a process of :func:`evaluate_split`)."""
-    model, est, vids, truth_style, truth, actions, unit_mm, seed = item
-    return evaluate_performer(model, est, vids, truth_style, truth, actions, unit_mm, seed=seed)
+def _prepare_worker(item):
+    """The orthodox model (``"model"``) or the population's global-style figures (``"population"``) of the
+    training performers (:func:`evaluate_split`)."""
+    from ..actionmodel.stylefit import GlobalStyleEstimator
+
+    what, dataset, train, seed = item
+    demo = demo_truth(dataset)
+    if what == "model":
+        return orthodox_model(dataset, demo["manifest"], train, seed)
+    return GlobalStyleEstimator().fit([x for p in train for x in performer_videos(demo["dataset"], demo["manifest"], p, "true")])
+
+
+def _label_worker(item):
+    """One (performer, input, label) fit of :func:`evaluate_split`: (result, seconds)."""
+    import time
+
+    from ..actionmodel.stylefit import fit_label_segments
+
+    model, label, segments = item
+    t0 = time.perf_counter()
+    return fit_label_segments(model, label, segments), time.perf_counter() - t0
+
+
+def _score_worker(item) -> dict:
+    """The scores of one (performer, input) of :func:`evaluate_split`."""
+    return score_performer(*item)
 
 
 def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | None = None,
@@ -257,7 +285,7 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     import time
 
     from ..actionmodel import defaults as D
-    from ..actionmodel.stylefit import GlobalStyleEstimator
+    from ..actionmodel.stylefit import GlobalStyleEstimator, assemble_action_style, plan_action_style
     from ..errors import InputError
     from ..mocap.keypoints import keypoint_positions
     from ..parallel import parallel_map
@@ -277,8 +305,9 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     groups = split_groups(manifest, seed)
     train = sorted(groups["A"] + groups["B"])
     t0 = time.perf_counter()
-    model = orthodox_model(dataset, manifest, train, seed)
-    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true")])
+    # the model and the population figures are independent: one worker each
+    model, est = parallel_map(_prepare_worker, [("model", dataset, train, seed), ("population", dataset, train, seed)],
+                              jobs=min(jobs if jobs > 0 else 2, 2), description="action model and population")
     fit_model_s = time.perf_counter() - t0
     log.info("action style: orthodox model and population on %s (%.1f s)", ", ".join(train), fit_model_s)
     items, keys, truths = [], [], {}
@@ -293,9 +322,24 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
             if not vids:
                 log.warning("action style: %s has no %s input (no pose file or labels)", p, kind)
                 continue
-            items.append((model, est, vids, demo["style"][p], truths[p], actions, unit_mm, seed))
+            # what fit_action_style does, its labels spread over the workers (the same fits: the segments are
+            # chosen in the same order from the same seed, and each label's fit is independent)
+            gs, segs = plan_action_style(model, est, vids, D.STYLE_MAX_SEGMENTS, seed)
+            items.append((gs, segs, len(vids)))
             keys.append((p, kind))
-    rows = parallel_map(_split_worker, items, jobs=jobs, description="action styles")
+    tasks = [(i, label, segs) for i, (_gs, plan, _n) in enumerate(items) for label, segs in plan.items()]
+    order = sorted(range(len(tasks)), key=lambda t: -sum(len(x) for x in tasks[t][2]))  # longest first
+    done = parallel_map(_label_worker, [(model, tasks[t][1], tasks[t][2]) for t in order], jobs=jobs,
+                        description="action-style fits")
+    fits: list[dict] = [{} for _ in items]
+    seconds = [0.0] * len(items)
+    for t, (fit, secs) in zip(order, done):
+        i, label, _ = tasks[t]
+        fits[i][label] = fit
+        seconds[i] += secs
+    scored = [(model, assemble_action_style(gs, fits[i]), n, demo["style"][p], truths[p], actions, unit_mm,
+               seconds[i], seed) for i, ((p, _kind), (gs, _segs, n)) in enumerate(zip(keys, items))]
+    rows = parallel_map(_score_worker, scored, jobs=jobs, description="action-style scores")
     by_kind: dict[str, list] = {k: [] for k in inputs}
     styles: dict[str, dict] = {k: {} for k in inputs}
     for (p, kind), r in zip(keys, rows):
