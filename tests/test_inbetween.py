@@ -186,3 +186,55 @@ def test_markov_follows_estimator_conventions_and_its_seed():
     from sklearn.base import clone
 
     assert clone(m2).get_params() == params
+
+
+def test_evaluate_on_graph_slerp_is_exact_on_uniform_motion_and_windows_follow_lafan1(tmp_path):
+    """evaluate inbetween --graph's evaluation on a clip whose every joint turns at a constant angular
+    velocity about a fixed axis and whose root moves on a line: SLERP + LERP reproduce it exactly (L2P and
+    L2Q zero), the Markov method does not claim to; the number of windows is LAFAN1's (start i every 40
+    frames while i + 65 < frames); the graph's clips come back as motions frame for frame."""
+    from vidstyle.evaluation.inbetween import evaluate_on_graph, graph_motions
+    from vidstyle.mocap import Motion
+    from vidstyle.mocap.bvh import write_bvh
+
+    lib = _library(clips=3, frames=150)
+    lib.n_frames = len(lib.frame_clip_)
+    motions = graph_motions(lib)
+    assert [m.n_frames for m in motions] == [150, 150, 150]
+    np.testing.assert_allclose(np.concatenate([m.rotations for m in motions]), lib.rotations_, atol=1e-14)  # normalised
+    np.testing.assert_array_equal(np.concatenate([m.root_positions for m in motions]), lib.root_positions_)
+    F = 230
+    t = np.arange(F) / 30.0
+    rng = np.random.default_rng(3)
+    J = lib.skeleton_.n_joints
+    axes = rng.normal(size=(J, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    q0 = Rotation.from_rotvec(rng.normal(scale=0.3, size=(J, 3)))
+    rot = np.stack([(Rotation.from_rotvec(axes * 0.9 * ti) * q0).as_quat() for ti in t])  # 0.9 rad/s
+    root = np.stack([0.4 * t, np.full(F, 3.0), 1.1 * t], 1)
+    clip = tmp_path / "uniform.bvh"
+    write_bvh(Motion(lib.skeleton_, rot, None, 30.0, root_positions=root), clip, precision=12)
+    doc = evaluate_on_graph(lib, [clip], gaps=(15, 30, 45), methods=("markov", "slerp"), seed=0)
+    assert doc["split"]["windows"] == len(range(0, F - 65, 40)) == 5
+    for g in ("15", "30", "45"):
+        assert doc["methods"]["slerp"][g]["l2p"] < 1e-6 and doc["methods"]["slerp"][g]["l2q"] < 1e-6
+        assert np.isfinite(doc["methods"]["markov"][g]["l2p"]) and doc["methods"]["markov"][g]["l2p"] > 1e-3
+    few = evaluate_on_graph(lib, [clip], gaps=(15,), methods=("slerp",), max_windows=2)
+    assert few["split"]["windows"] == 2 and few["params"]["max_windows"] == 2
+
+
+@pytest.mark.parametrize("args, needle", [
+    ([], "--cmu"),
+    (["--graph", "g.npz"], "--clips"),
+    (["--graph", "g.npz", "--cmu", "x"], "--cmu"),
+    (["--graph", "g.npz", "--clips", "absent.bvh"], "absent.bvh"),
+    (["--graph", "g.npz", "--clips", "absent.bvh", "--max-windows", "0"], "--max-windows"),
+])
+def test_evaluate_inbetween_graph_bad_options_exit_2(tmp_path, capsys, monkeypatch, args, needle):
+    from vidstyle.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["evaluate", "inbetween", *args, "--out", "m.json"]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "m.json").exists()

@@ -9,7 +9,7 @@ from typing import List
 
 import typer
 
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..inbetween import defaults as KD
 from ..motiongraph import defaults as D
 from ._evaluate import evaluate_app
@@ -230,7 +230,11 @@ def evaluate_motion(
 
 @evaluate_app.command("inbetween")
 def evaluate_inbetween(
-    cmu: Path = typer.Option(..., "--cmu", help="Folder of CMU BVH clips named <subject>_<trial>.bvh (with clips.csv)."),
+    cmu: Path | None = typer.Option(None, "--cmu", help="Folder of CMU BVH clips named <subject>_<trial>.bvh (with clips.csv)."),
+    graph: Path | None = typer.Option(None, "--graph", help="Instead of --cmu: this motion graph (build-graph) is the "
+                                      "library, and --clips are the held-out windows' clips."),
+    clips: List[Path] = typer.Option([], "--clips", help="With --graph: held-out BVH clips (none of the graph's)."),
+    max_windows: int | None = typer.Option(None, "--max-windows", help="With --graph: at most this many windows (an even spread)."),
     library: str = typer.Option(",".join(KD.EVAL_SPLIT["library"]), "--library", help="Comma-separated subjects the methods learn from."),
     test: str = typer.Option(",".join(KD.EVAL_SPLIT["test"]), "--test", help="Comma-separated held-out subjects whose windows are scored (none of --library)."),
     gaps: str = typer.Option(",".join(map(str, KD.EVAL_GAPS)), "--gaps", help="Comma-separated gap lengths in frames at 30 fps."),
@@ -240,23 +244,41 @@ def evaluate_inbetween(
     seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="Seed of the graph's threshold sample and the pose clustering."),
 ) -> None:
     """Keyframe in-betweening on held-out windows: LAFAN1's L2P and L2Q per gap and method, ms per request."""
-    from ..evaluation.inbetween import evaluate, table
+    from ..evaluation.inbetween import evaluate, evaluate_on_graph, table
     from ..formats.metrics import INBETWEEN, write_metrics
 
+    if (cmu is None) == (graph is None):
+        raise InputError("evaluate inbetween: give --cmu DIR, or --graph G with --clips")
+    if graph is not None:
+        from ..fileio import check_writable
+        from ..motiongraph import MotionGraph
+
+        if not clips:
+            raise InputError("--graph: give the held-out --clips")
+        if max_windows is not None and max_windows < 1:
+            raise ParameterError("--max-windows", f"must be at least 1, got {max_windows}")
+        for c in clips:
+            if not Path(c).is_file():
+                raise InputError(f"{c}: clip not found")
+        gap_list = _gaps(gaps)
+        names = _methods(methods)
+        check_writable(out)
+        g = MotionGraph.load(graph)
+        try:
+            doc = evaluate_on_graph(g, clips, gap_list, names, seed, max_windows, library=str(graph),
+                                    command=f"vidstyle evaluate inbetween --graph {graph} --clips ...")
+        except ValueError as e:
+            raise InputError(f"--clips: {e}") from None
+        write_metrics(out, doc, kind=INBETWEEN)
+        typer.echo(table(doc))
+        log.info("wrote %s", out)
+        return
     lib = [s.strip() for s in library.split(",") if s.strip()]
     held = [s.strip() for s in test.split(",") if s.strip()]
     if set(lib) & set(held):
         raise InputError(f"--test: subject(s) {', '.join(sorted(set(lib) & set(held)))} are also in --library")
-    try:
-        gap_list = [int(g) for g in gaps.split(",") if g.strip()]
-    except ValueError:
-        raise InputError(f"--gaps: expected comma-separated integers, got {gaps!r}") from None
-    if not gap_list or min(gap_list) < 1 or max(gap_list) > 54:
-        raise InputError(f"--gaps: each gap must be 1 .. 54 frames (windows are 65 frames), got {gaps!r}")
-    names = [m.strip() for m in methods.split(",") if m.strip()]
-    unknown = [m for m in names if m not in KD.METHODS]
-    if unknown or not names:
-        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.METHODS)}")
+    gap_list = _gaps(gaps)
+    names = _methods(methods)
     if not cmu.is_dir():
         raise InputError(f"--cmu: {cmu} is not a folder")
     for group, flag in ((lib, "--library"), (held, "--test")):
@@ -270,3 +292,21 @@ def evaluate_inbetween(
     write_metrics(out, doc, kind=INBETWEEN)
     typer.echo(table(doc))
     log.info("wrote %s", out)
+
+
+def _gaps(gaps: str) -> list[int]:
+    try:
+        gap_list = [int(g) for g in gaps.split(",") if g.strip()]
+    except ValueError:
+        raise InputError(f"--gaps: expected comma-separated integers, got {gaps!r}") from None
+    if not gap_list or min(gap_list) < 1 or max(gap_list) > 54:
+        raise InputError(f"--gaps: each gap must be 1 .. 54 frames (windows are 65 frames), got {gaps!r}")
+    return gap_list
+
+
+def _methods(methods: str) -> list[str]:
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    unknown = [m for m in names if m not in KD.METHODS]
+    if unknown or not names:
+        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.METHODS)}")
+    return names

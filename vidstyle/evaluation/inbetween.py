@@ -262,6 +262,63 @@ def evaluate(folder: str | Path, library_subjects=SPLIT["library"], test_subject
                       **{m: {str(g): v[str(g)]["ms_per_request"] for g in gaps} for m, v in body["methods"].items()}}}
 
 
+def graph_motions(graph) -> list[Motion]:
+    """The library clips of a fitted motion graph as motions (each clip's frames, in order)."""
+    clip = np.asarray(graph.frame_clip_)
+    cuts = np.flatnonzero(np.diff(clip)) + 1
+    out = []
+    for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [len(clip)]])):
+        out.append(Motion(graph.skeleton_, np.asarray(graph.rotations_[a:b]), None, float(graph.fps),
+                          root_positions=np.asarray(graph.root_positions_[a:b])))
+    return out
+
+
+def evaluate_on_graph(graph, clips, gaps=GAPS, methods=("markov", "slerp"), seed: int = 0, max_windows: int | None = None,
+                      command: str = "", library: str = "") -> dict:
+    """The in-betweening metrics document (without its header) with a fitted motion graph as the library
+    (e.g. the pipeline's) and held-out BVH ``clips`` (retargeted onto the graph's skeleton, at the graph's
+    frame rate) as the windows: position statistics from the graph's own clips' training windows, up to
+    ``max_windows`` evaluation windows (an even spread over all; ``None``: all)."""
+    from ..mocap import read_bvh
+    from ..mocap.retarget import retarget
+    from ..motiongraph.graph import has_tpose_first_frame
+
+    if abs(float(graph.fps) - FPS) > 1e-6:
+        raise ValueError(f"the graph is at {graph.fps:g} fps; the benchmark's windows are at {FPS:g} fps")
+    train = graph_motions(graph)
+    mean, std = position_stats([w for m in train for w in windows(m, TRAIN_WINDOW, TRAIN_OFFSET)])
+    wins, names, per = [], [], []
+    for f in clips:
+        m = read_bvh(f)
+        if has_tpose_first_frame(m):
+            m = m[1:]
+        m, _ = retarget(m, graph.skeleton_, str(f))
+        ws = windows(m.resample(FPS))
+        wins += ws
+        per += [Path(f).stem] * len(ws)
+        names.append(Path(f).stem)
+    if not wins:
+        raise ValueError("no evaluation window (each clip needs more than 65 frames at 30 fps)")
+    if max_windows is not None and len(wins) > max_windows:
+        keep = np.unique(np.linspace(0, len(wins) - 1, max_windows).round().astype(int))
+        wins, per = [wins[i] for i in keep], [per[i] for i in keep]
+    models = fit_methods(graph, methods, seed)
+    params = {f"{k}_params": m.get_params() for k, m in models.items() if m is not None}
+    res = score_methods(models, wins, gaps, mean, std)
+    goal = {}
+    if "markov" in res and "slerp" in res:
+        goal = {f"markov_below_slerp_l2p_{g}": res["markov"][str(g)]["l2p"] < res["slerp"][str(g)]["l2p"] for g in gaps}
+    return {"seed": seed, "command": command,
+            "split": {"library": library or "motion graph", "library_frames": int(graph.n_frames), "eval_clips": names,
+                      "windows": len(wins), "windows_per_clip": {n: per.count(n) for n in names}},
+            "gaps": list(gaps), "methods": res,
+            "params": {"fps": FPS, "window": WINDOW, "offset": OFFSET, "n_past": N_PAST, "train_window": TRAIN_WINDOW,
+                       "train_offset": TRAIN_OFFSET, "max_windows": max_windows, **params},
+            "goal": goal,
+            "speed": {"unit": "ms per request (median over windows), one thread",
+                      **{m: {str(g): v[str(g)]["ms_per_request"] for g in gaps} for m, v in res.items()}}}
+
+
 def table(doc: dict) -> str:
     """The metrics document as a text table (rows: method; columns: L2P and L2Q per gap, ms)."""
     gaps = doc["gaps"]

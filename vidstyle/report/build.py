@@ -12,6 +12,7 @@ It reads the run directory written by the kickboxing pipeline (``pipelines/kickb
     RUN/motion/<performer>.mp4        vidstyle synthesize --preview
     RUN/metrics/motion.json           vidstyle evaluate motion
     RUN/metrics/action_style.json     vidstyle evaluate action-style (and RUN/action_style/<label>.png)
+    RUN/metrics/inbetween.json        vidstyle evaluate inbetween --graph
     RUN/metrics/timing.json           vidstyle timing (the stage-time table; make demo writes it)
 
 Every section whose inputs are missing says so on the page (the report is also useful on a partial
@@ -34,6 +35,7 @@ from ..formats.metrics import (
     ACTION_STYLE,
     AUGMG,
     HEADLINE,
+    INBETWEEN,
     MOTION,
     RECOGNITION,
     RECONSTRUCT,
@@ -498,6 +500,32 @@ def _action_style_section(page: Page, run: Path) -> None:
     page.add(title, "".join(body))
 
 
+def _inbetween_section(page: Page, run: Path) -> None:
+    """Keyframe to keyframe (``vidstyle evaluate inbetween --graph``): L2P / L2Q per gap and method on windows
+    of held-out takes, the pipeline's motion graph as the library (metrics/inbetween.json)."""
+    title = "Motion between keyframes (in-betweening)"
+    path = run / "metrics" / "inbetween.json"
+    m = _metrics(path, INBETWEEN)
+    if m is None:
+        page.add(title, _missing("in-betweening metrics", path))
+        return
+    gaps = m["gaps"]
+    names = {"markov": "Markov chain over pose clusters (Molina Tanco & Hilton 2000)", "graph": "motion graph shortest path",
+             "slerp": "SLERP + linear root (baseline)"}
+    rows = [[names.get(k, k), *(round(v[str(g)]["l2p"], 3) for g in gaps), *(round(v[str(g)]["l2q"], 3) for g in gaps),
+             *(round(v[str(g)]["ms_per_request"], 1) for g in gaps)] for k, v in m["methods"].items()]
+    sp = m.get("split") or {}
+    body = table(rows, ["method", *(f"L2P, {g} frames" for g in gaps), *(f"L2Q, {g} frames" for g in gaps),
+                        *(f"ms, {g} frames" for g in gaps)])
+    body += (f'<p class="note">{esc(str(sp.get("windows")))} windows of 65 frames at 30 fps from '
+             f'{esc(", ".join(sp.get("eval_clips") or []))} (performers the library does not include); the gap '
+             f'between the last context frame and the first future frame is filled from the library of '
+             f'{esc(str(sp.get("library_frames")))} frames ({esc(str(sp.get("library")))}). LAFAN1\'s L2P (global '
+             'positions normalised by the library\'s statistics) and L2Q (global quaternions); lower is better '
+             '(metrics/inbetween.json)</p>')
+    page.add(title, body)
+
+
 def _get(doc: dict | None, *keys):
     for k in keys:
         if not isinstance(doc, dict) or k not in doc:
@@ -557,6 +585,9 @@ def headline_metrics(run: Path) -> dict:
         out["action_style"] = {k: a.get(k) for k in ("lead_accuracy", "mpjpe_reduction", "mpjpe_reduction_vs_true_lead",
                                                       "estimated_lead_accuracy", "estimated_mpjpe_reduction", "input")
                                if k in a}
+    inb = _metrics(run / "metrics" / "inbetween.json", INBETWEEN)
+    if inb is not None:  # vidstyle evaluate inbetween --graph (issue 30 item 3)
+        out["inbetween"] = {f"{k}_l2p_{g}": v[str(g)]["l2p"] for k, v in inb["methods"].items() for g in inb["gaps"]}
     rc = _metrics(run / "metrics" / "reconstruct.json", RECONSTRUCT)
     if rc is not None:
         h = rc.get("headline") or {}
@@ -581,5 +612,6 @@ def build_report(run: Path) -> str:
     _augmg_section(page, run, dataset)
     _reconstruct_section(page, run)
     _action_style_section(page, run)
+    _inbetween_section(page, run)
     timing_section(page, run)
     return page.render()

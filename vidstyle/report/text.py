@@ -90,6 +90,10 @@ GROUPS: list[tuple[str, str, list[tuple[str, str, str]]]] = [
         ("estimated_mpjpe_reduction", "MPJPE below unfitted", ""),
         ("input", "2D:", ""),
     ]),
+    ("inbetween", "keyframes", [
+        *((f"{m}_l2p_{g}", f"{name} L2P at {g} frames" if g == 15 else f"{g}", "")
+          for m, name in (("markov", "Markov"), ("slerp", "SLERP")) for g in (15, 30, 45)),
+    ]),
 ]
 
 
