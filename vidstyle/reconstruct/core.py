@@ -314,7 +314,8 @@ class Reconstructor:
     IK's reach from the pose, in leg lengths; None: unlimited) of step 7; ``focal_px`` (None: the default
     intrinsics; ``"auto"``: estimated from the keypoints and the blended poses, :func:`.camera.estimate_focal`,
     which keeps the default unless the data clearly prefer another lens); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
-    ``library_elevation_deg`` and ``target_fps`` of the library index
+    ``library_elevation_deg`` and ``target_fps`` of the library index; ``refine_smooth_frames`` the Gaussian sigma
+    (frames) of the refined pose in time (0: none; the refinement bends each frame on its own)
     (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
 
     def __init__(self, k: int = D.K, window_s: float = D.WINDOW_S, n_blend: int = D.N_BLEND, method: str = D.METHOD,
@@ -324,7 +325,7 @@ class Reconstructor:
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
                  pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
-                 jobs: int = 1, scheduler: str | None = None) -> None:
+                 refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, jobs: int = 1, scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend
@@ -346,6 +347,7 @@ class Reconstructor:
         self.ssg_transition_weight = ssg_transition_weight
         self.pin_max_offset = pin_max_offset
         self.refine_prior = refine_prior
+        self.refine_smooth_frames = refine_smooth_frames
         self.jobs = jobs
         self.scheduler = scheduler
 
@@ -354,7 +356,7 @@ class Reconstructor:
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
             "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
             "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset",
-            "refine_prior")}
+            "refine_prior", "refine_smooth_frames")}
 
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
@@ -371,7 +373,7 @@ class Reconstructor:
             raise ParameterError("n_blend", f"must be in 1..k ({self.k}), got {self.n_blend}")
         if self.method not in METHODS:
             raise ParameterError("method", f"must be one of {', '.join(METHODS)}, got {self.method!r}")
-        for name in ("window_s", "smooth_frames", "root_smooth_frames", "relax_s"):
+        for name in ("window_s", "smooth_frames", "root_smooth_frames", "relax_s", "refine_smooth_frames"):
             v = float(getattr(self, name))
             if not (v >= 0 and math.isfinite(v)):
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
@@ -601,6 +603,9 @@ class Reconstructor:
             wts0 = np.where(obs.scores > MIN_SCORE, obs.scores, 0.0) * observed[:, None]
             qb = refine_poses(skeleton, qb, q, use & observed[:, None], obs.xy, wts0, az, elevation,
                               prior=float(self.refine_prior))
+            if float(self.refine_smooth_frames) > 0:  # each frame is bent on its own: smooth the result in time
+                qb = _gaussian(continuous_quaternions(qb), float(self.refine_smooth_frames))
+                qb /= np.linalg.norm(qb, axis=-1, keepdims=True)
 
         # world orientation: the character faces pi - azimuth
         Rc = camera_rotation(elevation)
