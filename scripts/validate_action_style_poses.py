@@ -47,25 +47,13 @@ def main() -> int:
     log.setLevel(logging.INFO)
     import numpy as np
 
-    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
-    from vidstyle.evaluation.actionmodel import split_groups
-    from vidstyle.evaluation.actionstyle import (
-        demo_truth,
-        evaluate_performer,
-        orthodox_model,
-        performer_videos,
-        row_json,
-        summarise,
-        true_instances,
-    )
+    from vidstyle.evaluation.actionstyle import evaluate_performer, fit_training, performer_videos, row_json, summarise, true_instances
     from vidstyle.formats.validation import validation_header, write_validation
 
     t_start = time.perf_counter()
     dataset = args.run / "dataset"
-    demo = demo_truth(dataset)
+    demo, g, model, est = fit_training(dataset, args.seed, jobs=1)
     manifest, ds = demo["manifest"], demo["dataset"]
-    g = split_groups(manifest, args.seed)
-    train = sorted(g["A"] + g["B"])
     videos = [f"{p}_perf0_front" for p in g["V"]]
     poses_root = args.poses or Path(tempfile.mkdtemp(prefix="vidstyle_asp_"))
     frames = ",".join(map(str, range(args.frames)))
@@ -77,8 +65,6 @@ def main() -> int:
                "--backend", b, "--out-dir", str(out), "--frames", frames, "--jobs", "1"]
         log.info("%s", " ".join(cmd[:3] + ["..."]))
         subprocess.run(cmd, check=True, cwd=ROOT)
-    model = orthodox_model(dataset, manifest, train, args.seed)
-    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true")])
     rows, by_backend = {}, {}
     for b in BACKENDS:
         rs = []

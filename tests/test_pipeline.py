@@ -35,6 +35,7 @@ TINY = {
     "synthesize": {"performers": "p00"},
     "augmg": {"annotations": "annotations.json", "videos": "p03_perf0_front p04_perf0_front", "synthesize": "p03"},
     "reconstruct": {"videos": "p03_perf0_front", "show": "p03_perf0_front", "frames": 40},
+    "inbetween": {"clips": "p03_perf0", "max_windows": 8},
 }
 
 
@@ -120,6 +121,17 @@ def test_pipeline_outputs(run):
     rc = json.loads((out / "metrics/reconstruct.json").read_text())
     assert rc["headline"]["reconstruct.mpjpe_mm"] == head["reconstruct"]["mpjpe_mm"] > 0
     assert (out / "reconstruct" / "p03_perf0_front.bvh").is_file() and (out / "reconstruct" / "compare.mp4").is_file()
+    inb = json.loads((out / "metrics/inbetween.json").read_text())
+    assert inb["split"]["windows"] == 8 and inb["split"]["eval_clips"] == ["p03_perf0"]
+    assert head["inbetween"]["markov_l2p_30"] == inb["methods"]["markov"]["30"]["l2p"] > 0
+    ast = json.loads((out / "metrics/action_style.json").read_text())
+    test_performers = ast["splits"]["0"]["T"]
+    assert [r["performer"] for r in ast["rows"]["true"]] == test_performers
+    assert head["action_style"]["lead_accuracy"] == ast["by_input"]["true"]["lead_accuracy"]
+    assert (out / "action_style" / "actions.npz").is_file() and (out / "action_style" / "Jab.png").is_file()
+    for p in test_performers:
+        assert json.loads((out / "action_style" / f"{p}.json").read_text())["action_style"]["global"]["lead"] in (
+            "orthodox", "southpaw")
     shown = _dvc(run, "metrics", "show").stdout
     assert "headline.json" in shown and "recognition.frame_accuracy_smoothed" in shown
     assert "confusion" not in shown  # the full documents are outputs, not metric columns

@@ -212,14 +212,15 @@ def test_the_real_pose2sim_clip_becomes_a_bvh_an_independent_reader_opens(tmp_pa
 
 def test_refinement_bends_the_blend_toward_the_keypoints_and_a_strong_prior_keeps_it(library):
     """With noise-free 2D of a library clip, the refined pose reprojects closer to the keypoints than the
-    blend (scale and translation fitted per frame), and with an overwhelming prior it is the blend."""
+    blend (scale and translation fitted per frame), and with an overwhelming prior it is the blend (without
+    the smoothing after it); smoothed in time (refine_smooth_frames), its joints accelerate less."""
     from vidstyle.reconstruct.camera import project
     from vidstyle.reconstruct.core import similarity_residual
 
     clip = sorted(library.glob("*hook*.bvh"))[0]
     pts, uv, az = filmed(clip, yaw=0.7, place=np.array([2.0, 75.0]))
     obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
-    base = Reconstructor(foot_lock=False).fit([library])
+    base = Reconstructor(foot_lock=False, refine_smooth_frames=0.0).fit([library])
 
     def residual(rec):
         proj = project(rec.camera_points(), rec.K)
@@ -231,6 +232,13 @@ def test_refinement_bends_the_blend_toward_the_keypoints_and_a_strong_prior_keep
     assert residual(bent) < 0.9 * residual(plain)
     assert M.mpjpe_root_relative(bent.points, pts) <= M.mpjpe_root_relative(plain.points, pts) * 1.05
     np.testing.assert_allclose(held.points, plain.points, atol=1e-6)
+    smooth = base.set_params(refine_prior=0.03, refine_smooth_frames=2.0).reconstruct(obs)
+
+    def acceleration(points):  # mean second difference of the root-relative joints
+        rel = points - points[:, :1]
+        return float(np.mean(np.linalg.norm(rel[2:] - 2 * rel[1:-1] + rel[:-2], axis=-1)))
+
+    assert acceleration(smooth.points) < 0.9 * acceleration(bent.points)
 
 
 def test_the_index_cache_returns_the_same_library_and_notices_changed_clips(tmp_path, library, caplog):

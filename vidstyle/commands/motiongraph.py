@@ -269,26 +269,23 @@ def evaluate_inbetween(
                                     command=f"vidstyle evaluate inbetween --graph {graph} --clips ...")
         except ValueError as e:
             raise InputError(f"--clips: {e}") from None
-        write_metrics(out, doc, kind=INBETWEEN)
-        typer.echo(table(doc))
-        log.info("wrote %s", out)
-        return
-    lib = [s.strip() for s in library.split(",") if s.strip()]
-    held = [s.strip() for s in test.split(",") if s.strip()]
-    if set(lib) & set(held):
-        raise InputError(f"--test: subject(s) {', '.join(sorted(set(lib) & set(held)))} are also in --library")
-    gap_list = _gaps(gaps)
-    names = _methods(methods)
-    if not cmu.is_dir():
-        raise InputError(f"--cmu: {cmu} is not a folder")
-    for group, flag in ((lib, "--library"), (held, "--test")):
-        if not group or not any(any(cmu.glob(f"{s}_*.bvh")) for s in group):
-            raise InputError(f"{flag}: no clips <subject>_*.bvh of {', '.join(group) or 'no subject'} in {cmu}")
-    try:
-        doc = evaluate(cmu, lib, held, gap_list, names, seed, graph_cache,
-                       command=f"vidstyle evaluate inbetween --cmu {cmu} --library {','.join(lib)} --test {','.join(held)}")
-    except ValueError as e:
-        raise InputError(f"--test: {e}") from None
+    else:
+        lib = [s.strip() for s in library.split(",") if s.strip()]
+        held = [s.strip() for s in test.split(",") if s.strip()]
+        if set(lib) & set(held):
+            raise InputError(f"--test: subject(s) {', '.join(sorted(set(lib) & set(held)))} are also in --library")
+        gap_list = _gaps(gaps)
+        names = _methods(methods)
+        if not cmu.is_dir():
+            raise InputError(f"--cmu: {cmu} is not a folder")
+        for group, flag in ((lib, "--library"), (held, "--test")):
+            if not group or not any(any(cmu.glob(f"{s}_*.bvh")) for s in group):
+                raise InputError(f"{flag}: no clips <subject>_*.bvh of {', '.join(group) or 'no subject'} in {cmu}")
+        try:
+            doc = evaluate(cmu, lib, held, gap_list, names, seed, graph_cache,
+                           command=f"vidstyle evaluate inbetween --cmu {cmu} --library {','.join(lib)} --test {','.join(held)}")
+        except ValueError as e:
+            raise InputError(f"--test: {e}") from None
     write_metrics(out, doc, kind=INBETWEEN)
     typer.echo(table(doc))
     log.info("wrote %s", out)

@@ -244,6 +244,21 @@ def row_json(r: dict) -> dict:
 SPLIT_INPUTS = ("true", "estimated")
 
 
+def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1):
+    """``(demo, groups, model, estimator)``: the dataset's truth (:func:`demo_truth`), split ``seed``'s
+    performer groups, and the orthodox model and the population's global-style estimator fitted on the
+    training performers (A+B) only, the two in parallel (``jobs`` != 1)."""
+    from ..parallel import parallel_map
+    from .actionmodel import split_groups
+
+    demo = demo_truth(dataset)
+    groups = split_groups(demo["manifest"], seed)
+    train = sorted(groups["A"] + groups["B"])
+    model, est = parallel_map(_prepare_worker, [("model", dataset, train, seed), ("population", dataset, train, seed)],
+                              jobs=min(jobs if jobs > 0 else 2, 2), description="action model and population")
+    return demo, groups, model, est
+
+
 def _prepare_worker(item):
     """The orthodox model (``"model"``) or the population's global-style figures (``"population"``) of the
     training performers (:func:`evaluate_split`)."""
@@ -285,11 +300,10 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     import time
 
     from ..actionmodel import defaults as D
-    from ..actionmodel.stylefit import GlobalStyleEstimator, assemble_action_style, plan_action_style
+    from ..actionmodel.stylefit import assemble_action_style, plan_action_style
     from ..errors import InputError
     from ..mocap.keypoints import keypoint_positions
     from ..parallel import parallel_map
-    from .actionmodel import split_groups
 
     t_start = time.perf_counter()
     unknown = [k for k in inputs if k not in SPLIT_INPUTS]
@@ -300,14 +314,10 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     for d in (poses_dir, labels_dir):
         if d is not None and not Path(d).is_dir():
             raise InputError(f"{d}: directory not found")
-    demo = demo_truth(dataset)
-    manifest, ds, unit_mm, actions = demo["manifest"], demo["dataset"], demo["unit_mm"], demo["actions"]
-    groups = split_groups(manifest, seed)
-    train = sorted(groups["A"] + groups["B"])
     t0 = time.perf_counter()
-    # the model and the population figures are independent: one worker each
-    model, est = parallel_map(_prepare_worker, [("model", dataset, train, seed), ("population", dataset, train, seed)],
-                              jobs=min(jobs if jobs > 0 else 2, 2), description="action model and population")
+    demo, groups, model, est = fit_training(dataset, seed, jobs)
+    manifest, ds, unit_mm, actions = demo["manifest"], demo["dataset"], demo["unit_mm"], demo["actions"]
+    train = sorted(groups["A"] + groups["B"])
     fit_model_s = time.perf_counter() - t0
     log.info("action style: orthodox model and population on %s (%.1f s)", ", ".join(train), fit_model_s)
     items, keys, truths = [], [], {}
