@@ -447,6 +447,15 @@ def test_evaluate_action_style_bad_options_exit_2(tmp_path, capsys, args, needle
     assert not (tmp_path / "m.json").exists()
 
 
+@pytest.mark.slow
+def test_evaluate_action_style_unknown_label_exits_2_before_fitting(action_style_run, tmp_path, capsys):
+    out = tmp_path / "m.json"
+    assert _main(["evaluate", "action-style", "--dataset", str(action_style_run / "dataset"), "--label", "Headbutt",
+                  "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "Headbutt" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+
+
 def test_evaluate_action_style_missing_dataset_exits_2(tmp_path, capsys):
     assert _main(["evaluate", "action-style", "--dataset", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
     assert "dataset.json" in capsys.readouterr().err

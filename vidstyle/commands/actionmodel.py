@@ -130,7 +130,8 @@ def evaluate_action_style(
                                         "performer) and, with --style-dir, <performer>.json."),
     label: str = typer.Option("Jab", "--label", help="The action the figure shows."),
     out: Path = typer.Option(Path("metrics/action_style.json"), "--out", "-o", help="Metrics JSON (vidstyle.metrics.action_style)."),
-    jobs: int = jobs_option(-1, help="Test performers x inputs fitted in parallel (-1 = all cores; the fits do not depend on it)."),
+    jobs: int = jobs_option(-1, help="Workers for the fits, one (performer, input, action) each (-1 = all cores; the "
+                            "results do not depend on it)."),
 ) -> None:
     """A performer's action-level style fitted from 2D (lead, guard, stance, tempo, the action model's
     coefficients) on a split's test performers, against their truth: lead accuracy, correlations and the

@@ -12,6 +12,9 @@
   performer's true instances of that label (retargeted onto the model's skeleton, canonical frame) after
   slope-limited DTW alignment of the joint positions (the generated instance decoded at the true
   instance's length, then aligned frame to frame); mean over instances.
+* :func:`evaluate_split` (``vidstyle evaluate action-style``, the pipeline's ``action_style`` stage): one
+  split's test performers fitted from true 2D and from pose files, the fits spread over workers per
+  (performer, input, label); :func:`figure_png` draws one action of each.
 """
 
 from __future__ import annotations
@@ -314,6 +317,9 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     for d in (poses_dir, labels_dir):
         if d is not None and not Path(d).is_dir():
             raise InputError(f"{d}: directory not found")
+    known = demo_truth(dataset)["actions"]
+    if figure_label not in known:  # before the fits, not after
+        raise InputError(f"label: {figure_label!r} is not an action of {dataset} ({', '.join(known)})")
     t0 = time.perf_counter()
     demo, groups, model, est = fit_training(dataset, seed, jobs)
     manifest, ds, unit_mm, actions = demo["manifest"], demo["dataset"], demo["unit_mm"], demo["actions"]
