@@ -221,6 +221,9 @@ def test_evaluate_on_graph_slerp_is_exact_on_uniform_motion_and_windows_follow_l
         assert np.isfinite(doc["methods"]["markov"][g]["l2p"]) and doc["methods"]["markov"][g]["l2p"] > 1e-3
     few = evaluate_on_graph(lib, [clip], gaps=(15,), methods=("slerp",), max_windows=2)
     assert few["split"]["windows"] == 2 and few["params"]["max_windows"] == 2
+    lib.clips_ = {"names": ["walk", "uniform"]}  # a clip of the library itself is refused: not held out
+    with pytest.raises(ValueError, match="uniform"):
+        evaluate_on_graph(lib, [clip], gaps=(15,), methods=("slerp",))
 
 
 @pytest.mark.parametrize("args, needle", [

@@ -285,6 +285,10 @@ def evaluate_on_graph(graph, clips, gaps=GAPS, methods=("markov", "slerp"), seed
 
     if abs(float(graph.fps) - FPS) > 1e-6:
         raise ValueError(f"the graph is at {graph.fps:g} fps; the benchmark's windows are at {FPS:g} fps")
+    library_names = set((getattr(graph, "clips_", None) or {}).get("names") or [])
+    inside = sorted(Path(f).stem for f in clips if Path(f).stem in library_names)
+    if inside:
+        raise ValueError(f"{', '.join(inside)}: among the graph's own clips (the windows must be held out)")
     train = graph_motions(graph)
     mean, std = position_stats([w for m in train for w in windows(m, TRAIN_WINDOW, TRAIN_OFFSET)])
     wins, names, per = [], [], []
