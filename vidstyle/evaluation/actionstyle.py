@@ -247,14 +247,14 @@ def row_json(r: dict) -> dict:
 SPLIT_INPUTS = ("true", "estimated")
 
 
-def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1):
-    """``(demo, groups, model, estimator)``: the dataset's truth (:func:`demo_truth`), split ``seed``'s
-    performer groups, and the orthodox model and the population's global-style estimator fitted on the
-    training performers (A+B) only, the two in parallel (``jobs`` != 1)."""
+def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict | None = None):
+    """``(demo, groups, model, estimator)``: the dataset's truth (:func:`demo_truth`, or ``demo`` when already
+    read), split ``seed``'s performer groups, and the orthodox model and the population's global-style
+    estimator fitted on the training performers (A+B) only, the two in parallel (``jobs`` != 1)."""
     from ..parallel import parallel_map
     from .actionmodel import split_groups
 
-    demo = demo_truth(dataset)
+    demo = demo_truth(dataset) if demo is None else demo
     groups = split_groups(demo["manifest"], seed)
     train = sorted(groups["A"] + groups["B"])
     model, est = parallel_map(_prepare_worker, [("model", dataset, train, seed), ("population", dataset, train, seed)],
@@ -317,11 +317,11 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     for d in (poses_dir, labels_dir):
         if d is not None and not Path(d).is_dir():
             raise InputError(f"{d}: directory not found")
-    known = demo_truth(dataset)["actions"]
-    if figure_label not in known:  # before the fits, not after
-        raise InputError(f"label: {figure_label!r} is not an action of {dataset} ({', '.join(known)})")
+    demo = demo_truth(dataset)
+    if figure_label not in demo["actions"]:  # before the fits, not after
+        raise InputError(f"label: {figure_label!r} is not an action of {dataset} ({', '.join(demo['actions'])})")
     t0 = time.perf_counter()
-    demo, groups, model, est = fit_training(dataset, seed, jobs)
+    demo, groups, model, est = fit_training(dataset, seed, jobs, demo)
     manifest, ds, unit_mm, actions = demo["manifest"], demo["dataset"], demo["unit_mm"], demo["actions"]
     train = sorted(groups["A"] + groups["B"])
     fit_model_s = time.perf_counter() - t0
@@ -371,7 +371,7 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     if lm is not None:
         mu = lm.gmm_means[int(np.argmax(lm.gmm_weights))]
         for p, st in styles[first].items():
-            true_m = true_instances(dataset, p, model, max_per_label=1, seed=seed).get(figure_label)
+            true_m = truths[p].get(figure_label)  # the first of the instances the scores used
             if not true_m or figure_label not in st.coefficients:
                 continue
             n = true_m[0].n_frames

@@ -69,6 +69,15 @@ def _missing(what: str, path: Path) -> str:
     return f'<p class="missing">Not available: {esc(what)} ({esc(path)} is missing).</p>'
 
 
+def _section_metrics(page: Page, title: str, run: Path, name: str, kind: str, what: str) -> dict | None:
+    """RUN/metrics/<name>.json of ``kind``, or None after adding section ``title`` saying ``what`` is missing."""
+    path = run / "metrics" / f"{name}.json"
+    m = _metrics(path, kind)
+    if m is None:
+        page.add(title, _missing(what, path))
+    return m
+
+
 def gif_from_video(path: Path, max_seconds: float = 10.0, fps: float = 10.0, width: int = 320) -> bytes:
     """An animated GIF (bytes) of the first ``max_seconds`` of a video, at ``fps``, ``width`` pixels wide."""
     import cv2
@@ -420,10 +429,8 @@ def _reconstruct_section(page: Page, run: Path) -> None:
     (metrics/reconstruct.json), one video's frames with the reconstruction projected over them
     (RUN/reconstruct/*.preview.mp4) and its 3D against the truth (RUN/reconstruct/compare.mp4)."""
     title = "Whole video to 3D motion (reconstruct)"
-    path = run / "metrics" / "reconstruct.json"
-    m = _metrics(path, RECONSTRUCT)
+    m = _section_metrics(page, title, run, "reconstruct", RECONSTRUCT, "reconstruct metrics")
     if m is None:
-        page.add(title, _missing("reconstruct metrics", path))
         return
     names = {"true2d": "true 2D pose", "ps": "estimated 2D (pictorial structures)", "blazepose": "estimated 2D (BlazePose)"}
     rows = [[names.get(r["source"], r["source"]), r["method"], r["skeleton"], r["frames"],
@@ -453,10 +460,8 @@ def _action_style_section(page: Page, run: Path) -> None:
     and the per-performer fits (metrics/action_style.json), and one action of each performer: true, from
     their fitted style, and the unfitted model's (RUN/action_style/<label>.png)."""
     title = "How each performer does an action (action-level style)"
-    path = run / "metrics" / "action_style.json"
-    m = _metrics(path, ACTION_STYLE)
+    m = _section_metrics(page, title, run, "action_style", ACTION_STYLE, "action-style metrics")
     if m is None:
-        page.add(title, _missing("action-style metrics", path))
         return
     names = {"true": "true 2D, true labels", "estimated": "pose-stage 2D, recognised labels"}
 
@@ -504,10 +509,8 @@ def _inbetween_section(page: Page, run: Path) -> None:
     """Keyframe to keyframe (``vidstyle evaluate inbetween --graph``): L2P / L2Q per gap and method on windows
     of held-out takes, the pipeline's motion graph as the library (metrics/inbetween.json)."""
     title = "Motion between keyframes (in-betweening)"
-    path = run / "metrics" / "inbetween.json"
-    m = _metrics(path, INBETWEEN)
+    m = _section_metrics(page, title, run, "inbetween", INBETWEEN, "in-betweening metrics")
     if m is None:
-        page.add(title, _missing("in-betweening metrics", path))
         return
     gaps = m["gaps"]
     names = {"markov": "Markov chain over pose clusters (Molina Tanco & Hilton 2000)", "graph": "motion graph shortest path",
