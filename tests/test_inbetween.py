@@ -20,7 +20,9 @@ from vidstyle.inbetween import (
     segment_path,
     slerp_inbetween,
 )
+from vidstyle.errors import ParameterError
 from vidstyle.inbetween.markov import duration_tables, run_lengths
+from vidstyle.inbetween.poses import SlerpInbetweener, hermite_root
 from vidstyle.mocap import parse_bvh
 
 
@@ -161,7 +163,8 @@ def test_markov_reproduces_a_library_stretch_between_its_own_frames():
     # without the sketch's mismatch cost and time warps, the library's own stretch between the two keys is the
     # only zero-cost segment path: rendering and pinning must give it back exactly
     lib = _library()
-    model = MarkovInbetweener(n_clusters=6, n_components=4, mismatch_cost=0.0, warp_cost=None, random_state=0).fit(lib)
+    model = MarkovInbetweener(n_clusters=6, n_components=4, mismatch_cost=0.0, warp_cost=None, root_path="library",
+                              random_state=0).fit(lib)
     a, b = 100, 130
     s = Keypose(lib.rotations_[a], lib.root_positions_[a], Keypose(lib.rotations_[a - 1], lib.root_positions_[a - 1]))
     e = Keypose(lib.rotations_[b], lib.root_positions_[b])
@@ -170,6 +173,64 @@ def test_markov_reproduces_a_library_stretch_between_its_own_frames():
     rot, root = model.inbetween(s, e, b - a + 1)
     assert np.allclose(np.abs(np.sum(rot * lib.rotations_[a : b + 1], -1)), 1.0, atol=1e-6)
     assert np.allclose(root, lib.root_positions_[a : b + 1], atol=1e-6)
+
+
+def _cubic_keys(seed: int, T: int):
+    """Keys at t = 0 and t = T of a random cubic root path p(t), each with the neighbour frame that gives its
+    exact derivative as a one-frame step (the previous frame of the start, the following frame of the end)."""
+    rng = np.random.default_rng(seed)
+    c = rng.normal(size=(4, 3)) / np.array([1.0, 1.0, T, T * T])[:, None]
+    t = np.arange(T + 1.0)[:, None]
+    p = c[0] + c[1] * t + c[2] * t**2 + c[3] * t**3
+    v = lambda x: c[1] + 2 * c[2] * x + 3 * c[3] * x**2  # noqa: E731
+    q = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (2, 1))
+    s = Keypose(q, p[0], previous=Keypose(q, p[0] - v(0.0)))
+    e = Keypose(q, p[-1], following=Keypose(q, p[-1] + v(float(T))))
+    return s, e, p
+
+
+@pytest.mark.parametrize("seed,T", [(0, 15), (1, 30), (2, 46)])
+def test_hermite_root_reproduces_any_cubic_path_from_its_ends(seed, T):
+    # the cubic Hermite basis spans the cubics: end values and end derivatives determine the path exactly
+    s, e, p = _cubic_keys(seed, T)
+    assert np.allclose(hermite_root(s, e, T + 1), p, atol=1e-9)
+
+
+def test_hermite_root_is_the_straight_line_for_keys_moving_along_the_chord():
+    q = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (2, 1))
+    a, b, T = np.array([1.0, 2.0, 3.0]), np.array([7.0, 2.0, -3.0]), 12
+    step = (b - a) / T
+    s = Keypose(q, a, previous=Keypose(q, a - step))
+    e = Keypose(q, b, previous=Keypose(q, b - step))  # an end key's velocity from its previous frame
+    lerp = slerp_inbetween(s, e, T + 1)[1]
+    assert np.allclose(hermite_root(s, e, T + 1), lerp)
+    assert np.allclose(hermite_root(Keypose(q, a), Keypose(q, b), T + 1), lerp)  # no neighbours: the chord
+
+
+def test_hermite_root_path_changes_only_the_root():
+    lib = _library()
+    s, e, p = _cubic_keys(3, 20)
+    s = Keypose(lib.rotations_[100], s.root, Keypose(lib.rotations_[99], s.previous.root))
+    e = Keypose(lib.rotations_[150], e.root, following=Keypose(lib.rotations_[151], e.following.root))
+    rot, root = lib.rotations_[10:31], lib.root_positions_[10:31]
+    r_lib, p_lib = pin(rot, root, s, e)
+    r_her, p_her = pin(rot, root, s, e, root_path="hermite")
+    assert np.array_equal(r_lib, r_her) and np.allclose(p_her, p) and not np.allclose(p_lib, p)
+    model = MarkovInbetweener(n_clusters=6, n_components=4, random_state=0)
+    m_lib = model.set_params(root_path="library").fit(lib).inbetween(s, e, 21)
+    m_her = model.set_params(root_path="hermite").inbetween(s, e, 21)
+    assert np.array_equal(m_lib[0], m_her[0]) and np.allclose(m_her[1], p)
+    sl = SlerpInbetweener("hermite").inbetween(s, e, 21)
+    assert np.array_equal(sl[0], slerp_inbetween(s, e, 21)[0]) and np.allclose(sl[1], p)
+
+
+def test_unknown_root_path_is_refused():
+    lib = _library()
+    with pytest.raises(ParameterError, match="root_path"):
+        MarkovInbetweener(n_clusters=6, n_components=4, root_path="spline").fit(lib)
+    with pytest.raises(ValueError, match="root_path"):
+        pin(lib.rotations_[:5], lib.root_positions_[:5], Keypose(lib.rotations_[0], lib.root_positions_[0]),
+            Keypose(lib.rotations_[4], lib.root_positions_[4]), root_path="spline")
 
 
 def test_markov_follows_estimator_conventions_and_its_seed():

@@ -29,7 +29,8 @@ def test_defaults_are_the_validation_choice():
     assert doc["split"]["validation"] == list(D.EVAL_SPLIT["validation"])
     assert not set(doc["split"]["validation"]) & set(D.EVAL_SPLIT["test"])
     chosen = doc["chosen"]
-    assert chosen == {"n_clusters": D.N_CLUSTERS, "n_components": D.N_COMPONENTS, "warp_cost": D.WARP_COST}
+    assert chosen == {"n_clusters": D.N_CLUSTERS, "n_components": D.N_COMPONENTS, "warp_cost": D.WARP_COST,
+                      "root_path": D.ROOT_PATH}
     best = min(doc["rows"], key=lambda r: r["mean_l2p"])
     assert best["params"] == chosen
 
@@ -37,8 +38,9 @@ def test_defaults_are_the_validation_choice():
 def test_results_file_is_a_metrics_document_of_the_test_split():
     m = read_metrics(RESULTS_FILE, INBETWEEN)
     assert m.seed == 0 and m.get("split", "eval_subjects") == list(D.EVAL_SPLIT["test"])
-    assert set(m.get("methods")) == set(D.METHODS)
+    assert set(m.get("methods")) == set(D.EVAL_METHODS)
     assert m.get("params", "markov_params", "n_clusters") == D.N_CLUSTERS
+    assert m.get("params", "markov_params", "root_path") == D.ROOT_PATH
 
 
 @pytest.mark.parametrize("args", [["--library", "01,02", "--test", "02"], ["--gaps", "15,x"], ["--gaps", "0"],

@@ -238,7 +238,7 @@ def evaluate_inbetween(
     library: str = typer.Option(",".join(KD.EVAL_SPLIT["library"]), "--library", help="Comma-separated subjects the methods learn from."),
     test: str = typer.Option(",".join(KD.EVAL_SPLIT["test"]), "--test", help="Comma-separated held-out subjects whose windows are scored (none of --library)."),
     gaps: str = typer.Option(",".join(map(str, KD.EVAL_GAPS)), "--gaps", help="Comma-separated gap lengths in frames at 30 fps."),
-    methods: str = typer.Option(",".join(KD.METHODS), "--methods", help=f"Comma-separated: {', '.join(KD.METHODS)}."),
+    methods: str = typer.Option(",".join(KD.EVAL_METHODS), "--methods", help=f"Comma-separated: {', '.join(KD.EVAL_METHODS)} (slerp_hermite: SLERP with the keys' Hermite root path)."),
     graph_cache: Path | None = typer.Option(None, "--graph-cache", help="Motion graph of the library: read when it exists, else built and written there."),
     out: Path = typer.Option(Path("metrics/inbetween.json"), "--out", "-o", help="Metrics JSON."),
     seed: int = typer.Option(KD.RANDOM_STATE, "--seed", help="Seed of the graph's threshold sample and the pose clustering."),
@@ -303,7 +303,7 @@ def _gaps(gaps: str) -> list[int]:
 
 def _methods(methods: str) -> list[str]:
     names = [m.strip() for m in methods.split(",") if m.strip()]
-    unknown = [m for m in names if m not in KD.METHODS]
+    unknown = [m for m in names if m not in KD.EVAL_METHODS]
     if unknown or not names:
-        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.METHODS)}")
+        raise InputError(f"--methods: {', '.join(unknown) or 'none given'}: expected some of {', '.join(KD.EVAL_METHODS)}")
     return names

@@ -205,11 +205,14 @@ def prepare(folder: str | Path, library_subjects, eval_subjects, seed: int = 0, 
 def fit_methods(graph, methods, seed: int = 0, markov_params: dict | None = None) -> dict:
     """``name -> fitted in-betweener`` (``None`` for slerp)."""
     from ..inbetween import GraphInbetweener, MarkovInbetweener
+    from ..inbetween.poses import SlerpInbetweener
 
     models = {}
     for name in methods:
         if name == "markov":
             models[name] = MarkovInbetweener(random_state=seed, **(markov_params or {})).fit(graph)
+        elif name == "slerp_hermite":
+            models[name] = SlerpInbetweener("hermite")
         elif name == "graph":
             models[name] = GraphInbetweener().fit(graph)
         elif name == "slerp":
@@ -219,7 +222,7 @@ def fit_methods(graph, methods, seed: int = 0, markov_params: dict | None = None
     return models
 
 
-def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed: int = 0,
+def benchmark(data: dict, methods=D.EVAL_METHODS, gaps=GAPS, seed: int = 0,
               markov_params: dict | None = None, per_window: bool = False) -> dict:
     """Scores of ``methods`` on prepared ``data`` (:func:`prepare`): the metrics document's body
     (``split``, ``gaps``, ``methods``, ``params``)."""
@@ -236,7 +239,7 @@ def benchmark(data: dict, methods=("markov", "graph", "slerp"), gaps=GAPS, seed:
 
 
 def evaluate(folder: str | Path, library_subjects=SPLIT["library"], test_subjects=SPLIT["test"], gaps=GAPS,
-             methods=("markov", "graph", "slerp"), seed: int = 0, graph_cache=None, command: str = "") -> dict:
+             methods=D.EVAL_METHODS, seed: int = 0, graph_cache=None, command: str = "") -> dict:
     """The in-betweening metrics document (``vidstyle.metrics.inbetween``, without its header): the
     methods at their defaults (:mod:`vidstyle.inbetween.defaults`) on the test subjects' windows."""
     data = prepare(folder, library_subjects, test_subjects, seed, graph_cache)

@@ -1,7 +1,7 @@
 """Defaults of keyframe-to-keyframe synthesis (``vidstyle synthesize --keyframes``), one place for the CLI and
 the library.
 
-The learned model's size (``N_CLUSTERS``, ``N_COMPONENTS``) and ``WARP_COST`` were chosen on the validation
+The learned model's size (``N_CLUSTERS``, ``N_COMPONENTS``), ``WARP_COST`` and ``ROOT_PATH`` were chosen on the validation
 subject of the CMU split by ``scripts/validate_inbetween.py`` (lowest mean L2P over gaps of 15/30/45
 frames), recorded in ``pipelines/kickboxing/validation/inbetween.json``; never on the test subjects
 (``tests/test_inbetween_defaults.py`` checks these values equal that file's choice). The level-2 costs
@@ -16,11 +16,17 @@ from __future__ import annotations
 #: method of ``synthesize --keyframes`` (``markov`` = Molina Tanco & Hilton 2000)
 METHOD = "markov"
 METHODS = ("markov", "graph", "slerp")
+#: what ``vidstyle evaluate inbetween`` can score: the methods, and SLERP with the Hermite root path
+#: (the markov default's root path on a model-free body: what the library adds beyond it)
+EVAL_METHODS = (*METHODS, "slerp_hermite")
 
 # -- chosen on validation (scripts/validate_inbetween.py -> pipelines/kickboxing/validation/inbetween.json)
 N_CLUSTERS = 64
 N_COMPONENTS = 64
 VELOCITY_WEIGHT = 0.0
+#: where the root goes between the keys (``library`` | ``hermite``, :data:`vidstyle.inbetween.poses.ROOT_PATHS`),
+#: searched last, for the chosen model size
+ROOT_PATH = "hermite"
 
 # -- fixed
 #: root height feature weight, per leg length (a squat of half a leg ~ a 0.5 rad joint change)

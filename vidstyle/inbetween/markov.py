@@ -22,7 +22,10 @@ Synthesis between a start and an end key pose ``T`` frames apart:
 3. the segments are placed end to end (each continues from where the previous one is, Placement of the
    root heading and floor position), blended over ``blend_frames`` at each jump with the motion graph's
    blend (:func:`vidstyle.motiongraph.blend.blend_frames`), and pinned to the two keys
-   (:func:`~.poses.pin`), so the output passes exactly through both.
+   (:func:`~.poses.pin`), so the output passes exactly through both. The root follows the segments'
+   own path (``root_path="library"``, the paper) or a cubic Hermite curve with the keys' root velocities
+   (``"hermite"``: the body's motion comes from the library, where it goes from the keys' own momentum;
+   a library without the performer's kind of motion otherwise drags the root along its own paths).
 
 The library is any fitted :class:`~vidstyle.motiongraph.MotionGraph` (its frames ``rotations_``,
 ``root_positions_``, ``frame_clip_``, ``skeleton_`` and ``fps``).
@@ -39,7 +42,7 @@ from ..mocap.placement import Placement
 from ..mocap.retarget import leg_length
 from ..motiongraph.blend import blend_frames
 from . import defaults as D
-from .poses import Keypose, pin, placement_onto, pose_features
+from .poses import ROOT_PATHS, Keypose, pin, placement_onto, pose_features
 
 
 def run_lengths(labels: np.ndarray, cont: np.ndarray) -> list[tuple[int, int]]:
@@ -263,17 +266,18 @@ class MarkovInbetweener:
     Parameters: ``n_clusters`` (Markov states), ``n_components`` (PCA dimension), ``height_weight`` and
     ``velocity_weight`` (of the root height and feature-velocity parts of the pose feature),
     ``smoothing`` (pseudo-count of the transition counts), ``mismatch_cost``, ``jump_cost``, ``warp_cost``,
-    ``key_weight`` (level 2, see :func:`segment_path`), ``blend_frames`` (jump blend length).
+    ``key_weight`` (level 2, see :func:`segment_path`), ``blend_frames`` (jump blend length), ``root_path``
+    (:data:`~.poses.ROOT_PATHS`).
     """
 
     PARAMS = ("n_clusters", "n_components", "height_weight", "velocity_weight", "smoothing", "mismatch_cost",
-              "jump_cost", "warp_cost", "key_weight", "blend_frames", "random_state")
+              "jump_cost", "warp_cost", "key_weight", "blend_frames", "root_path", "random_state")
 
     def __init__(self, n_clusters: int = D.N_CLUSTERS, n_components: int = D.N_COMPONENTS,
                  height_weight: float = D.HEIGHT_WEIGHT, velocity_weight: float = D.VELOCITY_WEIGHT,
                  smoothing: float = D.SMOOTHING, mismatch_cost: float = D.MISMATCH_COST, jump_cost: float = D.JUMP_COST,
                  warp_cost: float | None = D.WARP_COST, key_weight: float = D.KEY_WEIGHT, blend_frames: int = D.BLEND_FRAMES,
-                 random_state: int = D.RANDOM_STATE) -> None:
+                 root_path: str = D.ROOT_PATH, random_state: int = D.RANDOM_STATE) -> None:
         self.n_clusters = n_clusters
         self.n_components = n_components
         self.height_weight = height_weight
@@ -284,6 +288,7 @@ class MarkovInbetweener:
         self.warp_cost = warp_cost
         self.key_weight = key_weight
         self.blend_frames = blend_frames
+        self.root_path = root_path
         self.random_state = random_state
 
     def get_params(self, deep: bool = True) -> dict:
@@ -333,6 +338,8 @@ class MarkovInbetweener:
         for name in ("n_clusters", "n_components", "blend_frames"):
             if int(getattr(self, name)) < 1:
                 raise ParameterError(name, f"must be at least 1, got {getattr(self, name)}")
+        if self.root_path not in ROOT_PATHS:
+            raise ParameterError("root_path", f"must be one of {', '.join(ROOT_PATHS)}, got {self.root_path!r}")
         self.skeleton_ = graph.skeleton_
         self.fps_ = float(graph.fps)
         self.rotations_ = np.asarray(graph.rotations_)
@@ -402,4 +409,4 @@ class MarkovInbetweener:
         rot, root = render_frames(self.rotations_, self.root_positions_, self.clip_, frames, here, int(self.blend_frames))
         if free_end:
             end = end.placed(placement_onto(end.rotations[0], end.root, rot[-1, 0], root[-1]))
-        return pin(rot, root, start, end)
+        return pin(rot, root, start, end, self.root_path)

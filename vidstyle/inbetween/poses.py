@@ -62,10 +62,49 @@ def pose_features(rotations: np.ndarray, root_positions: np.ndarray, leg: float,
     return np.concatenate([rv, h], axis=1)
 
 
-def pin(rotations: np.ndarray, roots: np.ndarray, start: Keypose, end: Keypose) -> tuple[np.ndarray, np.ndarray]:
+#: where the root goes between the keys: ``library`` (the synthesised motion's own root path, displaced onto
+#: the keys) or ``hermite`` (a cubic Hermite curve through the two keys' root positions with their velocities)
+ROOT_PATHS = ("library", "hermite")
+
+
+def key_velocity(key: Keypose, chord: np.ndarray, at_end: bool) -> np.ndarray:
+    """The root velocity (per frame step) at a key: from ``following`` (an end key) or ``previous``,
+    else ``chord`` (the other key's root minus this one's, per frame of the gap: no bend at this end)."""
+    if at_end and key.following is not None:
+        return key.following.root - key.root
+    if key.previous is not None:
+        return key.root - key.previous.root
+    if key.following is not None:
+        return key.following.root - key.root
+    return chord
+
+
+def hermite_root(start: Keypose, end: Keypose, n_frames: int) -> np.ndarray:
+    """(n_frames, 3) root positions from ``start`` to ``end`` (both included) on the cubic Hermite curve with
+    the keys' root velocities (:func:`key_velocity`): C1 with the motion around each key, where a straight
+    line (LERP) bends at both. Keys moving at the chord's constant velocity give the straight line."""
+    T = n_frames - 1
+    if T < 1:
+        return start.root[None].copy()
+    chord = (end.root - start.root) / T
+    v0 = key_velocity(start, chord, at_end=False) * T
+    v1 = key_velocity(end, chord, at_end=True) * T
+    s = np.linspace(0.0, 1.0, n_frames)[:, None]
+    s2, s3 = s * s, s * s * s
+    out = ((2 * s3 - 3 * s2 + 1) * start.root + (s3 - 2 * s2 + s) * v0 + (-2 * s3 + 3 * s2) * end.root
+           + (s3 - s2) * v1)
+    out[0], out[-1] = start.root, end.root
+    return out
+
+
+def pin(rotations: np.ndarray, roots: np.ndarray, start: Keypose, end: Keypose,
+        root_path: str = "library") -> tuple[np.ndarray, np.ndarray]:
     """Displace a motion (T+1 frames) so that frame 0 is exactly ``start`` and frame T exactly ``end``:
     each joint's rotation is pre-multiplied by the slerp (weight t/T) of the two key corrections
-    ``key * frame^-1``, the root moved by the linear blend of the two position errors."""
+    ``key * frame^-1``; the root (``root_path``, :data:`ROOT_PATHS`) moved by the linear blend of the two
+    position errors (``library``) or replaced by :func:`hermite_root` (``hermite``)."""
+    if root_path not in ROOT_PATHS:
+        raise ValueError(f"root_path must be one of {', '.join(ROOT_PATHS)}, got {root_path!r}")
     T = len(rotations) - 1
     conj = np.array([-1.0, -1.0, -1.0, 1.0])
     d0 = qmul(start.rotations, rotations[0] * conj)
@@ -76,14 +115,19 @@ def pin(rotations: np.ndarray, roots: np.ndarray, start: Keypose, end: Keypose) 
     out = qmul(d, rotations)
     e0, e1 = start.root - roots[0], end.root - roots[T]
     root = roots + (1.0 - w)[:, None] * e0 + w[:, None] * e1
+    if root_path == "hermite":
+        root = hermite_root(start, end, T + 1)
     out[0], root[0] = start.rotations, start.root
     out[T], root[T] = end.rotations, end.root
     return out, root
 
 
-def slerp_inbetween(start: Keypose, end: Keypose, n_frames: int) -> tuple[np.ndarray, np.ndarray]:
+def slerp_inbetween(start: Keypose, end: Keypose, n_frames: int, root_path: str = "linear") -> tuple[np.ndarray, np.ndarray]:
     """LAFAN1's LERP+SLERP baseline over ``n_frames`` = T + 1 output frames (both keys included): every
-    local rotation by scipy's :class:`~scipy.spatial.transform.Slerp`, the root position linearly."""
+    local rotation by scipy's :class:`~scipy.spatial.transform.Slerp`, the root position linearly
+    (``root_path="hermite"``: on :func:`hermite_root` instead, the evaluation's second baseline)."""
+    if root_path not in ("linear", "hermite"):
+        raise ValueError(f"root_path must be linear or hermite, got {root_path!r}")
     from scipy.spatial.transform import Slerp
 
     T = n_frames - 1
@@ -94,6 +138,25 @@ def slerp_inbetween(start: Keypose, end: Keypose, n_frames: int) -> tuple[np.nda
         key = Rotation.from_quat(np.stack([start.rotations[j], end.rotations[j]]))
         rot[:, j] = Slerp([0.0, 1.0], key)(w).as_quat()
     root = start.root[None] + w[:, None] * (end.root - start.root)[None]
+    if root_path == "hermite":
+        root = hermite_root(start, end, n_frames)
     if T >= 1:
         rot[0], rot[T] = start.rotations, end.rotations
     return rot, root
+
+
+class SlerpInbetweener:
+    """SLERP with a root path (:func:`slerp_inbetween`) on the in-betweeners' interface, for the
+    evaluation's ``slerp_hermite`` baseline (plain ``slerp`` is the model-free ``None`` of
+    :func:`vidstyle.inbetween.keyframes.inbetween_pair`)."""
+
+    def __init__(self, root_path: str = "hermite") -> None:
+        self.root_path = root_path
+
+    def get_params(self, deep: bool = True) -> dict:
+        return {"root_path": self.root_path}
+
+    def inbetween(self, start: Keypose, end: Keypose, n_frames: int, free_end: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        if free_end:
+            end = end.placed(placement_onto(end.rotations[0], end.root, start.rotations[0], start.root))
+        return slerp_inbetween(start, end, n_frames, self.root_path)
