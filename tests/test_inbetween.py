@@ -128,6 +128,21 @@ def test_slerp_midpoint_of_two_known_rotations():
     assert rot.shape == (3, J, 4)
 
 
+@pytest.mark.parametrize("n", [2, 3, 17, 47])
+def test_slerp_inbetween_is_scipys_slerp_of_every_joint(n):
+    # all joints at once must give exactly what scipy's Slerp gives joint by joint
+    from scipy.spatial.transform import Slerp
+
+    J = 31
+    a = Rotation.random(J, random_state=1).as_quat()
+    b = Rotation.random(J, random_state=2).as_quat()
+    rot, _ = slerp_inbetween(Keypose(a, np.zeros(3)), Keypose(b, np.ones(3)), n)
+    w = np.linspace(0.0, 1.0, n)
+    ref = np.stack([Slerp([0.0, 1.0], Rotation.from_quat(np.stack([a[j], b[j]])))(w).as_quat() for j in range(J)], 1)
+    ref[0], ref[-1] = a, b
+    assert np.array_equal(rot, ref)
+
+
 def test_pin_passes_exactly_through_both_keys():
     lib = _library()
     rot, root = lib.rotations_[:20], lib.root_positions_[:20]

@@ -128,15 +128,13 @@ def slerp_inbetween(start: Keypose, end: Keypose, n_frames: int, root_path: str 
     (``root_path="hermite"``: on :func:`hermite_root` instead, the evaluation's second baseline)."""
     if root_path not in ("linear", "hermite"):
         raise ValueError(f"root_path must be linear or hermite, got {root_path!r}")
-    from scipy.spatial.transform import Slerp
-
     T = n_frames - 1
     w = np.linspace(0.0, 1.0, n_frames)
     J = start.rotations.shape[0]
-    rot = np.empty((n_frames, J, 4))
-    for j in range(J):
-        key = Rotation.from_quat(np.stack([start.rotations[j], end.rotations[j]]))
-        rot[:, j] = Slerp([0.0, 1.0], key)(w).as_quat()
+    # scipy's Slerp between two keys, every joint at once: a * exp(w log(a^-1 b))
+    a = Rotation.from_quat(np.broadcast_to(start.rotations, (n_frames, J, 4)).reshape(-1, 4))
+    step = (Rotation.from_quat(start.rotations).inv() * Rotation.from_quat(end.rotations)).as_rotvec()
+    rot = (a * Rotation.from_rotvec((w[:, None, None] * step[None]).reshape(-1, 3))).as_quat().reshape(n_frames, J, 4)
     root = start.root[None] + w[:, None] * (end.root - start.root)[None]
     if root_path == "hermite":
         root = hermite_root(start, end, n_frames)
