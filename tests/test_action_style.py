@@ -107,6 +107,33 @@ def test_coefficients_recovered_from_a_noiseless_projected_decode(model):
     assert abs(r["yaw"] - 0.4) < 0.05 and abs(r["scale"] - 30.0) < 1.0
 
 
+@pytest.mark.parametrize("prior_weight,loss_scale", [(0.0, 0.5), (0.01, 0.05), (1.0, 0.2)])
+def test_residual_jacobian_is_the_derivative_of_the_residuals(model, prior_weight, loss_scale):
+    # the fit's exact Jacobian against scipy's central differences, at a point far from the solution, with
+    # missing keypoints and a residual at exactly zero (the robust loss's slope there is 1)
+    from scipy.optimize._numdiff import approx_derivative
+
+    f = SegmentFitter(model, "Jab", n_fit=4, prior_weight=prior_weight, loss_scale=loss_scale)
+    f._g = 0
+    lm = model.models_["Jab"]
+    n = 10
+    zc = np.array([0.5, -0.4, 0.3, 0.1])
+    K0, J = f.linearisation(zc, n)
+    xy = project(K0, 0.3, 30.0, np.array([80.0, 60.0]), f.elevation)
+    xy += np.random.default_rng(2).normal(0.0, 3.0, xy.shape)
+    xy[0, 0] = project(K0, 0.3, 30.0, np.array([80.0, 60.0]), f.elevation)[0, 0]
+    vis = np.ones(xy.shape[:2], bool)
+    vis[3, 2:6] = False
+    xy[~vis] = np.nan
+    L = np.linalg.inv(np.linalg.cholesky(lm.gmm_covariances[0]))
+    resid, jac = f._residuals(K0, J, zc, np.where(vis[..., None], xy, 0.0), vis, 25.0, L, lm.gmm_means[0])
+    for q in (np.concatenate([zc, [0.3, np.log(30.0), 80.0, 60.0]]),
+              np.concatenate([zc + [0.7, -0.2, 0.1, 0.5], [-1.1, np.log(24.0), 70.0, 66.0]])):
+        num = approx_derivative(resid, q, method="3-point", rel_step=1e-7)  # small steps: the loss is sharp
+        assert jac(q).shape == num.shape
+        assert np.allclose(jac(q), num, rtol=1e-5, atol=1e-5)
+
+
 def test_missing_keypoints_are_ignored(model):
     f = SegmentFitter(model, "Jab", n_fit=3, prior_weight=0.0, loss_scale=0.5, max_nfev=60)
     f._g = 0

@@ -375,23 +375,14 @@ class SegmentFitter:
         yaw, s, t = self.initial_camera(K0, xy)
         target = np.where(vis[..., None], xy, 0.0)
         f = self.loss_scale
-        w = math.sqrt(self.prior_weight)
         nf = self.n_fit
         p = np.concatenate([zf, [yaw, math.log(s)], t])
         nfev = 0
         for _ in range(max(1, int(rounds))):
             zc = p[:nf].copy()
             K0, J = self.linearisation(zc, n)
-
-            def resid(q):
-                dz = q[:nf] - zc
-                P3 = K0 + (J @ dz).reshape(K0.shape)
-                pr = project(P3, q[nf], math.exp(q[nf + 1]), q[nf + 2:nf + 4], self.elevation)
-                r = ((pr - target) / torso)[vis].ravel()
-                r = np.sign(r) * f * np.sqrt(np.log1p((r / f) ** 2))
-                return np.concatenate([r, w * (Linv @ (self.full(q[:nf]) - mu))])
-
-            res = least_squares(resid, p, method="trf", max_nfev=self.max_nfev)
+            resid, jac = self._residuals(K0, J, zc, target, vis, torso, Linv, mu)
+            res = least_squares(resid, p, jac=jac, method="trf", max_nfev=self.max_nfev)
             p = res.x
             nfev += int(res.nfev)
         z = self.full(p[:nf])
@@ -403,6 +394,55 @@ class SegmentFitter:
         nv = int(vis.sum())
         return {"z": z, "yaw": float(p[nf]), "scale": float(math.exp(p[nf + 1])), "shift": p[nf + 2:nf + 4].copy(),
                 "cost": float(np.sum(r ** 2) / max(nv, 1)), "n_visible": nv, "component": self._g, "nfev": nfev}
+
+    def _residuals(self, K0: np.ndarray, J: np.ndarray, zc: np.ndarray, target: np.ndarray, vis: np.ndarray,
+                   torso: float, Linv: np.ndarray, mu: np.ndarray):
+        """The robust residuals of one Gauss-Newton round of :meth:`fit` and their exact Jacobian, as
+        functions of ``q`` = (free coefficients, yaw, log scale, shift x, y): the data part, keypoints
+        ``K0 + J (z - zc)`` projected (:func:`project`) against ``target`` in torso lengths through the
+        Cauchy-like ``rho(r) = sign(r) f sqrt(log1p((r / f)^2))``; the prior part ``w Linv (z - mu)``."""
+        nf = self.n_fit
+        f = self.loss_scale
+        w = math.sqrt(self.prior_weight)
+        shape = K0.shape
+        Jk = J.reshape(*shape, nf)  # (n, 15, 3, nf)
+        prior_jac = w * Linv[:, :nf]
+        n_data = 2 * int(vis.sum())
+
+        def data(q):
+            P3 = K0 + (J @ (q[:nf] - zc)).reshape(shape)
+            pr = project(P3, q[nf], math.exp(q[nf + 1]), q[nf + 2:nf + 4], self.elevation)
+            return P3, pr, ((pr - target) / torso)[vis].ravel()
+
+        def resid(q):
+            _P3, _pr, r = data(q)
+            r = np.sign(r) * f * np.sqrt(np.log1p((r / f) ** 2))
+            return np.concatenate([r, w * (Linv @ (self.full(q[:nf]) - mu))])
+
+        def jac(q):
+            P3, pr, r = data(q)
+            yaw, s = q[nf], math.exp(q[nf + 1])
+            R = _rot(yaw, self.elevation)
+            cy, sy = math.cos(yaw), math.sin(yaw)
+            ce, se = math.cos(self.elevation), math.sin(self.elevation)
+            dR = np.array([[1.0, 0, 0], [0, -ce, se]]) @ np.array([[-sy, 0, cy], [0, 0, 0], [-cy, 0, -sy]])
+            D = np.empty((n_data, nf + 4))
+            D[:, :nf] = (s / torso) * np.einsum("nkcf,dc->nkdf", Jk, R)[vis].reshape(n_data, nf)
+            D[:, nf] = ((s / torso) * P3 @ dR.T)[vis].ravel()
+            D[:, nf + 1] = ((pr - q[nf + 2:nf + 4]) / torso)[vis].ravel()
+            D[:, nf + 2:] = 0.0
+            D[0::2, nf + 2] = 1.0 / torso
+            D[1::2, nf + 3] = 1.0 / torso
+            u = np.abs(r) / f
+            L = np.log1p(u * u)
+            small = u < 1e-6
+            drho = np.where(small, 1.0, u / ((1.0 + u * u) * np.sqrt(np.where(small, 1.0, L))))
+            out = np.zeros((n_data + len(mu), nf + 4))
+            out[:n_data] = drho[:, None] * D
+            out[n_data:, :nf] = prior_jac
+            return out
+
+        return resid, jac
 
     def _comp_logpdf(self, z, g) -> float:
         lm = self.lm
