@@ -107,6 +107,19 @@ def test_coefficients_recovered_from_a_noiseless_projected_decode(model):
     assert abs(r["yaw"] - 0.4) < 0.05 and abs(r["scale"] - 30.0) < 1.0
 
 
+def test_linearisation_is_the_forward_difference_of_each_decode(model):
+    f = SegmentFitter(model, "Jab", n_fit=5)
+    f._g = 0
+    zf = np.array([0.4, -0.3, 0.2, 0.1, -0.6])
+    K0, J = f.linearisation(zf, 14)
+    assert np.allclose(K0, f.keypoints(f.full(zf), 14), rtol=0, atol=1e-12)
+    for i in range(5):
+        z = zf.copy()
+        z[i] += 0.05
+        col = (f.keypoints(f.full(z), 14) - f.keypoints(f.full(zf), 14)).ravel() / 0.05
+        assert np.allclose(J[:, i], col, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("prior_weight,loss_scale", [(0.0, 0.5), (0.01, 0.05), (1.0, 0.2)])
 def test_residual_jacobian_is_the_derivative_of_the_residuals(model, prior_weight, loss_scale):
     # the fit's exact Jacobian against scipy's central differences, at a point far from the solution, with

@@ -332,16 +332,24 @@ class SegmentFitter:
     def linearisation(self, zf: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
         """Keypoints (n, 15, 3) of the free coefficients ``zf`` and their Jacobian (n*15*3, n_fit) by forward
         differences (step 0.05 whitened units); cached per (n, zf)."""
+        from ..mocap import Motion
+        from ..mocap.keypoints import keypoint_positions
+
         key = (int(n), tuple(np.round(zf, 9)))
         cache = self.__dict__.setdefault("_lin", {})
         if key not in cache:
-            K0 = self.keypoints(self.full(zf), n)
-            J = np.empty((K0.size, self.n_fit))
             h = 0.05
+            zs = np.repeat(zf[None], self.n_fit + 1, axis=0)
+            zs[1:][np.arange(self.n_fit), np.arange(self.n_fit)] += h
+            # the n_fit + 1 decodes' keypoints in one forward-kinematics call (per call, its overhead dominated)
+            ms = [self.model.decode(self.full(z), self.label, n_frames=n) for z in zs]
+            both = Motion(ms[0].skeleton, np.concatenate([m.rotations for m in ms]), None, ms[0].fps,
+                          root_positions=np.concatenate([m.root_positions for m in ms]))
+            K = keypoint_positions(both).reshape(self.n_fit + 1, n, -1, 3)
+            K0 = K[0]
+            J = np.empty((K0.size, self.n_fit))
             for i in range(self.n_fit):
-                z = zf.copy()
-                z[i] += h
-                J[:, i] = (self.keypoints(self.full(z), n) - K0).ravel() / h
+                J[:, i] = (K[i + 1] - K0).ravel() / h
             if len(cache) > 64:
                 cache.clear()
             cache[key] = (K0, J)
