@@ -113,10 +113,11 @@ def pin(rotations: np.ndarray, roots: np.ndarray, start: Keypose, end: Keypose,
     d = slerp(np.broadcast_to(d0, rotations.shape), np.broadcast_to(d1, rotations.shape),
               np.broadcast_to(w[:, None], rotations.shape[:2]))
     out = qmul(d, rotations)
-    e0, e1 = start.root - roots[0], end.root - roots[T]
-    root = roots + (1.0 - w)[:, None] * e0 + w[:, None] * e1
     if root_path == "hermite":
         root = hermite_root(start, end, T + 1)
+    else:
+        e0, e1 = start.root - roots[0], end.root - roots[T]
+        root = roots + (1.0 - w)[:, None] * e0 + w[:, None] * e1
     out[0], root[0] = start.rotations, start.root
     out[T], root[T] = end.rotations, end.root
     return out, root
