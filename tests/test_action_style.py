@@ -72,6 +72,25 @@ def test_global_style_recovers_lead_stance_and_guard(videos):
     assert p.stance_width == pytest.approx(1.0, abs=0.02) and p.guard_height == pytest.approx(0.0, abs=0.01)
 
 
+def test_stance_cue_finds_the_lead_without_jabs_and_with_left_right_swapped(videos):
+    # what the pose stage gives: left/right labels swapped in every frame, and a short clip recognised as all
+    # guard (no jab to go by); the front foot's image side still tells the lead, the jab rules cannot
+    swap = [0, 1, 2, 4, 3, 6, 5, 8, 7, 10, 9, 12, 11, 14, 13]
+    est = GlobalStyleEstimator().fit(videos["population"])
+    assert est.stance_side_ == {"front": 1.0, "left": -1.0, "right": -1.0}  # the orthodox front foot's side
+    for name, lead in (("narrow", "orthodox"), ("wide_southpaw", "southpaw")):
+        short = [(xy[:60, swap], ["Guard"] * 60, view) for xy, _labels, view in videos[name]]
+        g = est.estimate(short)
+        assert g.lead == lead and abs(g.lead_score) > 0.8 and g.n_jabs == 0
+    jab_only = GlobalStyleEstimator(lead_cue="jab").fit(videos["population"])
+    short = [(xy[:60, swap], ["Guard"] * 60, view) for xy, _labels, view in videos["wide_southpaw"]]
+    assert jab_only.estimate(short).lead_score == 0.0  # no jab: no evidence, the threshold's default
+    few = GlobalStyleEstimator(min_stance_frames=10_000).fit(videos["population"])  # too few frames: the jab rules
+    assert few.estimate(videos["wide_southpaw"]).lead == "southpaw"
+    with pytest.raises(Exception, match="lead_cue"):
+        GlobalStyleEstimator(lead_cue="feet").fit(videos["population"])
+
+
 def test_tempo_is_duration_relative_to_the_population(videos):
     est = GlobalStyleEstimator().fit(videos["population"])
     _, slow = _take("Jab", 0, speed=0.7)

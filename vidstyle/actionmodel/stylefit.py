@@ -9,7 +9,13 @@ recognised) and the view name (``front``/``left``/``right``: the camera's azimut
 performer's facing, known from the calibrated camera; the figures are normalised per view by the
 training population, so only the view's identity is used, never its angle).
 
-* **lead**: which hand throws the jabs. Per Jab segment, the largest image displacement of each wrist
+* **lead** (``lead_cue="stance"``, the default): the front foot's image side. Per frame with both ankles and
+  hips seen, the lower ankle (nearer a camera that looks down) is the front foot; the sign of its image x
+  from the hips' midpoint, times the orthodox sign learned per view from the training population (their
+  labelled jab hand), averaged over frames, is the score in [-1, 1]. Label-free: the pose stage's
+  left/right swaps do not matter, and every frame counts. With fewer than ``min_stance_frames`` such frames
+  (or ``lead_cue="jab"``) the jab rules decide:
+  which hand throws the jabs. Per Jab segment, the largest image displacement of each wrist
   from where it was at the segment's start; the wrist that moves more is the jabbing one.
   *Label-free rule* (used when there are ``min_front_jabs`` or more Jab segments in front views): the side
   of the neck (image x) on which the jabbing wrist travels; which side is orthodox is learned from the
@@ -63,6 +69,9 @@ log = logging.getLogger(__name__)
 # keypoint indices (vidstyle.formats.keypoints.KEYPOINTS order)
 HEAD, NECK, PELVIS, LSH, RSH, LEL, REL, LWR, RWR, LHIP, RHIP, LKN, RKN, LAN, RAN = range(15)
 NON_ACTIONS = ("Guard", "Step", "unlabelled", "other")
+#: what decides the lead (:class:`GlobalStyleEstimator`): ``stance`` (the front foot's image side, every
+#: frame) before the jab rules, or the jab rules alone (``jab``)
+LEAD_CUES = ("stance", "jab")
 VIEW_NAMES = ("front", "left", "right")
 
 
@@ -140,6 +149,14 @@ def video_figures(xy: np.ndarray, labels) -> dict:
     out["jab_scores"] = jab
     out["jab_sides"] = side
     out["durations"] = durations
+    # the stance: per frame with both ankles and hips seen, the image side (x from the hips' midpoint) of the
+    # lower ankle, the front foot for a camera that looks down; label-free, so left/right swaps do not matter
+    ok = np.isfinite(xy[:, [LAN, RAN, LHIP, RHIP]]).all(axis=(1, 2))
+    if np.isfinite(torso) and ok.any():
+        X = xy[ok]
+        front_x = np.where(X[:, LAN, 1] > X[:, RAN, 1], X[:, LAN, 0], X[:, RAN, 0])
+        out["stance_side"] = float(np.mean(np.sign(front_x - 0.5 * (X[:, LHIP, 0] + X[:, RHIP, 0]))))
+    out["stance_frames"] = int(ok.sum()) if "stance_side" in out else 0
     return out
 
 
@@ -181,9 +198,12 @@ class GlobalStyleEstimator(BaseEstimator):
     ``population_`` (view -> mean guard / stance / extension of the training videos), ``durations_``
     (action -> median segment length, frames)."""
 
-    def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5):
+    def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5, lead_cue: str = D.STYLE_LEAD_CUE,
+                 min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES):
         self.lead_threshold = lead_threshold
         self.min_front_jabs = min_front_jabs
+        self.lead_cue = lead_cue
+        self.min_stance_frames = min_stance_frames
 
     @classmethod
     def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
@@ -193,17 +213,23 @@ class GlobalStyleEstimator(BaseEstimator):
         est = cls(**kw)
         est.population_ = {}
         est.orthodox_side_ = 0.0  # unknown without a population: the labelled jab hand decides
+        est.stance_side_ = {}
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
         return est
 
     def fit(self, videos, y=None) -> GlobalStyleEstimator:
+        if self.lead_cue not in LEAD_CUES:
+            raise ParameterError("lead_cue", f"must be one of {', '.join(LEAD_CUES)}, got {self.lead_cue!r}")
         per_view: dict[str, dict[str, list[float]]] = {}
         dur: dict[str, list[int]] = {}
         front = []
+        stance: dict[str, list[float]] = {}
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
             if str(view) == "front":
                 front.append(f)
+            if f["jab_scores"] and f["stance_frames"]:  # the labelled jab hand's lead times the stance side
+                stance.setdefault(str(view), []).append(float(np.mean(f["jab_scores"])) * f["stance_side"])
             pv = per_view.setdefault(str(view), {"guard": [], "stance": [], "extension": []})
             for k in pv:
                 if k in f and np.isfinite(f[k]):
@@ -216,6 +242,8 @@ class GlobalStyleEstimator(BaseEstimator):
         # the image side of an orthodox jab in front views, from the labelled jab hand of the population
         prod = [np.mean(f["jab_scores"]) * np.mean(f["jab_sides"]) for f in front if f["jab_scores"] and f["jab_sides"]]
         self.orthodox_side_ = float(np.sign(np.sum(prod))) if prod else 0.0
+        # per view, the image side of an orthodox fighter's front foot, learned the same way
+        self.stance_side_ = {v: float(np.sign(np.sum(x))) for v, x in stance.items() if np.sum(x) != 0}
         self.durations_ = {a: float(np.median(d)) for a, d in dur.items() if d}
         return self
 
@@ -223,10 +251,15 @@ class GlobalStyleEstimator(BaseEstimator):
         if not hasattr(self, "population_"):
             raise ParameterError("estimator", "not fitted")
         g, s, c, jab, sides, dur = [], [], [], [], [], {}
+        stance_sum, stance_n = 0.0, 0
+        stance_side = getattr(self, "stance_side_", {})
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
             if str(view) == "front":
                 sides += f["jab_sides"]
+            if f["stance_frames"] and stance_side.get(str(view)):
+                stance_sum += f["stance_frames"] * f["stance_side"] * stance_side[str(view)]
+                stance_n += f["stance_frames"]
             pop = self.population_.get(str(view))
             if pop is None and self.population_:  # a view the population lacks: pool over its views
                 pop = {k: float(np.nanmean([p[k] for p in self.population_.values()])) for k in ("guard", "stance", "extension")}
@@ -240,7 +273,10 @@ class GlobalStyleEstimator(BaseEstimator):
             for a, ds in f["durations"].items():
                 dur.setdefault(a, []).extend(ds)
         side = getattr(self, "orthodox_side_", 0.0)
-        if side != 0.0 and len(sides) >= self.min_front_jabs:
+        if self.lead_cue == "stance" and stance_n >= self.min_stance_frames:
+            # label-free: the frame-weighted share of frames whose front foot is on the orthodox side, in [-1, 1]
+            score = stance_sum / stance_n
+        elif side != 0.0 and len(sides) >= self.min_front_jabs:
             # label-free: the share of front-view jabs thrown from the orthodox side of the neck, as a score in [-1, 1]
             score = float(2 * np.mean(np.sign(sides) == side) - 1)
             jab = sides

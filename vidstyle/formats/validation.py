@@ -12,6 +12,7 @@ kind                                          version   written by
 ``vidstyle.validation.pose_recognition``      1         ``scripts/pose_recognition_results.py``
 ``vidstyle.validation.inbetween``             1         ``scripts/validate_inbetween.py``
 ``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
+``vidstyle.validation.lead_cue``              1         ``scripts/validate_lead_cue.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -41,6 +42,7 @@ POSE_RECOGNITION = "vidstyle.validation.pose_recognition"
 INBETWEEN = "vidstyle.validation.inbetween"
 ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
 ACTION_STYLE_POSES = "vidstyle.validation.action_style_poses"
+LEAD_CUE = "vidstyle.validation.lead_cue"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -55,6 +57,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     INBETWEEN: (1, 1, True, False),
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
     ACTION_STYLE_POSES: (1, 1, True, False),
+    LEAD_CUE: (1, 1, True, False),
 }
 
 
