@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,7 +46,15 @@ def main() -> int:
     log.setLevel(logging.INFO)
     import numpy as np
 
-    from vidstyle.evaluation.actionstyle import evaluate_performer, fit_training, performer_videos, row_json, summarise, true_instances
+    from vidstyle.evaluation.actionstyle import (
+        evaluate_performer,
+        fit_training,
+        performer_videos,
+        pose_files,
+        row_json,
+        summarise,
+        true_instances,
+    )
     from vidstyle.formats.validation import validation_header, write_validation
 
     t_start = time.perf_counter()
@@ -56,15 +63,8 @@ def main() -> int:
     manifest, ds = demo["manifest"], demo["dataset"]
     videos = [f"{p}_perf0_front" for p in g["V"]]
     poses_root = args.poses or Path(tempfile.mkdtemp(prefix="vidstyle_asp_"))
-    frames = ",".join(map(str, range(args.frames)))
     for b in BACKENDS:
-        out = poses_root / f"poses_{b}"
-        if all((out / f"{v}.poses.json").is_file() for v in videos):
-            continue
-        cmd = [sys.executable, "-m", "vidstyle", "pose", *(str(dataset / "videos" / f"{v}.mp4") for v in videos),
-               "--backend", b, "--out-dir", str(out), "--frames", frames, "--jobs", "1"]
-        log.info("%s", " ".join(cmd[:3] + ["..."]))
-        subprocess.run(cmd, check=True, cwd=ROOT)
+        pose_files(dataset, videos, b, poses_root / f"poses_{b}", args.frames)
     rows, by_backend = {}, {}
     for b in BACKENDS:
         rs = []

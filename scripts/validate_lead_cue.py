@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -58,7 +57,7 @@ def main() -> int:
 
     from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
     from vidstyle.evaluation.actionmodel import split_groups
-    from vidstyle.evaluation.actionstyle import demo_truth, performer_videos
+    from vidstyle.evaluation.actionstyle import demo_truth, performer_videos, pose_files
     from vidstyle.formats.validation import LEAD_CUE, validation_header, write_validation
 
     t_start = time.perf_counter()
@@ -69,13 +68,8 @@ def main() -> int:
     train = sorted(g["A"] + g["B"])
     performers = sorted(g["A"] + g["B"] + g["V"])
     videos = [f"{p}_perf0_front" for p in performers]
-    poses = args.poses or Path(tempfile.mkdtemp(prefix="vidstyle_lead_"))
-    if not all((poses / f"{v}.poses.json").is_file() for v in videos):
-        cmd = [sys.executable, "-m", "vidstyle", "pose", *(str(dataset / "videos" / f"{v}.mp4") for v in videos),
-               "--backend", args.backend, "--out-dir", str(poses), "--frames", ",".join(map(str, range(args.frames))),
-               "--jobs", "1"]
-        log.info("%s", " ".join(cmd[:3] + ["..."]))
-        subprocess.run(cmd, check=True, cwd=ROOT)
+    poses = pose_files(dataset, videos, args.backend, args.poses or tempfile.mkdtemp(prefix="vidstyle_lead_"),
+                       args.frames)
     true2d = {p: performer_videos(ds, manifest, p, "true") for p in train}
     rows = []
     for p in performers:

@@ -100,6 +100,23 @@ def performer_videos(ds, manifest: dict, performer: str, kind: str = "true", pos
     return out
 
 
+def pose_files(dataset: str | Path, videos: list[str], backend: str, out_dir: str | Path, frames: int) -> Path:
+    """``out_dir`` holding ``<video>.poses.json`` of the first ``frames`` frames of each of ``videos`` (ids under
+    ``dataset/videos``) by ``backend``: made with the pipeline's ``reconstruct_poses`` command (``vidstyle pose
+    ... --frames 0,...,frames-1 --jobs 1``) unless every file is there already (the validation scripts)."""
+    import subprocess
+    import sys
+
+    out = Path(out_dir)
+    if not all((out / f"{v}.poses.json").is_file() for v in videos):
+        cmd = [sys.executable, "-m", "vidstyle", "pose", *(str(Path(dataset) / "videos" / f"{v}.mp4") for v in videos),
+               "--backend", backend, "--out-dir", str(out), "--frames", ",".join(map(str, range(int(frames)))),
+               "--jobs", "1"]
+        log.info("vidstyle pose --backend %s: %d videos", backend, len(videos))
+        subprocess.run(cmd, check=True)
+    return out
+
+
 def true_instances(dataset: str | Path, performer: str, model, max_per_label: int = 8, seed: int = 0) -> dict:
     """label -> up to ``max_per_label`` true instances (seeded choice) of ``performer`` on the model's skeleton."""
     from ..actionmodel import cut_instances, load_labelled
