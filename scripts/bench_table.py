@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The benchmark table of docs/benchmarks.md, generated from the committed bench files (bench_results/*.json),
+"""The benchmark table of the README and docs/benchmarks.md, generated from the committed bench files (bench_results/*.json),
 so no benchmark figure is typed by hand.
 
 Each ``scripts/bench_*.py`` writes its JSON under ``bench_results/``; this script reads the ones it knows
@@ -9,7 +9,7 @@ docs/benchmarks.md`` the text between ``<!-- bench:begin -->`` and ``<!-- bench:
 ``--check`` exits 1 when the page is not up to date (tests/test_bench_table.py runs it). A file that is
 absent is left out of the table; a file it cannot read is an error.
 
-    python scripts/bench_table.py --doc docs/benchmarks.md [--results bench_results] [--check]
+    python scripts/bench_table.py --doc README.md docs/benchmarks.md [--results bench_results] [--check]
 """
 
 from __future__ import annotations
@@ -159,7 +159,8 @@ def table(results: Path) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", type=Path, default=ROOT / "bench_results")
-    ap.add_argument("--doc", type=Path, default=None, help="page whose bench:begin/end block is replaced")
+    ap.add_argument("--doc", type=Path, nargs="+", default=None,
+                    help="pages whose bench:begin/end block is replaced (README.md, docs/benchmarks.md)")
     ap.add_argument("--check", action="store_true", help="exit 1 when --doc is not up to date")
     args = ap.parse_args(argv)
     body = table(args.results)
@@ -170,17 +171,19 @@ def main(argv: list[str] | None = None) -> int:
 
     from vidstyle.fileio import write_text
 
-    text = args.doc.read_text(encoding="utf-8")
-    new = splice(text, body, BEGIN, END)
-    if new is None:
-        raise SystemExit(f"bench_table: {args.doc} has no {BEGIN} ... {END} block")
-    if args.check:
-        if new != text:
-            print(f"{args.doc} is not up to date: run python scripts/bench_table.py --doc {args.doc}", file=sys.stderr)
-            return 1
-        return 0
-    write_text(args.doc, new)
-    return 0
+    stale = 0
+    for doc in args.doc:
+        text = doc.read_text(encoding="utf-8")
+        new = splice(text, body, BEGIN, END)
+        if new is None:
+            raise SystemExit(f"bench_table: {doc} has no {BEGIN} ... {END} block")
+        if args.check:
+            if new != text:
+                print(f"{doc} is not up to date: run python scripts/bench_table.py --doc {doc}", file=sys.stderr)
+                stale = 1
+            continue
+        write_text(doc, new)
+    return stale
 
 if __name__ == "__main__":
     sys.exit(main())
