@@ -6,8 +6,12 @@ on the validation performers, then the test split scored once.
 1. Calibration (validation performers only): the pose files of the split's validation videos against their
    true keypoints (:func:`~vidstyle.evaluation.poserecognition.measure_pose_error`) give the training
    noise (:func:`~vidstyle.evaluation.poserecognition.noise_from_error`).
-2. Two pose recognizers, trained on the mocap of the training performers (sets A and B) from ``--views``
-   virtual cameras each: with the default noise and with the calibrated noise.
+2. Pose recognizers, trained on the mocap of the training performers (sets A and B) from ``--views``
+   virtual cameras each: with the default noise, with the calibrated noise, and (``--residuals``, when
+   ``--poses-dir`` has the poses of set A's videos) with the *residual* noise — the estimator's own errors
+   on set A's videos, each training frame given the error of a set-A frame of a similar 2D pose
+   (:class:`~vidstyle.recognition.posetraining.ResidualNoise`; set A, not the validation videos, so that
+   the validation does not score frames whose errors trained the recognizer).
 3. Validation: each recognizer alone, and its late fusion with the 3D SIFT recognizer ``--sift-model``
    (trained on set B of the same seed) at the pose weights ``--weights`` (0 = 3D SIFT alone, 1 = pose
    alone), on the split's validation videos (from their pose files; smoothed frame accuracy) and on the
@@ -46,6 +50,7 @@ from vidstyle.evaluation.poserecognition import (
     measure_pose_error,
     noise_from_error,
     predict_pose_set,
+    residual_noise,
     score_pose_recognizer,
     train_for_split,
 )
@@ -86,9 +91,15 @@ def main() -> None:
                     help="real-motion validation clips (vidstyle evaluate real-motion --clips)")
     ap.add_argument("--clips", type=Path, nargs="*", default=[], help="also train on these labelled mocap clips")
     ap.add_argument("--clip-labels", type=Path, nargs="*", default=[], help="their labels (label CSV / JSON)")
+    ap.add_argument("--residuals", action=argparse.BooleanOptionalAction, default=True,
+                    help="also the residual noise (the estimator's errors on set A's videos, from --poses-dir)")
+    ap.add_argument("--residual-k", type=int, default=3, help="residual noise: calibration frames drawn from")
+    ap.add_argument("--noises", nargs="*", help="only these noises (default: all)")
     ap.add_argument("--tag", default="", help="suffix of the output names (e.g. _cmuwalks)")
     ap.add_argument("--model-out", type=Path, help="also save the chosen pose recognizer (a recognizer model file)")
     ap.add_argument("--results-dir", type=Path, default=ROOT / "pipelines/kickboxing/results")
+    ap.add_argument("--validate-only", action="store_true",
+                    help="stop after the validation (write --validation-out; no test split is scored)")
     a = ap.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s %(message)s")
     command = "python scripts/pose_recognition_results.py " + " ".join(sys.argv[1:])
@@ -102,7 +113,17 @@ def main() -> None:
     error = measure_pose_error(ds, a.poses_dir, split.val)
     noises = {"default": KeypointNoise(), "calibrated": noise_from_error(error)}
     log.info("pose error on validation: %s", {k: v for k, v in error.items() if k != "videos"})
+    # the estimator's own errors, from set A's videos (training data: the bank must not hold the frames the
+    # validation scores, or the choice would favour it)
+    bank_ids = list(split.vocab)
+    if a.residuals and all((a.poses_dir / f"{i}.poses.json").exists() for i in bank_ids):
+        noises["residuals"] = residual_noise(ds, a.poses_dir, bank_ids, k=a.residual_k)
+        log.info("residual noise: %s", noises["residuals"].to_dict())
+    elif a.residuals:
+        log.warning("no residual noise: %s lacks poses of set A's videos", a.poses_dir)
 
+    if a.noises:
+        noises = {k: v for k, v in noises.items() if k in a.noises}
     # 2. one recognizer per noise
     extra = []
     if a.clips:
@@ -160,7 +181,7 @@ def main() -> None:
             r["score"] = (r["smoothed"] + r["real_motion_val"]) / 2
         else:
             r["score"] = r["smoothed"]
-    simpler = {"default": 0, "calibrated": 1}
+    simpler = {"default": 0, "calibrated": 1, "residuals": 2}
 
     def key(r):
         n_rec = 1 if r["weight_pose"] in (0.0, 1.0) else 2
@@ -188,6 +209,9 @@ def main() -> None:
         save_pose_model(a.model_out, rec, training={k: v for k, v in training.items() if k != "train_s"},
                         extra={"validation": str(val_out), "chosen": best})
 
+    if a.validate_only:
+        print(json.dumps({"chosen": best, "rows": rows}, indent=1))
+        return
     # 4. test, once
     rec, training = recs[best["noise"]]
     splits = [("unseen-performer", "unseen_performer", ds, None, a.features, a.poses_dir)]

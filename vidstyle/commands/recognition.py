@@ -74,6 +74,8 @@ def train_recognizer(
     noise_sigma: float = number(0.05, "--noise-sigma", lo=0, hi=10, help="--features pose: Gaussian keypoint noise, torso lengths per coordinate."),
     outlier_rate: float = number(0.05, "--outlier-rate", lo=0, hi=1, help="--features pose: share of keypoints displaced by 0.5 torso lengths (sigma)."),
     dropout_rate: float = number(0.02, "--dropout-rate", lo=0, hi=1, help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
+    noise_poses: Path | None = typer.Option(None, "--noise-poses", help="--features pose: corrupt the training keypoints with your pose estimator's own errors instead of Gaussian noise: a directory of <video id>.poses.json (vidstyle pose --out-dir) of --dataset's videos; those of the training performers are compared with their true keypoints, and every training frame takes the error made on one of the --residual-k most similar poses (replaces --noise-sigma, --outlier-rate, --dropout-rate)."),
+    residual_k: int = number(3, "--residual-k", lo=1, hi=100, help="--noise-poses: calibration frames each training frame's error is drawn from."),
     clips: list[Path] = typer.Option(None, "--clips", help="--features pose: also (or instead of --dataset) train on these labelled mocap clips (BVH files or directories; any skeleton with the 15 keypoints' joints), labelled by --clip-labels or a <clip>.labels.json beside each."),
     clip_labels: list[Path] = typer.Option(None, "--clip-labels", help="--features pose: labels of --clips: a CSV file,label[,start,end] (BVH frame numbers, end exclusive), a demo labels JSON, or a CMU clips.csv. Unlabelled frames do not train."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
@@ -108,10 +110,10 @@ def train_recognizer(
     if features_kind == "pose":
         _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                     max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
-                    clips or [], clip_labels or [])
+                    clips or [], clip_labels or [], noise_poses, residual_k)
         return
-    if clips or clip_labels:
-        raise InputError("--clips / --clip-labels: only with --features pose (3D SIFT trains on videos)")
+    if clips or clip_labels or noise_poses:
+        raise InputError("--clips / --clip-labels / --noise-poses: only with --features pose (3D SIFT trains on videos)")
     if features_kind != "sift3d":
         raise InputError(f"--features: must be sift3d or pose, got {features_kind!r}")
     if vocab is None:
@@ -137,7 +139,7 @@ def train_recognizer(
 
 def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                 max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
-                clips, clip_labels):
+                clips, clip_labels, noise_poses=None, residual_k=3):
     from ..formats.dataset import read_dataset
     from ..recognition.poserecognizer import save_pose_model
     from ..recognition.posetraining import KeypointNoise, clip_motions, train_from_dataset
@@ -147,16 +149,38 @@ def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate
                          "not FEATURES or --annotations")
     if clip_labels and not clips:
         raise InputError("--clip-labels: give the --clips they label")
+    if noise_poses is not None and dataset is None:
+        raise InputError("--noise-poses: give the --dataset whose videos the pose files are of (their truth calibrates)")
     noise = KeypointNoise(sigma=noise_sigma, outlier_rate=outlier_rate, dropout_rate=dropout_rate)
     params = {"classifier": classifier, "C": c, "max_frames_per_class": max_frames_per_class or None,
               "smoothing_window": window, "smoothing": smoothing, "emission_weight": emission_weight,
               "mirror": mirror, "n_jobs": jobs}
     ds = read_dataset(dataset) if dataset is not None else None
+    if noise_poses is not None:
+        noise = _residual_noise(ds, noise_poses, split, seed, test_view, residual_k)
     extra_motions = clip_motions(clips, clip_labels, ds.fps if ds else D.FPS,
                                  classes=(ds.classes or None) if ds else None) if clips else []
     rec, extra = train_from_dataset(ds, split, seed, test_view, views, noise, params, extra_motions=extra_motions)
     header = save_pose_model(out, rec, extra["training"], {"split": extra["split"]})
     log.info("wrote %s (pose recognizer, %d classes): %s", out, len(rec.classes_), header["summary"])
+
+
+def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str | None, k: int):
+    """--noise-poses: the ResidualNoise of the pose files in ``poses_dir`` of the split's training
+    performers' videos (sets A and B: the ones the recognizer trains on; never validation or test videos)."""
+    from ..evaluation.poserecognition import residual_noise
+    from ..recognition.splits import make_split
+
+    if not Path(poses_dir).is_dir():
+        raise InputError(f"{poses_dir}: --noise-poses must be a directory of <video id>.poses.json")
+    sp = make_split(ds, "unseen-performer" if split == "unseen-camera" else split, seed=seed, test_view=test_view)
+    ids = [i for i in list(sp.vocab) + list(sp.train) if (Path(poses_dir) / f"{i}.poses.json").is_file()]
+    if not ids:
+        raise InputError(f"{poses_dir}: no <video id>.poses.json of the training videos of --dataset's split "
+                         f"(e.g. {(list(sp.vocab) + list(sp.train))[0]}.poses.json)")
+    noise = residual_noise(ds, Path(poses_dir), ids, k=k)
+    log.info("training noise: the pose errors of %d training videos (%s)", len(ids), noise.to_dict())
+    return noise
 
 
 def recognize(

@@ -13,7 +13,8 @@ Test input, per test video of the split (the same videos as ``vidstyle evaluate 
   scored, and the metrics say which.
 
 Noise calibration (:func:`measure_pose_error`): a pose file against the true keypoints of its video, in
-units of the true torso length.
+units of the true torso length; or (:func:`residual_noise`) the estimator's errors themselves, frame by
+frame, handed to training frames of similar poses.
 """
 
 from __future__ import annotations
@@ -31,7 +32,13 @@ from ..formats.dataset import Dataset
 from ..formats.labels import read_labels
 from ..recognition.posefeatures import NECK, PELVIS, PoseTrack, track_from_poses
 from ..recognition.poserecognizer import PoseRecognizer
-from ..recognition.posetraining import KeypointNoise, check_training_memory, dataset_motions, virtual_views
+from ..recognition.posetraining import (
+    KeypointNoise,
+    ResidualNoise,
+    check_training_memory,
+    dataset_motions,
+    virtual_views,
+)
 from ..recognition.splits import make_split
 from .recognition import score_videos
 
@@ -65,6 +72,20 @@ def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str]) -> dic
         trues.append(true)
         ests.append(track_from_poses(read_poses(poses_dir / f"{i}.poses.json"), dataset.fps, len(true)).xy)
     return {"videos": list(ids), **pose_error(trues, ests)}
+
+
+def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3) -> ResidualNoise:
+    """The :class:`~vidstyle.recognition.posetraining.ResidualNoise` of the pose files
+    ``<poses_dir>/<id>.poses.json`` against the true keypoints of the dataset videos ``ids`` (calibration
+    videos: never the ones the recognizer is scored on)."""
+    from ..formats.poses import read_poses
+
+    trues, ests = [], []
+    for i in ids:
+        true = true_keypoints(dataset, i)
+        trues.append(true)
+        ests.append(track_from_poses(read_poses(Path(poses_dir) / f"{i}.poses.json"), dataset.fps, len(true)).xy)
+    return ResidualNoise.from_tracks(trues, ests, k=k, videos=list(ids))
 
 
 def pose_error(trues: list[np.ndarray], ests: list[np.ndarray]) -> dict[str, Any]:

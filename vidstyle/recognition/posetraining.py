@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..render.camera import Camera, circular_median, intrinsics, look_at_rotation
+from .posefeatures import N_KEYPOINTS as N_KP
 from .posefeatures import NECK, PELVIS, PoseTrack
 
 log = logging.getLogger(__name__)
@@ -153,8 +154,113 @@ class KeypointNoise:
                 "dropout_rate": self.dropout_rate, "dropout_length": self.dropout_length, **self.extra}
 
 
+@dataclass
+class ResidualNoise:
+    """Corruption by the pose estimator's own errors: each training frame takes the error that the estimator
+    made on a calibration frame of a similar 2D pose. The calibration is pairs of tracks of the same frames
+    (true keypoints, the estimator's; :meth:`from_tracks`), e.g. held-out renders with their truth. A frame's
+    *key* is its true pose root-centred at the pelvis and scaled by the track's median torso length (the
+    28 coordinates of the 14 other keypoints); its *residual* is ``(estimated - true) / torso`` (NaN where
+    the estimator found nobody). :meth:`apply` finds, for every frame of a track, the ``k`` calibration
+    frames whose keys are nearest (Euclidean) and adds the residual of one of them, drawn uniformly, scaled
+    by the track's torso. So an arm the estimator misses when it is stretched out, or a limb it puts on the
+    wrong side when the legs cross, is missed and swapped in the training tracks in the same poses, which
+    Gaussian noise (:class:`KeypointNoise`) cannot imitate. With ``mirror`` the bank also holds the
+    left-right mirror image of every calibration frame (its key and residual mirrored), so both stances
+    are covered.
+    """
+
+    keys: np.ndarray
+    residuals: np.ndarray
+    k: int = 3
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.keys = np.asarray(self.keys, dtype=np.float64)
+        self.residuals = np.asarray(self.residuals, dtype=np.float64)
+        if self.keys.ndim != 2 or self.residuals.ndim != 3 or len(self.keys) != len(self.residuals) \
+                or len(self.keys) == 0 or self.residuals.shape[1:] != (N_KP, 2) or self.keys.shape[1] != 2 * (N_KP - 1):
+            raise ParameterError("residual noise", f"expected keys (N, {2 * (N_KP - 1)}) and residuals (N, {N_KP}, 2) "
+                                 f"with N > 0, got {self.keys.shape} and {self.residuals.shape}")
+        if not np.all(np.isfinite(self.keys)):
+            raise ParameterError("residual noise", "keys must be finite")
+        if int(self.k) < 1:
+            raise ParameterError("k", f"must be >= 1, got {self.k}")
+        self.k = int(min(self.k, len(self.keys)))
+        self._sq = np.einsum("ij,ij->i", self.keys, self.keys)
+
+    def nearest(self, q: np.ndarray, chunk: int = 1024) -> np.ndarray:
+        """(Q, k) indices of the ``k`` keys nearest each row of ``q`` (Q, 28), by brute force in chunks (a
+        kd-tree is slower than a matrix product in 28 dimensions), in no particular order."""
+        out = np.empty((len(q), self.k), dtype=np.int64)
+        for s in range(0, len(q), chunk):
+            b = q[s:s + chunk]
+            d = self._sq[None, :] - 2.0 * (b @ self.keys.T)  # + |b|^2, the same for a row's candidates
+            out[s:s + chunk] = np.argpartition(d, self.k - 1, axis=1)[:, :self.k] if self.k < d.shape[1] \
+                else np.argsort(d, axis=1)[:, :self.k]
+        return out
+
+    @staticmethod
+    def _normalise(xy: np.ndarray) -> tuple[np.ndarray, float]:
+        """(F, 28) keys of a track's frames (NaN rows where a keypoint is unknown) and its torso length."""
+        lengths = np.linalg.norm(xy[:, NECK] - xy[:, PELVIS], axis=-1)
+        lengths = lengths[np.isfinite(lengths)]
+        torso = float(np.median(lengths)) if lengths.size else np.nan
+        q = (xy - xy[:, PELVIS:PELVIS + 1]) / torso
+        return np.delete(q, PELVIS, axis=1).reshape(len(xy), -1), torso
+
+    @classmethod
+    def from_tracks(cls, trues: Sequence[np.ndarray], ests: Sequence[np.ndarray], k: int = 3, mirror: bool = True,
+                    videos: Sequence[str] = ()) -> ResidualNoise:
+        """The bank of calibration pairs: ``trues[i]`` and ``ests[i]`` (F, 15, 2) pixel keypoints of the same
+        frames (an estimated frame with any NaN keypoint is a frame the estimator missed; a true frame with a
+        NaN is skipped)."""
+        from .posefeatures import mirror_track
+
+        keys, res = [], []
+        for true, est in zip(trues, ests, strict=True):
+            true, est = np.asarray(true, dtype=np.float64), np.asarray(est, dtype=np.float64)
+            if true.shape != est.shape or true.ndim != 3 or true.shape[1:] != (N_KP, 2):
+                raise ParameterError("residual noise", f"true and estimated tracks must both be (F, {N_KP}, 2), "
+                                     f"got {true.shape} and {est.shape}")
+            variants = [(true, est)] + ([(mirror_track(true), mirror_track(est))] if mirror else [])
+            for t, e in variants:
+                q, torso = cls._normalise(t)
+                if not np.isfinite(torso) or torso <= 0:
+                    continue
+                ok = np.all(np.isfinite(q), axis=1)
+                r = (e - t) / torso
+                r[~np.all(np.isfinite(e), axis=(1, 2))] = np.nan
+                keys.append(q[ok])
+                res.append(r[ok])
+        if not keys or sum(len(x) for x in keys) == 0:
+            raise ParameterError("residual noise", "no calibration frame with a complete true pose")
+        n_est = sum(len(x) for x in keys) // (2 if mirror else 1)
+        return cls(np.concatenate(keys), np.concatenate(res), k=k,
+                   extra={"calibration_frames": int(n_est), "mirror": bool(mirror),
+                          "calibrated_on_videos": len(videos) or len(trues)})
+
+    def apply(self, xy: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        xy = np.array(xy, dtype=np.float64)
+        if xy.shape[0] == 0:
+            return xy
+        q, torso = self._normalise(xy)
+        if not np.isfinite(torso) or torso <= 0:
+            return xy
+        ok = np.flatnonzero(np.all(np.isfinite(q), axis=1))
+        if ok.size == 0:
+            return xy
+        idx = self.nearest(q[ok])
+        pick = idx[np.arange(len(ok)), rng.integers(0, self.k, len(ok))]
+        xy[ok] += self.residuals[pick] * torso
+        return xy
+
+    def to_dict(self) -> dict:
+        return {"kind": "residuals", "k": self.k, **self.extra}
+
+
 def virtual_views(motions: Sequence[LabelledMotion], n_views: int, rng: np.random.Generator | int,
-                  noise: KeypointNoise | None = None, **camera_ranges) -> tuple[list[PoseTrack], list[list[str]]]:
+                  noise: KeypointNoise | ResidualNoise | None = None, **camera_ranges) -> tuple[list[PoseTrack], list[list[str]]]:
     """``n_views`` projections of every motion through cameras of :func:`sample_cameras`
     (``camera_ranges``: its ranges), corrupted by ``noise`` (None = exact 2D). Returns tracks and labels."""
     rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
