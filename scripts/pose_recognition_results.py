@@ -42,6 +42,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -58,7 +60,7 @@ from vidstyle.formats.dataset import read_dataset
 from vidstyle.formats.metrics import write_metrics
 from vidstyle.formats.validation import POSE_RECOGNITION, validation_header, write_validation
 from vidstyle.recognition.pipeline import load_recognizer
-from vidstyle.recognition.posetraining import KeypointNoise
+from vidstyle.recognition.posetraining import KeypointNoise, ResidualNoise
 from vidstyle.recognition.splits import make_split
 
 log = logging.getLogger("pose_recognition_results")
@@ -94,6 +96,9 @@ def main() -> None:
     ap.add_argument("--residuals", action=argparse.BooleanOptionalAction, default=True,
                     help="also the residual noise (the estimator's errors on set A's videos, from --poses-dir)")
     ap.add_argument("--residual-k", type=int, default=3, help="residual noise: calibration frames drawn from")
+    ap.add_argument("--residual-gate", type=float, default=0.99,
+                    help="also the gated residual noise: this quantile of the validation performers' true poses' "
+                         "distances to the calibration poses is the gate (0: no gated candidate)")
     ap.add_argument("--noises", nargs="*", help="only these noises (default: all)")
     ap.add_argument("--tag", default="", help="suffix of the output names (e.g. _cmuwalks)")
     ap.add_argument("--model-out", type=Path, help="also save the chosen pose recognizer (a recognizer model file)")
@@ -117,8 +122,19 @@ def main() -> None:
     # validation scores, or the choice would favour it)
     bank_ids = list(split.vocab)
     if a.residuals and all((a.poses_dir / f"{i}.poses.json").exists() for i in bank_ids):
-        noises["residuals"] = residual_noise(ds, a.poses_dir, bank_ids, k=a.residual_k)
-        log.info("residual noise: %s", noises["residuals"].to_dict())
+        bank = noises["residuals"] = residual_noise(ds, a.poses_dir, bank_ids, k=a.residual_k)
+        log.info("residual noise: %s", bank.to_dict())
+        if a.residual_gate:
+            # gated: poses further from every calibration pose than the validation performers' true poses
+            # are (their --residual-gate quantile) take the calibrated Gaussian noise instead
+            from vidstyle.evaluation.poserecognition import true_keypoints
+
+            d = np.concatenate([bank.distances(true_keypoints(ds, i)) for i in split.val])
+            gate = float(np.nanquantile(d, a.residual_gate))
+            noises["residuals_gated"] = ResidualNoise(bank.keys, bank.residuals, k=bank.k, max_distance=gate,
+                                                      fallback=noises["calibrated"],
+                                                      extra={**bank.extra, "gate_quantile": a.residual_gate})
+            log.info("gated residual noise: %s", noises["residuals_gated"].to_dict())
     elif a.residuals:
         log.warning("no residual noise: %s lacks poses of set A's videos", a.poses_dir)
 
@@ -181,7 +197,7 @@ def main() -> None:
             r["score"] = (r["smoothed"] + r["real_motion_val"]) / 2
         else:
             r["score"] = r["smoothed"]
-    simpler = {"default": 0, "calibrated": 1, "residuals": 2}
+    simpler = {"default": 0, "calibrated": 1, "residuals": 2, "residuals_gated": 3}
 
     def key(r):
         n_rec = 1 if r["weight_pose"] in (0.0, 1.0) else 2

@@ -71,6 +71,33 @@ def test_missed_frames_are_missing_and_reproducible_draws():
     assert np.all(np.isnan(out[2, 4])) and np.all(out[2, 3] == y[2, 3])
 
 
+def test_poses_the_calibration_never_saw_take_the_fallback_noise():
+    """max_distance: a frame further than it from every calibration pose is corrupted by the fallback (here
+    none: left as it is; or a KeypointNoise), a frame near one takes its residual; distances() is the
+    nearest-key distance."""
+    from vidstyle.recognition.posetraining import KeypointNoise
+
+    rng = np.random.default_rng(4)
+    a = _pose(rng)
+    r = rng.normal(size=(1, 15, 2))
+    far_pose = _pose(rng)  # another random pose: far from a in key space
+    rn = ResidualNoise.from_tracks([a[None]], [a[None] + r * 40.0], k=1, mirror=False, max_distance=0.5)
+    track = np.stack([a, far_pose, a + 0.5])
+    d = rn.distances(track)
+    assert d[0] == pytest.approx(0.0, abs=1e-9) and d[1] > 0.5 and d[2] < 0.5
+    out = rn.apply(track, np.random.default_rng(0))
+    np.testing.assert_allclose(out[[0, 2]], track[[0, 2]] + r[0] * 40.0)
+    np.testing.assert_array_equal(out[1], track[1])
+    gated = ResidualNoise(rn.keys, rn.residuals, k=1, max_distance=0.5,
+                          fallback=KeypointNoise(sigma=0.1, outlier_rate=0.0, dropout_rate=0.0))
+    out = gated.apply(track, np.random.default_rng(0))
+    assert not np.allclose(out[1], track[1]) and np.abs(out[1] - track[1]).max() < 40.0  # ~0.1 torso noise
+    np.testing.assert_allclose(out[[0, 2]], track[[0, 2]] + r[0] * 40.0)
+    assert gated.to_dict()["max_distance"] == 0.5 and gated.to_dict()["fallback"]["sigma"] == 0.1
+    with pytest.raises(ParameterError):
+        ResidualNoise(rn.keys, rn.residuals, max_distance=-1.0)
+
+
 def test_bad_banks_are_refused():
     with pytest.raises(ParameterError):
         ResidualNoise(np.zeros((0, 28)), np.zeros((0, 15, 2)))

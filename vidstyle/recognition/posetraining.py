@@ -167,12 +167,16 @@ class ResidualNoise:
     wrong side when the legs cross, is missed and swapped in the training tracks in the same poses, which
     Gaussian noise (:class:`KeypointNoise`) cannot imitate. With ``mirror`` the bank also holds the
     left-right mirror image of every calibration frame (its key and residual mirrored), so both stances
-    are covered.
+    are covered. A frame whose nearest calibration pose is further than ``max_distance`` (key units: torso
+    lengths over 28 coordinates) is a pose the calibration never saw; it takes the ``fallback`` noise instead
+    (None: no corruption), so the estimator's errors on fighting poses are not pasted onto, say, a walk.
     """
 
     keys: np.ndarray
     residuals: np.ndarray
     k: int = 3
+    max_distance: float | None = None
+    fallback: KeypointNoise | None = None
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -187,6 +191,8 @@ class ResidualNoise:
         if int(self.k) < 1:
             raise ParameterError("k", f"must be >= 1, got {self.k}")
         self.k = int(min(self.k, len(self.keys)))
+        if self.max_distance is not None and not (np.isfinite(self.max_distance) and self.max_distance > 0):
+            raise ParameterError("max_distance", f"must be a positive number or None, got {self.max_distance}")
         self._sq = np.einsum("ij,ij->i", self.keys, self.keys)
 
     def nearest(self, q: np.ndarray, chunk: int = 1024) -> np.ndarray:
@@ -211,7 +217,8 @@ class ResidualNoise:
 
     @classmethod
     def from_tracks(cls, trues: Sequence[np.ndarray], ests: Sequence[np.ndarray], k: int = 3, mirror: bool = True,
-                    videos: Sequence[str] = ()) -> ResidualNoise:
+                    videos: Sequence[str] = (), max_distance: float | None = None,
+                    fallback: KeypointNoise | None = None) -> ResidualNoise:
         """The bank of calibration pairs: ``trues[i]`` and ``ests[i]`` (F, 15, 2) pixel keypoints of the same
         frames (an estimated frame with any NaN keypoint is a frame the estimator missed; a true frame with a
         NaN is skipped)."""
@@ -236,7 +243,7 @@ class ResidualNoise:
         if not keys or sum(len(x) for x in keys) == 0:
             raise ParameterError("residual noise", "no calibration frame with a complete true pose")
         n_est = sum(len(x) for x in keys) // (2 if mirror else 1)
-        return cls(np.concatenate(keys), np.concatenate(res), k=k,
+        return cls(np.concatenate(keys), np.concatenate(res), k=k, max_distance=max_distance, fallback=fallback,
                    extra={"calibration_frames": int(n_est), "mirror": bool(mirror),
                           "calibrated_on_videos": len(videos) or len(trues)})
 
@@ -252,11 +259,32 @@ class ResidualNoise:
             return xy
         idx = self.nearest(q[ok])
         pick = idx[np.arange(len(ok)), rng.integers(0, self.k, len(ok))]
+        if self.max_distance is not None:
+            nearest = np.sqrt(np.maximum(((self.keys[idx] - q[ok][:, None, :]) ** 2).sum(-1).min(1), 0.0))
+            far = nearest > self.max_distance
+            if far.any():
+                other = self.fallback.apply(xy, rng) if self.fallback is not None else xy.copy()
+                xy[ok[far]] = other[ok[far]]
+            ok, pick = ok[~far], pick[~far]
         xy[ok] += self.residuals[pick] * torso
         return xy
 
+    def distances(self, xy: np.ndarray) -> np.ndarray:
+        """(F,) distance of each frame's key to its nearest calibration key (NaN where a keypoint is unknown)."""
+        q, torso = self._normalise(np.asarray(xy, dtype=np.float64))
+        out = np.full(len(q), np.nan)
+        ok = np.flatnonzero(np.all(np.isfinite(q), axis=1))
+        if ok.size and np.isfinite(torso) and torso > 0:
+            idx = self.nearest(q[ok])
+            out[ok] = np.sqrt(np.maximum(((self.keys[idx] - q[ok][:, None, :]) ** 2).sum(-1).min(1), 0.0))
+        return out
+
     def to_dict(self) -> dict:
-        return {"kind": "residuals", "k": self.k, **self.extra}
+        d = {"kind": "residuals", "k": self.k, **self.extra}
+        if self.max_distance is not None:
+            d.update(max_distance=float(self.max_distance),
+                     fallback=self.fallback.to_dict() if self.fallback is not None else None)
+        return d
 
 
 def virtual_views(motions: Sequence[LabelledMotion], n_views: int, rng: np.random.Generator | int,
