@@ -42,13 +42,12 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vidstyle.errors import InputError
 from vidstyle.evaluation.poserecognition import (
+    gated_residual_noise,
     measure_pose_error,
     noise_from_error,
     predict_pose_set,
@@ -60,7 +59,7 @@ from vidstyle.formats.dataset import read_dataset
 from vidstyle.formats.metrics import write_metrics
 from vidstyle.formats.validation import POSE_RECOGNITION, validation_header, write_validation
 from vidstyle.recognition.pipeline import load_recognizer
-from vidstyle.recognition.posetraining import KeypointNoise, ResidualNoise
+from vidstyle.recognition.posetraining import KeypointNoise
 from vidstyle.recognition.splits import make_split
 
 log = logging.getLogger("pose_recognition_results")
@@ -127,18 +126,16 @@ def main() -> None:
         if a.residual_gate:
             # gated: poses further from every calibration pose than the validation performers' true poses
             # are (their --residual-gate quantile) take the calibrated Gaussian noise instead
-            from vidstyle.evaluation.poserecognition import true_keypoints
-
-            d = np.concatenate([bank.distances(true_keypoints(ds, i)) for i in split.val])
-            gate = float(np.nanquantile(d, a.residual_gate))
-            noises["residuals_gated"] = ResidualNoise(bank.keys, bank.residuals, k=bank.k, max_distance=gate,
-                                                      fallback=noises["calibrated"],
-                                                      extra={**bank.extra, "gate_quantile": a.residual_gate})
+            noises["residuals_gated"] = gated_residual_noise(bank, ds, list(split.val), a.residual_gate,
+                                                             noises["calibrated"])
             log.info("gated residual noise: %s", noises["residuals_gated"].to_dict())
     elif a.residuals:
         log.warning("no residual noise: %s lacks poses of set A's videos", a.poses_dir)
 
     if a.noises:
+        unknown = sorted(set(a.noises) - set(noises))
+        if unknown:
+            raise SystemExit(f"--noises: {', '.join(unknown)} not among the candidates {', '.join(noises)}")
         noises = {k: v for k, v in noises.items() if k in a.noises}
     # 2. one recognizer per noise
     extra = []

@@ -80,4 +80,4 @@ def test_the_fusion_default_is_the_validated_choice():
     for d in docs:
         assert max(r["score"] for r in d["rows"]) == d["chosen"]["score"]
     best = max(docs, key=lambda d: d["chosen"]["score"])
-    assert D.FUSION_WEIGHT == best["chosen"]["weight_pose"] and best["extra_clips"]
+    assert D.FUSION_WEIGHT == best["chosen"]["weight_pose"]

@@ -139,11 +139,20 @@ def test_train_recognizer_noise_poses_calibrates_on_the_training_videos_only(tmp
     out = tmp_path / "m.joblib"
     args = ["train-recognizer", "--features", "pose", "--dataset", str(ds_dir / "dataset.json"), "--views", "1",
             "--out", str(out), "--jobs", "1"]
-    assert main([*args, "--noise-poses", str(poses), "--residual-k", "2"]) == 0
+    assert main([*args, "--noise-poses", str(poses), "--residual-k", "2", "--residual-gate", "0"]) == 0
     _, header = read_recognizer_model(out)
     noise = header["training"]["noise"]
     assert noise["kind"] == "residuals" and noise["k"] == 2 and noise["calibration_frames"] == n_train
-    assert noise["calibrated_on_videos"] == len(sp.vocab) + len(sp.train)
+    assert noise["calibrated_on_videos"] == len(sp.vocab) + len(sp.train) and "max_distance" not in noise
+    # gated (the default): the gate a quantile of the validation performer's distances, the fallback the
+    # Gaussian of the pose files' error (a 3 px shift: every keypoint an inlier of that size)
+    assert main([*args, "--noise-poses", str(poses)]) == 0
+    noise = read_recognizer_model(out)[1]["training"]["noise"]
+    assert noise["gate_quantile"] == 0.99 and noise["max_distance"] > 0
+    torso = np.median([np.linalg.norm(true_keypoints(ds, i)[:, 1] - true_keypoints(ds, i)[:, 2], axis=-1).mean()
+                       for i in list(sp.vocab) + list(sp.train)])
+    assert noise["fallback"]["sigma"] == pytest.approx(3.0 / np.sqrt(2) / torso, rel=0.2)
+    assert noise["fallback"]["outlier_rate"] == 0.0
     # the bank's residuals are the shift, in torso lengths: right in the image, right in the mirror's x -> -x
     from vidstyle.evaluation.poserecognition import residual_noise
 

@@ -76,6 +76,7 @@ def train_recognizer(
     dropout_rate: float = number(0.02, "--dropout-rate", lo=0, hi=1, help="--features pose: share of frames dropped (performer not found), in runs of 4 frames on average."),
     noise_poses: Path | None = typer.Option(None, "--noise-poses", help="--features pose: corrupt the training keypoints with your pose estimator's own errors instead of Gaussian noise: a directory of <video id>.poses.json (vidstyle pose --out-dir) of --dataset's videos; those of the training performers are compared with their true keypoints, and every training frame takes the error made on one of the --residual-k most similar poses (replaces --noise-sigma, --outlier-rate, --dropout-rate)."),
     residual_k: int = number(3, "--residual-k", lo=1, hi=100, help="--noise-poses: calibration frames each training frame's error is drawn from."),
+    residual_gate: float = number(0.99, "--residual-gate", lo=0, hi=1, help="--noise-poses: a training pose further from every calibration pose than this quantile of the validation performers' true poses are takes Gaussian noise of the size the pose files' errors have instead (0: no gate; 0.99 was chosen on validation, docs/results.md)."),
     clips: list[Path] = typer.Option(None, "--clips", help="--features pose: also (or instead of --dataset) train on these labelled mocap clips (BVH files or directories; any skeleton with the 15 keypoints' joints), labelled by --clip-labels or a <clip>.labels.json beside each."),
     clip_labels: list[Path] = typer.Option(None, "--clip-labels", help="--features pose: labels of --clips: a CSV file,label[,start,end] (BVH frame numbers, end exclusive), a demo labels JSON, or a CMU clips.csv. Unlabelled frames do not train."),
     out: Path = typer.Option(..., "--out", "-o", help="Output model .joblib."),
@@ -110,7 +111,7 @@ def train_recognizer(
     if features_kind == "pose":
         _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                     max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
-                    clips or [], clip_labels or [], noise_poses, residual_k)
+                    clips or [], clip_labels or [], noise_poses, residual_k, residual_gate)
         return
     if clips or clip_labels or noise_poses:
         raise InputError("--clips / --clip-labels / --noise-poses: only with --features pose (3D SIFT trains on videos)")
@@ -139,7 +140,7 @@ def train_recognizer(
 
 def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                 max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
-                clips, clip_labels, noise_poses=None, residual_k=3):
+                clips, clip_labels, noise_poses=None, residual_k=3, residual_gate=0.0):
     from ..formats.dataset import read_dataset
     from ..recognition.poserecognizer import save_pose_model
     from ..recognition.posetraining import KeypointNoise, clip_motions, train_from_dataset
@@ -157,7 +158,7 @@ def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate
               "mirror": mirror, "n_jobs": jobs}
     ds = read_dataset(dataset) if dataset is not None else None
     if noise_poses is not None:
-        noise = _residual_noise(ds, noise_poses, split, seed, test_view, residual_k)
+        noise = _residual_noise(ds, noise_poses, split, seed, test_view, residual_k, residual_gate)
     extra_motions = clip_motions(clips, clip_labels, ds.fps if ds else D.FPS,
                                  classes=(ds.classes or None) if ds else None) if clips else []
     rec, extra = train_from_dataset(ds, split, seed, test_view, views, noise, params, extra_motions=extra_motions)
@@ -165,10 +166,17 @@ def _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate
     log.info("wrote %s (pose recognizer, %d classes): %s", out, len(rec.classes_), header["summary"])
 
 
-def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str | None, k: int):
+def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str | None, k: int, gate: float = 0.0):
     """--noise-poses: the ResidualNoise of the pose files in ``poses_dir`` of the split's training
-    performers' videos (sets A and B: the ones the recognizer trains on; never validation or test videos)."""
-    from ..evaluation.poserecognition import residual_noise
+    performers' videos (sets A and B: the ones the recognizer trains on; never validation or test videos);
+    with ``gate`` > 0, gated at that quantile of the validation performers' true poses' distances, the
+    fallback a Gaussian of the training pose files' error."""
+    from ..evaluation.poserecognition import (
+        gated_residual_noise,
+        measure_pose_error,
+        noise_from_error,
+        residual_noise,
+    )
     from ..recognition.splits import make_split
 
     if not Path(poses_dir).is_dir():
@@ -179,6 +187,11 @@ def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str |
         raise InputError(f"{poses_dir}: no <video id>.poses.json of the training videos of --dataset's split "
                          f"(e.g. {(list(sp.vocab) + list(sp.train))[0]}.poses.json)")
     noise = residual_noise(ds, Path(poses_dir), ids, k=k)
+    if gate > 0:
+        if not sp.val:
+            raise InputError("--residual-gate: the split has no validation performers to set the gate (use 0)")
+        fallback = noise_from_error(measure_pose_error(ds, Path(poses_dir), ids))
+        noise = gated_residual_noise(noise, ds, list(sp.val), gate, fallback)
     log.info("training noise: the pose errors of %d training videos (%s)", len(ids), noise.to_dict())
     return noise
 

@@ -64,20 +64,13 @@ def true_keypoints(dataset: Dataset, video_id: str) -> np.ndarray:
 def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str]) -> dict[str, Any]:
     """:func:`pose_error` of the pose files ``<poses_dir>/<id>.poses.json`` against the true keypoints of
     the dataset videos ``ids``."""
-    from ..formats.poses import read_poses
-
-    trues, ests = [], []
-    for i in ids:
-        true = true_keypoints(dataset, i)
-        trues.append(true)
-        ests.append(track_from_poses(read_poses(poses_dir / f"{i}.poses.json"), dataset.fps, len(true)).xy)
+    trues, ests = pose_pairs(dataset, poses_dir, ids)
     return {"videos": list(ids), **pose_error(trues, ests)}
 
 
-def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3) -> ResidualNoise:
-    """The :class:`~vidstyle.recognition.posetraining.ResidualNoise` of the pose files
-    ``<poses_dir>/<id>.poses.json`` against the true keypoints of the dataset videos ``ids`` (calibration
-    videos: never the ones the recognizer is scored on)."""
+def pose_pairs(dataset: Dataset, poses_dir: Path, ids: list[str]) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The true keypoints (:func:`true_keypoints`) and the pose file ``<poses_dir>/<id>.poses.json``'s
+    keypoints (F, 15, 2; NaN where it has none) of each dataset video of ``ids``, on the same frames."""
     from ..formats.poses import read_poses
 
     trues, ests = [], []
@@ -85,7 +78,26 @@ def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3
         true = true_keypoints(dataset, i)
         trues.append(true)
         ests.append(track_from_poses(read_poses(Path(poses_dir) / f"{i}.poses.json"), dataset.fps, len(true)).xy)
+    return trues, ests
+
+
+def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3) -> ResidualNoise:
+    """The :class:`~vidstyle.recognition.posetraining.ResidualNoise` of the pose files
+    ``<poses_dir>/<id>.poses.json`` against the true keypoints of the dataset videos ``ids`` (calibration
+    videos: never the ones the recognizer is scored on)."""
+    trues, ests = pose_pairs(dataset, poses_dir, ids)
     return ResidualNoise.from_tracks(trues, ests, k=k, videos=list(ids))
+
+
+def gated_residual_noise(bank: ResidualNoise, dataset: Dataset, reach_ids: list[str], quantile: float,
+                         fallback: KeypointNoise) -> ResidualNoise:
+    """``bank`` gated by its reach: a training pose further from every calibration pose than the
+    ``quantile`` of the distances of the true poses of the dataset videos ``reach_ids`` (poses the
+    estimator is used on: not the calibration videos) takes ``fallback`` instead."""
+    d = np.concatenate([bank.distances(true_keypoints(dataset, i)) for i in reach_ids])
+    gate = float(np.nanquantile(d, quantile))
+    return ResidualNoise(bank.keys, bank.residuals, k=bank.k, max_distance=gate, fallback=fallback,
+                         extra={**bank.extra, "gate_quantile": quantile})
 
 
 def pose_error(trues: list[np.ndarray], ests: list[np.ndarray]) -> dict[str, Any]:

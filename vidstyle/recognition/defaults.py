@@ -39,9 +39,9 @@ MIRROR = True                  # also train on mirror images (scovanner2007 desc
 # ------------------------------------------------------------------ late fusion with the pose recognizer
 # the weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model): chosen by
 # scripts/pose_recognition_results.py on seed 0's validation performers and the real-motion validation clips
-# (pictorial-structures 2D, training noise calibrated to it); of the two runs, with and without CMU walks
-# labelled Step in the pose recognizer's training, validation preferred the walks
-# (pipelines/kickboxing/validation/pose_recognition_cmuwalks_seed0.json)
+# (pictorial-structures 2D; the training noise its own errors, gated: --noise-poses); the two runs, with and
+# without CMU walks labelled Step in the pose recognizer's training, chose the same weight, and the one
+# without scored higher (pipelines/kickboxing/validation/pose_recognition{,_cmuwalks}_seed0.json)
 FUSION_WEIGHT = 0.5
 
 # ------------------------------------------------------------------ runs

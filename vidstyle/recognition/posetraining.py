@@ -260,8 +260,7 @@ class ResidualNoise:
         idx = self.nearest(q[ok])
         pick = idx[np.arange(len(ok)), rng.integers(0, self.k, len(ok))]
         if self.max_distance is not None:
-            nearest = np.sqrt(np.maximum(((self.keys[idx] - q[ok][:, None, :]) ** 2).sum(-1).min(1), 0.0))
-            far = nearest > self.max_distance
+            far = self._nearest_distance(q[ok], idx) > self.max_distance
             if far.any():
                 other = self.fallback.apply(xy, rng) if self.fallback is not None else xy.copy()
                 xy[ok[far]] = other[ok[far]]
@@ -275,9 +274,12 @@ class ResidualNoise:
         out = np.full(len(q), np.nan)
         ok = np.flatnonzero(np.all(np.isfinite(q), axis=1))
         if ok.size and np.isfinite(torso) and torso > 0:
-            idx = self.nearest(q[ok])
-            out[ok] = np.sqrt(np.maximum(((self.keys[idx] - q[ok][:, None, :]) ** 2).sum(-1).min(1), 0.0))
+            out[ok] = self._nearest_distance(q[ok], self.nearest(q[ok]))
         return out
+
+    def _nearest_distance(self, q: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(Q,) distance of each row of ``q`` to the nearest of its candidate keys ``idx`` (Q, k)."""
+        return np.sqrt(((self.keys[idx] - q[:, None, :]) ** 2).sum(-1).min(1))
 
     def to_dict(self) -> dict:
         d = {"kind": "residuals", "k": self.k, **self.extra}
