@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -31,7 +30,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 
 import numpy as np
-from _benchutil import machine, write_results
+from _benchutil import machine, timeit, write_results
 
 GOAL_SHARE = 0.10
 
@@ -50,16 +49,6 @@ def _motion(params, index: int, take: int):
     lm = LabelledMotion(pts[: len(labels)], labels, float(params.fps), circular_median(t.motion.facing_angles()),
                         f"{perf.id}_{take}")
     return lm, t.motion
-
-
-def _median_s(fn, runs: int) -> tuple[float, list[float]]:
-    fn()
-    ts = []
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts), ts
 
 
 def main() -> int:
@@ -103,8 +92,8 @@ def main() -> int:
         test, test_motion = _motion(params, 4, perf_take)
         cam = camera_for(test, azimuth_deg=20.0, elevation_deg=10.0, distance=3.5, vfov_deg=40.0)
         track = PoseTrack(noise.apply(project_keypoints(test.points, cam), np.random.default_rng(1)), float(params.fps))
-        rec_s, rec_runs = _median_s(lambda: rec.predict_video(track), args.runs)
-        rec_ms = 1000.0 * rec_s / track.n_frames
+        rec_t = timeit(lambda: rec.predict_video(track), args.runs)
+        rec_ms = 1000.0 * rec_t["median_s"] / track.n_frames
 
         model = load_model(Path(__file__).resolve().parents[1] / "vidstyle/pose/weights/ps_cnn.joblib")[0]
         motion = test_motion.resample(float(params.fps))
@@ -113,8 +102,8 @@ def main() -> int:
         rcam = Camera.for_view(clip, view=20.0, size=(160, 120))
         frames, _ = render_motion(clip, rcam, fps=float(params.fps), appearance=Appearance.random(2),
                                   background="texture")
-        ps_s, ps_runs = _median_s(lambda: [model.estimate(f) for f in frames], args.runs)
-        ps_ms = 1000.0 * ps_s / len(frames)
+        ps_t = timeit(lambda: [model.estimate(f) for f in frames], args.runs)
+        ps_ms = 1000.0 * ps_t["median_s"] / len(frames)
     share = rec_ms / ps_ms
     n_sv = int(sum(getattr(c, "n_support_", np.zeros(1)).sum() for c in getattr(rec, "estimators_", []) or []))
     print(f"pose recognizer: {rec_ms:.3f} ms/frame ({1000.0 / rec_ms:.0f} frames/s) over {track.n_frames} frames; "
@@ -122,11 +111,11 @@ def main() -> int:
           f"(goal <= {100 * GOAL_SHARE:.0f} %); trained in {train_s:.0f} s on {sum(len(t.xy) for t in tracks)} frames")
     payload = {"machine": machine(), "runs": args.runs, "goal_share": GOAL_SHARE,
                "recognizer": {"ms_per_frame": rec_ms, "frames_per_s": 1000.0 / rec_ms, "frames": track.n_frames,
-                              "runs_s": rec_runs, "train_s": train_s, "train_frames": int(sum(len(t.xy) for t in tracks)),
+                              "timing": rec_t, "train_s": train_s, "train_frames": int(sum(len(t.xy) for t in tracks)),
                               "classes": [str(c) for c in rec.classes_], "support_vectors": n_sv or None,
                               "params": {"C": 10.0, "max_frames_per_class": 1500}},
                "pose_stage": {"backend": "ps (shipped cnn model)", "size": [160, 120], "ms_per_frame": ps_ms,
-                              "frames": len(frames), "runs_s": ps_runs},
+                              "frames": len(frames), "timing": ps_t},
                "share": share}
     if args.out is None:
         print(f"wrote {write_results('pose_recognition', payload)}")
