@@ -27,20 +27,17 @@ from pathlib import Path
 
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 ROOT = Path(__file__).resolve().parents[1]
+from _actionstyle_args import pose_run_arguments
+
 log = logging.getLogger("validate_action_style_poses")
 BACKENDS = ("ps", "blazepose")
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--run", type=Path, default=ROOT / "pipelines" / "kickboxing" / "out",
-                    help="The pipeline's run directory (dataset/, recognized/).")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--frames", type=int, default=200, help="First frames of each take (params.yaml reconstruct.frames).")
-    ap.add_argument("--poses", type=Path, default=None, help="Keep the pose files here (default: a temporary directory).")
-    ap.add_argument("--out", type=Path, default=ROOT / "pipelines" / "kickboxing" / "validation" / "action_style_poses.json")
+    pose_run_arguments(ap, "action_style_poses.json")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(message)s", stream=sys.stderr)
     log.setLevel(logging.INFO)
