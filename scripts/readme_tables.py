@@ -462,7 +462,7 @@ def people_table(items, root: Path) -> list[str]:
 
 
 _REC_SOURCES = {"true2d": "true 2D", "ps": "pictorial structures", "blazepose": "BlazePose",
-                "noisy": "true 2D + 5 % noise"}
+                "noisy": "true 2D + 5 % noise", "truth": "3D truth"}
 
 
 def _mm(x) -> str:
@@ -514,6 +514,12 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
             lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
                       f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
                       f"library):", "", *_REC_HEAD, *_reconstruct_rows(real["runs"], "real pose2sim"), ""]
+        if any(r["method"] == "library-bound" for part in (cmu, real) if part for r in part["runs"]):
+            lines += ["*library-bound*: per frame, the library frame nearest the 3D truth after a similarity "
+                      "alignment (`vidstyle.reconstruct.metrics.library_bound`): the PA-MPJPE floor that the "
+                      "library's coverage sets for one library pose per frame. On the real take it includes "
+                      "the gap between the reference's keypoints (BlazePose's: pelvis and neck are the midpoints "
+                      "of the hips and shoulders) and the library's joints.", ""]
     return lines[:-1] if lines else []
 
 

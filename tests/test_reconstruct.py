@@ -305,3 +305,19 @@ def test_estimated_focal_length_finds_a_wide_lens_close_up(library):
     pts, uv, az = filmed(clip, yaw=2.5, place=np.array([3.0, 70.0]))
     r.reconstruct(Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H)))
     assert r.focal_estimated_ == pytest.approx(C.focal_from_fov(W, H, 60.0), rel=0.1)
+
+
+def test_library_bound_row_is_zero_for_the_librarys_own_motion_and_not_for_other_bodies(library):
+    from vidstyle.evaluation.reconstruct import library_bound_row
+
+    clip = sorted(library.glob("*hook*.bvh"))[0]
+    pts, uv, az = filmed(clip, yaw=1.0, place=np.array([0.0, 60.0]))
+    rec_base = Reconstructor(foot_lock=False).fit([clip])
+    own = library_bound_row("own", rec_base.library_.points_, pts * 56.44)
+    # every filmed frame is (up to facing and place) an indexed frame: the library at the filmed rate
+    assert own["method"] == "library-bound" and own["frames"] == len(pts)
+    assert own["pa_mpjpe_mm"] < 1e-3 and own["mpjpe_root_relative_mm"] is None  # float32 index
+    others = sorted(p for p in library.glob("*.bvh") if p.name.split("_")[0] != clip.name.split("_")[0])
+    base = Reconstructor(foot_lock=False).fit(others)
+    row = library_bound_row("others", base.library_.points_, pts * 56.44)
+    assert row["pa_mpjpe_mm"] > own["pa_mpjpe_mm"] + 5.0  # other bodies: never exactly the hook

@@ -273,3 +273,22 @@ def test_bad_arguments():
         M.foot_contacts(x, 0.0)
     with pytest.raises(ValueError, match="contacts"):
         M.foot_skate(x, contacts=np.ones((4, 2), dtype=bool))
+
+
+def test_library_bound_against_brute_force_and_exact_copies():
+    rng = np.random.default_rng(21)
+    library = _sequence(F=40, seed=22) / 56.44  # another unit: the similarity absorbs it
+    library[5, 3] = np.nan  # a broken library frame is never chosen
+    true = _sequence(F=6, seed=23)
+    true[2] = 2.0 * library[17] @ Rotation.random(random_state=rng).as_matrix().T + [300.0, 0.0, -50.0]
+    true[4, 0] = np.nan
+    got = M.library_bound(library, true, chunk=7)  # chunks that do not divide the library
+    assert got[2] == pytest.approx(0.0, abs=1e-6)  # an exact (similar) copy of library frame 17
+    assert np.isnan(got[4])
+    ok = np.isfinite(library).all(axis=(1, 2))
+    for f in (0, 1, 3, 5):
+        brute = min(M.pa_mpjpe(library[j][None], true[f][None]) for j in np.flatnonzero(ok))
+        assert got[f] == pytest.approx(brute, rel=1e-9)
+        assert got[f] > 1.0
+    with pytest.raises(ValueError):
+        M.library_bound(library[:, :14], true)

@@ -19,6 +19,7 @@ frame, handed to training frames of similar poses.
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from dataclasses import dataclass
@@ -45,17 +46,34 @@ from .recognition import score_videos
 log = logging.getLogger(__name__)
 
 
-def true_keypoints(dataset: Dataset, video_id: str) -> np.ndarray:
-    """(F, 15, 2) true 2D keypoints of a dataset video (see the module docstring)."""
+@functools.lru_cache(maxsize=32)
+def _take_keypoints(path: str, mtime_ns: int, size: int) -> tuple[np.ndarray, float]:
+    """(every frame's 3D keypoints, read-only; fps) of a take's BVH. The views of one take share it, so
+    it is read once per take (the cache key changes when the file does)."""
     from ..mocap import read_bvh
     from ..mocap.keypoints import keypoint_positions
+
+    motion = read_bvh(path)
+    pts = keypoint_positions(motion)
+    pts.setflags(write=False)
+    return pts, float(motion.fps)
+
+
+def true_keypoints(dataset: Dataset, video_id: str) -> np.ndarray:
+    """(F, 15, 2) true 2D keypoints of a dataset video (see the module docstring)."""
     from ..render.camera import Camera
 
     v = dataset.by_id()[video_id]
     truth = np.load(dataset.root / v.raw["truth"])
-    motion = read_bvh(dataset.root / v.raw["bvh"])
-    idx = np.clip(np.round(truth["source_time"] * motion.fps).astype(int), 0, motion.n_frames - 1)
-    pts = keypoint_positions(motion)[idx]
+    bvh = dataset.root / v.raw["bvh"]
+    try:
+        st = bvh.stat()
+    except OSError:  # read_bvh names the file and the problem
+        take, fps = _take_keypoints.__wrapped__(str(bvh), 0, 0)
+    else:
+        take, fps = _take_keypoints(str(bvh), st.st_mtime_ns, st.st_size)
+    idx = np.clip(np.round(truth["source_time"] * fps).astype(int), 0, len(take) - 1)
+    pts = take[idx]
     cam = Camera(truth["K"], truth["R"], truth["t"], size=tuple(int(s) for s in truth["size"]))
     uv, _ = cam.project(pts)
     return np.asarray(uv, dtype=np.float64)

@@ -33,6 +33,8 @@ Metrics (all means are over valid frames and all 15 keypoints unless said otherw
   ``height_tol`` of the sequence's floor" (height only: a sliding foot is fast, so a speed criterion
   would hide exactly what is measured); alternatively the caller passes contact flags, e.g. the
   truth's :func:`foot_contacts`, so that the prediction is scored where the performer's foot was down.
+- **Library bound** (:func:`library_bound`): per frame, the PA-MPJPE of the library frame nearest the
+  truth after that alignment, the floor of what one library pose per frame can reach.
 - **Floor** of a sequence: the ``floor_percentile`` (default 5) percentile of the up-coordinate of both
   ankles over the valid frames (the ankle keypoint sits above the sole, so this is the height of a
   planted ankle, not of the ground).
@@ -213,6 +215,34 @@ def pa_mpjpe(pred: np.ndarray, true: np.ndarray) -> float:
     p, t = _pair(pred, true)
     ok = valid_frames(p, t)
     return _mean_error(procrustes_align(p, t), t, ok)
+
+
+def library_bound(library: np.ndarray, true: np.ndarray, chunk: int = 8192) -> np.ndarray:
+    """(F,) per frame of ``true`` (F, N, 3), the smallest PA-MPJPE (:func:`pa_mpjpe`'s per-frame
+    similarity alignment, ``true``'s units) any frame of ``library`` (L, N, 3; any unit, any facing)
+    reaches: what a method that outputs one library pose per frame could reach at best, so how much of a
+    reconstruction's error the library's coverage alone explains. NaN for a frame of ``true`` with a
+    non-finite value; library frames with one are never chosen. Brute force, ``chunk`` library frames
+    at a time (L x F similarity fits)."""
+    lib = np.asarray(library, dtype=np.float64)
+    t = np.asarray(true, dtype=np.float64)
+    if lib.ndim != 3 or t.ndim != 3 or lib.shape[1:] != t.shape[1:] or t.shape[-1] != 3:
+        raise ValueError(f"library (L, N, 3) and true (F, N, 3) must share N, got {lib.shape} and {t.shape}")
+    if chunk < 1:
+        raise ValueError(f"chunk must be >= 1, got {chunk}")
+    lib = lib[np.isfinite(lib).all(axis=(1, 2))]
+    out = np.full(len(t), np.nan)
+    if not len(lib):
+        return out
+    for f in np.flatnonzero(np.isfinite(t).all(axis=(1, 2))):
+        best = np.inf
+        for a in range(0, len(lib), chunk):
+            part = lib[a:a + chunk]
+            target = np.broadcast_to(t[f], part.shape)
+            err = np.linalg.norm(procrustes_align(part, target) - target, axis=-1).mean(axis=1)
+            best = min(best, float(err.min()))
+        out[f] = best
+    return out
 
 
 def _second_differences(points: np.ndarray) -> np.ndarray:
