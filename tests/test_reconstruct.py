@@ -311,7 +311,7 @@ def test_library_bound_row_is_zero_for_the_librarys_own_motion_and_not_for_other
     from vidstyle.evaluation.reconstruct import library_bound_row
 
     clip = sorted(library.glob("*hook*.bvh"))[0]
-    pts, uv, az = filmed(clip, yaw=1.0, place=np.array([0.0, 60.0]))
+    pts, _uv, _az = filmed(clip, yaw=1.0, place=np.array([0.0, 60.0]))
     rec_base = Reconstructor(foot_lock=False).fit([clip])
     own = library_bound_row("own", rec_base.library_.points_, pts * 56.44)
     # every filmed frame is (up to facing and place) an indexed frame: the library at the filmed rate
