@@ -513,13 +513,14 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
         if real:
             lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
                       f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
-                      f"library):", "", *_REC_HEAD, *_reconstruct_rows(real["runs"], "real pose2sim"), ""]
+                      f"library; the reconstructions' pelvis and neck are the midpoints of their hips and shoulders, "
+                      f"as the reference's BlazePose keypoints define them):", "", *_REC_HEAD, *_reconstruct_rows(real["runs"], "real pose2sim"), ""]
         if any(r["method"] == "library-bound" for part in (cmu, real) if part for r in part["runs"]):
             lines += ["*library-bound*: per frame, the library frame nearest the 3D truth after a similarity "
                       "alignment (`vidstyle.reconstruct.metrics.library_bound`): the PA-MPJPE floor that the "
                       "library's coverage sets for one library pose per frame. On the real take it includes "
-                      "the gap between the reference's keypoints (BlazePose's: pelvis and neck are the midpoints "
-                      "of the hips and shoulders) and the library's joints.", ""]
+                      "what still differs between BlazePose's keypoints (hips, shoulders, the head top "
+                      "extrapolated from the face) and the library's joints.", ""]
     return lines[:-1] if lines else []
 
 

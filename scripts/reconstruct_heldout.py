@@ -15,9 +15,9 @@ pose2sim take reconstructed from each calibrated view alone against the 3D trian
   of them is the pose2sim performer); BlazePose 2D of each view (cached as scripts/real_reference.py
   caches them), against the triangulated reference; BlazePose's own 3D world landmarks scored alike.
 
-    python scripts/reconstruct_heldout.py [--skip-real] [--skip-cmu]
+    python scripts/reconstruct_heldout.py [--skip-real] [--skip-cmu] [--skip-cmu-rendered]
 
-Writes ``--out`` (default ``pipelines/kickboxing/results/reconstruct_heldout.json``); logs on stderr.
+A skipped part keeps what ``--out`` already holds for the same seed. Writes ``--out`` (default ``pipelines/kickboxing/results/reconstruct_heldout.json``); logs on stderr.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ os.environ.setdefault("GLOG_minloglevel", "2")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidstyle.errors import VidstyleError
-from vidstyle.formats.validation import RECONSTRUCT_HELDOUT, validation_header, write_validation
+from vidstyle.formats.validation import RECONSTRUCT_HELDOUT, read_validation, validation_header, write_validation
 
 log = logging.getLogger("reconstruct_heldout")
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,6 +64,14 @@ def main() -> int:
     from vidstyle.evaluation.reconstruct import evaluate_cmu_heldout, evaluate_real
 
     doc = {**validation_header(RECONSTRUCT_HELDOUT), "script": "scripts/reconstruct_heldout.py", "seed": args.seed}
+    if args.out.is_file():  # a skipped part keeps what the file holds (the same seed's)
+        old = read_validation(args.out, RECONSTRUCT_HELDOUT)
+        if old.get("seed") == args.seed:
+            for part, skipped in (("cmu", args.skip_cmu), ("cmu_rendered", args.skip_cmu_rendered),
+                                  ("real", args.skip_real)):
+                if skipped and part in old:
+                    doc[part] = old[part]
+                    log.info("%s: kept from %s", part, args.out)
     try:
         if not args.skip_cmu:
             doc["cmu"] = evaluate_cmu_heldout(CMU, LIBRARY_SUBJECTS, TEST_SUBJECTS, seed=args.seed, jobs=args.jobs)
