@@ -17,7 +17,8 @@ pose2sim take reconstructed from each calibrated view alone against the 3D trian
 
     python scripts/reconstruct_heldout.py [--skip-real] [--skip-cmu] [--skip-cmu-rendered]
 
-A skipped part keeps what ``--out`` already holds for the same seed. Writes ``--out`` (default ``pipelines/kickboxing/results/reconstruct_heldout.json``); logs on stderr.
+A skipped part keeps what ``--out`` already holds for the same seed. Writes ``--out`` (default
+``pipelines/kickboxing/results/reconstruct_heldout.json``); logs on stderr.
 """
 
 from __future__ import annotations
