@@ -323,12 +323,12 @@ def test_library_bound_row_is_zero_for_the_librarys_own_motion_and_not_for_other
     assert row["pa_mpjpe_mm"] > own["pa_mpjpe_mm"] + 5.0  # other bodies: never exactly the hook
 
 
-def test_midpoint_keypoints_redefine_pelvis_and_neck_only():
-    from vidstyle.evaluation.reconstruct import midpoint_keypoints
+def test_girdle_midpoints_redefine_pelvis_and_neck_only():
+    from vidstyle.augmg.index import girdle_midpoints
 
     rng = np.random.default_rng(3)
     pts = rng.normal(size=(4, 15, 3))
-    out = midpoint_keypoints(pts)
+    out = girdle_midpoints(pts)
     np.testing.assert_array_equal(out[:, KP["pelvis"]], (pts[:, KP["left_hip"]] + pts[:, KP["right_hip"]]) / 2)
     np.testing.assert_array_equal(out[:, KP["neck"]], (pts[:, KP["left_shoulder"]] + pts[:, KP["right_shoulder"]]) / 2)
     others = [i for i in range(15) if i not in (KP["pelvis"], KP["neck"])]

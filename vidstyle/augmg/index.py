@@ -240,12 +240,14 @@ def library_clips(paths, stride_fps: float | None = None) -> list[LibraryClip]:
     return out
 
 
-__all__ = ["KP", "LibraryClip", "PoseIndex", "clip_files", "coherent_ranking", "library_clips"]
+__all__ = ["KP", "LibraryClip", "PoseIndex", "clip_files", "coherent_ranking", "girdle_midpoints",
+           "library_clips"]
 
 
-def _girdle_midpoints(points: np.ndarray) -> np.ndarray:
+def girdle_midpoints(points: np.ndarray) -> np.ndarray:
     """Copy of keypoints (..., 15, d) with the neck and pelvis at the shoulder and hip midpoints (as
-    :func:`.projection.angle_features` compares them)."""
+    :func:`.projection.angle_features` compares them, and as BlazePose's mapping defines them: a mocap
+    skeleton's root and neck joints sit elsewhere, the CMU root about 10 cm above its hips' midpoint)."""
     p = np.array(points, dtype=np.float64, copy=True)
     p[..., KP["neck"], :] = 0.5 * (p[..., KP["left_shoulder"], :] + p[..., KP["right_shoulder"], :])
     p[..., KP["pelvis"], :] = 0.5 * (p[..., KP["left_hip"], :] + p[..., KP["right_hip"], :])
@@ -257,7 +259,7 @@ def bone_length_ratios(points3d: np.ndarray) -> np.ndarray:
     shoulder midpoint): the unforeshortened 2D length a bone has next to an upright torso."""
     from .keypoints import BONE_INDEX
 
-    p = _girdle_midpoints(points3d)
+    p = girdle_midpoints(points3d)
     bones = np.linalg.norm(p[:, BONE_INDEX[:, 1]] - p[:, BONE_INDEX[:, 0]], axis=-1)
     torso = np.linalg.norm(p[:, KP["neck"]] - p[:, KP["pelvis"]], axis=-1)
     return np.median(bones / np.maximum(torso, 1e-9)[:, None], axis=0)
@@ -270,7 +272,7 @@ def foreshortening_weights(points2d: np.ndarray, ratios: np.ndarray) -> np.ndarr
     front); its angle then counts for little. The neck and pelvis are the girdle midpoints."""
     from .keypoints import BONE_INDEX
 
-    p = _girdle_midpoints(points2d)
+    p = girdle_midpoints(points2d)
     bones = np.linalg.norm(p[..., BONE_INDEX[:, 1], :] - p[..., BONE_INDEX[:, 0], :], axis=-1)
     torso = np.linalg.norm(p[..., KP["neck"], :] - p[..., KP["pelvis"], :], axis=-1)
     return np.clip(bones / np.maximum(ratios * torso[..., None], 1e-9), 0.0, 1.0)

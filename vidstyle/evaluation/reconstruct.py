@@ -316,26 +316,10 @@ def _evaluate_video(item) -> list[dict]:
 
 
 # ------------------------------------------------------------------------------------------ beyond the demo
-def midpoint_keypoints(points: np.ndarray) -> np.ndarray:
-    """(..., 15, 3) keypoints with pelvis and neck redefined as BlazePose's mapping defines them
-    (:mod:`vidstyle.pose.blazepose`): the midpoints of the hips and of the shoulders. A mocap skeleton's
-    pelvis (the root joint) and neck (the joint at the base of the neck) sit elsewhere (the CMU root
-    about 10 cm above the hips' midpoint), and a root-relative error subtracts the pelvis from every
-    keypoint, so a reconstruction is compared with a reference made of BlazePose keypoints in the
-    reference's own definitions."""
-    from ..formats.keypoints import KEYPOINTS
-
-    k = {n: i for i, n in enumerate(KEYPOINTS)}
-    out = np.array(points, dtype=np.float64, copy=True)
-    out[..., k["pelvis"], :] = 0.5 * (out[..., k["left_hip"], :] + out[..., k["right_hip"], :])
-    out[..., k["neck"], :] = 0.5 * (out[..., k["left_shoulder"], :] + out[..., k["right_shoulder"], :])
-    return out
-
-
 def _runs_for(rec_base, obs: Observation, true_mm: np.ndarray, mm: float, fps: float, methods, data: str,
               source: str, skeleton: str, keypoints=None) -> list[dict]:
     """One row per method; ``keypoints`` maps the reconstruction's keypoints (mm) to the truth's
-    definitions first (e.g. :func:`midpoint_keypoints`)."""
+    definitions first (e.g. :func:`vidstyle.augmg.index.girdle_midpoints`)."""
     out = []
     for method in methods:
         rec_base.set_params(method=method)
@@ -436,7 +420,9 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
     ``videos`` the views' videos (frame rate and size), in the same order. Also scores BlazePose's own 3D
     world landmarks of the view (``blazepose-world``) under the same assumed camera pitch and alignment.
     The reconstructions (and the library bound) are scored in the reference's keypoint definitions
-    (:func:`midpoint_keypoints`: pelvis and neck the midpoints of the hips and shoulders)."""
+    (:func:`vidstyle.augmg.index.girdle_midpoints`: pelvis and neck the midpoints of the hips and
+    shoulders, as BlazePose's keypoints define them; root-relative MPJPE subtracts the pelvis)."""
+    from ..augmg.index import girdle_midpoints
     from ..formats.poses import read_poses
     from ..reconstruct.core import Observation, Reconstructor
     from ..reconstruct.reference import reference_in_y_up, triangulated_reference
@@ -456,7 +442,7 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
         obs_all = Observation.from_poses(doc, fps, size, int(frames.max()) + 1)
         obs = Observation(obs_all.xy[frames], obs_all.scores[frames], obs_all.azimuth[frames], fps, size, str(p))
         runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"real:{name}", "blazepose", "library",
-                          keypoints=midpoint_keypoints)
+                          keypoints=girdle_midpoints)
         world = blazepose_world_points(doc, int(frames.max()) + 1,
                                        base.elevation_deg if base.elevation_deg is not None else base.library_elevation_deg)
         if world is not None:
@@ -467,8 +453,8 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
         rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]
         pooled.append({"data": "real pose2sim take, every view", "source": key[0], "method": key[1],
                        "skeleton": key[2], **_pool(rows)})
-    pooled.append(library_bound_row("real pose2sim take (the reference)", midpoint_keypoints(base.library_.points_),
-                                    true_mm))
+    pooled.append(library_bound_row("real pose2sim take (the reference)",
+                                    girdle_midpoints(base.library_.points_), true_mm))
     return {"runs": pooled + runs, "views": list(ref.names), "frames": len(ref.frames),
             "library_frames": base.library_.n_frames, "reference_up_axis": ref.up_axis,
             "params": {**base.get_params(), "unit_mm": unit_mm}}
