@@ -175,6 +175,7 @@ def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str |
         gated_residual_noise,
         measure_pose_error,
         noise_from_error,
+        pose_pairs,
         residual_noise,
     )
     from ..recognition.splits import make_split
@@ -186,11 +187,12 @@ def _residual_noise(ds, poses_dir: Path, split: str, seed: int, test_view: str |
     if not ids:
         raise InputError(f"{poses_dir}: no <video id>.poses.json of the training videos of --dataset's split "
                          f"(e.g. {(list(sp.vocab) + list(sp.train))[0]}.poses.json)")
-    noise = residual_noise(ds, Path(poses_dir), ids, k=k)
+    if gate > 0 and not sp.val:
+        raise InputError("--residual-gate: the split has no validation performers to set the gate (use 0)")
+    pairs = pose_pairs(ds, Path(poses_dir), ids)  # read once: the bank and the fallback's error both use them
+    noise = residual_noise(ds, Path(poses_dir), ids, k=k, pairs=pairs)
     if gate > 0:
-        if not sp.val:
-            raise InputError("--residual-gate: the split has no validation performers to set the gate (use 0)")
-        fallback = noise_from_error(measure_pose_error(ds, Path(poses_dir), ids))
+        fallback = noise_from_error(measure_pose_error(ds, Path(poses_dir), ids, pairs=pairs))
         noise = gated_residual_noise(noise, ds, list(sp.val), gate, fallback)
     log.info("training noise: the pose errors of %d training videos (%s)", len(ids), noise.to_dict())
     return noise

@@ -79,10 +79,10 @@ def true_keypoints(dataset: Dataset, video_id: str) -> np.ndarray:
     return np.asarray(uv, dtype=np.float64)
 
 
-def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str]) -> dict[str, Any]:
+def measure_pose_error(dataset: Dataset, poses_dir: Path, ids: list[str], pairs=None) -> dict[str, Any]:
     """:func:`pose_error` of the pose files ``<poses_dir>/<id>.poses.json`` against the true keypoints of
-    the dataset videos ``ids``."""
-    trues, ests = pose_pairs(dataset, poses_dir, ids)
+    the dataset videos ``ids`` (``pairs``: their :func:`pose_pairs`, when already read)."""
+    trues, ests = pairs if pairs is not None else pose_pairs(dataset, poses_dir, ids)
     return {"videos": list(ids), **pose_error(trues, ests)}
 
 
@@ -99,11 +99,12 @@ def pose_pairs(dataset: Dataset, poses_dir: Path, ids: list[str]) -> tuple[list[
     return trues, ests
 
 
-def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3) -> ResidualNoise:
+def residual_noise(dataset: Dataset, poses_dir: Path, ids: list[str], k: int = 3, pairs=None) -> ResidualNoise:
     """The :class:`~vidstyle.recognition.posetraining.ResidualNoise` of the pose files
     ``<poses_dir>/<id>.poses.json`` against the true keypoints of the dataset videos ``ids`` (calibration
-    videos: never the ones the recognizer is scored on)."""
-    trues, ests = pose_pairs(dataset, poses_dir, ids)
+    videos: never the ones the recognizer is scored on; ``pairs``: their :func:`pose_pairs`, when already
+    read)."""
+    trues, ests = pairs if pairs is not None else pose_pairs(dataset, poses_dir, ids)
     return ResidualNoise.from_tracks(trues, ests, k=k, videos=list(ids))
 
 
