@@ -52,6 +52,23 @@ def test_estimator_conventions(model):
     assert not hasattr(clone, "models_")
 
 
+def test_labels_fitted_on_workers_give_the_same_model(model, iset, tmp_path):
+    # n_jobs spreads the labels over workers; each label's fit is seeded by the label alone, so the model
+    # file is the same bytes (fit times aside), and n_jobs is a run setting the file does not keep
+    par = ActionModel(random_state=0, n_jobs=2).fit(iset)
+    assert par.labels_ == model.labels_ and par.skipped_ == model.skipped_
+    for label in model.labels_:
+        a, b = model.models_[label], par.models_[label]
+        for k in ("gmm_weights", "gmm_means", "gmm_covariances", "spatial_components", "temporal_components",
+                  "ref_rotations", "keyframes"):
+            assert np.array_equal(getattr(a, k), getattr(b, k)), (label, k)
+        b.fit_seconds = a.fit_seconds
+    model.save(tmp_path / "serial.npz")
+    par.save(tmp_path / "workers.npz")
+    assert (tmp_path / "serial.npz").read_bytes() == (tmp_path / "workers.npz").read_bytes()
+    assert "n_jobs" not in read_actionmodel(tmp_path / "workers.npz").params
+
+
 def test_kick_is_segmented_at_the_contact_change(model):
     """The rear foot leaves the floor during a low kick: two primitives (both feet, then one)."""
     assert model.models_["Jab"].signature == [[True, True]]

@@ -44,6 +44,30 @@ def test_fk_matches_reference(rng):
     assert np.allclose(rot, ref_rot, atol=1e-10)
 
 
+def test_compiled_fk_equals_numpy_reference_to_the_bit(rng):
+    # forward_kinematics (the compiled loop) replaces the vectorised numpy version on the promise of the same
+    # bits: positions and rotations, with and without matrices, several roots, one frame and none
+    from vidstyle.mocap.kinematics import forward_kinematics_numpy
+
+    for J, F in ((12, 9), (31, 200), (5, 1), (4, 0)):
+        m = _random_motion(rng, J, max(F, 1))
+        if F == 0:
+            m = m[:0]
+        for want in (True, False):
+            pos, rot = forward_kinematics(m, return_matrices=want)
+            ref_pos, ref_rot = forward_kinematics_numpy(m, return_matrices=want)
+            assert pos.shape == (F, J, 3) and np.array_equal(pos, ref_pos)
+            assert (rot is None) == (ref_rot is None) == (not want)
+            if want:
+                assert rot.shape == (F, J, 3, 3) and np.array_equal(rot, ref_rot)
+    # two roots (a second hierarchy in the same file)
+    sk = Skeleton(["a", "b", "c", "d"], np.array([-1, 0, -1, 2]), rng.normal(size=(4, 3)))
+    rots = Rotation.random(3 * 4, random_state=3).as_quat().reshape(3, 4, 4)
+    m = Motion(sk, rots, np.broadcast_to(sk.offsets, (3, 4, 3)) + rng.normal(size=(3, 4, 3)), 30.0)
+    assert np.array_equal(forward_kinematics(m)[0], forward_kinematics_numpy(m)[0])
+    assert np.allclose(forward_kinematics(m)[0], _reference_fk(m)[0], atol=1e-10)
+
+
 def test_fk_hand_computed_pose():
     m = parse_bvh(TWO_JOINT)
     pos, _ = forward_kinematics(m)

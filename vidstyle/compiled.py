@@ -3,7 +3,8 @@
 :func:`compile_kernel` returns ``loop`` compiled with ``njit(cache=True, nogil=True)`` (cached per
 installation; no fast-math, so every floating-point operation rounds as numpy's and the C library's do
 and a kernel can be tested bit for bit against its numpy reference), or ``fallback`` when numba cannot
-be imported. Used by the 3D SIFT histograms, the motion graph's distance tail and the renderer.
+be imported. Used by the 3D SIFT histograms, the motion graph's distance tail, the renderer and forward
+kinematics.
 """
 
 from __future__ import annotations

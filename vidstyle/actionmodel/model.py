@@ -170,6 +170,19 @@ class Aligned:
     n_frames: int
 
 
+def _fit_label_task(item) -> tuple[LabelModel | None, str]:
+    """One label's model of :meth:`ActionModel.fit` (``(model, label, instances)``): ``(LabelModel, "")``, or
+    ``(None, why)`` when the label is not modelled."""
+    model, label, insts = item
+    t0 = time.perf_counter()
+    try:
+        lm = model._fit_label(label, insts)
+    except _Skip as e:
+        return None, str(e)
+    lm.fit_seconds = time.perf_counter() - t0
+    return lm, ""
+
+
 class ActionModel(BaseEstimator):
     """Statistical models of actions learned from labelled mocap (module text).
 
@@ -181,6 +194,10 @@ class ActionModel(BaseEstimator):
     :class:`~.instances.InstanceSet`. Learned attributes end in ``_``: ``skeleton_``, ``fps_``,
     ``labels_``, ``models_`` (label -> :class:`LabelModel`), ``contact_height_`` (planted ankle height,
     source units), ``reach_`` (J,), ``skipped_`` (label -> why it has no model).
+
+    ``n_jobs``: the labels' models fitted on that many workers (:func:`vidstyle.parallel.parallel_map`;
+    None or 1: in this process). Each label's fit is seeded by ``random_state`` and the label alone, so the
+    model is the same for every ``n_jobs``; a run setting, not a model parameter (not in the model file).
     """
 
     def __init__(self, variance: float = D.VARIANCE, slope_limit: int = D.SLOPE_LIMIT,
@@ -188,7 +205,7 @@ class ActionModel(BaseEstimator):
                  min_frames: int = D.MIN_FRAMES, min_run: int = D.MIN_RUN, min_primitive: int = D.MIN_PRIMITIVE,
                  min_instances: int = D.MIN_INSTANCES, medoid_candidates: int = D.MEDOID_CANDIDATES,
                  blend_frames: int = D.BLEND_FRAMES, warp_smoothing: float = D.WARP_SMOOTHING, labels: tuple[str, ...] | None = None,
-                 random_state: int | None = D.RANDOM_STATE) -> None:
+                 random_state: int | None = D.RANDOM_STATE, n_jobs: int | None = None) -> None:
         self.variance = variance
         self.slope_limit = slope_limit
         self.max_components = max_components
@@ -202,6 +219,7 @@ class ActionModel(BaseEstimator):
         self.warp_smoothing = warp_smoothing
         self.labels = labels
         self.random_state = random_state
+        self.n_jobs = n_jobs
 
     # ------------------------------------------------------------------ parameters
     def check_params(self) -> None:
@@ -319,19 +337,29 @@ class ActionModel(BaseEstimator):
         self.models_: dict[str, LabelModel] = {}
         self.skipped_: dict[str, str] = {}
         wanted = iset.labels() if self.labels is None else list(self.labels)
+        tasks = []
         for label in wanted:
             insts = iset.of(label)
             if not insts:
                 self.skipped_[label] = "no instance"
                 continue
-            t0 = time.perf_counter()
-            try:
-                lm = self._fit_label(label, insts)
-            except _Skip as e:
-                self.skipped_[label] = str(e)
-                log.warning("action model: %s not modelled: %s", label, e)
+            tasks.append((self, label, insts))
+        if self.n_jobs in (None, 1) or len(tasks) < 2:
+            done = [_fit_label_task(t) for t in tasks]
+        else:
+            from ..parallel import parallel_map
+
+            # the largest labels first (each worker takes the next when done)
+            order = sorted(range(len(tasks)), key=lambda k: -sum(i.n_frames for i in tasks[k][2]))
+            out = parallel_map(_fit_label_task, [tasks[k] for k in order], jobs=self.n_jobs, description="action models")
+            done = [None] * len(tasks)
+            for k, r in zip(order, out):
+                done[k] = r
+        for (_, label, _), (lm, skipped) in zip(tasks, done):
+            if lm is None:
+                self.skipped_[label] = skipped
+                log.warning("action model: %s not modelled: %s", label, skipped)
                 continue
-            lm.fit_seconds = time.perf_counter() - t0
             self.models_[label] = lm
         if not self.models_:
             raise InputError("clips: no action has enough instances to model "
@@ -522,7 +550,7 @@ class ActionModel(BaseEstimator):
             arrays = {k: getattr(lm, k) for k in LABEL_ARRAYS}
             meta = {f.name: getattr(lm, f.name) for f in dc_fields(lm) if f.name not in LABEL_ARRAYS and f.name != "label"}
             models[label] = {**arrays, "meta": meta}
-        params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.get_params().items()}
+        params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.get_params().items() if k != "n_jobs"}
         return ActionModelRecord(params, self.fps_, self.contact_height_,
                                  {"names": list(sk.names), "parents": sk.parents, "offsets": sk.offsets,
                                   "channels": list(sk.channels), "end_sites": dict(sk.end_sites)},

@@ -47,13 +47,8 @@ def southpaws(manifest: dict) -> set[str]:
 def orthodox_model(dataset: str | Path, manifest: dict, performers: list[str], seed: int = 0, params: dict | None = None):
     from ..actionmodel import ActionModel, cut_instances, load_labelled
     from ..actionmodel.stylefit import orthodox_clips
-    from .actionmodel import performer_takes
 
-    paths = []
-    for p in performers:
-        s, pf = performer_takes(dataset, p)
-        paths += s + pf
-    clips = orthodox_clips(load_labelled(paths), southpaws(manifest))
+    clips = orthodox_clips(load_labelled(_takes(dataset, performers)), southpaws(manifest))
     return ActionModel(**{**(params or {}), "random_state": seed}).fit(cut_instances(clips))
 
 
@@ -266,29 +261,61 @@ SPLIT_INPUTS = ("true", "estimated")
 
 def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict | None = None):
     """``(demo, groups, model, estimator)``: the dataset's truth (:func:`demo_truth`, or ``demo`` when already
-    read), split ``seed``'s performer groups, and the orthodox model and the population's global-style
-    estimator fitted on the training performers (A+B) only, the two in parallel (``jobs`` != 1)."""
-    from ..parallel import parallel_map
+    read), split ``seed``'s performer groups, and the orthodox model (:func:`orthodox_model`) and the
+    population's global-style estimator fitted on the training performers (A+B) only.
+
+    The work is spread over ``jobs`` workers: the population figures and each training
+    performer's instances (their takes read, southpaws mirrored, cut and retargeted onto the first take's
+    skeleton, as :func:`orthodox_model` does for all at once) at the same time, then the labels' models
+    (``ActionModel(n_jobs=jobs)``); the same model as :func:`orthodox_model`'s."""
+    from ..actionmodel import ActionModel, InstanceSet
+    from ..parallel import limit_threads, parallel_map
     from .actionmodel import split_groups
 
     demo = demo_truth(dataset) if demo is None else demo
     groups = split_groups(demo["manifest"], seed)
     train = sorted(groups["A"] + groups["B"])
-    model, est = parallel_map(_prepare_worker, [("model", dataset, train, seed), ("population", dataset, train, seed)],
-                              jobs=min(jobs if jobs > 0 else 2, 2), description="action model and population")
+    items = [("population", dataset, train)] + [("instances", dataset, train, p) for p in train]
+    est, *parts = parallel_map(_prepare_worker, items, jobs=jobs, description="training performers")
+    first = parts[0]
+    iset = InstanceSet([i for part in parts for i in part.instances], first.skeleton, first.fps,
+                       [s for part in parts for s in part.sources])
+    with limit_threads(1):  # as in a worker: the models do not depend on where they were fitted
+        model = ActionModel(random_state=seed, n_jobs=jobs).fit(iset)
+    model.n_jobs = None  # the run setting stays with this call
     return demo, groups, model, est
 
 
-def _prepare_worker(item):
-    """The orthodox model (``"model"``) or the population's global-style figures (``"population"``) of the
-    training performers (:func:`evaluate_split`)."""
+def _population(dataset, train):
     from ..actionmodel.stylefit import GlobalStyleEstimator
 
-    what, dataset, train, seed = item
     demo = demo_truth(dataset)
-    if what == "model":
-        return orthodox_model(dataset, demo["manifest"], train, seed)
     return GlobalStyleEstimator().fit([x for p in train for x in performer_videos(demo["dataset"], demo["manifest"], p, "true")])
+
+
+def _takes(dataset, performers) -> list:
+    from .actionmodel import performer_takes
+
+    paths = []
+    for p in performers:
+        s, pf = performer_takes(dataset, p)
+        paths += s + pf
+    return paths
+
+
+def _prepare_worker(item):
+    """The population's global-style estimator (``"population"``) or one training performer's instances
+    (``"instances"``) of :func:`fit_training`."""
+    from ..actionmodel import cut_instances, load_labelled
+    from ..actionmodel.stylefit import orthodox_clips
+
+    what, dataset, train = item[:3]
+    if what == "population":
+        return _population(dataset, train)
+    south = southpaws(demo_truth(dataset)["manifest"])
+    # the reference skeleton orthodox_model retargets onto: the first take of all, mirrored if a southpaw's
+    reference = orthodox_clips(load_labelled(_takes(dataset, train)[:1]), south)[0].motion.skeleton
+    return cut_instances(orthodox_clips(load_labelled(_takes(dataset, [item[3]])), south), reference=reference)
 
 
 def _label_worker(item):

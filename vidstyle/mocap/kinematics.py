@@ -1,8 +1,14 @@
-"""Forward kinematics, vectorised over frames.
+"""Forward kinematics.
 
 For joint j with parent p: ``R_j = R_p * r_j`` and ``x_j = x_p + R_p t_j``, where ``r_j`` and ``t_j`` are
-the local rotation and translation (see :mod:`vidstyle.mocap.motion`). Joints are in file order, so one
-pass over joints (each a batched operation over all frames) suffices.
+the local rotation and translation (see :mod:`vidstyle.mocap.motion`). Joints are in file order
+(``parents[j] < j``), so one pass over the joints suffices.
+
+:func:`forward_kinematics` runs a compiled loop (numba, :func:`vidstyle.compiled.compile_kernel`) frame by
+frame and joint by joint; :func:`forward_kinematics_numpy`, vectorised over frames one depth level of the
+hierarchy at a time, is its reference: the two give the same bits (the same float64 operations in the same
+order, no fused multiply-add). The compiled loop matters because the callers are many small calls (a style
+fit's or a reconstruction's thousands of candidate poses), where numpy's per-operation overhead dominated.
 """
 
 from __future__ import annotations
@@ -44,7 +50,86 @@ def forward_kinematics(motion: Motion, return_matrices: bool = True) -> tuple[np
     """Global joint positions ``(F, J, 3)`` and global rotation matrices ``(F, J, 3, 3)``.
 
     With ``return_matrices=False`` the second item is ``None`` (and the rotations of joints without
-    children, which no position needs, are not composed).
+    children, which no position needs, are not composed). The compiled :func:`_fk_loop`; without numba
+    :func:`forward_kinematics_numpy` (the same bits).
+    """
+    kernel = _fk_kernel()
+    if kernel is None:  # pragma: no cover - numba is a dependency
+        return forward_kinematics_numpy(motion, return_matrices)
+    q = np.ascontiguousarray(motion.rotations, dtype=np.float64)
+    trans = np.ascontiguousarray(motion.translations, dtype=np.float64)
+    F, J = q.shape[:2]
+    parents = np.ascontiguousarray(motion.skeleton.parents, dtype=np.int64)
+    if return_matrices:
+        need = np.ones(J, dtype=np.bool_)
+        glob = np.empty((F, J, 3, 3))
+    else:  # roots and joints with children: the rotations some position needs
+        need = parents < 0
+        need[parents[parents >= 0]] = True
+        glob = np.empty((1, J, 3, 3))  # one frame's, reused
+    pos = np.empty((F, J, 3))
+    kernel(q, trans, parents, need, pos, glob)
+    return pos, (glob if return_matrices else None)
+
+
+def _fk_loop(q, trans, parents, need, pos, glob):
+    # compiled by numba: forward_kinematics_numpy frame by frame, joint by joint, the same float64 operations
+    # in the same order: quat_to_matrix's entries, x_p + ((G_p[:, 0] t0 + G_p[:, 1] t1) + G_p[:, 2] t2) and
+    # G_p L entry by entry as ((a0 b0 + a1 b1) + a2 b2). glob holds every frame's rotations (F, J, 3, 3),
+    # or one frame's (1, J, 3, 3) reused when only positions are wanted; need[j]: compose joint j's rotation
+    F, J = q.shape[0], q.shape[1]
+    every = glob.shape[0] == F
+    L = np.empty((3, 3))
+    for f in range(F):
+        g = f if every else 0
+        for j in range(J):
+            p = parents[j]
+            if p < 0:
+                for a in range(3):
+                    pos[f, j, a] = trans[f, j, a]
+            else:
+                t0, t1, t2 = trans[f, j, 0], trans[f, j, 1], trans[f, j, 2]
+                for a in range(3):
+                    pos[f, j, a] = pos[f, p, a] + ((glob[g, p, a, 0] * t0 + glob[g, p, a, 1] * t1) + glob[g, p, a, 2] * t2)
+            if not need[j]:
+                continue
+            x, y, z, w = q[f, j, 0], q[f, j, 1], q[f, j, 2], q[f, j, 3]
+            xx, yy, zz = x * x, y * y, z * z
+            xy, xz, yz = x * y, x * z, y * z
+            wx, wy, wz = w * x, w * y, w * z
+            L[0, 0] = 1 - 2 * (yy + zz)
+            L[0, 1] = 2 * (xy - wz)
+            L[0, 2] = 2 * (xz + wy)
+            L[1, 0] = 2 * (xy + wz)
+            L[1, 1] = 1 - 2 * (xx + zz)
+            L[1, 2] = 2 * (yz - wx)
+            L[2, 0] = 2 * (xz - wy)
+            L[2, 1] = 2 * (yz + wx)
+            L[2, 2] = 1 - 2 * (xx + yy)
+            if p < 0:
+                for a in range(3):
+                    for b in range(3):
+                        glob[g, j, a, b] = L[a, b]
+            else:
+                for a in range(3):
+                    for b in range(3):
+                        glob[g, j, a, b] = (glob[g, p, a, 0] * L[0, b] + glob[g, p, a, 1] * L[1, b]) + glob[g, p, a, 2] * L[2, b]
+
+
+_KERNEL: list = []
+
+
+def _fk_kernel():
+    """:func:`_fk_loop` compiled (:func:`vidstyle.compiled.compile_kernel`), or None without numba."""
+    if not _KERNEL:
+        from ..compiled import compile_kernel
+
+        _KERNEL.append(compile_kernel(_fk_loop))
+    return _KERNEL[0]
+
+
+def forward_kinematics_numpy(motion: Motion, return_matrices: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`forward_kinematics` in numpy (its reference and its fallback without numba).
 
     The work runs one depth level of the hierarchy at a time (all joints of a level at once) on
     component-major arrays (``(3, 3, J, F)`` matrices, ``(3, J, F)`` positions: every operand contiguous),
