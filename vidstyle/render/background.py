@@ -102,10 +102,18 @@ class NoiseBank:
         else:
             self.fields = None
 
-    def add(self, img: np.ndarray) -> None:
-        """Add noise to ``img`` ((H, W, 3) float32) in place."""
+    def pick(self) -> tuple[np.ndarray | None, int, int]:
+        """The next frame's noise: ``(field, oy, ox)``, the frame's noise being
+        ``field[oy:oy + H, ox:ox + W]`` (one draw of the generator per frame), or ``(None, 0, 0)`` without noise."""
         if self.fields is None:
+            return None, 0, 0
+        k, oy, ox = (int(v) for v in self.rng.integers(0, [len(self.fields), self.pad + 1, self.pad + 1]))
+        return self.fields[k], oy, ox
+
+    def add(self, img: np.ndarray) -> None:
+        """Add the next frame's noise (:meth:`pick`) to ``img`` ((H, W, 3) float32) in place."""
+        field, oy, ox = self.pick()
+        if field is None:
             return
         W, H = self.size
-        k, oy, ox = (int(v) for v in self.rng.integers(0, [len(self.fields), self.pad + 1, self.pad + 1]))
-        img += self.fields[k, oy : oy + H, ox : ox + W]
+        img += field[oy : oy + H, ox : ox + W]

@@ -140,7 +140,7 @@ class RenderJob:
         W, H = self.camera.size
         radii = body.radii.astype(np.float64)
         mat, split, head = body.material, body.split, body.is_head
-        out = np.empty((H, W, 3), dtype=np.float32)
+        bg = np.ascontiguousarray(self.bg, dtype=np.float32)
         # joint pixels (rounded) for the visibility test; joints outside the image read pixel (0, 0)
         uv = self.joints2d
         ok = np.all(np.isfinite(uv), axis=2) & (self.depth > 0)
@@ -152,14 +152,11 @@ class RenderJob:
         seen = np.empty((self.n_frames, self.motion.n_joints, 5), dtype=np.float32)
         for f in range(self.n_frames):
             ras.draw(self.uv[f], self.z[f], self.rpx[f], radii, mat, split, self.order[f], head, self.face_cam[f])
-            ras.finish(self.outline_jump, self.outline_group)
-            np.copyto(out, self.bg)
-            ras.composite(out, self.palette)
-            self.noise.add(out)
-            np.clip(out, 0.0, 255.0, out=out)
+            frame = np.empty((H, W, 3), dtype=np.uint8)
+            ras.render_frame(frame, bg, self.palette, self.outline_jump, self.outline_group, self.noise)
             seen[f] = ras.buf[row[f], col[f]]
             mask = ras.part_mask(body.owner, self.mask_dtype) if with_masks else None
-            yield out.astype(np.uint8), mask
+            yield frame, mask
         self.visible = self._visibility(seen, ok)
 
     def _visibility(self, seen: np.ndarray, in_image: np.ndarray, block: int = 256) -> np.ndarray:

@@ -149,7 +149,85 @@ def _draw_loop(buf, uv, z, rpx, rworld, mat, split, order, head, face_dir, has_f
     return 0, 0, 0, 0
 
 
+def _shade_loop(buf, y0, y1, x0, x1, jump, group, light, consts, shade, material):
+    # compiled by numba: Rasterizer.finish pixel by pixel over the bbox, the same float32 operations in the
+    # same order (numpy 2 rounds a Python float meeting a float32 array to float32 first: light, consts
+    # and jump come as float32). consts: DIFFUSE, AMBIENT, OUTLINE
+    f = np.float32
+    one, zero = f(1.0), f(0.0)
+    lx, ly, lz = light[0], light[1], light[2]
+    diffuse, ambient, outline = consts[0], consts[1], consts[2]
+    ng = group.shape[0]
+    for y in range(y0, y1):
+        for x in range(x0, x1):
+            code = np.int32(buf[y, x, 4])  # truncation, as astype(np.int32)
+            cap = code >> 4
+            material[y - y0, x - x0] = code - cap * 16
+            nx, ny = buf[y, x, 1], buf[y, x, 2]
+            nz2 = f(nx * nx)
+            nz2 = f(nz2 + f(ny * ny))
+            if not (nz2 <= one):  # np.minimum(nz2, 1.0)
+                nz2 = one
+            nz2 = f(np.sqrt(f(one - nz2)))
+            lam = f(nx * lx)
+            lam = f(lam + f(ny * ly))
+            lam = f(lam - f(nz2 * lz))
+            if not (lam >= zero):  # np.maximum(lam, 0.0); the sign of a zero does not survive + AMBIENT
+                lam = zero
+            lam = f(f(lam * diffuse) + ambient)
+            d = buf[y, x, 0]
+            g = group[cap if cap >= 0 else ng + cap]
+            edge = False
+            for dy, dx in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                yy, xx = y + dy, x + dx
+                if yy < y0 or yy >= y1 or xx < x0 or xx >= x1:
+                    continue
+                c2 = np.int32(buf[yy, xx, 4]) >> 4
+                if f(buf[yy, xx, 0] - d) > jump and group[c2 if c2 >= 0 else ng + c2] != g:
+                    edge = True
+            if edge:
+                lam = f(lam * outline)
+            shade[y - y0, x - x0] = lam
+
+
+def _composite_loop(out, bg, buf, y0, y1, x0, x1, shade, material, palette, field, oy, ox, noisy):
+    # compiled by numba: out = bg, Rasterizer.composite, NoiseBank.add, np.clip(0, 255) and astype(np.uint8)
+    # pixel by pixel, the same float32 operations in the same order; out is the (H, W, 3) uint8 frame
+    f = np.float32
+    lo, hi = f(0.0), f(255.0)
+    H, W = out.shape[0], out.shape[1]
+    for y in range(H):
+        inside_y = y0 <= y < y1
+        for x in range(W):
+            inside = inside_y and x0 <= x < x1
+            for c in range(3):
+                v = bg[y, x, c]
+                if inside:
+                    col = f(palette[material[y - y0, x - x0], c] * shade[y - y0, x - x0])
+                    col = f(col - v)
+                    col = f(col * buf[y, x, 3])
+                    v = f(v + col)
+                if noisy:
+                    v = f(v + field[oy + y, ox + x, c])
+                if v < lo:
+                    v = lo
+                elif v > hi:
+                    v = hi
+                out[y, x, c] = np.uint8(v)
+
+
 _KERNEL: list = []
+_FRAME_KERNELS: list = []
+
+
+def _frame_kernels():
+    """The compiled :func:`_shade_loop` and :func:`_composite_loop`, or None without numba."""
+    if not _FRAME_KERNELS:
+        from ..compiled import compile_kernel
+
+        a, b = compile_kernel(_shade_loop), compile_kernel(_composite_loop)
+        _FRAME_KERNELS.append(None if a is None or b is None else (a, b))
+    return _FRAME_KERNELS[0]
 
 
 def _draw_kernel():
@@ -349,6 +427,44 @@ class Rasterizer:
         edge[:, 1:] |= ((d[:, :-1] - d[:, 1:]) > jump) & (g[:, :-1] != g[:, 1:])
         lam[edge] *= OUTLINE
         self.shade = lam
+
+    def render_frame(self, out: np.ndarray, bg: np.ndarray, palette: np.ndarray, jump: float, group: np.ndarray,
+                     noise=None) -> None:
+        """The drawn frame as an image: ``out`` ((H, W, 3) uint8) = the shaded figure (:meth:`finish`)
+        blended over ``bg`` ((H, W, 3) float32, +0.5 for the truncating conversion; :meth:`composite`), plus
+        ``noise`` (a :class:`~vidstyle.render.background.NoiseBank`: its next field), clipped to [0, 255].
+
+        Runs the compiled kernels (:func:`_shade_loop`, :func:`_composite_loop`) when numba is installed:
+        the same float32 operations in the same order as :meth:`render_frame_numpy`, the same bytes
+        (tests/test_render_raster_kernel.py)."""
+        kernels = _frame_kernels()
+        if kernels is None:  # pragma: no cover - numba is a dependency
+            self.render_frame_numpy(out, bg, palette, jump, group, noise)
+            return
+        shade_k, comp_k = kernels
+        y0, y1, x0, x1 = self.bbox
+        h, w = max(y1 - y0, 0), max(x1 - x0, 0)
+        shade = np.empty((h, w), dtype=np.float32)
+        material = np.empty((h, w), dtype=np.intp)
+        if h and w:
+            f = np.float32
+            shade_k(self.buf, y0, y1, x0, x1, f(jump), np.ascontiguousarray(group, dtype=np.int32),
+                    LIGHT.astype(np.float32), np.array([DIFFUSE, AMBIENT, OUTLINE], dtype=np.float32), shade, material)
+        self.shade, self.material = (shade, material) if h and w else (None, None)
+        field, oy, ox = noise.pick() if noise is not None else (None, 0, 0)
+        comp_k(out, bg, self.buf, y0, y1, x0, x1, shade, material, palette,
+               field if field is not None else np.zeros((1, 1, 3), dtype=np.float32), oy, ox, field is not None)
+
+    def render_frame_numpy(self, out: np.ndarray, bg: np.ndarray, palette: np.ndarray, jump: float, group: np.ndarray,
+                           noise=None) -> None:
+        """:meth:`render_frame` in numpy (the reference of the compiled kernels)."""
+        img = bg.copy()
+        self.finish(jump, group)
+        self.composite(img, palette)
+        if noise is not None:
+            noise.add(img)
+        np.clip(img, 0.0, 255.0, out=img)
+        out[...] = img.astype(np.uint8)
 
     def composite(self, out: np.ndarray, palette: np.ndarray) -> None:
         """Blend the shaded figure over ``out`` ((H, W, 3) float32, modified in place)."""
