@@ -117,6 +117,29 @@ def test_segment_path_equals_brute_force_on_a_tiny_library():
         assert cost == pytest.approx(best)
 
 
+def test_compiled_segment_path_equals_the_numpy_reference():
+    # the compiled forward pass replaces the numpy one on the promise of the same frames and cost: random
+    # libraries with integer costs (ties everywhere), hard and soft mismatch, with and without the time warp
+    from vidstyle.inbetween import markov
+
+    rng = np.random.default_rng(8)
+    for trial in range(60):
+        N, K, n = int(rng.integers(3, 40)), int(rng.integers(1, 5)), int(rng.integers(1, 9))
+        labels = rng.integers(0, K, N)
+        cont = rng.random(N) < 0.8
+        path = rng.integers(0, K, n)
+        first, last = rng.integers(0, 4, N).astype(float), rng.integers(0, 4, N).astype(float)
+        emission = rng.integers(0, 3, (N, K)).astype(float) if trial % 2 else None
+        warp = float(rng.integers(0, 3)) if trial % 3 else None
+        got = segment_path(labels, cont, path, first, last, 1.0, 2.0, emission, warp)
+        Kc = int(max(labels.max(), path.max())) + 1
+        entry = np.where(cont, np.roll(labels, 1), labels)
+        cont2 = np.zeros(N, bool)
+        cont2[2:] = cont[2:] & cont[1:-1]
+        ref = markov._segment_path_numpy(labels, cont, path, first, last, 1.0, 2.0, emission, warp, Kc, entry, cont2)
+        assert np.array_equal(got[0], ref[0]) and got[1] == ref[1], trial
+
+
 def test_slerp_midpoint_of_two_known_rotations():
     J = 2
     a = Rotation.from_euler("y", [[0], [0]], degrees=True).as_quat()

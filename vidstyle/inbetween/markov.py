@@ -170,6 +170,99 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
     entry = np.where(cont, np.roll(labels, 1), labels)  # cluster a jump into i must come from
     cont2 = np.zeros(N, bool)
     cont2[2:] = cont[2:] & cont[1:-1]
+    kernel = _segment_kernel()
+    if kernel is not None:
+        history = np.empty((n, N))
+        move = np.zeros((n, N), np.int8)
+        kernel(np.ascontiguousarray(labels, dtype=np.int64), np.ascontiguousarray(cont, dtype=np.bool_), cont2,
+               np.ascontiguousarray(entry, dtype=np.int64), np.ascontiguousarray(path, dtype=np.int64),
+               np.ascontiguousarray(cost_first, dtype=np.float64), np.ascontiguousarray(cost_last, dtype=np.float64),
+               float(mismatch_cost), float(jump_cost),
+               np.zeros((1, 1)) if emission is None else np.ascontiguousarray(np.asarray(emission, dtype=np.float64).T),
+               emission is not None, 0.0 if warp_cost is None else float(warp_cost), warp_cost is not None, K,
+               history, move)
+        return _segment_backtrack(labels, entry, history, move)
+    return _segment_path_numpy(labels, cont, path, cost_first, cost_last, mismatch_cost, jump_cost, emission,
+                               warp_cost, K, entry, cont2)
+
+
+def _segment_backtrack(labels, entry, history, move) -> tuple[np.ndarray, float]:
+    n = len(history)
+    V = history[-1]
+    frames = np.empty(n, np.int64)
+    i = int(np.argmin(V))
+    total = float(V[i])
+    for t in range(n - 1, -1, -1):
+        frames[t] = i
+        if t == 0:
+            break
+        mv = move[t, i]
+        if mv == 1:
+            same = np.flatnonzero(labels == entry[i])
+            i = int(same[np.argmin(history[t - 1][same])])
+        else:
+            i = i - (1, 0, 0, 2)[mv]
+    return frames, total
+
+
+def _segment_loop(labels, cont, cont2, entry, path, cost_first, cost_last, mismatch, jump, emission_t, soft, warp,
+                  warped, K, history, move):
+    # compiled by numba: the forward pass of _segment_path_numpy, frame by frame, the same float64 operations
+    # (a candidate replaces the running best only when strictly lower, np.minimum's NaN kept)
+    N = labels.shape[0]
+    n = path.shape[0]
+    inf = np.inf
+    best = np.empty(K)
+    for t in range(n):
+        c = path[t]
+        row = history[t]
+        if t == 0:
+            for i in range(N):
+                row[i] = cost_first[i] + (mismatch * emission_t[c, i] if soft else mismatch * (1.0 if labels[i] != c else 0.0))
+        else:
+            V = history[t - 1]
+            best[:] = inf
+            for i in range(N):  # np.minimum.reduceat of V per cluster
+                b = best[labels[i]]
+                if not np.isnan(b) and (np.isnan(V[i]) or V[i] < b):
+                    best[labels[i]] = V[i]
+            for i in range(N):
+                v = V[i - 1] if i >= 1 and cont[i] else inf
+                m = 0
+                cands = (best[entry[i]] + jump, V[i] + warp if warped else inf,
+                         V[i - 2] + warp if warped and i >= 2 and cont2[i] else inf)
+                for k in range(3 if warped else 1):
+                    x = cands[k]
+                    if x < v:
+                        m = k + 1
+                    if np.isnan(v) or np.isnan(x):
+                        v = np.nan
+                    elif x < v:
+                        v = x
+                move[t, i] = m
+                row[i] = v + (mismatch * emission_t[c, i] if soft else mismatch * (1.0 if labels[i] != c else 0.0))
+        if t == n - 1:
+            for i in range(N):
+                row[i] = row[i] + cost_last[i]
+
+
+_SEGMENT_KERNEL: list = []
+
+
+def _segment_kernel():
+    """:func:`_segment_loop` compiled (:func:`vidstyle.compiled.compile_kernel`), or None without numba."""
+    if not _SEGMENT_KERNEL:
+        from ..compiled import compile_kernel
+
+        _SEGMENT_KERNEL.append(compile_kernel(_segment_loop))
+    return _SEGMENT_KERNEL[0]
+
+
+def _segment_path_numpy(labels, cont, path, cost_first, cost_last, mismatch_cost, jump_cost, emission, warp_cost,
+                        K, entry, cont2) -> tuple[np.ndarray, float]:
+    """:func:`segment_path` in numpy (the reference of the compiled forward pass, and its fallback)."""
+    N = len(labels)
+    n = len(path)
 
     emission_t = None if emission is None else np.ascontiguousarray(emission.T)  # (K, N): one row per cluster
     order = np.argsort(labels, kind="stable")  # per-cluster minima by one reduceat over frames sorted by cluster
@@ -203,20 +296,7 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
         if t == n - 1:
             V = V + cost_last
         history.append(V)
-    frames = np.empty(n, np.int64)
-    i = int(np.argmin(V))
-    total = float(V[i])
-    for t in range(n - 1, -1, -1):
-        frames[t] = i
-        if t == 0:
-            break
-        mv = move[t, i]
-        if mv == 1:
-            same = np.flatnonzero(labels == entry[i])
-            i = int(same[np.argmin(history[t - 1][same])])
-        else:
-            i = i - (1, 0, 0, 2)[mv]
-    return frames, total
+    return _segment_backtrack(labels, entry, np.array(history), move)
 
 
 def render_frames(rotations: np.ndarray, roots: np.ndarray, clip: np.ndarray, frames: np.ndarray,
