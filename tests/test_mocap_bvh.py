@@ -298,6 +298,22 @@ def test_decimal_fast_path_gives_loadtxt_values_bit_for_bit(rows, cols, data):
     assert ours.tobytes() == ref.tobytes()  # same bits, signed zeros included
 
 
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(1, 3), st.integers(1, 4), st.text("0123456789.+-eE \t\n\x0b,x\u00b9", max_size=40), st.data())
+def test_compiled_decimal_reader_equals_the_numpy_reference(rows, cols, noise, data):
+    # the compiled reader replaces the vectorised one on the promise of the same values and the same
+    # refusals: well-formed tables, and arbitrary text of digits, points, signs, exponents and separators
+    from vidstyle.mocap.bvh import _decimal_values, _decimal_values_numpy
+
+    toks = [[data.draw(_DECIMAL) for _ in range(cols)] for _ in range(rows)]
+    table = "\n".join(" ".join(r) for r in toks)
+    for text, r in ((table, rows), (noise, rows), (table + data.draw(st.sampled_from(["", " ", "\n", "x", "\n1"])), rows)):
+        ours, ref = _decimal_values(text, r, cols), _decimal_values_numpy(text, r, cols)
+        assert (ours is None) == (ref is None), repr(text)
+        if ref is not None:
+            assert ours.tobytes() == ref.tobytes()
+
+
 def test_decimal_fast_path_values_over_the_whole_double_range_of_plain_decimals(rng):
     from vidstyle.mocap.bvh import _decimal_values
 

@@ -287,6 +287,98 @@ _CHAR_CLASS[46] = 2
 
 
 def _decimal_values(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
+    """``(n_rows, n_cols)`` values of ``text`` (lines of plain decimals), or None to leave it to loadtxt:
+    :func:`_decimal_values_numpy`'s rule and values, read by a compiled byte-by-byte loop
+    (:func:`_decimal_loop`; the numpy version without numba)."""
+    kernel = _decimal_kernel()
+    if kernel is None:  # pragma: no cover - numba is a dependency
+        return _decimal_values_numpy(text, n_rows, n_cols)
+    try:
+        data = text.encode("ascii")
+    except UnicodeEncodeError:
+        return None
+    out = np.empty(n_rows * n_cols)
+    if not kernel(np.frombuffer(data, dtype=np.uint8), _CHAR_CLASS, _POW10, n_rows, n_cols, _MAX_DIGITS, out):
+        return None
+    return out.reshape(n_rows, n_cols)
+
+
+def _decimal_loop(b, cls, pow10, n_rows, n_cols, max_digits, out):
+    # compiled by numba: _decimal_values_numpy token by token. A token: an optional sign, then digits with at
+    # most one point, 1 to max_digits digits, value (digits as an integer) / 10**(digits after the point);
+    # space, tab and newline separate tokens, n_cols tokens per line, n_rows lines (no blank one). False:
+    # anything else (leave it to loadtxt)
+    n = b.shape[0]
+    total = n_rows * n_cols
+    i = 0
+    tok = 0
+    line = 0
+    col = 0
+    while i < n:
+        ch = b[i]
+        k = cls[ch]
+        if k == 0:
+            if ch == 10:
+                if col != n_cols:
+                    return False
+                line += 1
+                col = 0
+            i += 1
+            continue
+        if tok >= total:
+            return False
+        neg = False
+        if k == 3:
+            if ch == 45:
+                neg = True
+            elif ch != 43:
+                return False
+            i += 1
+        mant = 0
+        digits = 0
+        frac = 0
+        point = False
+        while i < n:
+            ch = b[i]
+            k = cls[ch]
+            if k == 0:
+                break
+            if k == 1:
+                digits += 1
+                if digits > max_digits:
+                    return False
+                mant = mant * 10 + (ch - 48)
+                if point:
+                    frac += 1
+            elif k == 2:
+                if point:
+                    return False
+                point = True
+            else:
+                return False
+            i += 1
+        if digits == 0:
+            return False
+        v = np.float64(mant) / pow10[frac]
+        out[tok] = -v if neg else v
+        tok += 1
+        col += 1
+    return tok == total and line == n_rows - 1 and col == n_cols
+
+
+_DECIMAL_KERNEL: list = []
+
+
+def _decimal_kernel():
+    """:func:`_decimal_loop` compiled (:func:`vidstyle.compiled.compile_kernel`), or None without numba."""
+    if not _DECIMAL_KERNEL:
+        from ..compiled import compile_kernel
+
+        _DECIMAL_KERNEL.append(compile_kernel(_decimal_loop))
+    return _DECIMAL_KERNEL[0]
+
+
+def _decimal_values_numpy(text: str, n_rows: int, n_cols: int) -> np.ndarray | None:
     """``(n_rows, n_cols)`` values of ``text`` (lines of plain decimals), or None to leave it to loadtxt.
 
     The fast path of the MOTION block, vectorised over all numbers at once. It takes only what it can
