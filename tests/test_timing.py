@@ -103,6 +103,17 @@ def test_a_record_times_the_whole_process_and_its_workers(tmp_path):
     assert r.children_cpu_seconds > 0.2 and r.children_peak_rss_mb > 10  # the workers, shut down first
 
 
+def test_a_command_a_shell_execs_after_another_records_only_itself(tmp_path):
+    """``sh -c 'a && exec vidstyle ...'`` (what a DVC stage's ``a && vidstyle ...`` becomes): the process id
+    started with the shell and has already waited for ``a``, whose CPU and time are not this command's."""
+    burn = f"{sys.executable} -c 'import time\nt = time.process_time()\nwhile time.process_time() - t < 1.5: pass'"
+    subprocess.run(["sh", "-c", f'{burn} && exec "{sys.executable}" -m vidstyle --help'], check=True, timeout=300,
+                   capture_output=True, env=_env(VIDSTYLE_TIMINGS=str(tmp_path)))
+    (r,) = _records(tmp_path)
+    assert r.children_cpu_seconds < 0.5  # the 1.5 s burn is not this command's children
+    assert r.wall_seconds < 1.2  # nor is its time
+
+
 def test_record_owner_checks_its_fields():
     doc = _rec("s", 10.0, 12.0).to_dict()
     assert parse_run_record(doc).wall_seconds == 2.0

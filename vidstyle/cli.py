@@ -228,6 +228,11 @@ def main(argv: list[str] | None = None) -> int:
     entered = time.time()
     args = sys.argv[1:] if argv is None else list(argv)
     status = 1
+    before = None
+    if os.environ.get("VIDSTYLE_TIMINGS"):
+        from .timing import inherited_usage
+
+        before = inherited_usage()
     try:
         status = _main(argv)
     except SystemExit as e:  # not raised by the commands; counted all the same
@@ -238,7 +243,10 @@ def main(argv: list[str] | None = None) -> int:
         if directory:
             from .timing import process_start_time, record_run
 
-            record_run(directory, _command_path(args), args, status, process_start_time() or entered)
+            # a shell that ran other commands before exec-ing this one (``a && vidstyle ...``): this process
+            # starts when it was entered, and the children's CPU before that is theirs, not this one's
+            started = entered if before is not None and before > 0 else (process_start_time() or entered)
+            record_run(directory, _command_path(args), args, status, started, before or 0.0)
     return status
 
 

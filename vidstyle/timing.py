@@ -87,8 +87,20 @@ def _mib(maxrss: int) -> float:
     return maxrss / (1024.0 * 1024.0) if sys.platform == "darwin" else maxrss / 1024.0  # bytes vs KiB
 
 
-def measure(command: str, argv: list[str], exit_status: int, started: float) -> RunRecord:
-    """This process's record, now: ``started`` is its start (Unix seconds)."""
+def inherited_usage() -> float:
+    """CPU seconds of children already waited for by this process id: nonzero when a shell ran other
+    commands and then exec'd this one (``sh -c 'a && vidstyle ...'`` does), whose children's CPU would
+    otherwise count again in this record (:func:`measure`'s ``children_before``)."""
+    import resource
+
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return kids.ru_utime + kids.ru_stime
+
+
+def measure(command: str, argv: list[str], exit_status: int, started: float,
+            children_before: float = 0.0) -> RunRecord:
+    """This process's record, now: ``started`` is its start (Unix seconds); ``children_before``
+    (:func:`inherited_usage` at the start) is taken off the children's CPU."""
     import resource
 
     _shut_down_workers()
@@ -98,17 +110,18 @@ def measure(command: str, argv: list[str], exit_status: int, started: float) -> 
     stage = os.environ.get(DVC_STAGE_ENV) or None
     return RunRecord(command=command, argv=[str(a) for a in argv], stage=stage, pid=os.getpid(),
                      start_time=min(started, end), end_time=end, cpu_seconds=me.ru_utime + me.ru_stime,
-                     children_cpu_seconds=kids.ru_utime + kids.ru_stime, peak_rss_mb=_mib(me.ru_maxrss),
+                     children_cpu_seconds=max(kids.ru_utime + kids.ru_stime - children_before, 0.0),
+                     peak_rss_mb=_mib(me.ru_maxrss),
                      children_peak_rss_mb=_mib(kids.ru_maxrss), exit_status=int(exit_status))
 
 
 def record_run(directory: str | os.PathLike, command: str, argv: list[str], exit_status: int,
-               started: float) -> Path | None:
+               started: float, children_before: float = 0.0) -> Path | None:
     """Write this process's record into ``directory`` (made if missing) as
     ``<end in microseconds>-<pid>.json``; returns its path, or None (with a warning) when it cannot be
     written. Never raises: timing must not change a command's outcome."""
     try:
-        rec = measure(command, argv, exit_status, started)
+        rec = measure(command, argv, exit_status, started, children_before)
         path = Path(directory) / f"{int(rec.end_time * 1e6)}-{rec.pid}.json"
         write_run_record(path, rec)
         return path
@@ -276,5 +289,5 @@ def format_table(m: Metrics) -> str:
     return "\n".join(lines + notes) + "\n"
 
 
-__all__ = ["ENV", "OUTSIDE", "collect", "dvc_stages", "format_table", "measure", "process_start_time", "read_records",
+__all__ = ["ENV", "OUTSIDE", "collect", "dvc_stages", "format_table", "inherited_usage", "measure", "process_start_time", "read_records",
            "record_run", "stage_name", "stage_times"]
