@@ -1,4 +1,4 @@
-"""Per-pixel z-buffer rasteriser for tapered capsules (numpy, one frame at a time).
+"""Per-pixel z-buffer rasteriser for tapered capsules, one frame at a time (compiled loops, numpy references).
 
 Each capsule is drawn as a sphere-swept segment in screen space: for every pixel of its bounding box
 the closest point on the projected axis gives the parameter ``t``, the interpolated pixel radius
