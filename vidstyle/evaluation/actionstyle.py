@@ -269,6 +269,7 @@ def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict |
     skeleton, as :func:`orthodox_model` does for all at once) at the same time, then the labels' models
     (``ActionModel(n_jobs=jobs)``); the same model as :func:`orthodox_model`'s."""
     from ..actionmodel import ActionModel, InstanceSet
+    from ..errors import InputError
     from ..parallel import limit_threads, parallel_map
     from .actionmodel import split_groups
 
@@ -278,6 +279,10 @@ def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict |
     items = [("population", dataset, train)] + [("instances", dataset, train, p) for p in train]
     est, *parts = parallel_map(_prepare_worker, items, jobs=jobs, description="training performers")
     first = parts[0]
+    other = next((part for part in parts if abs(part.fps - first.fps) > 1e-6), None)
+    if other is not None:  # what cut_instances says of clips at two frame rates, across performers too
+        raise InputError(f"{other.sources[0]}: frame rate {other.fps:g} differs from the first clip's {first.fps:g}; "
+                         "resample the clips to one rate")
     iset = InstanceSet([i for part in parts for i in part.instances], first.skeleton, first.fps,
                        [s for part in parts for s in part.sources])
     with limit_threads(1):  # as in a worker: the models do not depend on where they were fitted
