@@ -276,7 +276,13 @@ def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict |
     demo = demo_truth(dataset) if demo is None else demo
     groups = split_groups(demo["manifest"], seed)
     train = sorted(groups["A"] + groups["B"])
-    items = [("population", dataset, train)] + [("instances", dataset, train, p) for p in train]
+    from ..actionmodel import load_labelled
+    from ..actionmodel.stylefit import orthodox_clips
+
+    south = southpaws(demo["manifest"])
+    # the skeleton orthodox_model retargets onto: the first take of all, mirrored if a southpaw's
+    reference = orthodox_clips(load_labelled(_takes(dataset, train)[:1]), south)[0].motion.skeleton
+    items = [("population", dataset, train)] + [("instances", dataset, p, south, reference) for p in train]
     est, *parts = parallel_map(_prepare_worker, items, jobs=jobs, description="training performers")
     first = parts[0]
     other = next((part for part in parts if abs(part.fps - first.fps) > 1e-6), None)
@@ -314,13 +320,10 @@ def _prepare_worker(item):
     from ..actionmodel import cut_instances, load_labelled
     from ..actionmodel.stylefit import orthodox_clips
 
-    what, dataset, train = item[:3]
-    if what == "population":
-        return _population(dataset, train)
-    south = southpaws(demo_truth(dataset)["manifest"])
-    # the reference skeleton orthodox_model retargets onto: the first take of all, mirrored if a southpaw's
-    reference = orthodox_clips(load_labelled(_takes(dataset, train)[:1]), south)[0].motion.skeleton
-    return cut_instances(orthodox_clips(load_labelled(_takes(dataset, [item[3]])), south), reference=reference)
+    if item[0] == "population":
+        return _population(*item[1:])
+    _, dataset, performer, south, reference = item
+    return cut_instances(orthodox_clips(load_labelled(_takes(dataset, [performer])), south), reference=reference)
 
 
 def _label_worker(item):

@@ -216,6 +216,11 @@ def _composite_loop(out, bg, buf, y0, y1, x0, x1, shade, material, palette, fiel
                 out[y, x, c] = np.uint8(v)
 
 
+# the kernels' float32 constants (as numpy 2 rounds the Python floats meeting float32 arrays), made once
+_LIGHT32 = LIGHT.astype(np.float32)
+_SHADING32 = np.array([DIFFUSE, AMBIENT, OUTLINE], dtype=np.float32)
+_NO_NOISE = np.zeros((1, 1, 3), dtype=np.float32)
+
 _KERNEL: list = []
 _FRAME_KERNELS: list = []
 
@@ -447,13 +452,12 @@ class Rasterizer:
         shade = np.empty((h, w), dtype=np.float32)
         material = np.empty((h, w), dtype=np.intp)
         if h and w:
-            f = np.float32
-            shade_k(self.buf, y0, y1, x0, x1, f(jump), np.ascontiguousarray(group, dtype=np.int32),
-                    LIGHT.astype(np.float32), np.array([DIFFUSE, AMBIENT, OUTLINE], dtype=np.float32), shade, material)
+            shade_k(self.buf, y0, y1, x0, x1, np.float32(jump), np.ascontiguousarray(group, dtype=np.int32),
+                    _LIGHT32, _SHADING32, shade, material)
         self.shade, self.material = (shade, material) if h and w else (None, None)
         field, oy, ox = noise.pick() if noise is not None else (None, 0, 0)
         comp_k(out, bg, self.buf, y0, y1, x0, x1, shade, material, palette,
-               field if field is not None else np.zeros((1, 1, 3), dtype=np.float32), oy, ox, field is not None)
+               _NO_NOISE if field is None else field, oy, ox, field is not None)
 
     def render_frame_numpy(self, out: np.ndarray, bg: np.ndarray, palette: np.ndarray, jump: float, group: np.ndarray,
                            noise=None) -> None:
