@@ -8,7 +8,13 @@ Split (each CMU subject in one role; :data:`vidstyle.evaluation.inbetween.SPLIT`
 validation subject at 30 fps, gaps of 15 / 30 / 45 frames, LAFAN1's L2P and L2Q
 (:mod:`vidstyle.evaluation.inbetween`). Grid: every combination of the candidates below; the winner is the
 least mean L2P over the three gaps (ties: the first listed). Then, for the winner, the root path
-(``ROOT_PATH``: the library segments' own, or the keys' Hermite curve) by the same criterion. The graph,
+(``ROOT_PATH``: the library segments' own, or the keys' Hermite curve) by the same criterion. Last, for that
+model, the coverage gate (``COVERAGE_SCALE``, :func:`vidstyle.inbetween.markov.coverage_weight`: how far the
+keys may be from every library pose before the library's body motion gives way to SLERP) on more than the
+one validation subject, whose walking the library knows well: folds of the validation subject with the whole
+library, and of each library subject held out from the other three (the library then lacks its kind of
+motion, as it may a user's; up to ``FOLD_WINDOWS`` windows each, evenly spread), by the least mean over the
+folds of the mean L2P over the gaps. The test subjects take no part. The graph,
 SLERP and SLERP-with-the-Hermite-root baselines are scored once on the same windows for reference. Every
 row tried is written to the table.
 
@@ -26,12 +32,15 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidstyle.evaluation.inbetween import GAPS, SPLIT, benchmark, prepare
+from vidstyle.evaluation.inbetween import GAPS, SPLIT, benchmark, fit_methods, prepare, score_methods
 from vidstyle.formats.validation import INBETWEEN, validation_header, write_validation
+from vidstyle.inbetween import MarkovInbetweener
 
 log = logging.getLogger("validate_inbetween")
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,7 +48,65 @@ DEFAULT_CMU = ROOT.parent / "shared" / "data" / "mocap" / "cmu"
 DEFAULT_OUT = ROOT / "pipelines" / "kickboxing" / "validation" / "inbetween.json"
 DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_inbetween"
 GRID = {"n_clusters": [16, 32, 64], "n_components": [8, 16, 32, 64], "warp_cost": [None, 0.2]}
-ROOT_PATHS = ["library", "hermite"]  # searched last, for the grid's winner (the grid runs on "library")
+ROOT_PATHS = ["library", "hermite"]  # searched after the grid, for its winner (the grid runs on "library")
+COVERAGE_SCALES = [None, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0]  # searched last, on the folds
+FOLD_WINDOWS = 120
+
+
+def folds(library) -> list[tuple[tuple, tuple]]:
+    """(library subjects, held-out subjects): the validation subject with the whole library, then each
+    library subject held out from the others."""
+    return [(tuple(library), tuple(SPLIT["validation"]))] + [
+        (tuple(x for x in library if x != s), (s,)) for s in library]
+
+
+def cached_plans(model: MarkovInbetweener) -> MarkovInbetweener:
+    """``model`` with its :meth:`~MarkovInbetweener.plan` remembered per request: the plan does not depend on
+    the coverage gate, so each window's two dynamic programmes run once for all the scales tried."""
+    memo, plan = {}, model.plan
+
+    def remembered(start, end, n_frames):
+        key = (start.rotations.tobytes(), start.root.tobytes(), end.rotations.tobytes(), end.root.tobytes(), n_frames)
+        if key not in memo:
+            memo[key] = plan(start, end, n_frames)
+        return memo[key]
+
+    model.plan = remembered
+    return model
+
+
+def coverage_rows(cmu: Path, cache: Path, seed: int, params: dict) -> tuple[list[dict], dict]:
+    """One row per coverage scale (L2P and L2Q per fold and gap, and the criterion), and the SLERP baselines'
+    scores on the same folds' windows."""
+    scores = {str(c): {} for c in COVERAGE_SCALES}
+    base: dict = {}
+    for lib, held in folds(SPLIT["library"]):
+        data = prepare(cmu, lib, held, seed, cache / f"graph_{'_'.join(lib)}_seed{seed}.npz")
+        wins = data["wins"]
+        if len(wins) > FOLD_WINDOWS:
+            keep = np.unique(np.linspace(0, len(wins) - 1, FOLD_WINDOWS).round().astype(int))
+            wins = [wins[i] for i in keep]
+        model = cached_plans(MarkovInbetweener(random_state=seed, **params).fit(data["graph"]))
+        ref = score_methods(fit_methods(data["graph"], ("slerp", "slerp_hermite"), seed), wins, GAPS, data["mean"], data["std"])
+        for name, res in ref.items():
+            base.setdefault(name, {})[held[0]] = {
+                "windows": len(wins), **{f"l2p_{g}": res[str(g)]["l2p"] for g in GAPS},
+                **{f"l2q_{g}": res[str(g)]["l2q"] for g in GAPS},
+                "mean_l2p": float(np.mean([res[str(g)]["l2p"] for g in GAPS]))}
+        for c in COVERAGE_SCALES:
+            res = score_methods({"markov": model.set_params(coverage_scale=c)}, wins, GAPS, data["mean"], data["std"])
+            scores[str(c)][held[0]] = {"windows": len(wins), **{f"l2p_{g}": res["markov"][str(g)]["l2p"] for g in GAPS},
+                                       **{f"l2q_{g}": res["markov"][str(g)]["l2q"] for g in GAPS}}
+            log.info("held out %s, coverage scale %s: L2P %s", held[0], c,
+                     " ".join(f"{res['markov'][str(g)]['l2p']:.3f}" for g in GAPS))
+    rows = []
+    for c in COVERAGE_SCALES:
+        per = scores[str(c)]
+        rows.append({"coverage_scale": c, "folds": per,
+                     "mean_l2p": float(np.mean([np.mean([f[f"l2p_{g}"] for g in GAPS]) for f in per.values()]))})
+    for name, per in base.items():
+        base[name] = {"folds": per, "mean_l2p": float(np.mean([f["mean_l2p"] for f in per.values()]))}
+    return rows, base
 
 
 def main() -> int:
@@ -62,27 +129,43 @@ def main() -> int:
         return {"params": params, "mean_l2p": score,
                 **{f"l2p_{g}": res[str(g)]["l2p"] for g in GAPS}, **{f"l2q_{g}": res[str(g)]["l2q"] for g in GAPS}}
 
-    rows = [row({**dict(zip(GRID, values)), "root_path": ROOT_PATHS[0]}) for values in itertools.product(*GRID.values())]
+    rows = [row({**dict(zip(GRID, values)), "root_path": ROOT_PATHS[0], "coverage_scale": None})
+            for values in itertools.product(*GRID.values())]
     grid_best = min(rows, key=lambda r: r["mean_l2p"])
     rows += [row({**grid_best["params"], "root_path": rp}) for rp in ROOT_PATHS[1:]]
     best = min(rows, key=lambda r: r["mean_l2p"])
+    gate, gate_base = coverage_rows(args.cmu, args.cache, args.seed, best["params"])
+    gate_best = min(gate, key=lambda r: r["mean_l2p"])
+    chosen = {**best["params"], "coverage_scale": gate_best["coverage_scale"]}
     cols = [f"l2p_{g}" for g in GAPS] + [f"l2q_{g}" for g in GAPS]
     print(f"{'n_clusters':>10} {'n_comp':>6} {'warp':>5} {'root':>8} " + " ".join(f"{c:>7}" for c in cols) + "  mean_l2p")
     for r in rows:
         p = r["params"]
         print(f"{p['n_clusters']:>10} {p['n_components']:>6} {p['warp_cost']!s:>5} {p['root_path']:>8} "
               + " ".join(f"{r[c]:7.3f}" for c in cols) + f"  {r['mean_l2p']:.3f}" + ("  <- chosen" if r is best else ""))
+    print("coverage scale | mean L2P over gaps per held-out subject | mean")
+    for r in gate:
+        print(f"{r['coverage_scale']!s:>14} | " + " ".join(f"{h}:{np.mean([f[f'l2p_{g}'] for g in GAPS]):.3f}"
+                                                          for h, f in r["folds"].items())
+              + f" | {r['mean_l2p']:.3f}" + ("  <- chosen" if r is gate_best else ""))
+    for name, r in gate_base.items():
+        print(f"{name:>14} | " + " ".join(f"{h}:{f['mean_l2p']:.3f}" for h, f in r["folds"].items()) + f" | {r['mean_l2p']:.3f}")
     for name, res in base.items():
         print(f"{name:>33} " + " ".join(f"{res[str(g)]['l2p']:7.3f}" for g in GAPS) + " "
               + " ".join(f"{res[str(g)]['l2q']:7.3f}" for g in GAPS))
     doc = {**validation_header(INBETWEEN), "seed": args.seed,
            "command": "python scripts/validate_inbetween.py",
            "split": {k: list(v) for k, v in SPLIT.items()}, "windows": len(data["wins"]), "gaps": list(GAPS),
-           "criterion": "least mean L2P over the gaps, validation subject only; the root path searched last, "
-                        "for the grid's winner",
-           "grid": {**GRID, "root_path": ROOT_PATHS}, "rows": rows, "chosen": best["params"], "baselines": base}
+           "criterion": "least mean L2P over the gaps, validation subject only; the root path searched after the "
+                        "grid, for its winner; the coverage scale last, for that model, by the least mean over the "
+                        "folds (the validation subject; each library subject held out from the others) of the "
+                        "mean L2P over the gaps",
+           "grid": {**GRID, "root_path": ROOT_PATHS, "coverage_scale": COVERAGE_SCALES}, "rows": rows,
+           "coverage": {"folds": [{"library": list(lib), "held_out": list(held)} for lib, held in folds(SPLIT["library"])],
+                        "max_windows": FOLD_WINDOWS, "rows": gate, "baselines": gate_base},
+           "chosen": chosen, "baselines": base}
     write_validation(args.out, doc)
-    log.info("wrote %s; chosen %s", args.out, best["params"])
+    log.info("wrote %s; chosen %s", args.out, chosen)
     return 0
 
 

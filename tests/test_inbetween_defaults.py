@@ -30,9 +30,16 @@ def test_defaults_are_the_validation_choice():
     assert not set(doc["split"]["validation"]) & set(D.EVAL_SPLIT["test"])
     chosen = doc["chosen"]
     assert chosen == {"n_clusters": D.N_CLUSTERS, "n_components": D.N_COMPONENTS, "warp_cost": D.WARP_COST,
-                      "root_path": D.ROOT_PATH}
+                      "root_path": D.ROOT_PATH, "coverage_scale": D.COVERAGE_SCALE}
     best = min(doc["rows"], key=lambda r: r["mean_l2p"])
-    assert best["params"] == chosen
+    assert best["params"] == {**chosen, "coverage_scale": None}  # the grid and root path: without the gate
+    gate = min(doc["coverage"]["rows"], key=lambda r: r["mean_l2p"])
+    assert gate["coverage_scale"] == chosen["coverage_scale"]
+    # the gate's folds: the validation subject and library subjects, never a test subject
+    held = {f["held_out"][0] for f in doc["coverage"]["folds"]}
+    assert held == set(D.EVAL_SPLIT["validation"]) | set(D.EVAL_SPLIT["library"])
+    assert not held & set(D.EVAL_SPLIT["test"])
+    assert all(set(f["library"]) <= set(D.EVAL_SPLIT["library"]) for f in doc["coverage"]["folds"])
 
 
 def test_results_file_is_a_metrics_document_of_the_test_split():
@@ -41,6 +48,7 @@ def test_results_file_is_a_metrics_document_of_the_test_split():
     assert set(m.get("methods")) == set(D.EVAL_METHODS)
     assert m.get("params", "markov_params", "n_clusters") == D.N_CLUSTERS
     assert m.get("params", "markov_params", "root_path") == D.ROOT_PATH
+    assert m.get("params", "markov_params", "coverage_scale") == D.COVERAGE_SCALE
 
 
 @pytest.mark.parametrize("args", [["--library", "01,02", "--test", "02"], ["--gaps", "15,x"], ["--gaps", "0"],

@@ -40,9 +40,9 @@ import numpy as np
 from ..errors import ParameterError
 from ..mocap.placement import Placement
 from ..mocap.retarget import leg_length
-from ..motiongraph.blend import blend_frames
+from ..motiongraph.blend import blend_frames, slerp
 from . import defaults as D
-from .poses import ROOT_PATHS, Keypose, pin, placement_onto, pose_features
+from .poses import ROOT_PATHS, Keypose, pin, placement_onto, pose_features, slerp_inbetween
 
 
 def run_lengths(labels: np.ndarray, cont: np.ndarray) -> list[tuple[int, int]]:
@@ -338,6 +338,20 @@ def render_frames(rotations: np.ndarray, roots: np.ndarray, clip: np.ndarray, fr
     return rot, root
 
 
+def coverage_weight(key_distance: float, scale: float | None) -> float:
+    """The weight of the library's body motion against the keys' SLERP: ``exp(-(d / scale)^2)`` for the
+    keys' ``key_distance`` ``d`` (:meth:`MarkovInbetweener.plan`); 1 without a ``scale``.
+
+    Keys near library poses (``d`` below a cluster spread or so) keep the library's motion; keys that no
+    library frame resembles (a kind of motion the library lacks) fall back toward plain interpolation,
+    where the Markov path's segments, found among unrelated motion, would only add a wrong action. On
+    held-out CMU subjects whose motion the library lacks, the ungated library motion scored worse than
+    SLERP at every gap (``scripts/validate_inbetween.py``)."""
+    if scale is None:
+        return 1.0
+    return float(np.exp(-((float(key_distance) / float(scale)) ** 2)))
+
+
 class MarkovInbetweener:
     """Molina Tanco & Hilton's two-level model (scikit-learn conventions: parameters in ``__init__``,
     :meth:`fit` learns ``pca_``, ``kmeans_``, ``log_transitions_``, ``labels_``, ...; ``random_state`` seeds
@@ -347,17 +361,19 @@ class MarkovInbetweener:
     ``velocity_weight`` (of the root height and feature-velocity parts of the pose feature),
     ``smoothing`` (pseudo-count of the transition counts), ``mismatch_cost``, ``jump_cost``, ``warp_cost``,
     ``key_weight`` (level 2, see :func:`segment_path`), ``blend_frames`` (jump blend length), ``root_path``
-    (:data:`~.poses.ROOT_PATHS`).
+    (:data:`~.poses.ROOT_PATHS`), ``coverage_scale`` (:func:`coverage_weight`; ``None``: the paper, the
+    library's motion as it is).
     """
 
     PARAMS = ("n_clusters", "n_components", "height_weight", "velocity_weight", "smoothing", "mismatch_cost",
-              "jump_cost", "warp_cost", "key_weight", "blend_frames", "root_path", "random_state")
+              "jump_cost", "warp_cost", "key_weight", "blend_frames", "root_path", "coverage_scale", "random_state")
 
     def __init__(self, n_clusters: int = D.N_CLUSTERS, n_components: int = D.N_COMPONENTS,
                  height_weight: float = D.HEIGHT_WEIGHT, velocity_weight: float = D.VELOCITY_WEIGHT,
                  smoothing: float = D.SMOOTHING, mismatch_cost: float = D.MISMATCH_COST, jump_cost: float = D.JUMP_COST,
                  warp_cost: float | None = D.WARP_COST, key_weight: float = D.KEY_WEIGHT, blend_frames: int = D.BLEND_FRAMES,
-                 root_path: str = D.ROOT_PATH, random_state: int = D.RANDOM_STATE) -> None:
+                 root_path: str = D.ROOT_PATH, coverage_scale: float | None = D.COVERAGE_SCALE,
+                 random_state: int = D.RANDOM_STATE) -> None:
         self.n_clusters = n_clusters
         self.n_components = n_components
         self.height_weight = height_weight
@@ -369,6 +385,7 @@ class MarkovInbetweener:
         self.key_weight = key_weight
         self.blend_frames = blend_frames
         self.root_path = root_path
+        self.coverage_scale = coverage_scale
         self.random_state = random_state
 
     def get_params(self, deep: bool = True) -> dict:
@@ -420,6 +437,8 @@ class MarkovInbetweener:
                 raise ParameterError(name, f"must be at least 1, got {getattr(self, name)}")
         if self.root_path not in ROOT_PATHS:
             raise ParameterError("root_path", f"must be one of {', '.join(ROOT_PATHS)}, got {self.root_path!r}")
+        if self.coverage_scale is not None and not float(self.coverage_scale) > 0:
+            raise ParameterError("coverage_scale", f"must be positive or None, got {self.coverage_scale}")
         self.skeleton_ = graph.skeleton_
         self.fps_ = float(graph.fps)
         self.rotations_ = np.asarray(graph.rotations_)
@@ -466,18 +485,22 @@ class MarkovInbetweener:
 
     # ------------------------------------------------------------------------------------------ synthesis
     def plan(self, start: Keypose, end: Keypose, n_frames: int) -> dict:
-        """The two levels for ``n_frames`` output frames (both keys included): cluster path, library frames."""
+        """The two levels for ``n_frames`` output frames (both keys included): cluster path, library frames;
+        and ``key_distance``, the mean of the two keys' squared feature distances to their nearest library
+        frame, in mean cluster spreads (how well the library knows the keys, :func:`coverage_weight`)."""
         c0, z0 = self.quantise(start)
         c1, z1 = self.quantise(end)
         log_d, log_s = duration_tables(self.duration_counts_, n_frames, float(self.smoothing))
         path, logp = best_cluster_path(self.log_transitions_, c0, c1, n_frames, log_d, log_s)
-        w = float(self.key_weight) / self.spread_
-        cost_first = w * np.sum((self.features_ - z0) ** 2, axis=1)
-        cost_last = w * np.sum((self.features_ - z1) ** 2, axis=1)
+        d_first = np.sum((self.features_ - z0) ** 2, axis=1) / self.spread_
+        d_last = np.sum((self.features_ - z1) ** 2, axis=1) / self.spread_
+        w = float(self.key_weight)
+        cost_first, cost_last = w * d_first, w * d_last
         frames, cost = segment_path(self.labels_, self.cont_, path, cost_first, cost_last,
                                     float(self.mismatch_cost), float(self.jump_cost), self.emission_,
                                     None if self.warp_cost is None else float(self.warp_cost))
-        return {"clusters": path, "log_probability": logp, "frames": frames, "cost": cost}
+        key_distance = 0.5 * float(d_first.min() + d_last.min())
+        return {"clusters": path, "log_probability": logp, "frames": frames, "cost": cost, "key_distance": key_distance}
 
     def inbetween(self, start: Keypose, end: Keypose, n_frames: int, free_end: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (n, J, 4), roots (n, 3)) from ``start`` to ``end`` over ``n_frames`` output frames.
@@ -489,4 +512,10 @@ class MarkovInbetweener:
         rot, root = render_frames(self.rotations_, self.root_positions_, self.clip_, frames, here, int(self.blend_frames))
         if free_end:
             end = end.placed(placement_onto(end.rotations[0], end.root, rot[-1, 0], root[-1]))
-        return pin(rot, root, start, end, self.root_path)
+        rot, root = pin(rot, root, start, end, self.root_path)
+        weight = coverage_weight(plan["key_distance"], self.coverage_scale)
+        if weight < 1.0:  # keys the library does not know: its body motion shrinks toward the keys' SLERP
+            keyed, _ = slerp_inbetween(start, end, n_frames)
+            rot = slerp(keyed, rot, np.full(rot.shape[:2], weight))
+            rot[0], rot[-1] = start.rotations, end.rotations
+        return rot, root
