@@ -513,7 +513,7 @@ def _inbetween_section(page: Page, run: Path) -> None:
     if m is None:
         return
     gaps = m["gaps"]
-    names = {"markov": "Markov chain over pose clusters (Molina Tanco & Hilton 2000)", "graph": "motion graph shortest path",
+    names = {"markov": "Markov chain over pose clusters (Molina Tanco & Hilton 2000; coverage-gated)", "graph": "motion graph shortest path",
              "slerp": "SLERP + linear root (baseline)", "slerp_hermite": "SLERP + the keys' Hermite root path (baseline)"}
     rows = [[names.get(k, k), *(round(v[str(g)]["l2p"], 3) for g in gaps), *(round(v[str(g)]["l2q"], 3) for g in gaps),
              *(round(v[str(g)]["ms_per_request"], 1) for g in gaps)] for k, v in m["methods"].items()]
