@@ -98,6 +98,38 @@ def test_tempo_is_duration_relative_to_the_population(videos):
     assert g.tempo["Jab"] > 1.2
 
 
+def _labelled(runs):
+    """(xy, labels, view) of a track whose labels are the given (label, frames) runs (finite random points:
+    durations and steps do not depend on them)."""
+    labels = [lab for lab, n in runs for _ in range(n)]
+    xy = np.random.default_rng(len(labels)).normal(size=(len(labels), 15, 2))
+    return xy, labels, "front"
+
+
+def test_speed_from_step_lengths_separates_action_tempo_from_the_duration_factor():
+    from vidstyle.actionmodel.stylefit import GlobalStyle
+
+    pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4), ("Step", 12),
+                      ("Hook", 20), ("Guard", 5)])] * 3
+    est = GlobalStyleEstimator().fit(pop)
+    assert est.step_frames_ == 12.0 and est.durations_ == {"Jab": 15.0, "Hook": 20.0}
+    # steps of 10 frames: 1.2 times the population's speed; a jab of 12 frames: duration factor 0.8, so its
+    # own tempo (at the population's speed) is 0.8 * 1.2
+    fast = [_labelled([("Guard", 4), ("Step", 10), ("Jab", 12), ("Guard", 3), ("Step", 10), ("Hook", 20), ("Guard", 2)])]
+    g = est.estimate(fast)
+    assert g.speed == pytest.approx(1.2)
+    assert g.tempo == pytest.approx({"Jab": 0.8, "Hook": 1.0})
+    assert g.action_tempo == pytest.approx({"Jab": 0.96, "Hook": 1.2})
+    back = GlobalStyle.from_dict(g.to_dict())
+    assert back.speed == pytest.approx(1.2) and back.action_tempo == pytest.approx(g.action_tempo)
+    # no step seen: the speed is unknown, the duration factor stays
+    still = est.estimate([_labelled([("Guard", 4), ("Jab", 12), ("Guard", 3)])])
+    assert np.isnan(still.speed) and still.action_tempo == {} and still.tempo == pytest.approx({"Jab": 0.8})
+    # a style written before the speed existed loads without it
+    old = {k: v for k, v in g.to_dict().items() if k not in ("speed", "action_tempo")}
+    assert np.isnan(GlobalStyle.from_dict(old).speed) and GlobalStyle.from_dict(old).action_tempo == {}
+
+
 def test_mirror_track_is_an_involution():
     xy = np.random.default_rng(0).normal(size=(4, 15, 2))
     assert np.allclose(mirror_track(mirror_track(xy)), xy)

@@ -33,7 +33,10 @@ training population, so only the view's identity is used, never its angle).
   at that view), plus 1 for the stance (a ratio to the population's mean, as ``stance_width`` is).
 * **tempo**: per action the performer's median segment length (frames) over the population's median: the
   observable duration factor ``tempo[a] / speed`` of :class:`vidstyle.demo.performer.MovementTraits`;
-  ``relative_tempo`` divides by its mean over actions (``tempo[a] / mean tempo``).
+  ``relative_tempo`` divides by its mean over actions (``tempo[a] / mean tempo``). **speed**: the
+  population's median ``Step`` segment length over the performer's (a step takes ``BASE_SECONDS["Step"] /
+  speed``, whatever the per-action tempo), so that ``action_tempo[a] = tempo[a] * speed`` separates the
+  per-action tempo from the performer's overall speed (nan / empty when no step was seen).
 
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
 coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
@@ -131,8 +134,10 @@ def video_figures(xy: np.ndarray, labels) -> dict:
         hip_y = 0.5 * (G[:, LHIP, 1] + G[:, RHIP, 1])
         an_y = 0.5 * (G[:, LAN, 1] + G[:, RAN, 1])
         out["extension"] = _nanmedian((an_y - hip_y) / leg_len)
-    jab, side, durations = [], [], {}
+    jab, side, durations, steps = [], [], {}, []
     for label, s, e in label_runs(labels):
+        if label == "Step":
+            steps.append(e - s)
         if label in NON_ACTIONS:
             continue
         durations.setdefault(label, []).append(e - s)
@@ -149,6 +154,7 @@ def video_figures(xy: np.ndarray, labels) -> dict:
     out["jab_scores"] = jab
     out["jab_sides"] = side
     out["durations"] = durations
+    out["step_durations"] = steps
     # the stance: per frame with both ankles and hips seen, the image side (x from the hips' midpoint) of the
     # lower ankle, the front foot for a camera that looks down; label-free, so left/right swaps do not matter
     ok = np.isfinite(xy[:, [LAN, RAN, LHIP, RHIP]]).all(axis=(1, 2))
@@ -173,6 +179,8 @@ class GlobalStyle:
     relative_tempo: dict[str, float] = field(default_factory=dict)
     n_videos: int = 0
     n_jabs: int = 0
+    speed: float = math.nan  # the population's median step length over the performer's (nan: no steps seen)
+    action_tempo: dict[str, float] = field(default_factory=dict)  # tempo[a] * speed: the per-action tempo itself
 
     def to_dict(self) -> dict:
         f = lambda x: None if x is None or not np.isfinite(x) else round(float(x), 6)
@@ -180,7 +188,8 @@ class GlobalStyle:
                 "stance_width": f(self.stance_width), "crouch": f(self.crouch),
                 "tempo": {k: f(v) for k, v in self.tempo.items()},
                 "relative_tempo": {k: f(v) for k, v in self.relative_tempo.items()},
-                "n_videos": int(self.n_videos), "n_jabs": int(self.n_jabs)}
+                "n_videos": int(self.n_videos), "n_jabs": int(self.n_jabs), "speed": f(self.speed),
+                "action_tempo": {k: f(v) for k, v in self.action_tempo.items()}}
 
     @classmethod
     def from_dict(cls, d: dict) -> GlobalStyle:
@@ -188,7 +197,7 @@ class GlobalStyle:
         return cls(str(d["lead"]), n(d.get("lead_score")), n(d.get("guard_height")), n(d.get("stance_width")),
                    n(d.get("crouch")), {k: n(v) for k, v in d.get("tempo", {}).items()},
                    {k: n(v) for k, v in d.get("relative_tempo", {}).items()}, int(d.get("n_videos", 0)),
-                   int(d.get("n_jabs", 0)))
+                   int(d.get("n_jabs", 0)), n(d.get("speed")), {k: n(v) for k, v in (d.get("action_tempo") or {}).items()})
 
 
 class GlobalStyleEstimator(BaseEstimator):
@@ -215,6 +224,7 @@ class GlobalStyleEstimator(BaseEstimator):
         est.orthodox_side_ = 0.0  # unknown without a population: the labelled jab hand decides
         est.stance_side_ = {}
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
+        est.step_frames_ = math.nan  # no population: the speed is unknown
         return est
 
     def fit(self, videos, y=None) -> GlobalStyleEstimator:
@@ -222,10 +232,12 @@ class GlobalStyleEstimator(BaseEstimator):
             raise ParameterError("lead_cue", f"must be one of {', '.join(LEAD_CUES)}, got {self.lead_cue!r}")
         per_view: dict[str, dict[str, list[float]]] = {}
         dur: dict[str, list[int]] = {}
+        steps: list[int] = []
         front = []
         stance: dict[str, list[float]] = {}
         for xy, labels, view in videos:
             f = video_figures(xy, labels)
+            steps += f["step_durations"]
             if str(view) == "front":
                 front.append(f)
             if f["jab_scores"] and f["stance_frames"]:  # the labelled jab hand's lead times the stance side
@@ -245,12 +257,13 @@ class GlobalStyleEstimator(BaseEstimator):
         # per view, the image side of an orthodox fighter's front foot, learned the same way
         self.stance_side_ = {v: float(np.sign(np.sum(x))) for v, x in stance.items() if np.sum(x) != 0}
         self.durations_ = {a: float(np.median(d)) for a, d in dur.items() if d}
+        self.step_frames_ = float(np.median(steps)) if steps else math.nan
         return self
 
     def estimate(self, videos) -> GlobalStyle:
         if not hasattr(self, "population_"):
             raise ParameterError("estimator", "not fitted")
-        g, s, c, jab, sides, dur = [], [], [], [], [], {}
+        g, s, c, jab, sides, dur, steps = [], [], [], [], [], {}, []
         stance_sum, stance_n = 0.0, 0
         stance_side = getattr(self, "stance_side_", {})
         for xy, labels, view in videos:
@@ -270,6 +283,7 @@ class GlobalStyleEstimator(BaseEstimator):
                 s.append(f["stance"] / pop["stance"])
                 c.append(pop["extension"] - f["extension"])
             jab += f["jab_scores"]
+            steps += f["step_durations"]
             for a, ds in f["durations"].items():
                 dur.setdefault(a, []).extend(ds)
         side = getattr(self, "orthodox_side_", 0.0)
@@ -284,9 +298,12 @@ class GlobalStyleEstimator(BaseEstimator):
             score = float(np.mean(jab)) if jab else 0.0
         tempo = {a: float(np.median(d)) / self.durations_[a] for a, d in dur.items() if a in self.durations_ and d}
         mt = float(np.mean(list(tempo.values()))) if tempo else math.nan
+        pop_step = float(getattr(self, "step_frames_", math.nan))
+        speed = pop_step / float(np.median(steps)) if steps and np.isfinite(pop_step) else math.nan
+        action_tempo = {a: v * speed for a, v in tempo.items()} if np.isfinite(speed) else {}
         return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
                            _nanmedian(s), _nanmedian(c), tempo, {a: v / mt for a, v in tempo.items()},
-                           len(videos), len(jab))
+                           len(videos), len(jab), speed, action_tempo)
 
 
 # ----------------------------------------------------------------------------- orthodox clips for the model

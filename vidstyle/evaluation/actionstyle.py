@@ -194,6 +194,8 @@ def score_performer(model, style, n_videos: int, truth_style: dict, truth: dict,
            "tempo_true": {a: ts["tempo"][k] for k, a in enumerate(actions)},
            "duration_factor_true": {a: ts["tempo"][k] / ts["speed"] for k, a in enumerate(actions)},
            "tempo": gs.tempo, "relative_tempo": gs.relative_tempo,
+           "speed_true": ts["speed"], "speed": gs.speed if np.isfinite(gs.speed) else None,
+           "action_tempo": gs.action_tempo,
            "videos": n_videos, "fit_seconds": fit_s, "segments": dict(style.counts), "labels": {}}
     rng = np.random.default_rng(seed)
     true_south = ts["lead"] == "southpaw"
@@ -225,7 +227,7 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
     out["lead_accuracy"] = float(np.mean([r["lead"] == r["lead_true"] for r in rows]))
     for k in ("guard_height", "stance_width", "crouch"):
         out[f"{k}_r"] = pearson([r[f"{k}_true"] for r in rows], [r[k] for r in rows])
-    tt, te, dt, rt, rte = [], [], [], [], []
+    tt, te, dt, rt, rte, at, ae = [], [], [], [], [], [], []
     for r in rows:
         mt = np.mean(list(r["tempo_true"].values()))
         for a in actions:
@@ -235,9 +237,17 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
                 te.append(r["tempo"][a])
                 rt.append(r["tempo_true"][a] / mt)
                 rte.append(r["relative_tempo"][a])
+            if a in (r.get("action_tempo") or {}):
+                at.append(r["tempo_true"][a])
+                ae.append(r["action_tempo"][a])
     out["duration_factor_r"] = pearson(dt, te)  # tempo / speed: what durations show
     out["tempo_r"] = pearson(tt, te)  # the raw per-action tempo parameter against the duration factor
     out["relative_tempo_r"] = pearson(rt, rte)  # tempo / the performer's mean tempo
+    # the per-action tempo itself: the duration factor times the speed the performer's steps show
+    out["action_tempo_r"] = pearson(at, ae)
+    out["action_tempo_pairs"] = len(at)
+    sp = [(r["speed_true"], r["speed"]) for r in rows if r.get("speed") is not None]
+    out["speed_r"] = pearson([a for a, _ in sp], [b for _, b in sp])
     keys = ("fitted_mean_mm", "fitted_sample_mm", "unfitted_mean_mm", "unfitted_sample_mm", "unfitted_mean_true_lead_mm")
     vals = {k: [lr[k] for r in rows for lr in r["labels"].values() if np.isfinite(lr[k])] for k in keys}
     for k in keys:

@@ -32,7 +32,8 @@ rows and columns in the order of ``actions``; modes of model (b) are rows of its
           "params": {...},             # the fit's parameters (prior_weight, loss_scale, n_fit, ...)
           "global": {"lead": "orthodox" | "southpaw", "lead_score", "guard_height", "stance_width",
                      "crouch" (numbers or null), "tempo": {action: factor}, "relative_tempo": {action: x},
-                     "n_videos", "n_jabs"},
+                     "n_videos", "n_jabs",
+                     "speed" (number or null; optional), "action_tempo": {action: x} (optional)},
           "labels": {label: {"coefficients": [k], "spread": [k], "segments": n}}   # orthodox frame
       }
     }
@@ -204,8 +205,9 @@ def _action_style_dict(r: ActionStyleRecord) -> dict[str, Any]:
     g = dict(r.global_style)
     for k in ("lead_score", "guard_height", "stance_width", "crouch"):
         g[k] = None if g.get(k) is None else _finite_or_none(g[k])
-    for k in ("tempo", "relative_tempo"):
+    for k in ("tempo", "relative_tempo", "action_tempo"):
         g[k] = {a: _finite_or_none(v) for a, v in (g.get(k) or {}).items()}
+    g["speed"] = None if g.get("speed") is None else _finite_or_none(g["speed"])
     return {"model": r.model, "params": r.params, "global": g,
             "labels": {lab: {"coefficients": [float(x) for x in c], "spread": [float(x) for x in sp], "segments": int(n)}
                        for lab, (c, sp, n) in r.labels.items()}}
@@ -223,9 +225,9 @@ def _parse_action_style(f: Fields) -> ActionStyleRecord:
             raise f.fail("params", f"{k}: must be finite")
     g = f.sub("global")
     glob: dict[str, Any] = {"lead": g.str("lead", choices=("orthodox", "southpaw"))}
-    for k in ("lead_score", "guard_height", "stance_width", "crouch"):
+    for k in ("lead_score", "guard_height", "stance_width", "crouch", "speed"):
         glob[k] = _opt_number(g, k)
-    for k in ("tempo", "relative_tempo"):
+    for k in ("tempo", "relative_tempo", "action_tempo"):
         t = g.sub(k, required=False)
         glob[k] = {} if t is None else {a: _opt_number(t, a) for a in t.obj}
     glob["n_videos"] = g.int("n_videos", required=False, default=0, min=0)
