@@ -81,11 +81,11 @@ def main() -> int:
     import numpy as np
 
     from vidstyle.actionmodel import defaults as D
-    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
     from vidstyle.evaluation.actionmodel import split_groups
     from vidstyle.evaluation.actionstyle import (
         demo_truth,
         evaluate_performer,
+        fit_population,
         orthodox_model,
         performer_videos,
         row_json,
@@ -106,7 +106,7 @@ def main() -> int:
         train = sorted(g["A"] + g["B"])
         t0 = time.perf_counter()
         model = orthodox_model(args.dataset, manifest, train, seed)
-        est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true", cache=cache)])
+        est = fit_population(ds, manifest, train, cache=cache)
         log.info("seed %d: model and population on %s (%.0f s)", seed, train, time.perf_counter() - t0)
         for p in g["T"]:
             truth = true_instances(args.dataset, p, model, seed=seed)

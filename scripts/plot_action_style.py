@@ -40,9 +40,14 @@ def main() -> int:
     import numpy as np
 
     from vidstyle.actionmodel.dtw import dtw
-    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator, fit_action_style
+    from vidstyle.actionmodel.stylefit import fit_action_style
     from vidstyle.evaluation.actionmodel import read_manifest, split_groups
-    from vidstyle.evaluation.actionstyle import orthodox_model, performer_videos, true_instances
+    from vidstyle.evaluation.actionstyle import (
+        fit_population,
+        orthodox_model,
+        performer_videos,
+        true_instances,
+    )
     from vidstyle.formats.dataset import read_dataset
     from vidstyle.mocap.keypoints import KEYPOINT_INDEX, PARTS, keypoint_positions
 
@@ -51,7 +56,7 @@ def main() -> int:
     g = split_groups(manifest, args.seed)
     train = sorted(g["A"] + g["B"])
     model = orthodox_model(args.dataset, manifest, train, args.seed)
-    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true")])
+    est = fit_population(ds, manifest, train)
     lm = model.models_[args.label]
     mu = lm.gmm_means[int(np.argmax(lm.gmm_weights))]
     bones = [(KEYPOINT_INDEX[a], KEYPOINT_INDEX[b]) for a, b in PARTS.values()]

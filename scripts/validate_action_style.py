@@ -44,11 +44,11 @@ def main() -> int:
 
     import numpy as np
 
-    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator
     from vidstyle.evaluation.actionmodel import split_groups
     from vidstyle.evaluation.actionstyle import (
         demo_truth,
         evaluate_performer,
+        fit_population,
         orthodox_model,
         performer_videos,
         summarise,
@@ -64,7 +64,7 @@ def main() -> int:
     train = sorted(g["A"] + g["B"])
     model = orthodox_model(args.dataset, manifest, train, args.seed)
     cache: dict = {}
-    est = GlobalStyleEstimator().fit([x for p in train for x in performer_videos(ds, manifest, p, "true", cache=cache)])
+    est = fit_population(ds, manifest, train, cache=cache)
     data = {}
     for p in g["V"]:
         truth = true_instances(args.dataset, p, model, seed=args.seed)

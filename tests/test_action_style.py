@@ -20,6 +20,7 @@ from vidstyle.actionmodel.stylefit import (
     mirror_track,
     project,
 )
+from vidstyle.errors import ParameterError
 from vidstyle.formats import FormatError
 
 
@@ -128,6 +129,19 @@ def test_speed_from_step_lengths_separates_action_tempo_from_the_duration_factor
     # a style written before the speed existed loads without it
     old = {k: v for k, v in g.to_dict().items() if k not in ("speed", "action_tempo")}
     assert np.isnan(GlobalStyle.from_dict(old).speed) and GlobalStyle.from_dict(old).action_tempo == {}
+
+
+def test_population_tempo_reference_is_the_mean_of_each_performers_own_ratio():
+    # performer a: steps of 10, jabs of 10 (ratio 1.0); performer b, slower: steps of 15, jabs of 18 (1.2).
+    # Grouped by performer, the reference ratio is their mean 1.1 and the step length their mean 12.5
+    a = [_labelled([("Guard", 3), ("Step", 10), ("Jab", 10), ("Guard", 3), ("Step", 10), ("Jab", 10)])] * 2
+    b = [_labelled([("Guard", 3), ("Step", 15), ("Jab", 18), ("Guard", 3)])]
+    est = GlobalStyleEstimator().fit(a + b, groups=["a", "a", "b"])
+    assert est.step_frames_ == pytest.approx(12.5) and est.action_step_ratio_ == pytest.approx({"Jab": 1.1})
+    g = est.estimate([_labelled([("Guard", 2), ("Step", 12), ("Jab", 13), ("Guard", 2), ("Step", 12), ("Jab", 14)])])
+    assert g.speed == pytest.approx(12.5 / 12) and g.action_tempo == pytest.approx({"Jab": 13.5 / 12 / 1.1})
+    with pytest.raises(ParameterError, match="groups"):
+        GlobalStyleEstimator().fit(a + b, groups=["a", "b"])
 
 
 def test_mirror_track_is_an_involution():

@@ -34,9 +34,12 @@ training population, so only the view's identity is used, never its angle).
 * **tempo**: per action the performer's median segment length (frames) over the population's median: the
   observable duration factor ``tempo[a] / speed`` of :class:`vidstyle.demo.performer.MovementTraits`;
   ``relative_tempo`` divides by its mean over actions (``tempo[a] / mean tempo``). **speed**: the
-  population's median ``Step`` segment length over the performer's (a step takes ``BASE_SECONDS["Step"] /
-  speed``, whatever the per-action tempo), so that ``action_tempo[a] = tempo[a] * speed`` separates the
-  per-action tempo from the performer's overall speed (nan / empty when no step was seen).
+  population's ``Step`` segment length over the performer's median (a step takes ``BASE_SECONDS["Step"] /
+  speed``, whatever the per-action tempo). **action_tempo**: the performer's action-to-step length ratio
+  over the population's, which separates the per-action tempo from the overall speed (nan / empty when no
+  step was seen). With the performers of the population's videos (``fit(groups=)``) the population's
+  step length and ratios are means over performers of their own medians; without, pooled medians (then
+  ``action_tempo[a] = tempo[a] * speed``).
 
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
 coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
@@ -179,8 +182,8 @@ class GlobalStyle:
     relative_tempo: dict[str, float] = field(default_factory=dict)
     n_videos: int = 0
     n_jabs: int = 0
-    speed: float = math.nan  # the population's median step length over the performer's (nan: no steps seen)
-    action_tempo: dict[str, float] = field(default_factory=dict)  # tempo[a] * speed: the per-action tempo itself
+    speed: float = math.nan  # the population's step length over the performer's (nan: no steps seen)
+    action_tempo: dict[str, float] = field(default_factory=dict)  # the per-action tempo, speed removed
 
     def to_dict(self) -> dict:
         f = lambda x: None if x is None or not np.isfinite(x) else round(float(x), 6)
@@ -225,9 +228,13 @@ class GlobalStyleEstimator(BaseEstimator):
         est.stance_side_ = {}
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
         est.step_frames_ = math.nan  # no population: the speed is unknown
+        est.action_step_ratio_ = {}
         return est
 
-    def fit(self, videos, y=None) -> GlobalStyleEstimator:
+    def fit(self, videos, y=None, groups=None) -> GlobalStyleEstimator:
+        """``groups``: the performer of each video (scikit-learn's ``groups``). With them the tempo reference
+        of each action is the mean over performers of their own action-to-step length ratio, so a
+        population's mix of speeds does not shift it; without them, pooled medians."""
         if self.lead_cue not in LEAD_CUES:
             raise ParameterError("lead_cue", f"must be one of {', '.join(LEAD_CUES)}, got {self.lead_cue!r}")
         per_view: dict[str, dict[str, list[float]]] = {}
@@ -235,9 +242,18 @@ class GlobalStyleEstimator(BaseEstimator):
         steps: list[int] = []
         front = []
         stance: dict[str, list[float]] = {}
-        for xy, labels, view in videos:
+        videos = list(videos)
+        if groups is not None and len(groups) != len(videos):
+            raise ParameterError("groups", f"one performer per video: {len(groups)} groups for {len(videos)} videos")
+        by_performer: dict = {}
+        for i, (xy, labels, view) in enumerate(videos):
             f = video_figures(xy, labels)
             steps += f["step_durations"]
+            if groups is not None:
+                mine = by_performer.setdefault(groups[i], ({}, []))
+                mine[1].extend(f["step_durations"])
+                for a, ds in f["durations"].items():
+                    mine[0].setdefault(a, []).extend(ds)
             if str(view) == "front":
                 front.append(f)
             if f["jab_scores"] and f["stance_frames"]:  # the labelled jab hand's lead times the stance side
@@ -258,6 +274,14 @@ class GlobalStyleEstimator(BaseEstimator):
         self.stance_side_ = {v: float(np.sign(np.sum(x))) for v, x in stance.items() if np.sum(x) != 0}
         self.durations_ = {a: float(np.median(d)) for a, d in dur.items() if d}
         self.step_frames_ = float(np.median(steps)) if steps else math.nan
+        # the per-action tempo reference: action length over step length
+        self.action_step_ratio_ = {a: d / self.step_frames_ for a, d in self.durations_.items()} if steps else {}
+        if by_performer:
+            own = [(d, float(np.median(st))) for d, st in by_performer.values() if st]
+            if own:
+                self.step_frames_ = float(np.mean([st for _, st in own]))
+                self.action_step_ratio_ = {a: float(np.mean(r)) for a in self.durations_
+                                           if (r := [float(np.median(d[a])) / st for d, st in own if d.get(a)])}
         return self
 
     def estimate(self, videos) -> GlobalStyle:
@@ -300,7 +324,9 @@ class GlobalStyleEstimator(BaseEstimator):
         mt = float(np.mean(list(tempo.values()))) if tempo else math.nan
         pop_step = float(getattr(self, "step_frames_", math.nan))
         speed = pop_step / float(np.median(steps)) if steps and np.isfinite(pop_step) else math.nan
-        action_tempo = {a: v * speed for a, v in tempo.items()} if np.isfinite(speed) else {}
+        ratio = getattr(self, "action_step_ratio_", {})
+        action_tempo = ({a: float(np.median(d)) / float(np.median(steps)) / ratio[a] for a, d in dur.items()
+                         if a in ratio and d} if np.isfinite(speed) else {})
         return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
                            _nanmedian(s), _nanmedian(c), tempo, {a: v / mt for a, v in tempo.items()},
                            len(videos), len(jab), speed, action_tempo)

@@ -116,15 +116,14 @@ def learn_style(
         if population is not None:  # the population's true 2D (dataset truth sidecars) and labels
             import json
 
-            from ..actionmodel.stylefit import GlobalStyleEstimator
-            from ..evaluation.actionstyle import performer_videos
+            from ..evaluation.actionstyle import fit_population
             from ..formats.dataset import read_dataset
 
             ds = read_dataset(Path(population) / "dataset.json")
             manifest = json.loads((Path(population) / "dataset.json").read_text())
             pop = ([p.strip() for p in population_performers.split(",") if p.strip()] if population_performers
                    else [p["id"] for p in manifest["performers"]])
-            est = GlobalStyleEstimator().fit([x for q in pop for x in performer_videos(ds, manifest, q, "true")])
+            est = fit_population(ds, manifest, pop)
         learned[0][1].action_style = learn_action_style(labels, poses_dir, action_model, est, seed)
     styles = [(out if pid is None else Path(out_dir) / f"{pid}.json", style) for pid, style in learned]
     from ..fileio import output_dir

@@ -307,11 +307,19 @@ def fit_training(dataset: str | Path, seed: int = 0, jobs: int = 1, demo: dict |
     return demo, groups, model, est
 
 
-def _population(dataset, train):
+def fit_population(ds, manifest: dict, performers, cache: dict | None = None, **params):
+    """The global-style estimator fitted on the true 2D of ``performers``' videos, each video grouped by its
+    performer (:meth:`~vidstyle.actionmodel.stylefit.GlobalStyleEstimator.fit`'s ``groups``)."""
     from ..actionmodel.stylefit import GlobalStyleEstimator
 
+    videos = {p: performer_videos(ds, manifest, p, "true", cache=cache) for p in performers}
+    return GlobalStyleEstimator(**params).fit([x for p in performers for x in videos[p]],
+                                              groups=[p for p in performers for _ in videos[p]])
+
+
+def _population(dataset, train):
     demo = demo_truth(dataset)
-    return GlobalStyleEstimator().fit([x for p in train for x in performer_videos(demo["dataset"], demo["manifest"], p, "true")])
+    return fit_population(demo["dataset"], demo["manifest"], train)
 
 
 def _takes(dataset, performers) -> list:
