@@ -32,11 +32,11 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
-
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # before numpy loads its BLAS: one thread, as the timings say
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
 
 from vidstyle.evaluation.inbetween import GAPS, SPLIT, benchmark, fit_methods, prepare, score_methods
 from vidstyle.formats.validation import INBETWEEN, validation_header, write_validation

@@ -323,10 +323,11 @@ class GlobalStyleEstimator(BaseEstimator):
         tempo = {a: float(np.median(d)) / self.durations_[a] for a, d in dur.items() if a in self.durations_ and d}
         mt = float(np.mean(list(tempo.values()))) if tempo else math.nan
         pop_step = float(getattr(self, "step_frames_", math.nan))
-        speed = pop_step / float(np.median(steps)) if steps and np.isfinite(pop_step) else math.nan
+        step = float(np.median(steps)) if steps else math.nan
+        speed = pop_step / step if np.isfinite(pop_step) else math.nan
         ratio = getattr(self, "action_step_ratio_", {})
-        action_tempo = ({a: float(np.median(d)) / float(np.median(steps)) / ratio[a] for a, d in dur.items()
-                         if a in ratio and d} if np.isfinite(speed) else {})
+        action_tempo = ({a: float(np.median(d)) / step / ratio[a] for a, d in dur.items() if a in ratio and d}
+                        if np.isfinite(speed) else {})
         return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
                            _nanmedian(s), _nanmedian(c), tempo, {a: v / mt for a, v in tempo.items()},
                            len(videos), len(jab), speed, action_tempo)
