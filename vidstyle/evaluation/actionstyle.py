@@ -243,7 +243,7 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
     out["duration_factor_r"] = pearson(dt, te)  # tempo / speed: what durations show
     out["tempo_r"] = pearson(tt, te)  # the raw per-action tempo parameter against the duration factor
     out["relative_tempo_r"] = pearson(rt, rte)  # tempo / the performer's mean tempo
-    # the per-action tempo itself: the duration factor times the speed the performer's steps show
+    # the per-action tempo itself: the performer's action-to-step length ratio over the population's
     out["action_tempo_r"] = pearson(at, ae)
     out["action_tempo_pairs"] = len(at)
     sp = [(r["speed_true"], r["speed"]) for r in rows if r.get("speed") is not None]
