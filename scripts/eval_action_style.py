@@ -51,12 +51,12 @@ def fmt(x, d=3):
 def print_tables(by_input: dict) -> None:
     print("\nGlobal style (Pearson r over test performers; tempo over performer x action)")
     print(f"{'input':24s} {'perf':>4s} {'lead acc':>8s} {'guard r':>8s} {'stance r':>8s} {'crouch r':>8s} "
-          f"{'dur.f r':>8s} {'tempo r':>8s} {'rel.t r':>8s} {'speed r':>8s} {'act.t r':>8s}")
+          f"{'dur.f r':>8s} {'tempo r':>8s} {'rel.t r':>8s} {'speed r':>8s} {'act.t r':>8s} {'pop.t r':>8s}")
     for k, s in by_input.items():
         print(f"{k:24s} {s['performers']:4d} {fmt(s.get('lead_accuracy'))} {fmt(s.get('guard_height_r')):>8s} "
               f"{fmt(s.get('stance_width_r')):>8s} {fmt(s.get('crouch_r')):>8s} {fmt(s.get('duration_factor_r')):>8s} "
               f"{fmt(s.get('tempo_r')):>8s} {fmt(s.get('relative_tempo_r')):>8s} {fmt(s.get('speed_r')):>8s} "
-              f"{fmt(s.get('action_tempo_r')):>8s}")
+              f"{fmt(s.get('action_tempo_r')):>8s} {fmt(s.get('action_tempo_population_r')):>8s}")
     print("\nGenerated actions: DTW-aligned MPJPE (mm) against the performer's true instances of the label")
     print(f"{'input':24s} {'fit mean':>9s} {'fit smp':>9s} {'pool mean':>9s} {'pool smp':>9s} {'pool+lead':>9s} "
           f"{'reduction':>9s} {'red.smp':>8s} {'red.lead':>8s}")
@@ -88,6 +88,7 @@ def main() -> int:
         fit_population,
         orthodox_model,
         performer_videos,
+        population_tempo,
         row_json,
         summarise,
         true_instances,
@@ -119,7 +120,7 @@ def main() -> int:
                 if not vids:
                     continue
                 r = evaluate_performer(model, est, vids, truth_style[p], truth, actions, unit_mm, seed=seed)
-                r.update(seed=seed, performer=p, input=kind)
+                r.update(seed=seed, performer=p, input=kind, population_tempo_true=population_tempo(truth_style, train, actions))
                 rows[kind].append(r)
                 log.info("seed %d %s %s: lead %s (%s) guard %.3f/%.3f stance %.3f/%.3f, MPJPE fit %.1f / pooled %.1f mm "
                          "(%d videos, %.0f s)", seed, p, kind, r["lead"], r["lead_true"], r["guard_height"],

@@ -144,6 +144,39 @@ def test_population_tempo_reference_is_the_mean_of_each_performers_own_ratio():
         GlobalStyleEstimator().fit(a + b, groups=["a", "b"])
 
 
+def test_action_tempo_equals_the_true_tempo_over_the_population_mean_and_the_metric_scores_that():
+    from vidstyle.evaluation.actionstyle import population_tempo, summarise
+
+    # a generator like the demo's: a step lasts 12 / speed frames, a jab 20 * tempo / speed
+    truth = {"p": {"tempo": [0.9], "speed": 1.0}, "q": {"tempo": [1.0], "speed": 1.0},
+             "r": {"tempo": [1.2], "speed": 1.0}, "t": {"tempo": [0.9], "speed": 1.5}}
+
+    def video(who):
+        sp, tj = truth[who]["speed"], truth[who]["tempo"][0]
+        return _labelled([("Guard", 3), ("Step", round(12 / sp)), ("Jab", round(20 * tj / sp)), ("Guard", 3)])
+
+    pop = ["p", "q", "r"]
+    est = GlobalStyleEstimator().fit([video(w) for w in pop], groups=pop)
+    ref = population_tempo(truth, pop, ["Jab"])
+    assert ref == pytest.approx({"Jab": (0.9 + 1.0 + 1.2) / 3})
+    g = est.estimate([video("t")])
+    assert g.speed == pytest.approx(1.5) and g.action_tempo["Jab"] == pytest.approx(0.9 / ref["Jab"])
+
+    # estimates exact against the population-relative truth, populations differing in their mean tempo:
+    # that correlation is 1, the one against the absolute tempo is not
+    def row(tempo, pop_mean):
+        return {"lead": "orthodox", "lead_true": "orthodox", "guard_height": 0.0, "guard_height_true": 0.0,
+                "stance_width": 0.0, "stance_width_true": 0.0, "crouch": 0.0, "crouch_true": 0.0,
+                "tempo_true": {"Jab": tempo}, "duration_factor_true": {"Jab": tempo}, "tempo": {"Jab": tempo},
+                "relative_tempo": {"Jab": 1.0}, "action_tempo": {"Jab": tempo / pop_mean},
+                "population_tempo_true": {"Jab": pop_mean}, "speed_true": 1.0, "speed": None, "labels": {}}
+
+    rows = [row(t, m) for t, m in [(0.9, 0.95), (1.1, 0.95), (0.95, 1.1), (1.15, 1.1), (1.0, 1.02), (0.88, 1.02)]]
+    out = summarise(rows, ["Jab"])
+    assert out["action_tempo_population_r"] == pytest.approx(1.0)
+    assert out["action_tempo_r"] < 0.9
+
+
 def test_mirror_track_is_an_involution():
     xy = np.random.default_rng(0).normal(size=(4, 15, 2))
     assert np.allclose(mirror_track(mirror_track(xy)), xy)

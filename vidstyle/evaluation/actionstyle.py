@@ -227,7 +227,7 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
     out["lead_accuracy"] = float(np.mean([r["lead"] == r["lead_true"] for r in rows]))
     for k in ("guard_height", "stance_width", "crouch"):
         out[f"{k}_r"] = pearson([r[f"{k}_true"] for r in rows], [r[k] for r in rows])
-    tt, te, dt, rt, rte, at, ae = [], [], [], [], [], [], []
+    tt, te, dt, rt, rte, at, ae, ap, ape = [], [], [], [], [], [], [], [], []
     for r in rows:
         mt = np.mean(list(r["tempo_true"].values()))
         for a in actions:
@@ -240,12 +240,18 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
             if a in (r.get("action_tempo") or {}):
                 at.append(r["tempo_true"][a])
                 ae.append(r["action_tempo"][a])
+                if a in (r.get("population_tempo_true") or {}):
+                    ap.append(r["tempo_true"][a] / r["population_tempo_true"][a])
+                    ape.append(r["action_tempo"][a])
     out["duration_factor_r"] = pearson(dt, te)  # tempo / speed: what durations show
     out["tempo_r"] = pearson(tt, te)  # the raw per-action tempo parameter against the duration factor
     out["relative_tempo_r"] = pearson(rt, rte)  # tempo / the performer's mean tempo
     # the per-action tempo itself: the performer's action-to-step length ratio over the population's
     out["action_tempo_r"] = pearson(at, ae)
     out["action_tempo_pairs"] = len(at)
+    # the same against the truth over the population's mean tempo of the action: the reference the estimate is
+    # relative to (the population's clips are what synthesize re-times), which no video of the performer shows
+    out["action_tempo_population_r"] = pearson(ap, ape)
     sp = [(r["speed_true"], r["speed"]) for r in rows if r.get("speed") is not None]
     out["speed_r"] = pearson([a for a, _ in sp], [b for _, b in sp])
     keys = ("fitted_mean_mm", "fitted_sample_mm", "unfitted_mean_mm", "unfitted_sample_mm", "unfitted_mean_true_lead_mm")
@@ -257,6 +263,14 @@ def summarise(rows: list[dict], actions: list[str]) -> dict:
         out["mpjpe_reduction_sample"] = 1 - out["fitted_sample_mm"] / out["unfitted_sample_mm"]
         out["mpjpe_reduction_vs_true_lead"] = 1 - out["fitted_mean_mm"] / out["unfitted_mean_true_lead_mm"]
     return out
+
+
+def population_tempo(truth_style: dict, performers, actions: list[str]) -> dict[str, float]:
+    """The mean true per-action tempo of ``performers`` (dataset ``style``): the reference that
+    :class:`~vidstyle.actionmodel.stylefit.GlobalStyleEstimator` fitted on them measures ``action_tempo``
+    against (the mean over its performers of their own action-to-step ratios, each ``tempo[a]`` times a
+    constant of the action)."""
+    return {a: float(np.mean([truth_style[p]["tempo"][k] for p in performers])) for k, a in enumerate(actions)}
 
 
 def row_json(r: dict) -> dict:
@@ -429,7 +443,7 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     by_kind: dict[str, list] = {k: [] for k in inputs}
     styles: dict[str, dict] = {k: {} for k in inputs}
     for (p, kind), r in zip(keys, rows):
-        r.update(seed=seed, performer=p, input=kind)
+        r.update(seed=seed, performer=p, input=kind, population_tempo_true=population_tempo(demo["style"], train, actions))
         by_kind[kind].append(r)
         styles[kind][p] = r["style"]
     by_input = {k: summarise(v, actions) for k, v in by_kind.items() if v}
