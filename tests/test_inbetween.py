@@ -381,3 +381,23 @@ def test_evaluate_inbetween_graph_bad_options_exit_2(tmp_path, capsys, monkeypat
     err = capsys.readouterr().err
     assert needle in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "m.json").exists()
+
+
+def test_batched_global_poses_and_position_stats_equal_window_by_window():
+    from vidstyle.evaluation.inbetween import _global_poses, global_pose, position_stats, windows
+    from vidstyle.mocap.motion import Motion
+
+    lib = _library(seed=3, clips=1, frames=200)
+    m = Motion(lib.skeleton_, lib.rotations_, None, 30.0, root_positions=lib.root_positions_)
+    wins = windows(m, 50, 20)
+    assert len(wins) == 8
+    # the window is turned to face +Z at frame n_past - 1, whatever frames around it
+    assert all(abs(w.facing_angles()[9]) < 1e-9 for w in wins)
+    rots = [w.rotations[3:30] for w in wins]
+    roots = [w.root_positions[3:30] for w in wins]
+    for (q, p), w, r, t in zip(_global_poses(wins, rots, roots), wins, rots, roots):
+        q1, p1 = global_pose(w.skeleton, r, t)
+        assert np.array_equal(q, q1) and np.array_equal(p, p1)
+    mean, std = position_stats(wins)
+    pos = np.concatenate([global_pose(w.skeleton, w.rotations, w.root_positions)[1] for w in wins])
+    assert np.array_equal(mean, pos.mean(axis=0)) and np.array_equal(std, np.where(pos.std(axis=0) > 1e-9, pos.std(axis=0), 1.0))

@@ -61,6 +61,17 @@ def global_pose(skeleton: Skeleton, rotations: np.ndarray, roots: np.ndarray) ->
     return q, pos
 
 
+def _global_poses(wins: list[Motion], rotations: list[np.ndarray], roots: list[np.ndarray]):
+    """:func:`global_pose` of each (rotations, roots) pair (on its window's skeleton), in order; pairs whose
+    windows share one skeleton go through one call (per-frame kinematics and conversions: the same values
+    as pair by pair)."""
+    if wins and all(w.skeleton is wins[0].skeleton for w in wins):
+        q, pos = global_pose(wins[0].skeleton, np.concatenate(rotations), np.concatenate(roots))
+        cuts = np.cumsum([len(r) for r in rotations])[:-1]
+        return list(zip(np.split(q, cuts), np.split(pos, cuts)))
+    return [global_pose(w.skeleton, r, p) for w, r, p in zip(wins, rotations, roots)]
+
+
 def sign_continuous(q: np.ndarray, anchor: np.ndarray | None = None) -> np.ndarray:
     """(F, J, 4) quaternions with each in the hemisphere of the previous frame's; with ``anchor`` (J, 4)
     the chain starts from it (the anchor itself is not returned)."""
@@ -115,7 +126,8 @@ def windows(motion: Motion, window: int = WINDOW, offset: int = OFFSET, n_past: 
         w = motion[i : i + window]
         mean = w.root_positions[:, [0, 2]].mean(axis=0)
         w = w.translate(np.array([-mean[0], 0.0, -mean[1]]))
-        w = w.rotate_about_vertical(-float(w.facing_angles()[n_past - 1]))
+        # the facing of that one frame (per-frame kinematics: the same angle as the whole window's)
+        w = w.rotate_about_vertical(-float(w[n_past - 1 : n_past].facing_angles()[0]))
         out.append(w)
         i += offset
     return out
@@ -123,7 +135,14 @@ def windows(motion: Motion, window: int = WINDOW, offset: int = OFFSET, n_past: 
 
 def position_stats(wins: list[Motion]) -> tuple[np.ndarray, np.ndarray]:
     """(J, 3) mean and standard deviation of global joint positions over the windows' frames."""
-    pos = np.concatenate([global_pose(w.skeleton, w.rotations, w.root_positions)[1] for w in wins])
+    # positions only (no quaternions), every window's frames through one forward-kinematics call when the
+    # windows share a skeleton (per-frame kinematics: the same positions as window by window)
+    if wins and all(w.skeleton is wins[0].skeleton for w in wins):
+        m = Motion(wins[0].skeleton, np.concatenate([w.rotations for w in wins]), None, FPS,
+                   root_positions=np.concatenate([w.root_positions for w in wins]))
+        pos = forward_kinematics(m, return_matrices=False)[0]
+    else:
+        pos = np.concatenate([global_pose(w.skeleton, w.rotations, w.root_positions)[1] for w in wins])
     std = pos.std(axis=0)
     return pos.mean(axis=0), np.where(std > 1e-9, std, 1.0)
 
@@ -140,23 +159,25 @@ def score_methods(methods: dict, wins: list[Motion], gaps=GAPS, mean=None, std=N
     for n in gaps:
         e = n_past + n
         truth_q, truth_p, anchors = [], [], []
-        for w in wins:
-            gq, gp = global_pose(w.skeleton, w.rotations[: e + 1], w.root_positions[: e + 1])
+        for gq, gp in _global_poses(wins, [w.rotations[: e + 1] for w in wins], [w.root_positions[: e + 1] for w in wins]):
             gq = sign_continuous(gq)
             truth_q.append(gq[n_past:e])
             truth_p.append(gp[n_past:e])
             anchors.append(gq[n_past - 1])
         truth_q, truth_p = np.stack(truth_q), np.stack(truth_p)
         for name, model in methods.items():
-            pq, pp, secs = [], [], []
-            for w, anchor in zip(wins, anchors):
+            rots, roots, secs = [], [], []
+            for w in wins:
                 r, p = w.rotations, w.root_positions
                 start = Keypose(r[n_past - 1], p[n_past - 1], Keypose(r[n_past - 2], p[n_past - 2]))
                 end = Keypose(r[e], p[e], following=Keypose(r[e + 1], p[e + 1]) if e + 1 < len(r) else None)
                 t0 = time.perf_counter()
                 rot, root = inbetween_pair(model, start, end, n + 2, free_end=False)
                 secs.append(time.perf_counter() - t0)
-                gq, gp = global_pose(w.skeleton, rot[1:-1], root[1:-1])
+                rots.append(rot[1:-1])
+                roots.append(root[1:-1])
+            pq, pp = [], []
+            for (gq, gp), anchor in zip(_global_poses(wins, rots, roots), anchors):
                 pq.append(sign_continuous(gq, anchor))
                 pp.append(gp)
             pq, pp = np.stack(pq), np.stack(pp)
