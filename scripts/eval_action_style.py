@@ -109,6 +109,7 @@ def main() -> int:
         model = orthodox_model(args.dataset, manifest, train, seed)
         est = fit_population(ds, manifest, train, cache=cache)
         log.info("seed %d: model and population on %s (%.0f s)", seed, train, time.perf_counter() - t0)
+        pop_tempo = population_tempo(truth_style, train, actions)  # the reference est's action_tempo is relative to
         for p in g["T"]:
             truth = true_instances(args.dataset, p, model, seed=seed)
             for kind in args.inputs:
@@ -120,7 +121,7 @@ def main() -> int:
                 if not vids:
                     continue
                 r = evaluate_performer(model, est, vids, truth_style[p], truth, actions, unit_mm, seed=seed)
-                r.update(seed=seed, performer=p, input=kind, population_tempo_true=population_tempo(truth_style, train, actions))
+                r.update(seed=seed, performer=p, input=kind, population_tempo_true=pop_tempo)
                 rows[kind].append(r)
                 log.info("seed %d %s %s: lead %s (%s) guard %.3f/%.3f stance %.3f/%.3f, MPJPE fit %.1f / pooled %.1f mm "
                          "(%d videos, %.0f s)", seed, p, kind, r["lead"], r["lead_true"], r["guard_height"],

@@ -442,8 +442,9 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     rows = parallel_map(_score_worker, scored, jobs=jobs, description="action-style scores")
     by_kind: dict[str, list] = {k: [] for k in inputs}
     styles: dict[str, dict] = {k: {} for k in inputs}
+    pop_tempo = population_tempo(demo["style"], train, actions)
     for (p, kind), r in zip(keys, rows):
-        r.update(seed=seed, performer=p, input=kind, population_tempo_true=population_tempo(demo["style"], train, actions))
+        r.update(seed=seed, performer=p, input=kind, population_tempo_true=pop_tempo)
         by_kind[kind].append(r)
         styles[kind][p] = r["style"]
     by_input = {k: summarise(v, actions) for k, v in by_kind.items() if v}

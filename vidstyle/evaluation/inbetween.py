@@ -61,12 +61,18 @@ def global_pose(skeleton: Skeleton, rotations: np.ndarray, roots: np.ndarray) ->
     return q, pos
 
 
+def _shared_skeleton(wins: list[Motion]) -> Skeleton | None:
+    """The one skeleton object every window of ``wins`` has, else None: their frames can then go through
+    one call of the per-frame kinematics, with the same values as window by window."""
+    return wins[0].skeleton if wins and all(w.skeleton is wins[0].skeleton for w in wins) else None
+
+
 def _global_poses(wins: list[Motion], rotations: list[np.ndarray], roots: list[np.ndarray]):
     """:func:`global_pose` of each (rotations, roots) pair (on its window's skeleton), in order; pairs whose
-    windows share one skeleton go through one call (per-frame kinematics and conversions: the same values
-    as pair by pair)."""
-    if wins and all(w.skeleton is wins[0].skeleton for w in wins):
-        q, pos = global_pose(wins[0].skeleton, np.concatenate(rotations), np.concatenate(roots))
+    windows share one skeleton go through one call (:func:`_shared_skeleton`)."""
+    sk = _shared_skeleton(wins)
+    if sk is not None:
+        q, pos = global_pose(sk, np.concatenate(rotations), np.concatenate(roots))
         cuts = np.cumsum([len(r) for r in rotations])[:-1]
         return list(zip(np.split(q, cuts), np.split(pos, cuts)))
     return [global_pose(w.skeleton, r, p) for w, r, p in zip(wins, rotations, roots)]
@@ -135,10 +141,10 @@ def windows(motion: Motion, window: int = WINDOW, offset: int = OFFSET, n_past: 
 
 def position_stats(wins: list[Motion]) -> tuple[np.ndarray, np.ndarray]:
     """(J, 3) mean and standard deviation of global joint positions over the windows' frames."""
-    # positions only (no quaternions), every window's frames through one forward-kinematics call when the
-    # windows share a skeleton (per-frame kinematics: the same positions as window by window)
-    if wins and all(w.skeleton is wins[0].skeleton for w in wins):
-        m = Motion(wins[0].skeleton, np.concatenate([w.rotations for w in wins]), None, FPS,
+    # positions only (no quaternions); one forward-kinematics call when the windows share a skeleton
+    sk = _shared_skeleton(wins)
+    if sk is not None:
+        m = Motion(sk, np.concatenate([w.rotations for w in wins]), None, FPS,
                    root_positions=np.concatenate([w.root_positions for w in wins]))
         pos = forward_kinematics(m, return_matrices=False)[0]
     else:
