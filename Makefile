@@ -19,6 +19,9 @@ $(STAMP): pyproject.toml
 	# the package's bytecode, once: an editable install leaves vidstyle's own modules uncompiled, and where
 	# PYTHONDONTWRITEBYTECODE is set every process of the pipeline compiled them again (~0.3 s each)
 	$(BIN)/python -m compileall -q -j 0 vidstyle
+	# the numba kernels, once (vidstyle/warmup.py): otherwise the pipeline's first stage to call each one compiles
+	# it, ~15 s of CPU over a fresh run, often in two workers at once
+	$(BIN)/vidstyle -q compile
 	rm -f $(DEV_STAMP)
 	touch $(STAMP)
 

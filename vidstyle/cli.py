@@ -73,8 +73,8 @@ def _register_commands() -> None:
 #: --help lists the commands in pipeline order, stages apart from the tools
 _ORDER = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
           "synthesize", "fit-actions", "sample-action", "train-pose", "pose", "match-pose", "augment", "reconstruct", "annotate", "demo", "render", "evaluate",
-          "report", "timing", "mocap", "init"]
-_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing", "init"}
+          "report", "timing", "mocap", "init", "compile"]
+_TOOLS = {"annotate", "demo", "render", "mocap", "evaluate", "report", "timing", "init", "compile"}
 
 
 def _check_numbers() -> None:
