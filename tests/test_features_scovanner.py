@@ -356,3 +356,58 @@ def test_compiled_quantise_is_the_numpy_reference_to_the_bit(rng):
     h[7, :2] = 1.0
     h[8] = rng.integers(0, 4, sc.DIM)
     assert sc.quantise(h).tobytes() == sc.quantise_numpy(h).tobytes()
+
+
+def _candidate_table_cell_by_cell():
+    """The candidate table computed cell by cell, one direction at a time (the loop the vectorised
+    :func:`sc._candidate_table` replaced), as the reference."""
+    C = sc._bins()
+    n = sc.CUBE_RES
+    edges = np.linspace(-1.0, 1.0, n + 1)
+
+    def cube_dir(face, x, y):
+        axis, sign = divmod(face, 2)
+        v = np.empty(3)
+        v[axis] = 1.0 if sign == 0 else -1.0
+        others = [a for a in range(3) if a != axis]
+        v[others[0]], v[others[1]] = x, y
+        return v / np.linalg.norm(v)
+
+    lists = []
+    for face in range(6):
+        for i in range(n):
+            for j in range(n):
+                corners = [cube_dir(face, edges[i + a], edges[j + b]) for a in (0, 1) for b in (0, 1)]
+                u0 = cube_dir(face, (edges[i] + edges[i + 1]) / 2, (edges[j] + edges[j + 1]) / 2)
+                rho = max(math.acos(min(1.0, float(u0 @ c))) for c in corners) + 1e-6
+                alpha = np.arccos(np.clip(C @ u0, -1.0, 1.0))
+                lower = np.cos(np.minimum(alpha + rho, np.pi))
+                upper = np.cos(np.maximum(alpha - rho, 0.0))
+                l3 = np.sort(lower)[-3]
+                lists.append(np.flatnonzero(upper >= l3 - 1e-9))
+    return lists
+
+
+def test_candidate_table_equals_the_cell_by_cell_construction():
+    table, k = sc._candidate_table()
+    want = _candidate_table_cell_by_cell()
+    assert table.shape == (6 * sc.CUBE_RES ** 2, k) and k == max(len(x) for x in want)
+    for row, x in zip(table, want):
+        np.testing.assert_array_equal(row[row >= 0], x)
+        assert (row[len(x):] == -1).all()
+
+
+def test_every_direction_finds_its_top3_among_its_cells_candidates(rng):
+    """The table's promise, against brute force: the three bins nearest a direction (largest cosines) are
+    among the candidates of the cell it falls in, for random directions and directions at cell corners."""
+    C = sc._bins()
+    table, _ = sc._candidate_table()
+    u = rng.standard_normal((20000, 3))
+    g = np.linspace(-1, 1, sc.CUBE_RES + 1)
+    corner = np.stack(np.meshgrid([1.0], g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    u = np.concatenate([u, corner, -corner[:, [2, 0, 1]]])
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    cells = sc._cube_cell(u[:, 0], u[:, 1], u[:, 2])
+    top = np.argsort(-(u @ C.T), axis=1, kind="stable")[:, :3]
+    for t, cell in zip(top, cells):
+        assert set(t.tolist()) <= set(table[cell][table[cell] >= 0].tolist())

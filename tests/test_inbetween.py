@@ -138,6 +138,10 @@ def test_compiled_segment_path_equals_the_numpy_reference():
         cont2[2:] = cont[2:] & cont[1:-1]
         ref = markov._segment_path_numpy(labels, cont, path, first, last, 1.0, 2.0, emission, warp, Kc, entry, cont2)
         assert np.array_equal(got[0], ref[0]) and got[1] == ref[1], trial
+        if emission is not None:  # the caller's kept transpose (MarkovInbetweener.plan) gives the same
+            kept = segment_path(labels, cont, path, first, last, 1.0, 2.0, emission, warp,
+                                emission_t=np.ascontiguousarray(emission.T))
+            assert np.array_equal(kept[0], ref[0]) and kept[1] == ref[1], trial
 
 
 def test_slerp_midpoint_of_two_known_rotations():

@@ -171,18 +171,20 @@ def _candidate_table() -> tuple[np.ndarray, int]:
     C = _bins()
     n = CUBE_RES
     edges = np.linspace(-1.0, 1.0, n + 1)
+    mids = (edges[:-1] + edges[1:]) / 2
     lists = []
-    for face in range(6):
-        for i in range(n):
-            for j in range(n):
-                corners = [_cube_dir(face, edges[i + a], edges[j + b]) for a in (0, 1) for b in (0, 1)]
-                u0 = _cube_dir(face, (edges[i] + edges[i + 1]) / 2, (edges[j] + edges[j + 1]) / 2)
-                rho = max(math.acos(min(1.0, float(u0 @ c))) for c in corners) + 1e-6
-                alpha = np.arccos(np.clip(C @ u0, -1.0, 1.0))
-                lower = np.cos(np.minimum(alpha + rho, np.pi))
-                upper = np.cos(np.maximum(alpha - rho, 0.0))
-                l3 = np.sort(lower)[-3]
-                lists.append(np.flatnonzero(upper >= l3 - 1e-9))
+    for face in range(6):  # all cells of a face at once, in the order (face, i, j)
+        corners = _cube_dirs(face, edges[:, None], edges[None, :])  # (n + 1, n + 1, 3)
+        u0 = _cube_dirs(face, mids[:, None], mids[None, :]).reshape(-1, 3)  # (n * n, 3)
+        cos_corner = np.stack([np.einsum("cd,cd->c", u0, corners[a:a + n, b:b + n].reshape(-1, 3))
+                               for a in (0, 1) for b in (0, 1)], axis=1)
+        rho = np.arccos(np.minimum(1.0, cos_corner)).max(axis=1) + 1e-6  # (n * n,)
+        alpha = np.arccos(np.clip(u0 @ C.T, -1.0, 1.0))  # (n * n, bins)
+        lower = np.cos(np.minimum(alpha + rho[:, None], np.pi))
+        upper = np.cos(np.maximum(alpha - rho[:, None], 0.0))
+        l3 = np.sort(lower, axis=1)[:, -3]
+        ok = upper >= (l3 - 1e-9)[:, None]
+        lists.extend(np.flatnonzero(row) for row in ok)
     k = max(len(x) for x in lists)
     table = np.full((len(lists), k), -1, dtype=np.int64)
     for r, x in enumerate(lists):
@@ -190,13 +192,16 @@ def _candidate_table() -> tuple[np.ndarray, int]:
     return table, k
 
 
-def _cube_dir(face: int, x: float, y: float) -> np.ndarray:
+def _cube_dirs(face: int, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Unit directions (..., 3) through the points ``(x, y)`` (broadcast) of cube face ``face`` (axis
+    ``face // 2``, at +1 for even faces, -1 for odd ones; ``x``, ``y`` the other two axes in order)."""
     axis, sign = divmod(face, 2)
-    v = np.empty(3)
-    v[axis] = 1.0 if sign == 0 else -1.0
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
+    v = np.empty(x.shape + (3,))
+    v[..., axis] = 1.0 if sign == 0 else -1.0
     others = [a for a in range(3) if a != axis]
-    v[others[0]], v[others[1]] = x, y
-    return v / np.linalg.norm(v)
+    v[..., others[0]], v[..., others[1]] = x, y
+    return v / np.sqrt((v * v).sum(axis=-1))[..., None]
 
 
 def _cube_cell(u1: np.ndarray, u2: np.ndarray, u3: np.ndarray) -> np.ndarray:

@@ -153,7 +153,8 @@ def best_cluster_path(log_a: np.ndarray, start: int, end: int, n_states: int, lo
 
 def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_first: np.ndarray,
                  cost_last: np.ndarray, mismatch_cost: float, jump_cost: float,
-                 emission: np.ndarray | None = None, warp_cost: float | None = None) -> tuple[np.ndarray, float]:
+                 emission: np.ndarray | None = None, warp_cost: float | None = None,
+                 emission_t: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Level 2: the library frame shown at each output frame (``len(path)``), least total cost.
 
     ``labels`` (N,) cluster of each library frame; ``cont[i]``: frame ``i`` follows frame ``i-1`` in the same
@@ -163,7 +164,9 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
     of the segment, so a segment whose pace differs from the gap's can still meet both keys).
     Frame costs: ``mismatch_cost`` when ``labels[i] != path[t]`` (or, given ``emission`` (N, K), ``mismatch_cost
     * emission[i, path[t]]``: a soft mismatch, e.g. the squared distance to the cluster's centre), plus
-    ``cost_first`` at t = 0 and ``cost_last`` at the last t."""
+    ``cost_first`` at t = 0 and ``cost_last`` at the last t. ``emission_t``: ``emission.T`` as a C-contiguous
+    float64 (K, N) array, when the caller keeps one (the compiled pass reads it so; otherwise each call
+    makes that copy)."""
     N = len(labels)
     K = int(max(labels.max(), path.max())) + 1
     n = len(path)
@@ -178,12 +181,18 @@ def segment_path(labels: np.ndarray, cont: np.ndarray, path: np.ndarray, cost_fi
                np.ascontiguousarray(entry, dtype=np.int64), np.ascontiguousarray(path, dtype=np.int64),
                np.ascontiguousarray(cost_first, dtype=np.float64), np.ascontiguousarray(cost_last, dtype=np.float64),
                float(mismatch_cost), float(jump_cost),
-               np.zeros((1, 1)) if emission is None else np.ascontiguousarray(np.asarray(emission, dtype=np.float64).T),
+               np.zeros((1, 1)) if emission is None else (
+                   _emission_rows(emission) if emission_t is None else emission_t),
                emission is not None, 0.0 if warp_cost is None else float(warp_cost), warp_cost is not None, K,
                history, move)
         return _segment_backtrack(labels, entry, history, move)
     return _segment_path_numpy(labels, cont, path, cost_first, cost_last, mismatch_cost, jump_cost, emission,
                                warp_cost, K, entry, cont2)
+
+
+def _emission_rows(emission: np.ndarray) -> np.ndarray:
+    """``emission`` (N, K) as the compiled pass reads it: (K, N) C-contiguous float64."""
+    return np.ascontiguousarray(np.asarray(emission, dtype=np.float64).T)
 
 
 def _segment_backtrack(labels, entry, history, move) -> tuple[np.ndarray, float]:
@@ -484,6 +493,16 @@ class MarkovInbetweener:
         return int(self.kmeans_.predict(z[None])[0]), z
 
     # ------------------------------------------------------------------------------------------ synthesis
+    def _emission_rows(self) -> np.ndarray | None:
+        """``emission_`` transposed for the compiled segment pass, made once per fitted emission (a copy of
+        the library's size per gap otherwise)."""
+        if self.emission_ is None:
+            return None
+        cached = self.__dict__.get("_emission_rows_cache")
+        if cached is None or cached[0] is not self.emission_:
+            cached = self._emission_rows_cache = (self.emission_, _emission_rows(self.emission_))
+        return cached[1]
+
     def plan(self, start: Keypose, end: Keypose, n_frames: int) -> dict:
         """The two levels for ``n_frames`` output frames (both keys included): cluster path, library frames;
         and ``key_distance``, the mean of the two keys' squared feature distances to their nearest library
@@ -498,7 +517,8 @@ class MarkovInbetweener:
         cost_first, cost_last = w * d_first, w * d_last
         frames, cost = segment_path(self.labels_, self.cont_, path, cost_first, cost_last,
                                     float(self.mismatch_cost), float(self.jump_cost), self.emission_,
-                                    None if self.warp_cost is None else float(self.warp_cost))
+                                    None if self.warp_cost is None else float(self.warp_cost),
+                                    emission_t=self._emission_rows())
         key_distance = 0.5 * float(d_first.min() + d_last.min())
         return {"clusters": path, "log_probability": logp, "frames": frames, "cost": cost, "key_distance": key_distance}
 
