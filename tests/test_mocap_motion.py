@@ -103,3 +103,20 @@ def test_facing_angle_convention():
     assert np.isclose(rest.facing_angles()[0], 0.0)
     turned = rest.rotate_about_vertical(np.pi / 2)  # +Z turns to +X
     assert np.isclose(turned.facing_angles()[0], np.pi / 2)
+
+
+@pytest.mark.parametrize("new", ["down3", "up", "random", "keys"])
+def test_quat_slerp_is_scipys_slerp_to_the_last_bit(rng, new):
+    """vidstyle.mocap.quat.slerp against scipy's Slerp joint by joint, bit for bit: resampling down (a third
+    of the intervals used), up (every interval used several times), at random times, and at the keys."""
+    from vidstyle.mocap.quat import slerp
+
+    F, J = 31, 5
+    times = np.cumsum(rng.uniform(0.5, 1.5, F))
+    quats = rng.standard_normal((F, J, 4))
+    new_times = {"down3": times[::3], "up": np.linspace(times[0], times[-1], 4 * F),
+                 "random": np.sort(rng.uniform(times[0], times[-1], 17)), "keys": times}[new]
+    got = slerp(times, quats, new_times)
+    for j in range(J):
+        want = Slerp(times, Rotation.from_quat(quats[:, j]))(new_times).as_quat()
+        assert np.array_equal(got[:, j], want), j
