@@ -20,7 +20,7 @@ $(STAMP): pyproject.toml
 	# PYTHONDONTWRITEBYTECODE is set every process of the pipeline compiled them again (~0.3 s each)
 	$(BIN)/python -m compileall -q -j 0 vidstyle
 	# the numba kernels, once (vidstyle/warmup.py): otherwise the pipeline's first stage to call each one compiles
-	# it, ~15 s of CPU over a fresh run, often in two workers at once
+	# it, 13 s of compilation over a fresh run (measured on one core), often in two workers at once
 	$(BIN)/vidstyle -q compile
 	rm -f $(DEV_STAMP)
 	touch $(STAMP)

@@ -2,7 +2,7 @@
 
 numba compiles a kernel (:func:`vidstyle.compiled.compile_kernel`) the first time a process calls it and
 keeps the machine code in its cache (``__pycache__`` beside the source, or ``NUMBA_CACHE_DIR``), keyed by
-the source file and the argument types. The package has 23 kernels, 0.2 to 2 s each to compile, about 15 s
+the source file and the argument types. The package has 23 kernels, 0.2 to 2 s each to compile, 13 s
 in all on one core. Without this, a fresh install pays that inside its first pipeline run, one stage at a
 time, often in two workers at once. ``make demo`` and ``make test`` run ``vidstyle compile`` as the last
 install step, so the pipeline loads the kernels from the cache.

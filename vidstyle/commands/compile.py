@@ -21,9 +21,10 @@ def compile_kernels(
     """Compile every numba kernel of vidstyle into numba's cache now, so that no stage compiles one.
 
     numba compiles a kernel the first time a process calls it and caches the machine code beside the
-    source (or in NUMBA_CACHE_DIR). This runs each kernel's public path on tiny inputs, which takes about 15 s
-    of CPU. `make demo` and `make test` run it as their last install step; after an install by pip,
-    run it once. A kernel whose source changed is compiled again at its next use."""
+    source (or in NUMBA_CACHE_DIR). This runs each kernel's public path on tiny inputs (about 13 s of
+    compilation on one core, split over the workers). `make demo` and `make test` run it as their last
+    install step; after an install by pip, run it once. A kernel whose source changed is compiled again at
+    its next use."""
     from ..warmup import warm
 
     seconds = warm(jobs=jobs)

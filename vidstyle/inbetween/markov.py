@@ -493,7 +493,7 @@ class MarkovInbetweener:
         return int(self.kmeans_.predict(z[None])[0]), z
 
     # ------------------------------------------------------------------------------------------ synthesis
-    def _emission_rows(self) -> np.ndarray | None:
+    def _emission_t(self) -> np.ndarray | None:
         """``emission_`` transposed for the compiled segment pass, made once per fitted emission (a copy of
         the library's size per gap otherwise)."""
         if self.emission_ is None:
@@ -518,7 +518,7 @@ class MarkovInbetweener:
         frames, cost = segment_path(self.labels_, self.cont_, path, cost_first, cost_last,
                                     float(self.mismatch_cost), float(self.jump_cost), self.emission_,
                                     None if self.warp_cost is None else float(self.warp_cost),
-                                    emission_t=self._emission_rows())
+                                    emission_t=self._emission_t())
         key_distance = 0.5 * float(d_first.min() + d_last.min())
         return {"clusters": path, "log_probability": logp, "frames": frames, "cost": cost, "key_distance": key_distance}
 
