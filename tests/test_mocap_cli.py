@@ -77,7 +77,8 @@ def test_help_lists_every_command_with_stages_in_pipeline_order(capsys):
     stages = ["features", "vocabulary", "train-recognizer", "recognize", "learn-style", "generate", "build-graph",
               "synthesize", "fit-actions", "sample-action", "train-pose", "pose", "match-pose", "augment", "reconstruct"]
     assert listed[: len(stages)] == stages
-    assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "timing", "mocap", "init"}
+    assert set(listed[len(stages):]) == {"annotate", "demo", "render", "evaluate", "report", "timing", "mocap", "init",
+                                         "compile"}
     for command in listed:  # every listed command answers --help
         assert main([command, "--help"]) == 0
 
