@@ -10,8 +10,7 @@ import hides a dependency, it does not remove it. A *package* is a top-level nam
 1. no cycle between packages;
 2. ``formats`` imports no domain package, only the base (``errors``, ``fileio``, ``logutil``), and the
    base imports nothing but the base;
-3. only the edge (``demo``, ``evaluation``, ``commands``, ``cli``, ``__main__``, and ``warmup``, which runs
-   every kernel's public path at install) imports ``demo``.
+3. only the edge (``demo``, ``evaluation``, ``commands``, ``cli``, ``__main__``) imports ``demo``.
 
 Also counted: private names (``_x``) imported from another module, in ``vidstyle/`` and ``scripts/``,
 and private attributes (``obj._x``, not ``self._x``) that ``scripts/`` reaches into.
@@ -30,7 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "vidstyle"
 BASE = frozenset({"budget", "compiled", "errors", "fileio", "lazy", "logutil", "parallel"})
 FORMATS_MAY_IMPORT = BASE - {"parallel"}
-EDGE = frozenset({"demo", "evaluation", "commands", "cli", "__main__", "warmup"})
+EDGE = frozenset({"demo", "evaluation", "commands", "cli", "__main__"})
 
 
 def module_name(path: Path) -> str:

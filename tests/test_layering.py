@@ -1,5 +1,5 @@
 """The package layering (issue 26): no import cycles between vidstyle's packages, ``formats`` imports
-no domain package, and only the edge (demo, evaluation, commands, cli, warmup) imports the demo generator.
+no domain package, and only the edge (demo, evaluation, commands, cli) imports the demo generator.
 
 The analysis is ``scripts/import_graph.py`` (which prints the graph); these tests also check that the
 analysis itself sees what it claims to, on a small package written for the purpose.

@@ -7,9 +7,9 @@ in all on one core. Without this, a fresh install pays that inside its first pip
 time, often in two workers at once. ``make demo`` and ``make test`` run ``vidstyle compile`` as the last
 install step, so the pipeline loads the kernels from the cache.
 
-Each task calls the public functions the pipeline calls, on tiny inputs: the demo take writer and renderer,
-BVH read and forward kinematics, feature extraction from a video file, the motion graph, and the array
-kernels of pose, reconstruction, in-betweening and action models. The functions cast their arguments
+Each task calls the public functions the pipeline calls, on tiny inputs: BVH write and read, forward
+kinematics, the renderer as the demo's dataset writer calls it, feature extraction from a video file, the
+motion graph, and the array kernels of pose, reconstruction, in-betweening and action models. The functions cast their arguments
 before the kernel call, so the signature compiled here is the pipeline's. ``tests/test_warmup.py`` checks
 that every kernel the package compiles is cached, and that a run afterwards compiles nothing. The tasks run
 in parallel through :func:`vidstyle.parallel.parallel_map`. A kernel whose source file changed since is
@@ -29,15 +29,21 @@ log = logging.getLogger(__name__)
 
 
 def _render(tmp: Path) -> None:
-    """The demo's take writer (BVH, renderer, video writer) and the BVH reader: the raster, forward
-    kinematics and BVH number kernels."""
-    from .demo.dataset import DatasetParams, generate_take
-    from .mocap import forward_kinematics, read_bvh
+    """A short take written and read back as BVH, forward kinematics, and rendered to a video file as the
+    demo's dataset writer renders one (appearance, labels, transitions): the BVH number, forward
+    kinematics and raster kernels."""
+    from .mocap import forward_kinematics, read_bvh, write_bvh
+    from .render import Appearance, render_to_file
+    from .render.samples import sample_motion
 
-    params = DatasetParams(seed=0, performers=1, views=("front",), single_seconds=1.5, performances=0)
-    entries = generate_take((params, 0, 0, str(tmp)))
-    motion = read_bvh(tmp / entries[0]["bvh"])
+    write_bvh(sample_motion(60, fps=60.0), tmp / "walk.bvh")
+    motion = read_bvh(tmp / "walk.bvh")
     forward_kinematics(motion)
+    labels = ["Guard"] * 30 + ["Jab"] * 30
+    transitions = np.zeros(60, dtype=bool)
+    transitions[30] = True
+    render_to_file(motion, tmp / "walk.mp4", view=0.0, size=(160, 120), fps=20, appearance=Appearance.random(0),
+                   seed=0, labels=labels, transitions=transitions)
 
 
 def _features(tmp: Path) -> None:
@@ -62,15 +68,13 @@ def _features(tmp: Path) -> None:
 
 
 def _graph(tmp: Path) -> None:
-    """A motion graph of two short demo clips (the distance kernels)."""
-    from .demo.clip import performer_clip
+    """A motion graph of two short clips (the distance kernels)."""
     from .motiongraph import MotionGraph
     from .motiongraph.graph import Clip
+    from .render.samples import sample_motion
 
-    clips = []
-    for index, action in ((0, "Jab"), (1, "Hook")):
-        _, take = performer_clip(seed=0, index=index, action=action, seconds=2.0, fps=60)
-        clips.append(Clip(name=f"p{index}_{action}", motion=take.motion, labels=list(take.labels)))
+    clips = [Clip(name=f"walk{k}", motion=sample_motion(120, fps=60.0, speed=speed), labels=["Walk"] * 120)
+             for k, speed in enumerate((0.8, 1.2))]
     MotionGraph(window=10, fps=30).fit(clips)
 
 
