@@ -84,6 +84,15 @@ def reconstruct(
                                         help="Camera pitch in degrees, down positive (default: the library "
                                         "projection's, 10)."),
     foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Keep planted feet in place."),
+    contact_threshold: float = number(D.CONTACT_THRESHOLD, "--contact-threshold", integer=False, lo=0, lo_open=True,
+                                      hi=1, help="Share of the blended neighbours' vote that plants a foot (default: "
+                                      "chosen on validation performers)."),
+    contact_gap: float = number(D.CONTACT_GAP_S, "--contact-gap", integer=False, lo=0, hi=10,
+                                help="Seconds: a foot lifted for at most this long between two planted runs stays "
+                                "planted (0: none; default: chosen on validation performers)."),
+    pin_drift: bool = typer.Option(D.PIN_DRIFT, "--pin-drift/--no-pin-drift", help="A foot planted for long moves "
+                                   "with the slow drift of the camera's root path instead of holding the spot where "
+                                   "it landed (default: chosen on validation performers)."),
     refine: bool = typer.Option(D.REFINE_PRIOR is not None, "--refine/--no-refine", help="Bend the blended pose "
                                 "toward the keypoints within the span of its neighbours (the prior's weight: "
                                 "chosen on validation performers)."),
@@ -121,7 +130,8 @@ def reconstruct(
                       skeleton=skeleton, record=record, labels=labels, preview=preview, jobs=jobs, method=method,
                       k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
                       refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px="auto" if estimate_focal else focal, elevation_deg=elevation,
-                      foot_lock=foot_lock, cache_dir=index_cache)
+                      foot_lock=foot_lock, contact_threshold=contact_threshold, contact_gap_s=contact_gap,
+                      pin_drift=pin_drift, cache_dir=index_cache)
 
 
 @evaluate_app.command("reconstruct")

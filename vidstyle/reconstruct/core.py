@@ -40,13 +40,17 @@ the camera's azimuth about the performer when the pose stage estimated it):
    the blended library height (the camera's distance to the performer is the least certain quantity,
    so the height, which the library knows well, does not come from it).
 7. **Foot contacts**: a foot is planted where the weighted vote of the blended nodes' contacts
-   (:attr:`.library.ReconstructionLibrary.contacts_`) is at least a half. With ``foot_lock``, the root
+   (:attr:`.library.ReconstructionLibrary.contacts_`) is at least ``contact_threshold``, and across a lift
+   of at most ``contact_gap_s`` seconds between two planted runs (:func:`.footlock.bridge_gaps`: a
+   noisy vote flickers, a real step takes longer). With ``foot_lock``, the root
    is moved horizontally so a planted foot stays where it was planted (both planted: the mean of the
    two corrections); the difference between that path and the camera's is low-passed (Gaussian, sigma
    ``relax_s`` seconds) and added back, so a long take does not drift away from what the camera saw.
    What that leaves (two planted feet under a changing stance, the relaxed drift) is taken up by the
    legs: :func:`.footlock.pin_feet` turns hip and knee by two-bone IK so that each planted ankle stays
-   where its run of contact began (height: the run's median, not below the floor), the foot keeping
+   where its run of contact began (height: the run's median, not below the floor; with ``pin_drift``, plus
+   the relaxed drift added since then, so a foot planted for seconds goes along with the path the camera
+   saw instead of stretching the leg after a body that has moved on), the foot keeping
    its world orientation, blended in and out over 3 frames either side; the IK moves an ankle at most
    ``pin_max_offset`` leg lengths (thigh + shin) from where the pose puts it (beyond that the contact or
    the root path is wrong, and bending the leg further would only trade slide for pose error: the foot
@@ -310,7 +314,8 @@ class Reconstructor:
     ``window_s`` the OLNG window (Tautges: about half a second);
     ``n_blend`` nodes blended; ``method`` ``"olng"`` or ``"nn"``; ``use_azimuth`` / ``spread`` the views
     searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
-    camera's root path; ``foot_lock`` and ``relax_s`` (the root lock) and ``pin_max_offset`` (the leg
+    camera's root path; ``contact_threshold`` and ``contact_gap_s`` the foot contacts; ``foot_lock`` and
+    ``relax_s`` (the root lock), ``pin_drift`` and ``pin_max_offset`` (the leg
     IK's reach from the pose, in leg lengths; None: unlimited) of step 7; ``focal_px`` (None: the default
     intrinsics; ``"auto"``: estimated from the keypoints and the blended poses, :func:`.camera.estimate_focal`,
     which keeps the default unless the data clearly prefer another lens); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
@@ -325,7 +330,9 @@ class Reconstructor:
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
                  pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
-                 refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, jobs: int = 1, scheduler: str | None = None) -> None:
+                 refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, contact_threshold: float = D.CONTACT_THRESHOLD,
+                 contact_gap_s: float = D.CONTACT_GAP_S, pin_drift: bool = D.PIN_DRIFT, jobs: int = 1,
+                 scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend
@@ -348,6 +355,9 @@ class Reconstructor:
         self.pin_max_offset = pin_max_offset
         self.refine_prior = refine_prior
         self.refine_smooth_frames = refine_smooth_frames
+        self.contact_threshold = contact_threshold
+        self.contact_gap_s = contact_gap_s
+        self.pin_drift = pin_drift
         self.jobs = jobs
         self.scheduler = scheduler
 
@@ -356,7 +366,7 @@ class Reconstructor:
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
             "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
             "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset",
-            "refine_prior", "refine_smooth_frames")}
+            "refine_prior", "refine_smooth_frames", "contact_threshold", "contact_gap_s", "pin_drift")}
 
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
@@ -377,6 +387,12 @@ class Reconstructor:
             v = float(getattr(self, name))
             if not (v >= 0 and math.isfinite(v)):
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
+        if not isinstance(self.pin_drift, (bool, np.bool_)):
+            raise ParameterError("pin_drift", f"must be true or false, got {self.pin_drift!r}")
+        if not 0 < float(self.contact_threshold) <= 1:
+            raise ParameterError("contact_threshold", f"must be in (0, 1], got {self.contact_threshold}")
+        if not (float(self.contact_gap_s) >= 0 and math.isfinite(float(self.contact_gap_s))):
+            raise ParameterError("contact_gap_s", f"must be a finite number >= 0, got {self.contact_gap_s}")
         if self.pin_max_offset is not None and not (float(self.pin_max_offset) >= 0
                                                     and math.isfinite(float(self.pin_max_offset))):
             raise ParameterError("pin_max_offset",
@@ -642,9 +658,14 @@ class Reconstructor:
         # median of (that height - the root's height relative to the camera) above it
         cam_height = float(np.median((height - root[:, 1])[t_ok]))
         root[:, 1] = height
-        contacts = contact_vote >= 0.5
+        contacts = contact_vote >= float(self.contact_threshold)
+        gap = int(round(float(self.contact_gap_s) * obs.fps))
+        if gap > 0:
+            from .footlock import bridge_gaps
+
+            contacts = bridge_gaps(contacts, gap)
         if self.foot_lock:
-            root = self._lock_feet(root, rel, contacts, obs.fps)
+            root, drift = self._lock_feet(root, rel, contacts, obs.fps)
         motion = Motion(skeleton, qw, fps=obs.fps, root_positions=root)
         if self.foot_lock:
             from .footlock import pin_feet
@@ -652,7 +673,11 @@ class Reconstructor:
             reach = None
             if self.pin_max_offset is not None:
                 reach = float(self.pin_max_offset) * _leg_length(skeleton)
-            motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach)  # the library's floor: height 0
+            creep = None
+            if self.pin_drift:  # a planted foot moves with the slow drift the root lock added back
+                creep = drift.copy()
+                creep[:, 1] = 0.0
+            motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach, creep=creep)  # the library's floor: height 0
             points = self._keypoints(motion)
         else:
             points = rel + root[:, None, :]
@@ -731,4 +756,4 @@ class Reconstructor:
         drift = _gaussian(root - locked, float(self.relax_s) * fps)
         out = locked + drift
         out[:, 1] = root[:, 1]
-        return out
+        return out, drift

@@ -96,6 +96,24 @@ def _runs(planted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1
 
 
+def bridge_gaps(planted: np.ndarray, max_gap: int) -> np.ndarray:
+    """``planted`` (T,) or (T, feet) bool with every run of False of at most ``max_gap`` frames that has
+    True on both sides (a lift between two planted runs, not the start or end of the take) set True."""
+    p = np.asarray(planted, dtype=bool)
+    if isinstance(max_gap, bool) or int(max_gap) != max_gap or max_gap < 0:
+        raise ValueError(f"max_gap must be an integer >= 0, got {max_gap!r}")
+    if p.ndim == 2:
+        return np.stack([bridge_gaps(p[:, f], max_gap) for f in range(p.shape[1])], axis=1) if p.shape[1] else p.copy()
+    if p.ndim != 1:
+        raise ValueError(f"planted must be (T,) or (T, feet), got shape {p.shape}")
+    out = p.copy()
+    starts, ends = _runs(~p)
+    for s, e in zip(starts.tolist(), ends.tolist()):
+        if s > 0 and e < len(p) - 1 and e - s + 1 <= max_gap:
+            out[s:e + 1] = True
+    return out
+
+
 def _run_medians(x: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """np.median of ``x[s:e+1]`` for every run, at once (runs are disjoint and sorted)."""
     n = ends - starts + 1
@@ -213,7 +231,7 @@ def _leg_ik(pos: np.ndarray, glob: Rotation, parent_of: dict, chain: tuple[int, 
 
 
 def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float | None = None,
-             max_offset: float | None = None, height: float | None = None):
+             max_offset: float | None = None, height: float | None = None, creep: np.ndarray | None = None):
     """A new :class:`~vidstyle.mocap.motion.Motion` whose planted ankles stay where they were planted
     (module docstring); ``motion`` is not modified.
 
@@ -221,7 +239,9 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
     frames of blending either side of a run; ``floor`` the lowest target ankle height (None: no limit);
     ``max_offset`` the leash (step 4; None: none), in the motion's length units; ``height`` (None: the
     run's median, step 1) the target ankle height of every run instead (the planted ankle height of a
-    generated motion: :mod:`vidstyle.actionmodel`). ValueError on a
+    generated motion: :mod:`vidstyle.actionmodel`); ``creep`` (None: none) a (T, 3) path by which a planted
+    ankle's target moves inside its run: at frame ``t`` of a run that began at ``s``, the target plus
+    ``creep[t] - creep[s]`` (the reconstruction's relaxed root drift). ValueError on a
     ``contacts`` of the wrong shape or values, a bad ``blend_frames``, ``floor`` or ``max_offset``, or a
     skeleton without two leg chains (:func:`leg_chains`).
     """
@@ -244,6 +264,10 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
         raise ValueError(f"height must be a finite number or None, got {height!r}")
     if max_offset is not None and not (float(max_offset) >= 0 and math.isfinite(float(max_offset))):
         raise ValueError(f"max_offset must be a finite number >= 0 or None, got {max_offset!r}")
+    if creep is not None:
+        creep = np.asarray(creep, dtype=np.float64)
+        if creep.shape != (T, 3) or not np.all(np.isfinite(creep)):
+            raise ValueError(f"creep must be a finite ({T}, 3) array, got shape {creep.shape}")
     rotations = motion.rotations.copy()
     out = Motion(motion.skeleton, rotations, motion.translations.copy(), motion.fps)
     out.rotations = rotations  # the constructor renormalises; untouched frames stay bit for bit
@@ -268,6 +292,10 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
         if floor is not None:
             targets[:, 1] = np.maximum(targets[:, 1], float(floor))
         w, P = _schedule(planted, pos[:, ankle], targets, starts, ends, blend_frames)
+        if creep is not None:  # a planted foot follows the slow drift from where its run began
+            run = np.clip(np.searchsorted(starts, np.arange(T), side="right") - 1, 0, None)
+            inside = planted.astype(bool)
+            P = P + np.where(inside[:, None], creep - creep[starts[run]], 0.0)
         if max_offset is not None:  # the leash: at most max_offset from where the pose puts the ankle
             off = P - pos[:, ankle]
             n = np.linalg.norm(off, axis=-1, keepdims=True)
