@@ -4,24 +4,29 @@ performers only (never the test performers ``vidstyle evaluate reconstruct`` sco
 
 For one performance take of each validation performer of the ``unseen-performer`` split (seed 0), the first
 ``--frames`` frames, 2D poses from the shipped pictorial-structures model (``vidstyle pose --backend ps``,
-what the pipeline uses on renders; cached in ``--cache``), reconstructed against the demo library
-(``out/augmg/library``) on the library's skeleton. Score: the pooled root-relative MPJPE (mm; lower is
-better). Search: per method, coordinate descent over the factors that method uses, from the starting values,
-twice over them; the method whose best scores least wins. Of a factor's candidates within ``TIE_MM`` of its
-best score the first listed (the cheaper) wins, except the foot-pinning cap (``pin_max_offset``, leg lengths;
-None: no cap), chosen by the least foot skate among those within ``POSE_TOLERANCE`` of the best pose error
-(pinning may trade one for the other). Then, for the chosen method with a refinement, ``refine_smooth_frames``
-(the refined pose smoothed in time): the least acceleration error among its candidates within
-``POSE_TOLERANCE`` of their best pose error. Last, for the chosen method, the foot contacts
-(``contact_threshold``, the vote a planted foot needs, and ``contact_gap_s``, the longest lift bridged) and
-``pin_drift`` (planted feet follow the root's relaxed drift), jointly: the least foot skate (the headline's,
-of the reconstruction's own low ankles) among the combinations within ``POSE_TOLERANCE`` of their best pose
-error, as for the pinning cap; until then they stay at their starting values, the reconstruction's behaviour
-before they existed. Every (values, score) tried is written to the table.
+what the pipeline uses on renders; cached in ``--cache``; BlazePose's in its ``blazepose/``), reconstructed
+against the demo library (``out/augmg/library``) on the library's skeleton. Score: the pooled root-relative
+MPJPE (mm; lower is better). Search: per method, coordinate descent over the factors that method uses, from
+the starting values, twice over them; the method whose best scores least wins. Of a factor's candidates within
+``TIE_MM`` of its best score the first listed (the cheaper) wins, except the foot-pinning cap
+(``pin_max_offset``, leg lengths; None: no cap), chosen by the least foot skate among those within
+``POSE_TOLERANCE`` of the best pose error (pinning may trade one for the other). Then, for the chosen method
+with a refinement, ``refine_smooth_frames`` (the refined pose smoothed in time): the least acceleration error
+among its candidates within ``POSE_TOLERANCE`` of their best pose error. Last, for the chosen method, the foot
+contacts (``contact_threshold``, the vote a planted foot needs, and ``contact_gap_s``, the longest lift
+bridged) and ``pin_drift`` (planted feet follow the root's relaxed drift), jointly, with the pictorial
+structures' 2D and with BlazePose's (what real footage gets; how far a noisy vote can be trusted depends on
+the 2D): per source, the least foot skate (the headline's, of the reconstruction's own low ankles) among the
+combinations within ``POSE_TOLERANCE`` of that source's best pose error, as for the pinning cap; for any other
+2D (``default``: true 2D, an unknown estimator), the least mean skate among those within it of both sources'
+best (none such: the least worst ratio to a source's best). Until then they stay at their starting values, the
+reconstruction's behaviour before they existed. Every (values, score) tried is written to the table.
 
     python scripts/validate_reconstruct.py [--run pipelines/kickboxing/out]
 
-About 130 settings, ten minutes on one core.
+About 130 settings with the pictorial structures' 2D and 32 with BlazePose's, a quarter of an hour on one
+core. ``table`` holds the former, ``table_blazepose`` the latter; ``chosen`` the values of
+``vidstyle/reconstruct/defaults.py``, ``contacts`` its ``CONTACTS``.
 
 Writes ``--out`` (default ``pipelines/kickboxing/validation/reconstruct.json``); logs on stderr.
 """
@@ -31,6 +36,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import logging
+import math
 import os
 import sys
 from pathlib import Path
@@ -61,7 +67,9 @@ CANDIDATES = {"method": ["nn", "olng", "subsequence"], "k": [16, 32, 64, 128], "
               "contact_gap_s": [0.0, 0.05, 0.1, 0.2], "pin_drift": [False, True]}
 
 
-def poses_for(dataset, videos: list[str], frames: int, cache: Path) -> Path:
+def poses_for(dataset, videos: list[str], frames: int, cache: Path, backend: str = "ps") -> Path:
+    """``cache`` holding ``<video>.poses.json`` of the first ``frames`` frames of each video by ``backend``
+    (as ``vidstyle pose --backend B`` estimates them), estimated where missing."""
     from vidstyle.formats.poses import read_poses, write_poses
     from vidstyle.pose.run import estimate_video
 
@@ -71,13 +79,13 @@ def poses_for(dataset, videos: list[str], frames: int, cache: Path) -> Path:
         if path.is_file():
             try:
                 p = read_poses(path)
-                if p.backend == "ps" and len(p.frames) >= frames:
+                if p.backend == backend and len(p.frames) >= frames:
                     continue
             except VidstyleError:
                 pass
         video = dataset.root / dataset.by_id()[v].video
-        log.info("%s: estimating %d frames", v, frames)
-        write_poses(path, estimate_video(video, "ps", None, list(range(frames)), jobs=1))
+        log.info("%s: estimating %d frames (%s)", v, frames, backend)
+        write_poses(path, estimate_video(video, backend, None, list(range(frames)), jobs=1))
     return cache
 
 
@@ -102,6 +110,7 @@ def main() -> int:
         videos = [sorted(v.id for v in dataset.videos if v.performer == p and v.kind == "performance" and v.id in val)[0]
                   for p in sorted(split.val_performers)]
         cache = poses_for(dataset, videos, args.frames, args.cache)
+        cache_bp = poses_for(dataset, videos, args.frames, args.cache / "blazepose", backend="blazepose")
         table: list[dict] = []
         seen: dict[tuple, float] = {}
 
@@ -109,6 +118,26 @@ def main() -> int:
 
         def key_of(values: dict) -> tuple:
             return tuple(sorted(values.items(), key=lambda kv: kv[0]))
+
+        bp_rows: dict[tuple, dict] = {}
+        table_bp: list[dict] = []
+
+        def blazepose_row(values: dict) -> dict:
+            """The pooled row of ``values`` with BlazePose's 2D (what real footage gets)."""
+            key = key_of(values)
+            if key not in bp_rows:
+                params = {k: v for k, v in values.items() if k != "method"}
+                m = evaluate(args.run / "dataset", [args.run / "augmg" / "library" / "clips"], videos=videos,
+                             poses_dirs=[cache_bp], methods=[values["method"]], skeletons=["library"],
+                             max_frames=args.frames, seed=args.seed, **params)
+                row = next(r for r in m["runs"] if r["data"] == "demo test performers" and r["source"] == "blazepose"
+                           and r["method"] == values["method"])  # not BlazePose's own 3D (blazepose-world)
+                bp_rows[key] = row
+                table_bp.append({**values, **{f: row[f] for f in ("mpjpe_root_relative_mm", "pa_mpjpe_mm",
+                                                                   "foot_skate_mm_per_frame",
+                                                                   "acceleration_error_mm_per_frame2")}})
+                log.info("%s (blazepose): %.1f mm", values, row["mpjpe_root_relative_mm"])
+            return bp_rows[key]
 
         def score(values: dict) -> float:
             key = key_of(values)
@@ -163,16 +192,30 @@ def main() -> int:
                    ["acceleration_error_mm_per_frame2"] for c in ok}
             best["refine_smooth_frames"] = min(ok, key=lambda c: (acc[c], cands.index(c)))
         # last, the foot contacts and the pins' drift of the chosen method, all three at once (a lower vote and
-        # a longer bridge both pin more frames, which a pin that follows the drift makes cheaper): the least
-        # foot skate among the combinations within POSE_TOLERANCE of their best pose error (as the pinning cap)
-        contact = ("pin_drift", "contact_threshold", "contact_gap_s")
-        combos = list(itertools.product(*(CANDIDATES[f] for f in contact)))
+        # a longer bridge both pin more frames, which a pin that follows the drift makes cheaper), per 2D source
+        # (how far a noisy vote can be trusted depends on the 2D): for each source, the least foot skate among
+        # the combinations within POSE_TOLERANCE of its best pose error (as the pinning cap); for any other 2D
+        # (true 2D, an unknown estimator) the least mean skate within POSE_TOLERANCE of each source's best (none
+        # such: the least worst ratio to a source's best)
+        contact = ("contact_threshold", "contact_gap_s", "pin_drift")
+        combos = list(itertools.product(*(CANDIDATES[f] for f in (contact[2], contact[0], contact[1]))))
+        combos = [(t, g, d) for d, t, g in combos]
         settings = {c: {**best, **dict(zip(contact, c))} for c in combos}
-        scores = {c: score(v) for c, v in settings.items()}
-        low = min(scores.values())
-        ok = [c for c in combos if scores[c] <= low * (1 + POSE_TOLERANCE)]
-        skate = {c: rows[key_of(settings[c])]["foot_skate_mm_per_frame"] for c in ok}
-        best.update(zip(contact, min(ok, key=lambda c: (skate[c], combos.index(c)))))
+        found = {"ps": {c: rows[key_of(v)] if score(v) < math.inf else None for c, v in settings.items()},
+                 "blazepose": {c: blazepose_row(v) for c, v in settings.items()}}
+
+        def skate_of(row: dict) -> float:  # no planted pair: no figure, not preferred
+            return math.inf if row["foot_skate_mm_per_frame"] is None else row["foot_skate_mm_per_frame"]
+
+        lows = {src: min(r["mpjpe_root_relative_mm"] for r in found[src].values()) for src in found}
+        contacts = {}
+        for src in found:
+            ok = [c for c in combos if found[src][c]["mpjpe_root_relative_mm"] <= lows[src] * (1 + POSE_TOLERANCE)]
+            contacts[src] = dict(zip(contact, min(ok, key=lambda c: (skate_of(found[src][c]), combos.index(c)))))
+        ratio = {c: max(found[src][c]["mpjpe_root_relative_mm"] / lows[src] for src in found) for c in combos}
+        ok = [c for c in combos if ratio[c] <= 1 + POSE_TOLERANCE] or [min(combos, key=lambda c: ratio[c])]
+        contacts["default"] = dict(zip(contact, min(
+            ok, key=lambda c: (sum(skate_of(found[src][c]) for src in found) / len(found), combos.index(c)))))
     except VidstyleError as e:
         log.error("%s", e)
         return 2
@@ -181,9 +224,12 @@ def main() -> int:
            "score": "pooled root-relative MPJPE (mm), lower is better", "start": START, "candidates": CANDIDATES,
            "factors_not_searched": ["n_views", "spread", "root_smooth_frames", "relax_s", "ssg_window_s",
                                     "ssg_overlap", "ssg_k", "ssg_transition_weight"],
-           "tie_mm": TIE_MM, "pose_tolerance": POSE_TOLERANCE, "chosen": best, "per_method": per_method, "chosen_score_mm": seen[key_of(best)], "table": table}
+           "tie_mm": TIE_MM, "pose_tolerance": POSE_TOLERANCE,
+           "chosen": {k: v for k, v in best.items() if k not in contact}, "contacts": contacts,
+           "per_method": per_method, "chosen_score_mm": seen[key_of({**best, **contacts["ps"]})], "table": table,
+           "table_blazepose": table_bp}
     write_validation(args.out, doc)
-    log.info("chosen %s (%.1f mm); wrote %s", best, doc["chosen_score_mm"], args.out)
+    log.info("chosen %s, contacts %s (%.1f mm); wrote %s", doc["chosen"], contacts, doc["chosen_score_mm"], args.out)
     return 0
 
 

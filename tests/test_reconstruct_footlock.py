@@ -6,6 +6,7 @@ below 5 mm/frame without hurting the pose. The truth here is forward kinematics 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -340,6 +341,14 @@ def test_contact_threshold_and_gap_set_which_frames_are_planted(clips):
     bridged = rec.set_params(contact_threshold=0.5, contact_gap_s=0.2).reconstruct(obs).contacts
     assert np.array_equal(bridged, bridge_gaps(c[0.5], round(0.2 * FPS)))
     assert (bridged & ~c[0.5]).any()  # the take has lifts short enough to bridge
+    # unset, the three come from the observation's 2D backend (vidstyle.reconstruct.defaults.CONTACTS)
+    from vidstyle.reconstruct import defaults as D
+
+    for backend in ("ps", "blazepose", None):
+        rec.set_params(contact_threshold=None, contact_gap_s=None, pin_drift=None)
+        got = rec.reconstruct(dataclasses.replace(obs, backend=backend))
+        want = rec.set_params(**D.CONTACTS[backend or "default"]).reconstruct(obs)
+        assert np.array_equal(got.contacts, want.contacts) and np.array_equal(got.points, want.points)
     for kw in ({"contact_threshold": 0.0}, {"contact_threshold": 1.5}, {"contact_gap_s": -0.1},
                {"contact_gap_s": math.inf}, {"pin_drift": "yes"}):
         with pytest.raises(ParameterError):

@@ -84,15 +84,15 @@ def reconstruct(
                                         help="Camera pitch in degrees, down positive (default: the library "
                                         "projection's, 10)."),
     foot_lock: bool = typer.Option(True, "--foot-lock/--no-foot-lock", help="Keep planted feet in place."),
-    contact_threshold: float = number(D.CONTACT_THRESHOLD, "--contact-threshold", integer=False, lo=0, lo_open=True,
-                                      hi=1, help="Share of the blended neighbours' vote that plants a foot (default: "
-                                      "chosen on validation performers)."),
-    contact_gap: float = number(D.CONTACT_GAP_S, "--contact-gap", integer=False, lo=0, hi=10,
-                                help="Seconds: a foot lifted for at most this long between two planted runs stays "
-                                "planted (0: none; default: chosen on validation performers)."),
-    pin_drift: bool = typer.Option(D.PIN_DRIFT, "--pin-drift/--no-pin-drift", help="A foot planted for long moves "
-                                   "with the slow drift of the camera's root path instead of holding the spot where "
-                                   "it landed (default: chosen on validation performers)."),
+    contact_threshold: float | None = number(None, "--contact-threshold", integer=False, lo=0, lo_open=True,
+                                             hi=1, help="Share of the blended neighbours' vote that plants a foot "
+                                             "(default: chosen on validation performers for the 2D's backend)."),
+    contact_gap: float | None = number(None, "--contact-gap", integer=False, lo=0, hi=10,
+                                       help="Seconds: a foot lifted for at most this long between two planted runs "
+                                       "stays planted (0: none; default: chosen for the 2D's backend)."),
+    pin_drift: bool | None = typer.Option(None, "--pin-drift/--no-pin-drift", help="A foot planted for long moves "
+                                          "with the slow drift of the camera's root path instead of holding the spot "
+                                          "where it landed (default: chosen for the 2D's backend)."),
     refine: bool = typer.Option(D.REFINE_PRIOR is not None, "--refine/--no-refine", help="Bend the blended pose "
                                 "toward the keypoints within the span of its neighbours (the prior's weight: "
                                 "chosen on validation performers)."),

@@ -440,7 +440,8 @@ def evaluate_real(calibration: str | os.PathLike, poses_paths: Sequence[str | os
         doc = read_poses(p)
         frames = np.asarray(ref.frames)
         obs_all = Observation.from_poses(doc, fps, size, int(frames.max()) + 1)
-        obs = Observation(obs_all.xy[frames], obs_all.scores[frames], obs_all.azimuth[frames], fps, size, str(p))
+        obs = Observation(obs_all.xy[frames], obs_all.scores[frames], obs_all.azimuth[frames], fps, size, str(p),
+                          obs_all.backend)
         runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"real:{name}", "blazepose", "library",
                           keypoints=girdle_midpoints)
         world = blazepose_world_points(doc, int(frames.max()) + 1,

@@ -42,7 +42,8 @@ the camera's azimuth about the performer when the pose stage estimated it):
 7. **Foot contacts**: a foot is planted where the weighted vote of the blended nodes' contacts
    (:attr:`.library.ReconstructionLibrary.contacts_`) is at least ``contact_threshold``, and across a lift
    of at most ``contact_gap_s`` seconds between two planted runs (:func:`.footlock.bridge_gaps`: a
-   noisy vote flickers, a real step takes longer). With ``foot_lock``, the root
+   vote flickers, a real step takes longer); unset, these and ``pin_drift`` are the validated values for
+   the observation's 2D backend (:data:`.defaults.CONTACTS`). With ``foot_lock``, the root
    is moved horizontally so a planted foot stays where it was planted (both planted: the mean of the
    two corrections); the difference between that path and the camera's is low-passed (Gaussian, sigma
    ``relax_s`` seconds) and added back, so a long take does not drift away from what the camera saw.
@@ -89,7 +90,8 @@ class Observation:
     """A video's 2D poses: ``xy`` (T, 15, 2) pixels (x = column, y = row), NaN where unknown; ``scores``
     (T, 15) confidences in [0, 1]; ``azimuth`` (T,) degrees of the camera about the performer (0 = the
     performer faces the camera, +90 = the camera at their left), NaN where unknown; ``fps``; ``size``
-    (width, height) in pixels."""
+    (width, height) in pixels; ``backend`` the 2D pose estimator's name (``vidstyle pose --backend``; None:
+    unknown, e.g. true 2D), which sets how far the foot contacts trust the matched neighbours."""
 
     xy: np.ndarray
     scores: np.ndarray
@@ -97,6 +99,7 @@ class Observation:
     fps: float
     size: tuple[int, int]
     source: str = ""
+    backend: str | None = None
 
     def __post_init__(self) -> None:
         self.xy = np.asarray(self.xy, dtype=np.float64)
@@ -144,7 +147,8 @@ class Observation:
                     az[f.frame] = parse_view(str(f.viewpoint))
                 except ValueError:
                     pass
-        return cls(xy, scores, az, float(fps), (int(size[0]), int(size[1])), str(poses.video))
+        return cls(xy, scores, az, float(fps), (int(size[0]), int(size[1])), str(poses.video),
+                   str(poses.backend) if poses.backend else None)
 
 
 @dataclass
@@ -314,8 +318,9 @@ class Reconstructor:
     ``window_s`` the OLNG window (Tautges: about half a second);
     ``n_blend`` nodes blended; ``method`` ``"olng"`` or ``"nn"``; ``use_azimuth`` / ``spread`` the views
     searched; ``smooth_frames`` the Gaussian sigma of the pose in time; ``root_smooth_frames`` that of the
-    camera's root path; ``contact_threshold`` and ``contact_gap_s`` the foot contacts; ``foot_lock`` and
-    ``relax_s`` (the root lock), ``pin_drift`` and ``pin_max_offset`` (the leg
+    camera's root path; ``contact_threshold`` and ``contact_gap_s`` the foot contacts (None: by the
+    observation's 2D backend, :data:`.defaults.CONTACTS`); ``foot_lock`` and ``relax_s`` (the root lock),
+    ``pin_drift`` (None: by the backend) and ``pin_max_offset`` (the leg
     IK's reach from the pose, in leg lengths; None: unlimited) of step 7; ``focal_px`` (None: the default
     intrinsics; ``"auto"``: estimated from the keypoints and the blended poses, :func:`.camera.estimate_focal`,
     which keeps the default unless the data clearly prefer another lens); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
@@ -330,8 +335,8 @@ class Reconstructor:
                  library_elevation_deg: float = 10.0, target_fps: float = 20.0, ssg_window_s: float = 0.5,
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
                  pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
-                 refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, contact_threshold: float = D.CONTACT_THRESHOLD,
-                 contact_gap_s: float = D.CONTACT_GAP_S, pin_drift: bool = D.PIN_DRIFT, jobs: int = 1,
+                 refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, contact_threshold: float | None = None,
+                 contact_gap_s: float | None = None, pin_drift: bool | None = None, jobs: int = 1,
                  scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
@@ -368,6 +373,14 @@ class Reconstructor:
             "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset",
             "refine_prior", "refine_smooth_frames", "contact_threshold", "contact_gap_s", "pin_drift")}
 
+    def contact_settings(self, backend: str | None) -> dict:
+        """``contact_threshold``, ``contact_gap_s`` and ``pin_drift`` for 2D from ``backend``: each parameter
+        set here, else the validated value for that backend (:data:`.defaults.CONTACTS`; an unknown one or
+        None: its ``"default"`` entry)."""
+        chosen = D.CONTACTS.get(backend or "", D.CONTACTS["default"])
+        return {k: chosen[k] if getattr(self, k) is None else getattr(self, k)
+                for k in ("contact_threshold", "contact_gap_s", "pin_drift")}
+
     def set_params(self, **params) -> Reconstructor:
         for k, v in params.items():
             if k not in self.get_params() and k not in ("jobs", "scheduler"):
@@ -387,12 +400,13 @@ class Reconstructor:
             v = float(getattr(self, name))
             if not (v >= 0 and math.isfinite(v)):
                 raise ParameterError(name, f"must be a finite number >= 0, got {v}")
-        if not isinstance(self.pin_drift, (bool, np.bool_)):
-            raise ParameterError("pin_drift", f"must be true or false, got {self.pin_drift!r}")
-        if not 0 < float(self.contact_threshold) <= 1:
-            raise ParameterError("contact_threshold", f"must be in (0, 1], got {self.contact_threshold}")
-        if not (float(self.contact_gap_s) >= 0 and math.isfinite(float(self.contact_gap_s))):
-            raise ParameterError("contact_gap_s", f"must be a finite number >= 0, got {self.contact_gap_s}")
+        if self.pin_drift is not None and not isinstance(self.pin_drift, (bool, np.bool_)):
+            raise ParameterError("pin_drift", f"must be true, false or None, got {self.pin_drift!r}")
+        if self.contact_threshold is not None and not 0 < float(self.contact_threshold) <= 1:
+            raise ParameterError("contact_threshold", f"must be in (0, 1] or None, got {self.contact_threshold}")
+        if self.contact_gap_s is not None and not (float(self.contact_gap_s) >= 0
+                                                   and math.isfinite(float(self.contact_gap_s))):
+            raise ParameterError("contact_gap_s", f"must be a finite number >= 0 or None, got {self.contact_gap_s}")
         if self.pin_max_offset is not None and not (float(self.pin_max_offset) >= 0
                                                     and math.isfinite(float(self.pin_max_offset))):
             raise ParameterError("pin_max_offset",
@@ -658,8 +672,9 @@ class Reconstructor:
         # median of (that height - the root's height relative to the camera) above it
         cam_height = float(np.median((height - root[:, 1])[t_ok]))
         root[:, 1] = height
-        contacts = contact_vote >= float(self.contact_threshold)
-        gap = int(round(float(self.contact_gap_s) * obs.fps))
+        cset = self.contact_settings(obs.backend)
+        contacts = contact_vote >= float(cset["contact_threshold"])
+        gap = int(round(float(cset["contact_gap_s"]) * obs.fps))
         if gap > 0:
             from .footlock import bridge_gaps
 
@@ -674,7 +689,7 @@ class Reconstructor:
             if self.pin_max_offset is not None:
                 reach = float(self.pin_max_offset) * _leg_length(skeleton)
             creep = None
-            if self.pin_drift:  # a planted foot moves with the slow drift the root lock added back
+            if cset["pin_drift"]:  # a planted foot moves with the slow drift the root lock added back
                 creep = drift.copy()
                 creep[:, 1] = 0.0
             motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach, creep=creep)  # the library's floor: height 0

@@ -12,8 +12,14 @@ PIN_MAX_OFFSET = None    # no cap on how far leg IK pulls a planted foot: least 
 REFINE_PRIOR = 0.1       # the blend bent toward the keypoints (vidstyle.reconstruct.refine): 0.1 beat off, 1, 0.03
 REFINE_SMOOTH_FRAMES = 2.0  # the refined pose smoothed in time (Gaussian sigma, frames; 0: not): the least acceleration
                            # error of 0, 1, 2, 3 within 2 % of their least pose error (3 was not)
-# the foot contacts and the pins' drift, chosen together last: the least foot skate within 2 % of the best pose
-# error of their 32 combinations
-CONTACT_THRESHOLD = 0.3  # a foot is planted where the blended neighbours' contact vote reaches this
-CONTACT_GAP_S = 0.2      # lifts between planted runs of at most this many seconds bridged (0: none)
-PIN_DRIFT = True         # planted feet move with the root lock's slow drift instead of holding where they landed
+#: Foot contacts and the pins' drift per 2D backend (``Observation.backend``), chosen last, on the validation
+#: performers with each source's 2D: ``contact_threshold`` (the neighbours' vote that plants a foot),
+#: ``contact_gap_s`` (lifts between planted runs bridged) and ``pin_drift`` (a planted foot moves with the root
+#: lock's slow drift). A backend's own entry: the least foot skate within 2 % of the best pose error with its 2D
+#: (the pictorial structures' 2D trusts the vote further: lower, and bridged); ``default`` (true 2D, an unknown
+#: estimator): the least skate within 2 % of each source's best, else the least worst ratio to a best.
+CONTACTS = {
+    "ps": {"contact_threshold": 0.3, "contact_gap_s": 0.2, "pin_drift": True},
+    "blazepose": {"contact_threshold": 0.5, "contact_gap_s": 0.0, "pin_drift": True},
+    "default": {"contact_threshold": 0.5, "contact_gap_s": 0.0, "pin_drift": True},
+}
