@@ -530,9 +530,11 @@ def reconstruct_defaults_table(items, root: Path) -> list[str]:
         c = d["chosen"]
         lines.append(f"- `{_rel(p, root)}`: on {', '.join(d['videos'])} ({d['frames']} frames, {d['source']} 2D): "
                      + ", ".join(f"{k} {v}" for k, v in c.items())
-                     + "".join(f"; foot contacts with {src} 2D: vote {v['contact_threshold']}, lifts up to "
-                               f"{v['contact_gap_s']} s bridged, pins {'following' if v['pin_drift'] else 'without'} "
-                               "the drift" for src, v in (d.get("contacts") or {}).items())
+                     + "".join(f"; foot contacts with {'other (true, unknown)' if src == 'default' else src} 2D: "
+                               f"vote {v['contact_threshold']}, "
+                               + (f"lifts up to {v['contact_gap_s']} s bridged" if v["contact_gap_s"] else "no lift bridged")
+                               + f", pins {'following' if v['pin_drift'] else 'without'} the drift"
+                               for src, v in (d.get("contacts") or {}).items())
                      + f", root-relative MPJPE {d['chosen_score_mm']:.1f} mm ({len(d['table'])} settings tried"
                      + (f", {len(d['table_blazepose'])} with BlazePose's 2D" if d.get("table_blazepose") else "") + ")")
     return lines
