@@ -311,6 +311,16 @@ def test_with_creep_a_planted_foot_follows_the_creep_path_from_where_its_run_beg
     P = _target(pos0, la, 40, 79)
     expect = P + creep[40:80] - creep[40]
     assert np.abs(pos1[40:80, la] - expect).max() < 1e-6
+    # the blend window after the run starts where the target ended: no jump back by the run's creep
+    from vidstyle.reconstruct.footlock import _schedule
+
+    planted = contacts[:, 0]
+    s_, e_ = np.array([40]), np.array([79])
+    w, P = _schedule(planted, pos0[:, la], P[None], s_, e_, 2, creep)
+    assert np.allclose(P[40:80], expect, atol=1e-12) and np.all(w[40:80] == 1.0)
+    assert np.allclose(P[80:82] - P[79:81], pos0[80:82, la] - pos0[79:81, la], atol=1e-12)  # window 80, 81
+    assert np.allclose(P[39:41] - P[38:40], pos0[39:41, la] - pos0[38:40, la], atol=1e-12)  # window 38, 39
+    assert np.abs(creep[79] - creep[40]).max() > 0.5  # the run's creep is large: a jump would show
     # a zero creep is no creep
     pos2, _ = forward_kinematics(pin_feet(m, contacts, blend_frames=2, creep=np.zeros((T, 3))))
     pos3, _ = forward_kinematics(pin_feet(m, contacts, blend_frames=2))

@@ -697,7 +697,8 @@ class Reconstructor:
         else:
             points = rel + root[:, None, :]
         return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
-                              {**self.get_params(), "stride": int(lib.stride_), "library_frames": lib.n_frames})
+                              {**self.get_params(), **cset, "stride": int(lib.stride_),
+                               "library_frames": lib.n_frames})
 
     # ------------------------------------------------------------------ helpers
     def _keypoints(self, motion) -> np.ndarray:

@@ -19,7 +19,7 @@ REFINE_SMOOTH_FRAMES = 2.0  # the refined pose smoothed in time (Gaussian sigma,
 #: (the pictorial structures' 2D trusts the vote further: lower, and bridged); ``default`` (true 2D, an unknown
 #: estimator): the least skate within 2 % of each source's best, else the least worst ratio to a best.
 CONTACTS = {
-    "ps": {"contact_threshold": 0.3, "contact_gap_s": 0.2, "pin_drift": True},
+    "ps": {"contact_threshold": 0.2, "contact_gap_s": 0.2, "pin_drift": True},
     "blazepose": {"contact_threshold": 0.5, "contact_gap_s": 0.0, "pin_drift": True},
     "default": {"contact_threshold": 0.5, "contact_gap_s": 0.0, "pin_drift": True},
 }

@@ -127,9 +127,10 @@ def _run_medians(x: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndar
 
 
 def _schedule(planted: np.ndarray, ankle: np.ndarray, targets: np.ndarray, starts: np.ndarray,
-              ends: np.ndarray, blend_frames: int) -> tuple[np.ndarray, np.ndarray]:
+              ends: np.ndarray, blend_frames: int, creep: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per frame the IK weight (T,) and target (T, 3) of one foot whose unpinned ankle is at ``ankle``
-    (T, 3) (module docstring, step 3)."""
+    (T, 3) (module docstring, step 3); with ``creep`` (T, 3) a run's target moves by ``creep[t] -
+    creep[start]`` inside it, and the window after it starts from where the target ended."""
     T = len(planted)
     t = np.arange(T)
     if len(starts) == 0:
@@ -141,14 +142,16 @@ def _schedule(planted: np.ndarray, ankle: np.ndarray, targets: np.ndarray, start
     pi, ni = np.maximum(prev, 0), np.minimum(nxt, last)
     w1 = np.where(prev >= 0, np.clip(1.0 - (t - ends[pi]) / (B + 1), 0.0, 1.0), 0.0)
     w2 = np.where(nxt <= last, np.clip(1.0 - (starts[ni] - t) / (B + 1), 0.0, 1.0), 0.0)
+    ends_at = targets if creep is None else targets + creep[ends] - creep[starts]  # the target at a run's end
     # in a window the target moves with the foot, offset as at the run's end / start
-    P1 = targets[pi] + ankle - ankle[ends[pi]]
+    P1 = ends_at[pi] + ankle - ankle[ends[pi]]
     P2 = targets[ni] + ankle - ankle[starts[ni]]
     tot = np.maximum(w1 + w2, 1e-300)[:, None]
     inside = planted.astype(bool)
-    run = np.searchsorted(starts, t, side="right") - 1
+    run = np.maximum(np.searchsorted(starts, t, side="right") - 1, 0)
+    held = targets[run] if creep is None else targets[run] + creep - creep[starts[run]]
     w = np.where(inside, 1.0, np.maximum(w1, w2))
-    P = np.where(inside[:, None], targets[np.maximum(run, 0)], (w1[:, None] * P1 + w2[:, None] * P2) / tot)
+    P = np.where(inside[:, None], held, (w1[:, None] * P1 + w2[:, None] * P2) / tot)
     return w, P
 
 
@@ -241,7 +244,8 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
     run's median, step 1) the target ankle height of every run instead (the planted ankle height of a
     generated motion: :mod:`vidstyle.actionmodel`); ``creep`` (None: none) a (T, 3) path by which a planted
     ankle's target moves inside its run: at frame ``t`` of a run that began at ``s``, the target plus
-    ``creep[t] - creep[s]`` (the reconstruction's relaxed root drift). ValueError on a
+    ``creep[t] - creep[s]`` (the reconstruction's relaxed root drift), and the blend window after the run
+    starts from where the target ended. ValueError on a
     ``contacts`` of the wrong shape or values, a bad ``blend_frames``, ``floor`` or ``max_offset``, or a
     skeleton without two leg chains (:func:`leg_chains`).
     """
@@ -291,11 +295,7 @@ def pin_feet(motion, contacts: np.ndarray, blend_frames: int = 3, floor: float |
         targets[:, 1] = _run_medians(pos[:, ankle, 1], starts, ends) if height is None else float(height)
         if floor is not None:
             targets[:, 1] = np.maximum(targets[:, 1], float(floor))
-        w, P = _schedule(planted, pos[:, ankle], targets, starts, ends, blend_frames)
-        if creep is not None:  # a planted foot follows the slow drift from where its run began
-            run = np.clip(np.searchsorted(starts, np.arange(T), side="right") - 1, 0, None)
-            inside = planted.astype(bool)
-            P = P + np.where(inside[:, None], creep - creep[starts[run]], 0.0)
+        w, P = _schedule(planted, pos[:, ankle], targets, starts, ends, blend_frames, creep)
         if max_offset is not None:  # the leash: at most max_offset from where the pose puts the ankle
             off = P - pos[:, ankle]
             n = np.linalg.norm(off, axis=-1, keepdims=True)
