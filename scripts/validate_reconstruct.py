@@ -57,6 +57,8 @@ DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_validate_reco
 POSE_TOLERANCE = 0.02
 #: differences below this are noise: of the candidates within it of the best, the first listed (the cheaper) wins
 TIE_MM = 0.1
+#: the figures of a pooled row the tables keep
+FIGURES = ("mpjpe_root_relative_mm", "pa_mpjpe_mm", "foot_skate_mm_per_frame", "acceleration_error_mm_per_frame2")
 START = {"method": "olng", "k": 32, "n_blend": 8, "window_s": 0.5, "smooth_frames": 1.0, "pin_max_offset": 0.25,
          "refine_prior": None, "refine_smooth_frames": 0.0, "contact_threshold": 0.5, "contact_gap_s": 0.0,
          "pin_drift": False}
@@ -112,50 +114,34 @@ def main() -> int:
         cache = poses_for(dataset, videos, args.frames, args.cache)
         cache_bp = poses_for(dataset, videos, args.frames, args.cache / "blazepose", backend="blazepose")
         table: list[dict] = []
-        seen: dict[tuple, float] = {}
-
-        rows: dict[tuple, dict] = {}
+        rows: dict[tuple, dict] = {}  # pooled rows with the pictorial structures' 2D, by setting
+        bp_rows: dict[tuple, dict] = {}  # and with BlazePose's
+        table_bp: list[dict] = []
 
         def key_of(values: dict) -> tuple:
             return tuple(sorted(values.items(), key=lambda kv: kv[0]))
 
-        bp_rows: dict[tuple, dict] = {}
-        table_bp: list[dict] = []
-
-        def blazepose_row(values: dict) -> dict:
-            """The pooled row of ``values`` with BlazePose's 2D (what real footage gets)."""
+        def pooled_row(values: dict, poses_dir: Path, source: str, store: dict, record: list) -> dict:
+            """The pooled row of ``values`` with ``source``'s 2D (from ``poses_dir``), evaluated once: kept in
+            ``store`` and its figures added to ``record``."""
             key = key_of(values)
-            if key not in bp_rows:
+            if key not in store:
                 params = {k: v for k, v in values.items() if k != "method"}
                 m = evaluate(args.run / "dataset", [args.run / "augmg" / "library" / "clips"], videos=videos,
-                             poses_dirs=[cache_bp], methods=[values["method"]], skeletons=["library"],
+                             poses_dirs=[poses_dir], methods=[values["method"]], skeletons=["library"],
                              max_frames=args.frames, seed=args.seed, **params)
-                row = next(r for r in m["runs"] if r["data"] == "demo test performers" and r["source"] == "blazepose"
-                           and r["method"] == values["method"])  # not BlazePose's own 3D (blazepose-world)
-                bp_rows[key] = row
-                table_bp.append({**values, **{f: row[f] for f in ("mpjpe_root_relative_mm", "pa_mpjpe_mm",
-                                                                   "foot_skate_mm_per_frame",
-                                                                   "acceleration_error_mm_per_frame2")}})
-                log.info("%s (blazepose): %.1f mm", values, row["mpjpe_root_relative_mm"])
-            return bp_rows[key]
+                # the method's row (BlazePose's own 3D, "blazepose-world", is another)
+                row = next(r for r in m["runs"] if r["data"] == "demo test performers" and r["source"] == source
+                           and r["method"] == values["method"])
+                store[key] = row
+                record.append({**values, **{f: row[f] for f in FIGURES}})
+                log.info("%s (%s): %.1f mm", values, source, row["mpjpe_root_relative_mm"])
+            return store[key]
 
         def score(values: dict) -> float:
-            key = key_of(values)
             if values["n_blend"] > values["k"]:  # not a setting: blend at most the k neighbours
                 return float("inf")
-            if key not in seen:
-                params = {k: v for k, v in values.items() if k != "method"}
-                m = evaluate(args.run / "dataset", [args.run / "augmg" / "library" / "clips"], videos=videos,
-                             poses_dirs=[cache], methods=[values["method"]], skeletons=["library"],
-                             max_frames=args.frames, seed=args.seed, **params)
-                row = next(r for r in m["runs"] if r["data"] == "demo test performers" and r["source"] == "ps")
-                seen[key] = row["mpjpe_root_relative_mm"]
-                rows[key] = row
-                table.append({**values, "mpjpe_root_relative_mm": row["mpjpe_root_relative_mm"],
-                              "pa_mpjpe_mm": row["pa_mpjpe_mm"], "foot_skate_mm_per_frame": row["foot_skate_mm_per_frame"],
-                              "acceleration_error_mm_per_frame2": row["acceleration_error_mm_per_frame2"]})
-                log.info("%s: %.1f mm", values, seen[key])
-            return seen[key]
+            return pooled_row(values, cache, "ps", rows, table)["mpjpe_root_relative_mm"]
 
         #: the factors each method uses (the subsequence graph has its own window and takes no k / blend)
         uses = {"nn": ["k", "n_blend", "smooth_frames", "pin_max_offset", "refine_prior"],
@@ -201,8 +187,8 @@ def main() -> int:
         combos = list(itertools.product(*(CANDIDATES[f] for f in (contact[2], contact[0], contact[1]))))
         combos = [(t, g, d) for d, t, g in combos]
         settings = {c: {**best, **dict(zip(contact, c))} for c in combos}
-        found = {"ps": {c: rows[key_of(v)] if score(v) < math.inf else None for c, v in settings.items()},
-                 "blazepose": {c: blazepose_row(v) for c, v in settings.items()}}
+        found = {"ps": {c: pooled_row(v, cache, "ps", rows, table) for c, v in settings.items()},
+                 "blazepose": {c: pooled_row(v, cache_bp, "blazepose", bp_rows, table_bp) for c, v in settings.items()}}
 
         def skate_of(row: dict) -> float:  # no planted pair: no figure, not preferred
             return math.inf if row["foot_skate_mm_per_frame"] is None else row["foot_skate_mm_per_frame"]
@@ -226,7 +212,7 @@ def main() -> int:
                                     "ssg_overlap", "ssg_k", "ssg_transition_weight"],
            "tie_mm": TIE_MM, "pose_tolerance": POSE_TOLERANCE,
            "chosen": {k: v for k, v in best.items() if k not in contact}, "contacts": contacts,
-           "per_method": per_method, "chosen_score_mm": seen[key_of({**best, **contacts["ps"]})], "table": table,
+           "per_method": per_method, "chosen_score_mm": rows[key_of({**best, **contacts["ps"]})]["mpjpe_root_relative_mm"], "table": table,
            "table_blazepose": table_bp}
     write_validation(args.out, doc)
     log.info("chosen %s, contacts %s (%.1f mm); wrote %s", doc["chosen"], contacts, doc["chosen_score_mm"], args.out)

@@ -688,11 +688,9 @@ class Reconstructor:
             reach = None
             if self.pin_max_offset is not None:
                 reach = float(self.pin_max_offset) * _leg_length(skeleton)
-            creep = None
-            if cset["pin_drift"]:  # a planted foot moves with the slow drift the root lock added back
-                creep = drift.copy()
-                creep[:, 1] = 0.0
-            motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach, creep=creep)  # the library's floor: height 0
+            # with pin_drift a planted foot moves with the slow (horizontal) drift the root lock added back
+            motion = pin_feet(motion, contacts, floor=0.0, max_offset=reach,  # the library's floor: height 0
+                              creep=drift if cset["pin_drift"] else None)
             points = self._keypoints(motion)
         else:
             points = rel + root[:, None, :]
@@ -748,7 +746,8 @@ class Reconstructor:
     def _lock_feet(self, root: np.ndarray, rel: np.ndarray, contacts: np.ndarray, fps: float) -> np.ndarray:
         """Step 7: the root moved horizontally so planted ankles stay put; the difference to the camera's
         root path ``root`` is then low-passed (Gaussian, sigma ``relax_s`` seconds) and added back, so the
-        path follows the camera in the long run and the feet in the short."""
+        path follows the camera in the long run and the feet in the short. Returns the path and that
+        low-passed difference (T, 3; zero in height)."""
         from ..augmg.keypoints import KP
 
         ankles = rel[:, [KP["left_ankle"], KP["right_ankle"]]][:, :, [0, 2]]  # (T, 2, 2) horizontal
