@@ -365,7 +365,7 @@ def pose_table(items, root: Path) -> list[str]:
 
 #: what each committed AugMG metrics file is (the 2D sources' poses and the validation file of its thresholds)
 AUGMG_FILES = {
-    "augmg_seed0.json": "the pipeline's evaluate_augmg stage: pictorial structures = the model shipped in the package "
+    "augmg_seed0.json": "the pipeline's augment stage (`vidstyle evaluate augmg`): pictorial structures = the model shipped in the package "
                         "(`scripts/train_default_pose.py`; poses at scales 1, 1.2, 1.4); defaults and thresholds from "
                         "`validation/augmg.json`",
     "augmg_trainpose_seed0.json": "the same marks with pictorial structures = `vidstyle train-pose`'s default model "
