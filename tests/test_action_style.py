@@ -598,3 +598,14 @@ def test_evaluate_action_style_missing_dataset_exits_2(tmp_path, capsys):
     assert _main(["evaluate", "action-style", "--dataset", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
     assert "dataset.json" in capsys.readouterr().err
     assert not (tmp_path / "m.json").exists()
+
+
+def test_dtw_mpjpe_is_zero_for_a_time_warped_copy_and_the_offset_for_a_shifted_one():
+    from vidstyle.evaluation.actionstyle import dtw_mpjpe
+
+    rng = np.random.default_rng(0)
+    seq = np.cumsum(rng.normal(size=(30, 4, 3)), axis=0)  # a random walk: no two frames alike
+    warped = np.repeat(seq, [2 if i % 3 == 0 else 1 for i in range(30)], axis=0)  # slower in places
+    assert dtw_mpjpe(warped, seq) == pytest.approx(0.0, abs=1e-12)
+    # every joint moved by the same 3-4-0 vector: the aligned frames are the same, each 5 apart
+    assert dtw_mpjpe(seq + np.array([3.0, 4.0, 0.0]), seq) == pytest.approx(5.0)

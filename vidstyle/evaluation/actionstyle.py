@@ -134,12 +134,9 @@ def dtw_mpjpe(gen_pos: np.ndarray, true_pos: np.ndarray, slope_limit: int = 5) -
     """Mean joint distance along the slope-limited DTW path between two (F, J, 3) position sequences."""
     from ..actionmodel.dtw import dtw
 
-    a = gen_pos.reshape(len(gen_pos), -1)
-    b = true_pos.reshape(len(true_pos), -1)
     C = np.linalg.norm((gen_pos[:, None] - true_pos[None]), axis=-1).mean(-1)
     _, path = dtw(C, slope_limit)
     path = np.asarray(path)
-    del a, b
     return float(C[path[:, 0], path[:, 1]].mean())
 
 
