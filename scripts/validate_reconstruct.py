@@ -34,7 +34,6 @@ Writes ``--out`` (default ``pipelines/kickboxing/validation/reconstruct.json``);
 from __future__ import annotations
 
 import argparse
-import itertools
 import logging
 import math
 import os
@@ -184,8 +183,9 @@ def main() -> int:
         # (true 2D, an unknown estimator) the least mean skate within POSE_TOLERANCE of each source's best (none
         # such: the least worst ratio to a source's best)
         contact = ("contact_threshold", "contact_gap_s", "pin_drift")
-        combos = list(itertools.product(*(CANDIDATES[f] for f in (contact[2], contact[0], contact[1]))))
-        combos = [(t, g, d) for d, t, g in combos]
+        # in ``contact``'s order; listed drift off first, then by vote and gap (ties: the earlier listed wins)
+        combos = [(t, g, d) for d in CANDIDATES["pin_drift"] for t in CANDIDATES["contact_threshold"]
+                  for g in CANDIDATES["contact_gap_s"]]
         settings = {c: {**best, **dict(zip(contact, c))} for c in combos}
         found = {"ps": {c: pooled_row(v, cache, "ps", rows, table) for c, v in settings.items()},
                  "blazepose": {c: pooled_row(v, cache_bp, "blazepose", bp_rows, table_bp) for c, v in settings.items()}}
