@@ -10,8 +10,8 @@ the true labels, for the inputs
 
 * ``true``: true 2D keypoints (projected from the truth sidecar, every seed),
 * ``noisy``: true 2D + Gaussian noise of 5 % of the torso + 5 % outlier keypoints (seeded, every seed),
-* ``estimated``: pictorial-structures poses (``--poses-dir``; only videos with a pose file; seed 0's
-  test performers), and ``estimated_recognised``: the same with the pipeline's recognised labels
+* ``estimated``: pictorial-structures poses (``--poses-dir``; only videos with a pose file), and
+  ``estimated_recognised``: the same with the pipeline's recognised labels and their per-frame confidence
   (``--recognised-dir``).
 
 Scores (:func:`vidstyle.evaluation.actionstyle.summarise`): lead accuracy, Pearson r of guard height,
@@ -144,7 +144,7 @@ def main() -> int:
         "params": {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
                    "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS, "rounds": D.STYLE_ROUNDS,
                    "validation": "pipelines/kickboxing/validation/action_style.json"},
-        "inputs_note": {"estimated": f"pose files of {args.poses_dir} (seed 0's test performers only)",
+        "inputs_note": {"estimated": f"pose files of {args.poses_dir} (the performers with pose files there)",
                         "noisy": "Gaussian 5 % of the torso + 5 % outliers within +-2 torso lengths"},
         "goals": GOALS,
         "by_input": by_input,

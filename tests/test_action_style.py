@@ -19,6 +19,7 @@ from vidstyle.actionmodel.stylefit import (
     fit_action_style,
     mirror_track,
     project,
+    video_figures,
 )
 from vidstyle.errors import ParameterError
 from vidstyle.formats import FormatError
@@ -129,6 +130,46 @@ def test_speed_from_step_lengths_separates_action_tempo_from_the_duration_factor
     # a style written before the speed existed loads without it
     old = {k: v for k, v in g.to_dict().items() if k not in ("speed", "action_tempo")}
     assert np.isnan(GlobalStyle.from_dict(old).speed) and GlobalStyle.from_dict(old).action_tempo == {}
+
+
+def _recognised(runs):
+    """(xy, labels, view, confidence) of recognised labels: (label, frames, confidence of every frame) runs."""
+    xy, labels, view = _labelled([(lab, n) for lab, n, _ in runs])
+    return xy, labels, view, np.array([c for _, n, c in runs for _ in range(n)])
+
+
+def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_tempo():
+    pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4)])] * 2
+    est = GlobalStyleEstimator(min_run_confidence=0.5).fit(pop)
+    # the performer's real steps last 15 frames (speed 12 / 15) and jabs 18; the recognizer also reports two
+    # spurious 7-frame steps and a 6-frame jab at low confidence
+    perf = _recognised([("Guard", 4, 0.9), ("Step", 15, 0.8), ("Guard", 3, 0.9), ("Step", 7, 0.3), ("Guard", 3, 0.9),
+                        ("Jab", 18, 0.7), ("Guard", 2, 0.9), ("Step", 7, 0.4), ("Jab", 6, 0.2), ("Guard", 3, 0.9),
+                        ("Step", 15, 0.6)])
+    g = est.estimate([perf])
+    assert g.speed == pytest.approx(12 / 15) and g.tempo == pytest.approx({"Jab": 18 / 15})
+    # the same labels without their confidence (true labels) are all trusted: median steps of (15, 7, 7, 15)
+    t = est.estimate([perf[:3]])
+    assert t.speed == pytest.approx(12 / 11) and t.tempo == pytest.approx({"Jab": 12 / 15})
+    # a threshold of 0 trusts every run, as true labels are
+    assert GlobalStyleEstimator(min_run_confidence=0.0).fit(pop).estimate([perf]).speed == pytest.approx(12 / 11)
+
+
+def test_a_label_whose_runs_are_all_doubtful_keeps_its_most_confident_run():
+    pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Hook", 20), ("Guard", 4)])]
+    est = GlobalStyleEstimator(min_run_confidence=0.5).fit(pop)
+    perf = _recognised([("Guard", 3, 0.9), ("Hook", 30, 0.2), ("Guard", 3, 0.9), ("Hook", 24, 0.45),
+                        ("Guard", 3, 0.9), ("Step", 10, 0.9)])
+    assert est.estimate([perf]).tempo == pytest.approx({"Hook": 24 / 20})
+    # the runs and their mean confidence, over the video's frames (runs of one label counted one by one)
+    f = video_figures(*perf[:2], perf[3])
+    assert f["runs"] == [("Hook", 30, pytest.approx(0.2)), ("Hook", 24, pytest.approx(0.45)), ("Step", 10, pytest.approx(0.9))]
+    conf = perf[3].copy()
+    conf[3:33] = np.linspace(0.0, 1.0, 30)  # the first hook's frames: mean 0.5
+    assert video_figures(*perf[:2], conf)["runs"][0][2] == pytest.approx(0.5)
+    assert all(np.isnan(c) for _, _, c in video_figures(*perf[:2])["runs"])
+    with pytest.raises(ParameterError, match="min_run_confidence"):
+        GlobalStyleEstimator(min_run_confidence=1.5).fit(pop).estimate([perf])
 
 
 def test_population_tempo_reference_is_the_mean_of_each_performers_own_ratio():
@@ -452,6 +493,40 @@ def test_learn_style_with_poses_end_to_end(tmp_path, model):
     s = Style.load(out)
     assert s.action_style is not None and "Jab" in s.action_style.coefficients
     assert s.action_style.global_style.lead == "southpaw"  # labelled rule: no population given
+
+
+def test_learn_action_style_reads_the_labels_confidence_and_leaves_doubtful_runs_out(tmp_path, model):
+    """A recognised-label file's per-frame confidence reaches the tempo: a spurious low-confidence Jab run
+    added to a take's labels changes the tempo only when the file carries no confidence."""
+    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator, label_runs, learn_action_style
+    from vidstyle.demo.dataset import label_document
+    from vidstyle.formats.labels import write_labels
+    from vidstyle.formats.poses import PoseFrame, Poses, write_poses
+
+    _, take = _take("Jab", 1, lead="orthodox")
+    xy, labels, _ = _video(take, "front")
+    labels = list(labels)
+    true_jabs = [e - s for lab, s, e in label_runs(labels) if lab == "Jab"]
+    guard = max((r for r in label_runs(labels) if r[0] == "Guard"), key=lambda r: r[2] - r[1])
+    fake = range(guard[1] + 1, guard[1] + 3)  # a 2-frame "Jab" inside the longest guard pause
+    for i in fake:
+        labels[i] = "Jab"
+    conf = [0.1 if i in fake else 0.9 for i in range(len(labels))]
+    pts = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1)
+    write_poses(tmp_path / "v.poses.json", Poses("videos/v.mp4", "ps", [PoseFrame(i, "front", p) for i, p in enumerate(pts)]))
+    mp = tmp_path / "m.npz"
+    model.save(mp)
+    est = GlobalStyleEstimator.from_model(model, 20.0)
+    tempo = {}
+    for name, extra in (("recognised", {"confidence": conf}), ("true", {})):
+        doc = label_document(labels, 20.0, take.chain, video="videos/v.mp4", performer="p01", view="front")
+        f = tmp_path / f"{name}.json"
+        write_labels(f, {**doc, **extra})
+        tempo[name] = learn_action_style([f], tmp_path, mp, est).global_style.tempo["Jab"]
+    ref = est.durations_["Jab"]
+    assert len(true_jabs) >= 2 and np.median(true_jabs + [2]) != np.median(true_jabs)  # the fake run would show
+    assert tempo["recognised"] == pytest.approx(float(np.median(true_jabs)) / ref)
+    assert tempo["true"] == pytest.approx(float(np.median(true_jabs + [2])) / ref)
 
 
 def test_restyle_motion_replaces_actions_only(style, model):

@@ -22,3 +22,18 @@ def test_lead_cue_is_the_validation_choice_and_saw_no_test_performer():
     for cue, s in doc["by_cue"].items():  # the summary is the rows'
         rs = [r for r in doc["rows"] if r["cue"] == cue]
         assert s["lead_accuracy"] == sum(r["correct"] for r in rs) / len(rs)
+
+
+def test_run_confidence_threshold_is_the_validation_choice_and_saw_no_test_performer():
+    import math
+
+    from vidstyle.formats.validation import TEMPO_RUNS
+
+    doc = read_validation(ROOT / "pipelines" / "kickboxing" / "validation" / "tempo_runs.json", TEMPO_RUNS)
+    assert doc["chosen"] == {"min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "max_run_factor": None}
+    measured = [c for c in doc["candidates"] if c["pairs_missing"] == 0]
+    best = min(measured, key=lambda c: c["score"])  # the rule, reapplied to the recorded table
+    assert {k: best[k] for k in doc["chosen"]} == doc["chosen"]
+    for c in doc["candidates"]:
+        assert math.isclose(c["score"], 0.5 * (c["error_all"] + c["error_perf0"]))
+    assert doc["validation_performers"] == doc["split"]["V"] and not set(doc["split"]["V"]) & set(doc["split"]["T"])

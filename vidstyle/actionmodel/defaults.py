@@ -28,6 +28,7 @@ STYLE_ELEVATION_DEG = 10.0  # assumed camera elevation (the demo's cameras)
 STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
 STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
 STYLE_LEAD_CUE = "stance"  # the lead from the front foot's image side before the jab rules; validation/lead_cue.json
+STYLE_MIN_RUN_CONFIDENCE = 0.5  # recognised labels: runs of lower mean confidence do not measure a length; validation/tempo_runs.json
 STYLE_MIN_STANCE_FRAMES = 50  # frames the stance cue needs (2.5 s at the demo's 20 fps), else the jab rules decide
 STYLE_ROUNDS = 2  # linearisations of the decoded keypoints per segment (Gauss-Newton rounds)
 STYLE_BLEND_FRAMES = 4  # synthesize --style: frames cross-faded at either end of a restyled action

@@ -41,6 +41,14 @@ training population, so only the view's identity is used, never its angle).
   step length and ratios are means over performers of their own medians; without, pooled medians (then
   ``action_tempo[a] = tempo[a] * speed``).
 
+  *Recognised labels* (a video given with its per-frame confidence, ``(xy, labels, view, confidence)``):
+  ``estimate`` measures lengths on the runs it can trust: a run whose mean confidence is below
+  ``min_run_confidence`` is left out (spurious runs: on the validation performers a false ``Step`` run was
+  7-9 frames, a third shorter than a real one, and pulled the speed up); a label left with no run keeps
+  its most confident one. Runs without a confidence (true labels) are always trusted.
+  ``scripts/validate_tempo_runs.py`` chose the threshold (it also tried dropping runs much longer than the
+  population's, repeats the recognizer joined into one run: the median did as well without).
+
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
 coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
 component's mean; temporal coefficients at the mean, since a segment's own duration already fixes its
@@ -111,9 +119,20 @@ def mirror_track(xy: np.ndarray) -> np.ndarray:
     return mt(xy)
 
 
-def video_figures(xy: np.ndarray, labels) -> dict:
+def video_parts(video) -> tuple[np.ndarray, list, str, np.ndarray | None]:
+    """``(xy, labels, view, confidence)`` of a video given as ``(xy, labels, view)`` or ``(xy, labels, view,
+    confidence)`` (the per-frame confidence of recognised labels, or None)."""
+    if len(video) == 3:
+        xy, labels, view = video
+        return xy, labels, view, None
+    xy, labels, view, conf = video
+    return xy, labels, view, None if conf is None else np.asarray(conf, dtype=np.float64)
+
+
+def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
     """Raw per-video figures of a track (module text): guard height (arm lengths), stance ratio, leg
-    extension, the jab-hand scores and the action segment lengths."""
+    extension, the jab-hand scores and the action segment lengths; ``runs``: ``(label, length, mean
+    confidence)`` of every action and ``Step`` run (NaN confidence when ``confidence`` is None)."""
     xy = np.asarray(xy, dtype=np.float64)
     labels = list(labels)[: len(xy)]
     if len(labels) < len(xy):
@@ -137,8 +156,12 @@ def video_figures(xy: np.ndarray, labels) -> dict:
         hip_y = 0.5 * (G[:, LHIP, 1] + G[:, RHIP, 1])
         an_y = 0.5 * (G[:, LAN, 1] + G[:, RAN, 1])
         out["extension"] = _nanmedian((an_y - hip_y) / leg_len)
-    jab, side, durations, steps = [], [], {}, []
+    jab, side, durations, steps, runs = [], [], {}, [], []
+    conf = None if confidence is None else np.asarray(confidence, dtype=np.float64)
     for label, s, e in label_runs(labels):
+        if label == "Step" or label not in NON_ACTIONS:
+            c = float(np.mean(conf[s:e])) if conf is not None and e <= len(conf) else math.nan
+            runs.append((label, e - s, c))
         if label == "Step":
             steps.append(e - s)
         if label in NON_ACTIONS:
@@ -158,6 +181,7 @@ def video_figures(xy: np.ndarray, labels) -> dict:
     out["jab_sides"] = side
     out["durations"] = durations
     out["step_durations"] = steps
+    out["runs"] = runs
     # the stance: per frame with both ankles and hips seen, the image side (x from the hips' midpoint) of the
     # lower ankle, the front foot for a camera that looks down; label-free, so left/right swaps do not matter
     ok = np.isfinite(xy[:, [LAN, RAN, LHIP, RHIP]]).all(axis=(1, 2))
@@ -211,11 +235,13 @@ class GlobalStyleEstimator(BaseEstimator):
     (action -> median segment length, frames)."""
 
     def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5, lead_cue: str = D.STYLE_LEAD_CUE,
-                 min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES):
+                 min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES,
+                 min_run_confidence: float = D.STYLE_MIN_RUN_CONFIDENCE):
         self.lead_threshold = lead_threshold
         self.min_front_jabs = min_front_jabs
         self.lead_cue = lead_cue
         self.min_stance_frames = min_stance_frames
+        self.min_run_confidence = min_run_confidence
 
     @classmethod
     def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
@@ -246,7 +272,8 @@ class GlobalStyleEstimator(BaseEstimator):
         if groups is not None and len(groups) != len(videos):
             raise ParameterError("groups", f"one performer per video: {len(groups)} groups for {len(videos)} videos")
         by_performer: dict = {}
-        for i, (xy, labels, view) in enumerate(videos):
+        for i, video in enumerate(videos):
+            xy, labels, view, _conf = video_parts(video)
             f = video_figures(xy, labels)
             steps += f["step_durations"]
             if groups is not None:
@@ -284,14 +311,29 @@ class GlobalStyleEstimator(BaseEstimator):
                                            if (r := [float(np.median(d[a])) / st for d, st in own if d.get(a)])}
         return self
 
+    def trusted_lengths(self, runs) -> dict[str, list[int]]:
+        """Label -> the lengths of ``runs`` (``(label, length, mean confidence)``, pooled over a performer's
+        videos) that measure it (module text: recognised labels)."""
+        if not 0.0 <= self.min_run_confidence <= 1.0:
+            raise ParameterError("min_run_confidence", f"must be in [0, 1], got {self.min_run_confidence}")
+        by_label: dict[str, list[tuple[float, int]]] = {}
+        for label, n, c in runs:
+            by_label.setdefault(label, []).append((c, n))
+        out = {}
+        for label, rr in by_label.items():
+            keep = [n for c, n in rr if not np.isfinite(c) or c >= self.min_run_confidence]
+            out[label] = keep or [max(rr)[1]]
+        return out
+
     def estimate(self, videos) -> GlobalStyle:
         if not hasattr(self, "population_"):
             raise ParameterError("estimator", "not fitted")
-        g, s, c, jab, sides, dur, steps = [], [], [], [], [], {}, []
+        g, s, c, jab, sides, runs = [], [], [], [], [], []
         stance_sum, stance_n = 0.0, 0
         stance_side = getattr(self, "stance_side_", {})
-        for xy, labels, view in videos:
-            f = video_figures(xy, labels)
+        for video in videos:
+            xy, labels, view, conf = video_parts(video)
+            f = video_figures(xy, labels, conf)
             if str(view) == "front":
                 sides += f["jab_sides"]
             if f["stance_frames"] and stance_side.get(str(view)):
@@ -307,9 +349,9 @@ class GlobalStyleEstimator(BaseEstimator):
                 s.append(f["stance"] / pop["stance"])
                 c.append(pop["extension"] - f["extension"])
             jab += f["jab_scores"]
-            steps += f["step_durations"]
-            for a, ds in f["durations"].items():
-                dur.setdefault(a, []).extend(ds)
+            runs += f["runs"]
+        dur = self.trusted_lengths(runs)
+        steps = dur.pop("Step", [])
         side = getattr(self, "orthodox_side_", 0.0)
         if self.lead_cue == "stance" and stance_n >= self.min_stance_frames:
             # label-free: the frame-weighted share of frames whose front foot is on the orthodox side, in [-1, 1]
@@ -612,7 +654,8 @@ def plan_action_style(model, estimator: GlobalStyleEstimator, videos, max_segmen
     the segments to fit (a southpaw's tracks mirrored; up to ``max_segments``, a seeded even spread)."""
     gs = estimator.estimate(videos)
     segs: dict[str, list[np.ndarray]] = {}
-    for xy, labels, _view in videos:
+    for video in videos:
+        xy, labels, _view, _conf = video_parts(video)
         xy = np.asarray(xy, dtype=np.float64)
         if gs.lead == "southpaw":
             xy = mirror_track(xy)
@@ -694,7 +737,7 @@ def learn_action_style(label_paths, poses_dir, model_path, estimator: GlobalStyl
         if not pf.is_file():
             raise InputError(f"{pf}: pose file not found (for {p})")
         xy = track_from_poses(read_poses(pf), fl.fps, fl.n_frames).xy
-        videos.append((xy, fl.labels, fl.view or "front"))
+        videos.append((xy, fl.labels, fl.view or "front", fl.confidence))
     est = estimator if estimator is not None else GlobalStyleEstimator.from_model(model, fps)
     style = fit_action_style(model, est, videos, random_state=seed)
     style.model = str(model_path)

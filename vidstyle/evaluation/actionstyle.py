@@ -4,7 +4,7 @@
 * :func:`orthodox_model`: one :class:`~vidstyle.actionmodel.ActionModel` on every take of the given
   (training) performers, southpaws' clips mirrored to orthodox (their lead is the dataset's truth: the
   training performers' mocap is labelled data).
-* :func:`performer_videos`: a performer's videos as ``(xy, labels, view)`` for an input ``kind``:
+* :func:`performer_videos`: a performer's videos as ``(xy, labels, view, confidence)`` for an input ``kind``:
   ``true`` (true 2D keypoints projected from the truth sidecar), ``noisy`` (true 2D plus Gaussian noise of
   5 % of the torso and 5 % outliers, seeded), ``estimated`` (``<poses_dir>/<id>.poses.json``), with the
   true labels or the recognised ones (``labels_dir``).
@@ -55,8 +55,8 @@ def orthodox_model(dataset: str | Path, manifest: dict, performers: list[str], s
 def performer_videos(ds, manifest: dict, performer: str, kind: str = "true", poses_dir: Path | None = None,
                      labels_dir: Path | None = None, rng: np.random.Generator | None = None,
                      cache: dict | None = None) -> list:
-    """``[(xy, labels, view)]`` of ``performer``'s videos (module text); a video without a pose file is
-    left out for ``estimated``."""
+    """``[(xy, labels, view, confidence)]`` of ``performer``'s videos (module text; ``confidence`` the recognised
+    labels' per-frame confidence, None for true labels); a video without a pose file is left out for ``estimated``."""
     from ..actionmodel.stylefit import noisy_track
     from ..formats.poses import read_poses
     from ..recognition.posefeatures import track_from_poses
@@ -67,11 +67,13 @@ def performer_videos(ds, manifest: dict, performer: str, kind: str = "true", pos
     for v in manifest["videos"]:
         if v["performer"] != performer:
             continue
+        confidence = None
         if labels_dir is not None:
             f = Path(labels_dir) / f"{v['id']}.json"
             if not f.is_file():
                 continue
-            labels = json.loads(f.read_text())["labels"]
+            doc = json.loads(f.read_text())
+            labels, confidence = doc["labels"], doc.get("confidence")
         else:
             labels = json.loads((root / v["labels"]).read_text())["labels"]
         if kind in ("true", "noisy"):
@@ -91,7 +93,7 @@ def performer_videos(ds, manifest: dict, performer: str, kind: str = "true", pos
             xy = track_from_poses(read_poses(f), float(manifest["fps"]), int(v["frames"])).xy
         else:
             raise ValueError(f"unknown input kind {kind!r}")
-        out.append((xy, labels, v["view"]))
+        out.append((xy, labels, v["view"], confidence))
     return out
 
 

@@ -13,6 +13,7 @@ kind                                          version   written by
 ``vidstyle.validation.inbetween``             1         ``scripts/validate_inbetween.py``
 ``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
 ``vidstyle.validation.lead_cue``              1         ``scripts/validate_lead_cue.py``
+``vidstyle.validation.tempo_runs``            1         ``scripts/validate_tempo_runs.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -43,6 +44,7 @@ INBETWEEN = "vidstyle.validation.inbetween"
 ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
 ACTION_STYLE_POSES = "vidstyle.validation.action_style_poses"
 LEAD_CUE = "vidstyle.validation.lead_cue"
+TEMPO_RUNS = "vidstyle.validation.tempo_runs"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -58,6 +60,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
     ACTION_STYLE_POSES: (1, 1, True, False),
     LEAD_CUE: (1, 1, True, False),
+    TEMPO_RUNS: (1, 1, True, False),
 }
 
 
