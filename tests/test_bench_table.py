@@ -65,3 +65,31 @@ def test_demo_timing_shows_the_median_of_its_runs_and_both_goals(tmp_path):
     assert "median 416 s wall of 3 fresh runs (389-443 s)" in pipeline[0]
     assert "| <= 390 s | **no** |" in pipeline[0]  # the best run (389 s) does not make the goal met
     assert "median 506 s of 3 runs (476-620 s)" in total[0] and "| <= 600 s | yes |" in total[0]
+
+
+def test_bench_demo_pairs_each_round_and_the_table_shows_the_median_ratio(tmp_path):
+    """bench_demo.py --baseline: the ratio of each round's HEAD run to its baseline run, their median; the
+    table row carries it."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from bench_demo import paired
+
+    def run(wall, cpu, total, commit):
+        return ({"run_wall_seconds": wall, "cpu_seconds": cpu}, total, commit)
+
+    head = [run(400.0, 700.0, 500.0, "h"), run(380.0, 690.0, 480.0, "h"), run(420.0, 720.0, 530.0, "h")]
+    base = [run(400.0, 800.0, 520.0, "b" * 40), run(400.0, 690.0, 500.0, "b" * 40), run(420.0, 700.0, 500.0, "b" * 40)]
+    p = paired(head, base)
+    assert [r["pipeline_ratio"] for r in p["rounds"]] == [1.0, 0.95, 1.0]
+    assert p["pipeline_ratio"] == 1.0 and p["cpu_ratio"] == 1.0 and p["make_demo_ratio"] == 500.0 / 520.0
+    assert p["median_run_wall_seconds"] == 400.0 and p["median_make_demo_seconds"] == 500.0 and p["commit"] == "b" * 40
+    res = tmp_path / "bench_results"
+    res.mkdir()
+    (res / "demo_timing.json").write_text(json.dumps({
+        "started": 1796389669.0, "cores": 2, "run_wall_seconds": 400.0, "cpu_seconds": 700.0,
+        "stages": [{"stage": "features", "wall_seconds": 80.0}], "runs": [], "median_run_wall_seconds": 400.0,
+        "baseline": {**p, "pipeline_ratio": 0.9512}}))
+    out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
+                         check=True).stdout
+    row = [line for line in out.splitlines() if "against commit bbbbbbb" in line]
+    assert len(row) == 1 and "| 0.951 wall, 1.000 CPU, 0.962 with the install (median of 3 rounds' ratios; " in row[0]
+    assert "baseline median 400 s) | < 1 | yes |" in row[0]

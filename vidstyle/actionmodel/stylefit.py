@@ -260,7 +260,8 @@ class GlobalStyleEstimator(BaseEstimator):
     def fit(self, videos, y=None, groups=None) -> GlobalStyleEstimator:
         """``groups``: the performer of each video (scikit-learn's ``groups``). With them the tempo reference
         of each action is the mean over performers of their own action-to-step length ratio, so a
-        population's mix of speeds does not shift it; without them, pooled medians."""
+        population's mix of speeds does not shift it; without them, pooled medians. The population is
+        measured on its labels as given (meant for true labels: a video's confidence, if any, is not used)."""
         if self.lead_cue not in LEAD_CUES:
             raise ParameterError("lead_cue", f"must be one of {', '.join(LEAD_CUES)}, got {self.lead_cue!r}")
         per_view: dict[str, dict[str, list[float]]] = {}
