@@ -14,9 +14,11 @@ varies by about 10 % from run to run on a shared 2-core machine.
 
 ``--baseline REV`` pairs every run of HEAD with a fresh run of ``REV`` in the same round (their order
 alternating between rounds, so a machine that drifts during the bench favours neither) and records the
-baseline's runs and the median over rounds of each round's HEAD / baseline ratio (pipeline wall, CPU and
-the whole command): the figure that says whether a change made the demo faster, which separate benches
-on a machine that drifts by ~10 % cannot.
+baseline's runs and the median over rounds of each round's HEAD / baseline ratio (pipeline wall, CPU,
+the whole command, and wall seconds per CPU second). Separate benches on a machine that drifts by ~10 %
+cannot say whether a change made the demo faster. The wall and CPU ratios still carry the drift within a
+round (the same code's CPU time moved by 30 % between rounds here); the wall-per-CPU ratio does not,
+and shows what a change of scheduling (stages run side by side) did.
 
 ``--from DIR`` takes a clone where ``make demo`` already ran (``--total``: its measured wall seconds,
 install included, one per ``--from``). Writes ``bench_results/demo_timing.json``: the median run's
@@ -130,7 +132,8 @@ def main(argv: list[str] | None = None) -> int:
     if base_runs:
         b = payload["baseline"]
         print(f"baseline {b['commit'][:7]}: median {b['median_run_wall_seconds']:.0f} s; HEAD / baseline per round, "
-              f"median: pipeline {b['pipeline_ratio']:.3f}, CPU {b['cpu_ratio']:.3f}, make demo {b['make_demo_ratio']:.3f}")
+              f"median: pipeline {b['pipeline_ratio']:.3f}, CPU {b['cpu_ratio']:.3f}, make demo {b['make_demo_ratio']:.3f}, "
+              f"wall per CPU second {b['wall_per_cpu_ratio']:.3f}")
     return 0
 
 
@@ -140,12 +143,17 @@ def paired(runs: list, base_runs: list) -> dict:
     rounds = []
     for (d, t, _), (bd, bt, _) in zip(runs, base_runs, strict=True):
         rounds.append({"pipeline_ratio": d["run_wall_seconds"] / bd["run_wall_seconds"],
-                       "cpu_ratio": d["cpu_seconds"] / bd["cpu_seconds"], "make_demo_ratio": t / bt})
+                       "cpu_ratio": d["cpu_seconds"] / bd["cpu_seconds"], "make_demo_ratio": t / bt,
+                       # wall seconds per CPU second, HEAD over baseline: how well the two cores are kept
+                       # busy, which the machine's drift (both runs' CPU time moving together) leaves alone
+                       "wall_per_cpu_ratio": (d["run_wall_seconds"] / d["cpu_seconds"])
+                       / (bd["run_wall_seconds"] / bd["cpu_seconds"])})
     return {"commit": base_runs[0][2], "runs": [summary(doc, total, src) for doc, total, src in base_runs],
             "median_run_wall_seconds": statistics.median(d["run_wall_seconds"] for d, _, _ in base_runs),
             "median_make_demo_seconds": statistics.median(t for _, t, _ in base_runs),
             "rounds": rounds,
-            **{k: statistics.median(r[k] for r in rounds) for k in ("pipeline_ratio", "cpu_ratio", "make_demo_ratio")}}
+            **{k: statistics.median(r[k] for r in rounds)
+               for k in ("pipeline_ratio", "cpu_ratio", "make_demo_ratio", "wall_per_cpu_ratio")}}
 
 
 if __name__ == "__main__":

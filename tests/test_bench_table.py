@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "scripts" / "bench_table.py"
 
@@ -82,6 +84,9 @@ def test_bench_demo_pairs_each_round_and_the_table_shows_the_median_ratio(tmp_pa
     assert [r["pipeline_ratio"] for r in p["rounds"]] == [1.0, 0.95, 1.0]
     assert p["pipeline_ratio"] == 1.0 and p["cpu_ratio"] == 1.0 and p["make_demo_ratio"] == 500.0 / 520.0
     assert p["median_run_wall_seconds"] == 400.0 and p["median_make_demo_seconds"] == 500.0 and p["commit"] == "b" * 40
+    # wall per CPU second, HEAD over baseline: round 1 (400/700) / (400/800) = 8/7, round 2 0.95, round 3 (420/720) / (420/700)
+    assert [r["wall_per_cpu_ratio"] for r in p["rounds"]] == pytest.approx([8 / 7, 0.95, 700 / 720])
+    assert p["wall_per_cpu_ratio"] == pytest.approx(700 / 720)
     res = tmp_path / "bench_results"
     res.mkdir()
     (res / "demo_timing.json").write_text(json.dumps({
@@ -91,5 +96,5 @@ def test_bench_demo_pairs_each_round_and_the_table_shows_the_median_ratio(tmp_pa
     out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
                          check=True).stdout
     row = [line for line in out.splitlines() if "against commit bbbbbbb" in line]
-    assert len(row) == 1 and "| 0.951 wall, 1.000 CPU, 0.962 with the install (median of 3 rounds' ratios; " in row[0]
+    assert len(row) == 1 and "| 0.951 wall, 1.000 CPU, 0.962 with the install, 0.972 wall per CPU second (median of 3 " in row[0]
     assert "baseline median 400 s) | < 1 | yes |" in row[0]
