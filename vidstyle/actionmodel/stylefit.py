@@ -131,7 +131,7 @@ def video_parts(video) -> tuple[np.ndarray, list, str, np.ndarray | None]:
 
 def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
     """Raw per-video figures of a track (module text): guard height (arm lengths), stance ratio, leg
-    extension, the jab-hand scores and the action segment lengths; ``runs``: ``(label, length, mean
+    extension, the jab-hand scores; ``runs``: ``(label, length, mean
     confidence)`` of every action and ``Step`` run (NaN confidence when ``confidence`` is None)."""
     xy = np.asarray(xy, dtype=np.float64)
     labels = list(labels)[: len(xy)]
@@ -156,17 +156,14 @@ def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
         hip_y = 0.5 * (G[:, LHIP, 1] + G[:, RHIP, 1])
         an_y = 0.5 * (G[:, LAN, 1] + G[:, RAN, 1])
         out["extension"] = _nanmedian((an_y - hip_y) / leg_len)
-    jab, side, durations, steps, runs = [], [], {}, [], []
+    jab, side, runs = [], [], []
     conf = None if confidence is None else np.asarray(confidence, dtype=np.float64)
     for label, s, e in label_runs(labels):
         if label == "Step" or label not in NON_ACTIONS:
             c = float(np.mean(conf[s:e])) if conf is not None and e <= len(conf) else math.nan
             runs.append((label, e - s, c))
-        if label == "Step":
-            steps.append(e - s)
         if label in NON_ACTIONS:
             continue
-        durations.setdefault(label, []).append(e - s)
         if label == "Jab" and np.isfinite(torso):
             seg = xy[s:e]
             d = [np.nanmax(np.linalg.norm(seg[:, w] - seg[0, w], axis=-1)) if np.isfinite(seg[:, w]).all(-1).any()
@@ -179,8 +176,6 @@ def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
                     side.append(float(np.mean(seg[ok, w, 0] - seg[ok, NECK, 0]) / torso))
     out["jab_scores"] = jab
     out["jab_sides"] = side
-    out["durations"] = durations
-    out["step_durations"] = steps
     out["runs"] = runs
     # the stance: per frame with both ankles and hips seen, the image side (x from the hips' midpoint) of the
     # lower ankle, the front foot for a camera that looks down; label-free, so left/right swaps do not matter
@@ -276,11 +271,15 @@ class GlobalStyleEstimator(BaseEstimator):
         for i, video in enumerate(videos):
             xy, labels, view, _conf = video_parts(video)
             f = video_figures(xy, labels)
-            steps += f["step_durations"]
+            lengths: dict[str, list[int]] = {}  # the population's labels are all trusted (true labels)
+            for label, n, _c in f["runs"]:
+                lengths.setdefault(label, []).append(n)
+            video_steps = lengths.pop("Step", [])
+            steps += video_steps
             if groups is not None:
                 mine = by_performer.setdefault(groups[i], ({}, []))
-                mine[1].extend(f["step_durations"])
-                for a, ds in f["durations"].items():
+                mine[1].extend(video_steps)
+                for a, ds in lengths.items():
                     mine[0].setdefault(a, []).extend(ds)
             if str(view) == "front":
                 front.append(f)
@@ -290,7 +289,7 @@ class GlobalStyleEstimator(BaseEstimator):
             for k in pv:
                 if k in f and np.isfinite(f[k]):
                     pv[k].append(f[k])
-            for a, ds in f["durations"].items():
+            for a, ds in lengths.items():
                 dur.setdefault(a, []).extend(ds)
         if not per_view:
             raise ParameterError("videos", "no training video")
