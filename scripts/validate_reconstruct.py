@@ -86,7 +86,9 @@ def poses_for(dataset, videos: list[str], frames: int, cache: Path, backend: str
                 pass
         video = dataset.root / dataset.by_id()[v].video
         log.info("%s: estimating %d frames (%s)", v, frames, backend)
-        write_poses(path, estimate_video(video, backend, None, list(range(frames)), jobs=1))
+        # the pictorial structures at scale 1 only, as the pipeline's reconstruct_poses stage reads the demo
+        write_poses(path, estimate_video(video, backend, None, list(range(frames)), jobs=1,
+                                         scales=(1.0,) if backend == "ps" else None))
     return cache
 
 

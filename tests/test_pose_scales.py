@@ -86,3 +86,38 @@ def test_poses_params_round_trip(tmp_path):
     (tmp_path / "r.json").write_text(json.dumps(doc))
     with pytest.raises(FormatError, match="params: expected an object"):
         read_poses(tmp_path / "r.json")
+
+
+def test_zoom_candidates_are_the_scale_one_pose_then_each_zoom_mapped_back():
+    m = SquareFinder()
+    frame = _frame(40, 50, 5)  # 10 px wide: zoom 2 gives 20 px (score 1), zoom 0.5 gives 5 px (score 0.25)
+    got = m.zoom_candidates(frame, (2.0, 0.5))
+    assert len(got) == 3
+    np.testing.assert_array_equal(got[0].points, m.estimate(frame).points)  # scales (1,): the first
+    np.testing.assert_allclose([c.points[0, 2] for c in got], [0.5, 1.0, 0.25], atol=0.06)
+    for c in got:  # every candidate in the frame's pixels
+        np.testing.assert_allclose(c.points[:, :2], np.tile([39.5, 49.5], (15, 1)), atol=0.3)
+    m.set_inference(scales=(1.0, 2.0, 0.5))  # estimate keeps the most confident candidate
+    np.testing.assert_array_equal(m.estimate(frame).points, got[1].points)
+
+
+def test_default_scales_are_the_validation_choice_and_the_pose_command_uses_them():
+    from pathlib import Path
+
+    from vidstyle.formats.validation import POSE_SCALES, read_validation
+    from vidstyle.pose.defaults import PS_SCALES
+    from vidstyle.pose.run import check_estimate_params
+
+    doc = read_validation(Path(__file__).resolve().parents[1] / "pipelines" / "kickboxing" / "validation"
+                          / "pose_scales.json", POSE_SCALES)
+    assert tuple(doc["chosen"]) == PS_SCALES
+    rows = doc["candidates"]
+    for r in rows:  # a candidate's score is its figure-size bins' mean, its cost one pass per distinct zoom
+        assert r["pck@0.2"] == pytest.approx(np.mean([b["pck@0.2"] for b in r["by_figure_scale"]]))
+        assert r["passes"] == len(check_scales(r["scales"]))
+    best = max(r["pck@0.2"] for r in rows)  # the rule, reapplied to the recorded table
+    near = [r for r in rows if r["pck@0.2"] >= best - doc["tolerance"]]
+    assert min(near, key=lambda r: (r["passes"], -r["pck@0.2"]))["scales"] == doc["chosen"]
+    assert doc["split"].startswith("val") and "CMU" in doc["split"]  # validation performers only
+    assert check_estimate_params("ps", None, None) == PS_SCALES
+    assert check_estimate_params("blazepose", None, None) == (1.0,)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from ..pose.defaults import MAX_CONTEXT
+from ..pose.defaults import MAX_CONTEXT, PS_SCALES
 from ._numbers import jobs_option, number
 
 from ..errors import InputError
@@ -154,7 +154,9 @@ def pose(
     scales: str | None = typer.Option(None, "--scales", help="ps backend: comma-separated zoom factors of "
                                       "multi-scale inference, e.g. 1,1.2,1.4 (each frame is also zoomed about the "
                                       "person by each factor and the most confident pose kept; for people smaller "
-                                      "or larger than the training figures; time grows with their number)."),
+                                      "or larger than the training figures; time grows with their number). Default: "
+                                      + ",".join(f"{z:g}" for z in PS_SCALES) + ", chosen on validation renders "
+                                      "(validation/pose_scales.json)."),
     track: bool | None = typer.Option(None, "--track/--no-track", help="Follow one performer through the video "
                                       "(other people are ignored; frames without the performer get no pose) "
                                       "[default: on for blazepose without --annotations; with --annotations, on "

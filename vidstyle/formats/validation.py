@@ -14,6 +14,7 @@ kind                                          version   written by
 ``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
 ``vidstyle.validation.lead_cue``              1         ``scripts/validate_lead_cue.py``
 ``vidstyle.validation.tempo_runs``            1         ``scripts/validate_tempo_runs.py``
+``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -45,6 +46,7 @@ ACTIONMODEL_DEFAULTS = "vidstyle.validation.actionmodel"
 ACTION_STYLE_POSES = "vidstyle.validation.action_style_poses"
 LEAD_CUE = "vidstyle.validation.lead_cue"
 TEMPO_RUNS = "vidstyle.validation.tempo_runs"
+POSE_SCALES = "vidstyle.validation.pose_scales"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -61,6 +63,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     ACTION_STYLE_POSES: (1, 1, True, False),
     LEAD_CUE: (1, 1, True, False),
     TEMPO_RUNS: (1, 1, True, False),
+    POSE_SCALES: (1, 1, True, False),
 }
 
 

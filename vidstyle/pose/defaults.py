@@ -14,6 +14,12 @@ CNN_DEFAULTS = {"unary_weight": 16.0, "epochs": 20, "channels": 48, "refine": 3,
                 "augment": "flip", "demo_performers": 30, "cmu_clips": 71, "views_per_clip": 16}
 #: the training set of ``vidstyle train-pose`` (demo performers, CMU clips, azimuths per clip)
 TRAIN_SET = ("demo_performers", "cmu_clips", "views_per_clip")
+#: zoom factors of the pictorial structures' multi-scale inference when none are given (``vidstyle pose
+#: --backend ps --scales``, :func:`vidstyle.pose.run.estimate_video`): each frame is also zoomed about the
+#: person by each factor and the most confident pose kept. Chosen by ``scripts/validate_pose_scales.py`` on
+#: validation renders with figures 0.3..1.4 times the training renders' (``validation/pose_scales.json``):
+#: the fewest zooms within a point of the best mean PCK@0.2; at the training figure size they change nothing
+PS_SCALES: tuple[float, ...] = (1.0, 1.4, 2.0)
 #: environment variables the CLI reads for ``--cmu-dir`` (CMU BVH clips) and ``evaluate pose --real-dir``
 CMU_ENV = "VIDSTYLE_CMU_DIR"
 REAL_ENV = "VIDSTYLE_REAL_DIR"

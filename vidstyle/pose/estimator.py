@@ -644,24 +644,29 @@ class PoseModel:
         than the training renders' figures): the frame is also zoomed by each factor about the centre
         of the pose found at scale 1 (kept at the frame's size, borders replicated), and the pose whose
         keypoints score highest on average is returned, mapped back to the frame's pixels."""
+        zooms = tuple(float(z) for z in self.scales if float(z) != 1.0)
+        return max(self.zoom_candidates(frame, zooms, index, view, detectors, background),
+                   key=lambda c: float(c.points[:, 2].mean()))  # the first of equals: scale 1 wins ties
+
+    def zoom_candidates(self, frame: np.ndarray, zooms: tuple[float, ...], index: int = 0, view: str | None = None,
+                        detectors: str | None = None, background: np.ndarray | None = None) -> list[PoseFrame]:
+        """The pose of the frame as given, then one per zoom factor of ``zooms``: the frame zoomed by it
+        about the centre of the first pose (kept at the frame's size, borders replicated), each pose mapped
+        back to the frame's pixels. :meth:`estimate` returns the one whose keypoints score highest on
+        average; ``scripts/validate_pose_scales.py`` scores every zoom of a frame from one call."""
         pf = self._estimate_once(frame, index, view, detectors, background)
-        zooms = [float(z) for z in self.scales if float(z) != 1.0]
-        if not zooms:
-            return pf
+        out = [pf]
         H, W = frame.shape[:2]
         centre = pf.points[:, :2].mean(axis=0)
-        best, best_score = pf, float(pf.points[:, 2].mean())
         for z in zooms:
             A = zoom_about(centre, z, (W, H))
             fz = cv2.warpAffine(frame, A, (W, H), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
             bz = None if background is None else cv2.warpAffine(background, A, (W, H), flags=cv2.INTER_LINEAR,
                                                                   borderMode=cv2.BORDER_REPLICATE)
             cand = self._estimate_once(fz, index, view, detectors, bz)
-            score = float(cand.points[:, 2].mean())
-            if score > best_score:
-                cand.points[:, :2] = (cand.points[:, :2] - A[:, 2]) / z
-                best, best_score = cand, score
-        return best
+            cand.points[:, :2] = (cand.points[:, :2] - A[:, 2]) / z
+            out.append(cand)
+        return out
 
     def _estimate_once(self, frame: np.ndarray, index: int, view: str | None, detectors: str | None,
                        background: np.ndarray | None) -> PoseFrame:

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..formats.poses import PoseFrame, Poses
+from .defaults import PS_SCALES
 from .interfaces import MODEL_BACKENDS, PoseBackend, backend_factory, check_backend
 
 log = logging.getLogger(__name__)
@@ -189,7 +190,7 @@ def check_estimate_params(backend: str, model_path, scales) -> tuple[float, ...]
     check_backend(backend)
     resolve_model(backend, model_path)
     if scales is None:
-        return (1.0,)
+        return PS_SCALES if backend == "ps" else (1.0,)
     if backend != "ps":
         raise ParameterError("scales", "multi-scale inference is a ps backend setting")
     from .estimator import check_scales  # the ps model's module (scikit-learn, numba): not for BlazePose
@@ -215,7 +216,7 @@ def estimate_video(video: str | Path, backend: str | None = None, model_path: st
     """Poses of ``frames`` (default: all) of ``video`` (``vidstyle pose``); ``backend``: a name of
     :data:`vidstyle.pose.interfaces.BACKENDS` (default :func:`default_backend`; ``model_path``: the ``ps``
     backend's pose model file, default the shipped one, :func:`resolve_model`); ``scales``: zoom factors of the ps backend's multi-scale inference
-    (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default: 1 only). ``track`` (default: on for
+    (:meth:`vidstyle.pose.estimator.PoseModel.estimate`; default :data:`vidstyle.pose.defaults.PS_SCALES`). ``track`` (default: on for
     :data:`TRACKED_BACKENDS`): follow one performer through the frames
     (:class:`vidstyle.pose.people.PerformerTracker`; ``person``: the one at that pixel of the input video
     in the first frame with people, or in frame ``person_frame`` when given (chosen there, then followed
