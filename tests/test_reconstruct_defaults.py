@@ -80,3 +80,24 @@ def test_library_and_cli_default_to_them():
     assert sig["refine"].default.default is (D.REFINE_PRIOR is not None)
     assert (sig["contact_threshold"].default.default, sig["contact_gap"].default.default,
             sig["pin_drift"].default.default) == (None, None, None)
+
+
+def test_view_step_cost_is_the_view_tracking_validation_choice():
+    from vidstyle.formats.validation import VIEW_TRACKING, read_validation
+
+    doc = read_validation(VALIDATION.with_name("view_tracking.json"), VIEW_TRACKING)
+    assert D.VIEW_STEP_COST == doc["chosen"]
+    rows, tol = doc["candidates"], doc["tolerance"]
+    near = [r for r in rows if r["flips"] <= min(x["flips"] for x in rows) + tol]  # the rule, reapplied
+    best = max(r["view_accuracy"] for r in near)
+    assert min((r for r in near if r["view_accuracy"] >= best - tol), key=lambda r: r["step_cost"])["step_cost"] == doc["chosen"]
+    for r in rows:  # the pooled scores are the clips' frames
+        assert r["frames"] == sum(c["frames"] for c in r["per_clip"])
+        assert math.isclose(r["flips"] * r["frames"], sum(c["flips"] * c["frames"] for c in r["per_clip"]), abs_tol=1e-6)
+    tested = {"05_01", "06_01"} | {f"{s}_" for s in ("03", "07", "08")}  # real-motion, held-out and pose test clips
+    assert not any(v["clip"] in tested or v["clip"][:3] in tested for v in doc["videos"])
+    assert {v["clip"][:2] for v in doc["videos"]} <= set(doc["subjects"])
+    assert inspect.signature(Reconstructor).parameters  # the library reads the default where it builds observations
+    from vidstyle.reconstruct.core import Observation
+
+    assert inspect.signature(Observation.from_poses).parameters["view_step_cost"].default is None

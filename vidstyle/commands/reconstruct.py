@@ -96,6 +96,11 @@ def reconstruct(
     refine: bool = typer.Option(D.REFINE_PRIOR is not None, "--refine/--no-refine", help="Bend the blended pose "
                                 "toward the keypoints within the span of its neighbours (the prior's weight: "
                                 "chosen on validation performers)."),
+    view_step_cost: float = number(D.VIEW_STEP_COST, "--view-step-cost", integer=False, lo=0, hi=1000,
+                                   help="Track the pictorial structures' classified viewpoints through the video: "
+                                   "the cost of a quarter turn between frames against the classifier's -log "
+                                   "scores (0: each frame's own view; a front/back flip swaps left and right). "
+                                   "Default: chosen on validation renders."),
     fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
     size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
@@ -131,7 +136,7 @@ def reconstruct(
                       k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
                       refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px="auto" if estimate_focal else focal, elevation_deg=elevation,
                       foot_lock=foot_lock, contact_threshold=contact_threshold, contact_gap_s=contact_gap,
-                      pin_drift=pin_drift, cache_dir=index_cache)
+                      pin_drift=pin_drift, cache_dir=index_cache, view_step_cost=view_step_cost)
 
 
 @evaluate_app.command("reconstruct")

@@ -15,6 +15,7 @@ kind                                          version   written by
 ``vidstyle.validation.lead_cue``              1         ``scripts/validate_lead_cue.py``
 ``vidstyle.validation.tempo_runs``            1         ``scripts/validate_tempo_runs.py``
 ``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
+``vidstyle.validation.view_tracking``         1         ``scripts/validate_view_tracking.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -47,6 +48,7 @@ ACTION_STYLE_POSES = "vidstyle.validation.action_style_poses"
 LEAD_CUE = "vidstyle.validation.lead_cue"
 TEMPO_RUNS = "vidstyle.validation.tempo_runs"
 POSE_SCALES = "vidstyle.validation.pose_scales"
+VIEW_TRACKING = "vidstyle.validation.view_tracking"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -64,6 +66,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     LEAD_CUE: (1, 1, True, False),
     TEMPO_RUNS: (1, 1, True, False),
     POSE_SCALES: (1, 1, True, False),
+    VIEW_TRACKING: (1, 1, True, False),
 }
 
 

@@ -4,6 +4,10 @@ signal): :class:`Reconstructor`.
 For every video frame ``t`` with a pose (an :class:`Observation`: 15 keypoints, their confidences, and
 the camera's azimuth about the performer when the pose stage estimated it):
 
+0. **Viewpoints** (:meth:`Observation.from_poses`): a pose estimator's classified views (the pictorial
+   structures') are tracked through the video (:func:`vidstyle.pose.viewtrack.track_views`: no half turn
+   between two frames; a frame turned by half a turn has its left and right exchanged), so a run of frames
+   read from the back does not turn the body inside out.
 1. **kNN** (:meth:`Reconstructor.neighbours`): the frame's bone-direction features
    (:func:`vidstyle.augmg.projection.angle_features`) against the library projected at the views
    nearest the frame's azimuth (``spread`` neighbouring views either side; every view when the azimuth
@@ -125,9 +129,15 @@ class Observation:
         return (self.scores > MIN_SCORE).sum(axis=1) >= MIN_KEYPOINTS
 
     @classmethod
-    def from_poses(cls, poses, fps: float, size: tuple[int, int], n_frames: int | None = None) -> Observation:
+    def from_poses(cls, poses, fps: float, size: tuple[int, int], n_frames: int | None = None,
+                   view_step_cost: float | None = None) -> Observation:
         """From a :class:`vidstyle.formats.poses.Poses` whose frames are decoded frames at ``fps`` (frames
-        absent from the file or without a pose are unknown)."""
+        absent from the file or without a pose are unknown). Classified viewpoints are first tracked
+        through the video (:func:`vidstyle.pose.viewtrack.track_views`; ``view_step_cost``: default
+        :data:`.defaults.VIEW_STEP_COST`, 0: each frame's own view)."""
+        from ..pose.viewtrack import track_views
+
+        poses = track_views(poses, D.VIEW_STEP_COST if view_step_cost is None else float(view_step_cost))
         last = max((f.frame for f in poses.frames), default=-1)
         T = int(n_frames) if n_frames is not None else last + 1
         xy = np.full((T, 15, 2), np.nan)

@@ -12,6 +12,9 @@ PIN_MAX_OFFSET = None    # no cap on how far leg IK pulls a planted foot: least 
 REFINE_PRIOR = 0.1       # the blend bent toward the keypoints (vidstyle.reconstruct.refine): 0.1 beat off, 1, 0.03
 REFINE_SMOOTH_FRAMES = 2.0  # the refined pose smoothed in time (Gaussian sigma, frames; 0: not): the least acceleration
                            # error of 0, 1, 2, 3 within 2 % of their least pose error (3 was not)
+#: the pictorial structures' classified views tracked through the video (vidstyle.pose.viewtrack): the cost of a
+#: quarter turn between frames, chosen by scripts/validate_view_tracking.py (validation/view_tracking.json)
+VIEW_STEP_COST = 3.0
 #: Foot contacts and the pins' drift per 2D backend (``Observation.backend``), chosen last, on the validation
 #: performers with each source's 2D: ``contact_threshold`` (the neighbours' vote that plants a foot),
 #: ``contact_gap_s`` (lifts between planted runs bridged) and ``pin_drift`` (a planted foot moves with the root

@@ -1,0 +1,88 @@
+"""The performer's viewpoint through a video, not frame by frame.
+
+The pictorial structures classify each frame's viewpoint alone (front, left, back, right). On a small or
+unfamiliar figure the classifier confuses front with back in runs of a few frames (a walker coming
+towards the camera read as walking away), and the pose solved with the back model then has the
+performer's left and right swapped: a 3D reconstruction from it turns the body inside out. A person
+cannot turn half round between two frames: from the front the camera reaches the back only through a
+side. :func:`track_views` finds the most probable sequence of views (Viterbi) on the ring
+front - left - back - right, each frame's cost ``-log`` of its classifier score, a step to a neighbouring
+view ``step_cost``, at most one step per frame (across a gap of ``g`` frames, ``g`` steps). A frame whose
+view the tracking turns by 180 degrees gets its left and right keypoints exchanged (the same image
+positions, named as the other view names them); a quarter turn keeps its keypoints (the side models'
+left and right follow the same convention) and takes the new view.
+
+The step cost is chosen on validation renders by ``scripts/validate_view_tracking.py``
+(``validation/view_tracking.json``); :data:`vidstyle.reconstruct.defaults.VIEW_STEP_COST` is the
+reconstruction's default.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+
+from ..formats.poses import Poses
+
+#: the views in ring order (a quarter turn apart)
+RING = ("front", "left", "back", "right")
+#: score given to a view the classifier left out or scored 0 (keeps ``-log`` finite)
+FLOOR = 1e-6
+
+
+def trackable(poses: Poses) -> list[int]:
+    """Indices into ``poses.frames`` of the frames with a pose, a score for every view of :data:`RING` and
+    no azimuth of their own (a backend that measures the azimuth, BlazePose from its 3D landmarks, is not
+    tracked: its view follows that angle)."""
+    return [i for i, f in enumerate(poses.frames)
+            if f.found and f.azimuth is None and f.viewpoint in RING and all(v in f.viewpoint_scores for v in RING)]
+
+
+def viterbi_views(costs: np.ndarray, gaps: np.ndarray, step_cost: float) -> np.ndarray:
+    """The least-cost state sequence (T,) over the ring of :data:`RING` (``costs`` (T, 4) per frame and
+    state; ``gaps`` (T - 1,) frames between consecutive rows, >= 1): a move of ``d`` ring steps (0-2)
+    costs ``d * step_cost`` and is allowed when ``d`` <= the gap. Ties go to the lower state index."""
+    costs = np.asarray(costs, dtype=np.float64)
+    T = len(costs)
+    if T == 0:
+        return np.zeros(0, dtype=np.int64)
+    idx = np.arange(4)
+    ring = np.minimum((idx[:, None] - idx[None, :]) % 4, (idx[None, :] - idx[:, None]) % 4)  # 0, 1 or 2 steps
+    acc = costs[0].copy()
+    back = np.zeros((T, 4), dtype=np.int64)
+    for t in range(1, T):
+        move = np.where(ring <= gaps[t - 1], ring * float(step_cost), np.inf)
+        total = acc[:, None] + move  # (from, to)
+        back[t] = np.argmin(total, axis=0)
+        acc = total[back[t], idx] + costs[t]
+    states = np.zeros(T, dtype=np.int64)
+    states[-1] = int(np.argmin(acc))
+    for t in range(T - 1, 0, -1):
+        states[t - 1] = back[t, states[t]]
+    return states
+
+
+def track_views(poses: Poses, step_cost: float) -> Poses:
+    """A copy of ``poses`` with the viewpoints tracked through the video (module docstring); ``step_cost``
+    <= 0 or fewer than two trackable frames: an unchanged copy. Frames without view scores (other
+    backends, frames without a pose) are left as they are and do not break the chain."""
+    from ..mocap.keypoints import MIRROR
+
+    if not (math.isfinite(step_cost) and step_cost >= 0):
+        raise ValueError(f"step_cost must be a finite number >= 0, got {step_cost}")
+    out = copy.deepcopy(poses)
+    rows = sorted(trackable(out), key=lambda i: out.frames[i].frame)
+    if step_cost == 0 or len(rows) < 2:
+        return out
+    frames = [out.frames[i] for i in rows]
+    costs = np.array([[-math.log(max(float(f.viewpoint_scores[v]), FLOOR)) for v in RING] for f in frames])
+    gaps = np.maximum(np.diff([f.frame for f in frames]), 1)
+    states = viterbi_views(costs, gaps, step_cost)
+    for f, s in zip(frames, states):
+        new = RING[int(s)]
+        if (RING.index(new) - RING.index(f.viewpoint)) % 4 == 2:  # half a turn: left and right exchange names
+            f.points = f.points[MIRROR]
+        f.viewpoint = new
+    return out
