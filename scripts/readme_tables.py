@@ -507,9 +507,14 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
                       *_reconstruct_rows(cmu["runs"], "cmu held-out"), ""]
         rend = d.get("cmu_rendered")
         if rend:
+            how = ""
+            if "ps_scales" in rend:
+                how = (f" (the pictorial structures zoomed by {', '.join(f'{z:g}' for z in rend['ps_scales'])}, their "
+                       f"viewpoints tracked at step cost {rend['view_step_cost']:g}; a camera framing each whole clip "
+                       f"draws these walkers at about half the demo's figure size)")
             lines += [f"The same held-out subjects rendered to video ({', '.join(rend['videos'])}; the first "
-                      f"frames of each) with 2D estimated on the renders; skeletons: the library's and the subject's "
-                      f"own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]
+                      f"frames of each) with 2D estimated on the renders{how}; skeletons: the library's and the "
+                      f"subject's own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]
         if real:
             lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
                       f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
