@@ -510,8 +510,10 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
             how = ""
             if "ps_scales" in rend:
                 how = (f" (the pictorial structures zoomed by {', '.join(f'{z:g}' for z in rend['ps_scales'])}, their "
-                       f"viewpoints tracked at step cost {rend['view_step_cost']:g}; a camera framing each whole clip "
-                       f"draws these walkers at about half the demo's figure size)")
+                       f"viewpoints tracked at step cost {rend['view_step_cost']:g}"
+                       + (f", {rend['view_dwell_s']:g} s between quarter turns" if "view_dwell_s" in rend else "")
+                       + "; a camera framing each whole clip "
+                       "draws these walkers at about half the demo's figure size)")
             lines += [f"The same held-out subjects rendered to video ({', '.join(rend['videos'])}; the first "
                       f"frames of each) with 2D estimated on the renders{how}; skeletons: the library's and the "
                       f"subject's own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]

@@ -131,11 +131,11 @@ def cmu_rendered(cache: Path, seed: int, jobs: int) -> dict:
             r["data"] = "cmu rendered held-out subjects"
     out["library_subjects"], out["test_subjects"] = LIBRARY_SUBJECTS, TEST_SUBJECTS
     from vidstyle.pose.defaults import PS_SCALES
-    from vidstyle.reconstruct.defaults import VIEW_STEP_COST
+    from vidstyle.reconstruct.defaults import VIEW_DWELL_S, VIEW_STEP_COST
 
     # the 2D: the pictorial structures at the pose command's default zooms, their views tracked as the
     # reconstruction tracks them by default
-    out["ps_scales"], out["view_step_cost"] = list(PS_SCALES), VIEW_STEP_COST
+    out["ps_scales"], out["view_step_cost"], out["view_dwell_s"] = list(PS_SCALES), VIEW_STEP_COST, VIEW_DWELL_S
     return out
 
 

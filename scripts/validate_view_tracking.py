@@ -1,6 +1,7 @@
 #!/usr/bin/env python
-"""Choose the step cost of the viewpoint tracking (:func:`vidstyle.pose.viewtrack.track_views`; the
-reconstruction's default :data:`vidstyle.reconstruct.defaults.VIEW_STEP_COST`) on validation renders.
+"""Choose the step cost and the dwell of the viewpoint tracking (:func:`vidstyle.pose.viewtrack.track_views`;
+the reconstruction's defaults :data:`vidstyle.reconstruct.defaults.VIEW_STEP_COST` and ``VIEW_DWELL_S``) on
+validation renders.
 
 The renders: ``--clips`` windows of ``--seconds`` s of CMU clips that no test of the project uses
 (subject 01's, and subjects 05's and 06's but for 05_01 and 06_01, which the real-motion split tests; the
@@ -11,9 +12,10 @@ and background; 2D poses by the shipped pictorial structures at their default zo
 
 Every frame's true view is the nearest of front, left, back, right to the camera's azimuth about the
 performer (both neighbours at a boundary: :func:`vidstyle.pose.data.acceptable_views`). Scores per step
-cost (0 = each frame's own view): view accuracy and the share of *flips* (a view half a turn from the
-truth, where left and right are swapped). Rule: the least flip share, then the higher view accuracy,
-then the lower cost (values within ``--tolerance`` count as equal).
+cost (0 = each frame's own view) and dwell (seconds between two quarter turns at least; 0 = one frame):
+view accuracy and the share of *flips* (a view half a turn from the truth, where left and right are
+swapped). Rule: the least flip share, then the higher view accuracy, then the lower cost, then the
+shorter dwell (values within ``--tolerance`` count as equal).
 
     python scripts/validate_view_tracking.py
 
@@ -36,6 +38,8 @@ CMU = ROOT.parent / "shared" / "data" / "mocap" / "cmu"
 EXCLUDED_CLIPS = ("05_01", "06_01")  # real-motion test clips
 SUBJECTS = ("01", "05", "06")
 COSTS = (0.0, 0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0)
+DWELLS_S = (0.0, 0.1, 0.2, 0.3, 0.5)
+FPS = 20.0  # the renders' frame rate
 
 
 def main() -> int:
@@ -95,11 +99,11 @@ def main() -> int:
                        "poses": read_poses(poses_path), "true_az": true_az})
         log.info("%s: %d frames from %d, camera azimuth %.0f, elevation %.0f", bvh.stem, n, start, az, el)
     rows = []
-    for cost in COSTS:
+    for cost, dwell_s in ((c, d) for c in COSTS for d in (DWELLS_S if c > 0 else (0.0,))):
         ok = flips = total = 0
         per_clip = []
         for v in videos:
-            tracked = track_views(v["poses"], cost)
+            tracked = track_views(v["poses"], cost, max(1, round(dwell_s * FPS)))
             c_ok = c_flip = c_n = 0
             for f in tracked.frames:
                 if not f.found or f.frame >= len(v["true_az"]) or f.viewpoint not in VIEW_AZ:
@@ -112,22 +116,23 @@ def main() -> int:
             per_clip.append({"clip": v["clip"], "frames": c_n, "view_accuracy": c_ok / max(c_n, 1),
                              "flips": c_flip / max(c_n, 1)})
             ok, flips, total = ok + c_ok, flips + c_flip, total + c_n
-        rows.append({"step_cost": cost, "frames": total, "view_accuracy": ok / total, "flips": flips / total,
+        rows.append({"step_cost": cost, "dwell_s": dwell_s, "frames": total, "view_accuracy": ok / total, "flips": flips / total,
                      "per_clip": per_clip})
     tol = args.tolerance
     least_flips = min(r["flips"] for r in rows)
     near = [r for r in rows if r["flips"] <= least_flips + tol]
     best_acc = max(r["view_accuracy"] for r in near)
-    chosen_row = min((r for r in near if r["view_accuracy"] >= best_acc - tol), key=lambda r: r["step_cost"])
+    chosen_row = min((r for r in near if r["view_accuracy"] >= best_acc - tol), key=lambda r: (r["step_cost"], r["dwell_s"]))
     doc = {**validation_header(VIEW_TRACKING), "script": "scripts/validate_view_tracking.py", "seed": args.seed,
            "subjects": list(SUBJECTS), "excluded_clips": list(EXCLUDED_CLIPS), "pose_scales": list(PS_SCALES),
            "videos": [{k: v[k] for k in ("clip", "start", "frames", "azimuth", "elevation")} for v in videos],
-           "tolerance": tol, "rule": "least flip share, then higher view accuracy, then lower cost (within tolerance)",
-           "candidates": rows, "chosen": chosen_row["step_cost"], "wall_seconds": round(time.time() - t0, 1)}
+           "tolerance": tol, "fps": FPS,
+           "rule": "least flip share, then higher view accuracy, then lower cost, then shorter dwell (within tolerance)",
+           "candidates": rows, "chosen": {"step_cost": chosen_row["step_cost"], "dwell_s": chosen_row["dwell_s"]}, "wall_seconds": round(time.time() - t0, 1)}
     write_validation(args.out, doc)
-    print(f"{'step cost':>9} {'frames':>6} {'view acc':>8} {'flips':>6}")
+    print(f"{'step cost':>9} {'dwell s':>7} {'frames':>6} {'view acc':>8} {'flips':>6}")
     for r in rows:
-        print(f"{r['step_cost']:>9g} {r['frames']:>6} {r['view_accuracy']:>8.3f} {r['flips']:>6.3f}"
+        print(f"{r['step_cost']:>9g} {r['dwell_s']:>7g} {r['frames']:>6} {r['view_accuracy']:>8.3f} {r['flips']:>6.3f}"
               + (" *" if r is chosen_row else ""))
     return 0
 

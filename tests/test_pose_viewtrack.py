@@ -15,32 +15,43 @@ from vidstyle.mocap.keypoints import KEYPOINT_INDEX, MIRROR
 from vidstyle.pose.viewtrack import RING, track_views, viterbi_views
 
 
-def _brute(costs, gaps, step):
-    best, arg = math.inf, None
-    for seq in itertools.product(range(4), repeat=len(costs)):
-        total = sum(costs[t][s] for t, s in enumerate(seq))
-        for t in range(1, len(seq)):
-            d = min((seq[t] - seq[t - 1]) % 4, (seq[t - 1] - seq[t]) % 4)
-            total += math.inf if d > gaps[t - 1] else d * step
-        if total < best:
-            best, arg = total, seq
-    return best, arg
+def _cost(seq, costs, gaps, step, dwell):
+    """The total cost of a view sequence, inf when it breaks a rule (one quarter step per frame, and at
+    least d * dwell frames since the previous move for a move of d steps)."""
+    at = np.concatenate([[0], np.cumsum(gaps)])  # frame numbers
+    total, last = sum(costs[t][s] for t, s in enumerate(seq)), -math.inf
+    for t in range(1, len(seq)):
+        d = min((seq[t] - seq[t - 1]) % 4, (seq[t - 1] - seq[t]) % 4)
+        if d == 0:
+            continue
+        if d > gaps[t - 1] or at[t] - last < d * dwell:
+            return math.inf
+        total, last = total + d * step, at[t]
+    return total
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(8))
 def test_viterbi_matches_brute_force(seed):
     rng = np.random.default_rng(seed)
     T = 6
     costs = rng.exponential(1.5, (T, 4))
     gaps = rng.choice([1, 1, 1, 2], T - 1)
     step = float(rng.uniform(0.2, 4.0))
-    got = viterbi_views(costs, gaps, step)
-    best, _ = _brute(costs, gaps, step)
-    total = sum(costs[t][s] for t, s in enumerate(got)) + sum(
-        min((got[t] - got[t - 1]) % 4, (got[t - 1] - got[t]) % 4) * step for t in range(1, T))
-    assert total == pytest.approx(best)
-    for t in range(1, T):  # never more quarter steps than frames between
-        assert min((got[t] - got[t - 1]) % 4, (got[t - 1] - got[t]) % 4) <= gaps[t - 1]
+    dwell = int(rng.integers(1, 4))
+    got = viterbi_views(costs, gaps, step, dwell)
+    best = min(_cost(seq, costs, gaps, step, dwell) for seq in itertools.product(range(4), repeat=T))
+    assert _cost(list(got), costs, gaps, step, dwell) == pytest.approx(best)  # a legal path of least cost
+
+
+def test_dwell_makes_a_quick_flip_too_costly_to_be_a_turn():
+    # back for 3 frames then front: with dwell 3 a half turn needs 3 frames at a side, dearer than reading
+    # the first frames as front
+    costs = np.array([[5.0, 9, 0.2, 9]] * 3 + [[0.1, 9, 6.0, 9]] * 6)
+    gaps = np.ones(8, dtype=int)
+    # dwell 1: back, back, a side (left: the lower index of the two equal sides), then front (cost 12.0,
+    # against 12.1 with the side one frame later and 15.6 for front throughout)
+    assert list(viterbi_views(costs, gaps, 1.0, dwell=1)) == [2, 2, 1, 0, 0, 0, 0, 0, 0]
+    assert list(viterbi_views(costs, gaps, 1.0, dwell=3)) == [0] * 9
 
 
 def _frame(i, view, scores, points=None):

@@ -86,11 +86,12 @@ def test_view_step_cost_is_the_view_tracking_validation_choice():
     from vidstyle.formats.validation import VIEW_TRACKING, read_validation
 
     doc = read_validation(VALIDATION.with_name("view_tracking.json"), VIEW_TRACKING)
-    assert D.VIEW_STEP_COST == doc["chosen"]
+    assert {"step_cost": D.VIEW_STEP_COST, "dwell_s": D.VIEW_DWELL_S} == doc["chosen"]
     rows, tol = doc["candidates"], doc["tolerance"]
     near = [r for r in rows if r["flips"] <= min(x["flips"] for x in rows) + tol]  # the rule, reapplied
     best = max(r["view_accuracy"] for r in near)
-    assert min((r for r in near if r["view_accuracy"] >= best - tol), key=lambda r: r["step_cost"])["step_cost"] == doc["chosen"]
+    pick = min((r for r in near if r["view_accuracy"] >= best - tol), key=lambda r: (r["step_cost"], r["dwell_s"]))
+    assert {k: pick[k] for k in ("step_cost", "dwell_s")} == doc["chosen"]
     for r in rows:  # the pooled scores are the clips' frames
         assert r["frames"] == sum(c["frames"] for c in r["per_clip"])
         assert math.isclose(r["flips"] * r["frames"], sum(c["flips"] * c["frames"] for c in r["per_clip"]), abs_tol=1e-6)
@@ -100,4 +101,8 @@ def test_view_step_cost_is_the_view_tracking_validation_choice():
     assert inspect.signature(Reconstructor).parameters  # the library reads the default where it builds observations
     from vidstyle.reconstruct.core import Observation
 
-    assert inspect.signature(Observation.from_poses).parameters["view_step_cost"].default is None
+    params = inspect.signature(Observation.from_poses).parameters
+    assert params["view_step_cost"].default is None and params["view_dwell_s"].default is None
+    cli = inspect.signature(reconstruct_cmd).parameters  # the CLI's defaults are the validated ones
+    assert cli["view_step_cost"].default.default == D.VIEW_STEP_COST
+    assert cli["view_dwell"].default.default == D.VIEW_DWELL_S

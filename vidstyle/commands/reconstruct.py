@@ -101,6 +101,10 @@ def reconstruct(
                                    "the cost of a quarter turn between frames against the classifier's -log "
                                    "scores (0: each frame's own view; a front/back flip swaps left and right). "
                                    "Default: chosen on validation renders."),
+    view_dwell: float = number(D.VIEW_DWELL_S, "--view-dwell", integer=False, lo=0, hi=10,
+                               help="Seconds: the least time between two quarter turns of the tracked viewpoint "
+                               "(at least one frame; a real turn is slower than the classifier's flicker). "
+                               "Default: chosen on validation renders with --view-step-cost."),
     fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
     size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
@@ -136,7 +140,8 @@ def reconstruct(
                       k=k, n_blend=blend, window_s=window, smooth_frames=smooth, n_views=views,
                       refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px="auto" if estimate_focal else focal, elevation_deg=elevation,
                       foot_lock=foot_lock, contact_threshold=contact_threshold, contact_gap_s=contact_gap,
-                      pin_drift=pin_drift, cache_dir=index_cache, view_step_cost=view_step_cost)
+                      pin_drift=pin_drift, cache_dir=index_cache, view_step_cost=view_step_cost,
+                      view_dwell_s=view_dwell)
 
 
 @evaluate_app.command("reconstruct")

@@ -130,14 +130,19 @@ class Observation:
 
     @classmethod
     def from_poses(cls, poses, fps: float, size: tuple[int, int], n_frames: int | None = None,
-                   view_step_cost: float | None = None) -> Observation:
+                   view_step_cost: float | None = None, view_dwell_s: float | None = None) -> Observation:
         """From a :class:`vidstyle.formats.poses.Poses` whose frames are decoded frames at ``fps`` (frames
         absent from the file or without a pose are unknown). Classified viewpoints are first tracked
         through the video (:func:`vidstyle.pose.viewtrack.track_views`; ``view_step_cost``: default
-        :data:`.defaults.VIEW_STEP_COST`, 0: each frame's own view)."""
+        :data:`.defaults.VIEW_STEP_COST`, 0: each frame's own view; ``view_dwell_s``: the least seconds
+        between two quarter turns, default :data:`.defaults.VIEW_DWELL_S`, at least one frame)."""
         from ..pose.viewtrack import track_views
 
-        poses = track_views(poses, D.VIEW_STEP_COST if view_step_cost is None else float(view_step_cost))
+        cost = D.VIEW_STEP_COST if view_step_cost is None else float(view_step_cost)
+        dwell_s = D.VIEW_DWELL_S if view_dwell_s is None else float(view_dwell_s)
+        if not (math.isfinite(dwell_s) and dwell_s >= 0):
+            raise ValueError(f"view_dwell_s must be a finite number >= 0, got {view_dwell_s}")
+        poses = track_views(poses, cost, max(1, round(dwell_s * float(fps))))
         last = max((f.frame for f in poses.frames), default=-1)
         T = int(n_frames) if n_frames is not None else last + 1
         xy = np.full((T, 15, 2), np.nan)

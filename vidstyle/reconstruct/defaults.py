@@ -13,8 +13,10 @@ REFINE_PRIOR = 0.1       # the blend bent toward the keypoints (vidstyle.reconst
 REFINE_SMOOTH_FRAMES = 2.0  # the refined pose smoothed in time (Gaussian sigma, frames; 0: not): the least acceleration
                            # error of 0, 1, 2, 3 within 2 % of their least pose error (3 was not)
 #: the pictorial structures' classified views tracked through the video (vidstyle.pose.viewtrack): the cost of a
-#: quarter turn between frames, chosen by scripts/validate_view_tracking.py (validation/view_tracking.json)
-VIEW_STEP_COST = 3.0
+#: quarter turn between frames and the least time between two quarter turns (seconds; at most one per frame),
+#: chosen together by scripts/validate_view_tracking.py (validation/view_tracking.json)
+VIEW_STEP_COST = 2.0
+VIEW_DWELL_S = 0.1
 #: Foot contacts and the pins' drift per 2D backend (``Observation.backend``), chosen last, on the validation
 #: performers with each source's 2D: ``contact_threshold`` (the neighbours' vote that plants a foot),
 #: ``contact_gap_s`` (lifts between planted runs bridged) and ``pin_drift`` (a planted foot moves with the root

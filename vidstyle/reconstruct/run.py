@@ -19,11 +19,11 @@ log = logging.getLogger(__name__)
 def observation_for(video: str | os.PathLike | None, poses: str | os.PathLike | None, backend: str | None = None,
                     model: str | os.PathLike | None = None, frames: Sequence[int] | None = None, jobs: int = 1,
                     fps: float | None = None, size: tuple[int, int] | None = None,
-                    view_step_cost: float | None = None) -> Observation:
+                    view_step_cost: float | None = None, view_dwell_s: float | None = None) -> Observation:
     """The :class:`Observation` of ``video``: its ``poses`` file (``vidstyle pose`` output; the frames up to
     the last one it holds), or poses estimated here with ``backend`` / ``model`` on ``frames`` (default
     all). The frame rate and size come from the video (or ``fps`` / ``size`` when there is no video).
-    ``view_step_cost``: :meth:`Observation.from_poses`'s viewpoint tracking."""
+    ``view_step_cost``, ``view_dwell_s``: :meth:`Observation.from_poses`'s viewpoint tracking."""
     from ..formats.poses import read_poses
 
     n = None
@@ -48,7 +48,7 @@ def observation_for(video: str | os.PathLike | None, poses: str | os.PathLike | 
         doc = estimate_video(video, backend, model, list(frames) if frames is not None else None, jobs=jobs)
     if frames is not None and len(frames):
         n = max(frames) + 1 if n is None else min(n, max(frames) + 1)
-    return Observation.from_poses(doc, fps, size, n, view_step_cost=view_step_cost)
+    return Observation.from_poses(doc, fps, size, n, view_step_cost=view_step_cost, view_dwell_s=view_dwell_s)
 
 
 def record_of(rec: Reconstruction, reconstructor: Reconstructor, video: str, poses: str, bvh: str, fps: float,
@@ -154,11 +154,12 @@ def reconstruct_video(video: str | os.PathLike | None, library: Sequence[str | o
                       labels: str | os.PathLike | None = None, preview: str | os.PathLike | None = None,
                       fps: float | None = None, size: tuple[int, int] | None = None, jobs: int = 1,
                       scheduler: str | None = None, cache_dir: str | os.PathLike | None = None,
-                      view_step_cost: float | None = None, **params) -> Reconstruction:
+                      view_step_cost: float | None = None, view_dwell_s: float | None = None,
+                      **params) -> Reconstruction:
     """Reconstruct ``video`` against the ``library`` clips and write the BVH ``out`` (and the optional
     ``record`` / ``labels`` / ``preview`` files). ``params``: :class:`Reconstructor` parameters (checked
-    before any work); ``cache_dir``: where the library index is cached between runs; ``view_step_cost``:
-    the viewpoint tracking of :meth:`Observation.from_poses` (default its validated one)."""
+    before any work); ``cache_dir``: where the library index is cached between runs; ``view_step_cost``,
+    ``view_dwell_s``: the viewpoint tracking of :meth:`Observation.from_poses` (default the validated one)."""
     from ..fileio import check_writable
     from ..mocap import read_bvh, write_bvh
 
@@ -168,7 +169,7 @@ def reconstruct_video(video: str | os.PathLike | None, library: Sequence[str | o
     reconstructor = Reconstructor(jobs=jobs, scheduler=scheduler, **params)
     reconstructor.check_params()
     obs = observation_for(video, poses, backend, model, frames, jobs=jobs, fps=fps, size=size,
-                          view_step_cost=view_step_cost)
+                          view_step_cost=view_step_cost, view_dwell_s=view_dwell_s)
     target = read_bvh(skeleton).skeleton if skeleton is not None else None
     reconstructor.set_params(target_fps=obs.fps).fit(library, skeleton=target, cache_dir=cache_dir)
     rec = reconstructor.reconstruct(obs)
