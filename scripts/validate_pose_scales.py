@@ -46,11 +46,12 @@ def _frame_zooms(item):
     """Every zoom's pose of one clip's frames: (n_frames, n_zooms, 15, 3)."""
     import numpy as np
 
-    from vidstyle.pose.run import _make_estimator, resolve_model
+    from vidstyle.pose.interfaces import backend_factory
+    from vidstyle.pose.run import resolve_model
 
     frames, zooms, background = item
     if "model" not in _MODEL:  # one load per worker process, not per clip
-        _MODEL["model"] = _make_estimator("ps", str(resolve_model("ps", None)))
+        _MODEL["model"] = backend_factory("ps")(str(resolve_model("ps", None)))
     model = _MODEL["model"]
     return np.stack([np.stack([c.points for c in model.zoom_candidates(f, zooms, background=background)])
                      for f in frames]) if frames else np.zeros((0, len(zooms) + 1, 15, 3))

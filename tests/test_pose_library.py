@@ -50,7 +50,10 @@ def test_library_with_defaults_gives_the_cli_poses(tmp_path, tiny):
 
     write_poses(tmp_path / "lib.json", lib)
     assert (tmp_path / "lib.json").read_bytes() == out.read_bytes()  # the same file, byte for byte
-    assert lib.backend == "ps" and lib.params == {} and [f.frame for f in lib.frames] == list(range(6))
+    from vidstyle.pose.defaults import PS_SCALES
+
+    # the zooms used are recorded: by default the validated ones
+    assert lib.backend == "ps" and lib.params == {"scales": list(PS_SCALES)} and [f.frame for f in lib.frames] == list(range(6))
     # and both are the model's own estimate of each frame, mapped from the 120-row working size to 240 rows
     from vidstyle.pose.run import video_background
     from vidstyle.video import VideoReader

@@ -127,8 +127,14 @@ def test_pose_command_ps_and_errors(tmp_path, trained, capsys):
 
     got = read_poses(ms)
     assert got.params == {"scales": [1.0, 1.5, 0.8]}
-    single = read_poses(out)
-    assert single.params == {}
+    from vidstyle.pose.defaults import PS_SCALES
+
+    assert read_poses(out).params == {"scales": list(PS_SCALES)}  # the default zooms, recorded
+    one = tmp_path / "one.json"
+    assert main(["pose", str(video), "--model", str(path), "--frames", "1,4", "--scales", "1", "--out", str(one),
+                 "-j", "1"]) == 0
+    single = read_poses(one)
+    assert single.params == {}  # one scale: nothing to record
     for a, b in zip(got.frames, single.frames):  # never less confident than the single-scale pose
         assert a.scores.mean() >= b.scores.mean() - 1e-3
     capsys.readouterr()
