@@ -19,7 +19,7 @@ best mean PCK, the one with the fewest zooms (each costs a pass of the model), t
 
     python scripts/validate_pose_scales.py
 
-Writes ``pipelines/kickboxing/validation/pose_scales.json`` and prints the table. About 15 min on 2 cores.
+Writes ``pipelines/kickboxing/validation/pose_scales.json`` and prints the table. About 3 min on 2 cores.
 """
 
 from __future__ import annotations

@@ -11,12 +11,12 @@ view ``step_cost``, at most one step per frame (across a gap of ``g`` frames, ``
 ``dwell``, at least that many frames between two steps (a half turn takes at least ``2 dwell`` frames:
 a real turn is slower than the classifier's flicker). A frame whose
 view the tracking turns by 180 degrees gets its left and right keypoints exchanged (the same image
-positions, named as the other view names them); a quarter turn keeps its keypoints (the side models'
-left and right follow the same convention) and takes the new view.
+positions, named as the other view names them); a quarter turn takes the new view and keeps its
+keypoints as the classified view's model solved them (they are not solved again with the new view's).
 
-The step cost is chosen on validation renders by ``scripts/validate_view_tracking.py``
-(``validation/view_tracking.json``); :data:`vidstyle.reconstruct.defaults.VIEW_STEP_COST` is the
-reconstruction's default.
+The step cost and the dwell are chosen together on validation renders by
+``scripts/validate_view_tracking.py`` (``validation/view_tracking.json``):
+:data:`vidstyle.reconstruct.defaults.VIEW_STEP_COST` and ``VIEW_DWELL_S`` are the reconstruction's defaults.
 """
 
 from __future__ import annotations
