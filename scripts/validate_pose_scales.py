@@ -87,12 +87,13 @@ def main() -> int:
     figure = {s.seed: s.scale for s in specs}
     backgrounds = clip_backgrounds(samples)
     zooms = tuple(sorted({z for c in CANDIDATES for z in check_scales(c)} - {1.0}))
-    clips = list(dict.fromkeys(s.clip for s in samples))
-    items = [([frame_of(s) for s in samples if s.clip == c], zooms, backgrounds.get(c)) for c in clips]
-    log.info("%d frames of %d clips, zooms %s", len(samples), len(clips), zooms)
+    by_clip: dict = {}  # the samples grouped by clip (one worker item each), in order of first appearance
+    for s in samples:
+        by_clip.setdefault(s.clip, []).append(s)
+    items = [([frame_of(s) for s in group], zooms, backgrounds.get(c)) for c, group in by_clip.items()]
+    log.info("%d frames of %d clips, zooms %s", len(samples), len(by_clip), zooms)
     P = np.concatenate(parallel_map(_frame_zooms, items, jobs=args.jobs, description="pose at every zoom"))
-    order = [i for c in clips for i, s in enumerate(samples) if s.clip == c]
-    samples = [samples[i] for i in order]
+    samples = [s for group in by_clip.values() for s in group]  # the rows of P
     gt = np.stack([s.keypoints for s in samples])
     size = np.array([figure[s.clip] for s in samples])
     which = np.digitize(size, BINS[1:-1])
@@ -116,7 +117,7 @@ def main() -> int:
     doc = {**validation_header(POSE_SCALES), "script": "scripts/validate_pose_scales.py", "seed": args.seed,
            "model": SHIPPED_MODEL_NAME, "performers": args.performers, "views": args.views,
            "split": "val (demo performers 30..; no CMU subject)", "figure_scales": [lo, hi],
-           "elevation": [-10.0, 45.0], "frames": len(samples), "clips": len(clips), "tolerance": args.tolerance,
+           "elevation": [-10.0, 45.0], "frames": len(samples), "clips": len(by_clip), "tolerance": args.tolerance,
            "rule": "fewest zooms within tolerance of the best mean PCK@0.2 over figure-size bins, then higher PCK",
            "candidates": rows, "chosen": chosen["scales"], "wall_seconds": round(time.time() - t0, 1)}
     write_validation(args.out, doc)
