@@ -490,8 +490,9 @@ def reconstruct_table(items, root: Path) -> list[str]:
         mf = (d.get("params") or {}).get("max_frames")
         lines += [f"Held-out renders: {', '.join(d.get('videos') or [])}, first "
                   f"{int(mf) if isinstance(mf, float) and mf.is_integer() else mf} frames each (`{_rel(p, root)}`). Skeleton *library*: "
-                  "the output is on the library's skeleton (the performer's body unknown); *performer*: the take's own "
-                  "skeleton given, so the error is the motion's alone. *blazepose-world*: BlazePose's own 3D.", "",
+                  "the output is on the library's skeleton (the performer's body unknown); *height*: the same scaled "
+                  "to the performer's standing height (`vidstyle reconstruct --height`, when the user knows it); "
+                  "*performer*: the take's own skeleton given, so the error is the motion's alone. *blazepose-world*: BlazePose's own 3D.", "",
                   *_REC_HEAD, *_reconstruct_rows(d["runs"], "demo test performers"), ""]
     return lines[:-1]
 
@@ -515,8 +516,8 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
                        + "; a camera framing each whole clip "
                        "draws these walkers at about half the demo's figure size)")
             lines += [f"The same held-out subjects rendered to video ({', '.join(rend['videos'])}; the first "
-                      f"frames of each) with 2D estimated on the renders{how}; skeletons: the library's and the "
-                      f"subject's own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]
+                      f"frames of each) with 2D estimated on the renders{how}; skeletons: the library's, the library's "
+                      f"at the subject's height (*height*) and the subject's own:", "", *_REC_HEAD, *_reconstruct_rows(rend["runs"], "cmu rendered"), ""]
         if real:
             lines += [f"The real pose2sim take ({real['frames']} frames), each of the views {', '.join(real['views'])} "
                       f"alone, against the 3D triangulated from all four (BlazePose 2D; all 86 CMU clips as the "
@@ -747,7 +748,9 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
             rows.append(f"| Demo: a video's performer as 3D motion, mean joint error against the true motion (root-relative, "
                         f"{_REC_SOURCES.get(h.get('reconstruct.source'), h.get('reconstruct.source'))} 2D) "
                         f"| {h['reconstruct.mpjpe_mm']:.0f} mm on the library's skeleton, "
-                        f"{h['reconstruct.mpjpe_performer_skeleton_mm']:.0f} mm on the performer's own "
+                        + (f"{h['reconstruct.mpjpe_height_given_mm']:.0f} mm at the performer's height (given), "
+                           if h.get("reconstruct.mpjpe_height_given_mm") is not None else "")
+                        + f"{h['reconstruct.mpjpe_performer_skeleton_mm']:.0f} mm on the performer's own "
                         f"| [reconstruct](" + results_link + ") |")
     first = next(((p, d) for p, d in docs.get("vidstyle.metrics.multiview_pose", [])
                   if Path(p).name == "pose_realviews_blazepose.json"), None)

@@ -112,6 +112,71 @@ def test_cli_writes_bvh_record_labels_and_preview_that_read_back(tmp_path, libra
     assert len(doc.frames[0]) == sum(len(c) for c in m.skeleton.channels)
 
 
+def test_stature_is_sole_to_head_top_of_the_rest_pose():
+    from vidstyle.mocap.retarget import leg_length, stature
+    from vidstyle.mocap.skeleton import Skeleton
+
+    # root 9 above the floor; spine up 5 with a head End Site 1.5 higher; a leg down 8 to an ankle, sole 1 lower
+    sk = Skeleton(["Hips", "Spine", "LeftUpLeg", "LeftFoot"], [-1, 0, 0, 2],
+                  [[0, 9, 0], [0, 5, 0], [1, 0, 0], [0, -8, 0]], end_sites={1: [0, 1.5, 0], 3: [0, -1, 0.5]})
+    assert stature(sk) == pytest.approx(15.5)  # 9 + 5 + 1.5 - 0
+    assert leg_length(sk) == pytest.approx(9.0)
+
+
+def test_a_known_height_scales_the_scene_and_recovers_a_larger_body(tmp_path, library):
+    """A clip of a body 15 % larger than the library's, filmed by the model camera: without its height the
+    reconstruction has the library's size (the images cannot tell), with it the skeleton's stature is that
+    height, every keypoint is the unscaled result times the ratio (a similarity about the floor under the
+    camera, so the projections are the same) and the root-relative error falls."""
+    from vidstyle.mocap import write_bvh
+    from vidstyle.mocap.retarget import rescale, stature
+    from vidstyle.reconstruct.camera import project
+
+    clip = sorted(library.glob("*hook*.bvh"))[0]
+    own = sorted(library.glob(clip.name.split("_")[0] + "_*.bvh"))
+    big = tmp_path / "big.bvh"
+    m = read_bvh(clip)
+    write_bvh(rescale(m, 1.15), big)
+    pts, uv, az = filmed(big, yaw=2.0, place=np.array([0.0, 80.0]))
+    obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    rec = Reconstructor().fit(own)
+    plain = rec.reconstruct(obs)
+    h = 1.15 * stature(plain.motion.skeleton)
+    sized = rec.set_params(height=h).reconstruct(obs)
+    assert stature(sized.motion.skeleton) == pytest.approx(h)
+    assert sized.params["scale"] == pytest.approx(1.15)
+    np.testing.assert_allclose(sized.points, plain.points * 1.15, rtol=1e-9, atol=1e-9)
+    assert sized.camera_height == pytest.approx(plain.camera_height * 1.15)
+    np.testing.assert_allclose(project(sized.camera_points(), sized.K), project(plain.camera_points(), plain.K),
+                               atol=1e-6)
+    from vidstyle.mocap.keypoints import keypoint_positions
+
+    np.testing.assert_allclose(keypoint_positions(sized.motion), sized.points, atol=1e-6)  # the BVH is the points
+    e_plain, e_sized = M.mpjpe_root_relative(plain.points, pts), M.mpjpe_root_relative(sized.points, pts)
+    assert e_sized < 0.7 * e_plain, (e_sized, e_plain)
+
+
+def test_cli_height_needs_the_unit_and_sets_the_bvh_stature(tmp_path, library, capsys):
+    from vidstyle.cli import main
+    from vidstyle.mocap.retarget import stature
+
+    clip = sorted(library.glob("*jab*.bvh"))[0]
+    pts, uv, az = filmed(clip, yaw=3.0, place=np.array([0.0, 70.0]))
+    frames = [{"frame": i, "viewpoint": "unknown", "azimuth": float(az[i]), "viewpoint_scores": {"front": 1.0},
+               "points": [[float(x), float(y), 1.0] for x, y in uv[i]]} for i in range(len(uv))]
+    poses = tmp_path / "clip.poses.json"
+    from vidstyle.formats.keypoints import KEYPOINTS
+
+    poses.write_text(json.dumps({"kind": "vidstyle.poses", "schema_version": 2, "video": "clip.mp4", "backend": "ps",
+                                 "keypoints": list(KEYPOINTS), "frames": frames}))
+    args = ["reconstruct", "--poses", str(poses), "--library", str(library), "--fps", str(FPS), "--size", f"{W},{H}"]
+    out = tmp_path / "motion.bvh"
+    assert main([*args, "--out", str(out), "--height", "1.8"]) == 2
+    assert "--height" in capsys.readouterr().err and not out.exists()
+    assert main([*args, "--out", str(out), "--height", "1.8", "--unit-mm", "10"]) == 0
+    assert stature(read_bvh(out).skeleton) == pytest.approx(180.0)  # centimetres
+
+
 @pytest.mark.parametrize("args, flag", [
     (["--k", "0"], "--k"), (["--blend", "40", "--k", "32"], "--blend"), (["--method", "magic"], "--method"),
     (["--window", "-1"], "--window"), (["--focal", "0"], "--focal"),
@@ -168,12 +233,23 @@ def test_evaluate_reconstruct_scores_the_test_takes_and_its_own_skeleton_helps(t
     assert res.exit_code == 0, res.output
     m = read_metrics(out, RECONSTRUCT).doc
     pooled = {(r["source"], r["method"], r["skeleton"]): r for r in m["runs"] if r["data"] == "demo test performers"}
-    assert set(pooled) == {("true2d", mth, sk) for mth in ("nn", "olng") for sk in ("library", "performer")}
+    assert set(pooled) == {("true2d", mth, sk) for mth in ("nn", "olng") for sk in ("library", "height", "performer")}
     for mth in ("nn", "olng"):
         lib_err = pooled[("true2d", mth, "library")]["mpjpe_root_relative_mm"]
         own_err = pooled[("true2d", mth, "performer")]["mpjpe_root_relative_mm"]
         assert 0 < own_err <= lib_err * 1.02 and lib_err < 200
     assert m["headline"]["reconstruct.mpjpe_true2d_mm"] == pooled[("true2d", "olng", "library")]["mpjpe_root_relative_mm"]
+    # the height rows rescale the library run by the performer's stature over the library skeleton's
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.mocap.retarget import stature
+
+    lib_stature = stature(read_bvh(sorted(library.glob("*.bvh"))[0]).skeleton)
+    videos = read_dataset(ds).by_id()
+    rows = [r for r in m["runs"] if r["skeleton"] == "height" and r["data"] != "demo test performers"]
+    assert len(rows) == 2 * len(m["videos"])
+    for r in rows:
+        truth = read_bvh(ds / videos[r["data"].split(":", 1)[1]].raw["bvh"])
+        assert r["scale"] == pytest.approx(stature(truth.skeleton) / lib_stature)
     assert (tmp_path / "cmp.mp4").stat().st_size > 0
 
 

@@ -105,6 +105,13 @@ def reconstruct(
                                help="Seconds: the least time between two quarter turns of the tracked viewpoint "
                                "(at least one frame; a real turn is slower than the classifier's flicker). "
                                "Default: chosen on validation renders with --view-step-cost."),
+    height: float | None = number(None, "--height", integer=False, lo=0.3, hi=3.0,
+                                     help="The performer's standing height in metres, when known (with --unit-mm): "
+                                     "the output is scaled to it (skeleton, root path and strides). A single camera "
+                                     "cannot measure it; without it the performer has the library skeleton's size."),
+    unit_mm: float | None = number(None, "--unit-mm", integer=False, lo=0, lo_open=True,
+                                      help="Millimetres per length unit of the library clips, for --height (e.g. 10 "
+                                      "for centimetres, 56.4 for CMU's BVH files)."),
     fps: float | None = number(None, "--fps", integer=False, lo=0, lo_open=True, hi=1000,
                                   help="Frame rate of the poses' frames when there is no VIDEO."),
     size: str | None = typer.Option(None, "--size", help="W,H: the video's size in pixels when there is no VIDEO."),
@@ -124,6 +131,9 @@ def reconstruct(
         raise InputError(f"--blend: must be at most --k ({k}), got {blend}")
     if estimate_focal and focal is not None:
         raise InputError("--estimate-focal: not with --focal (a known focal length)")
+    if (height is None) != (unit_mm is None):
+        raise InputError("--height and --unit-mm go together: the height in metres and the library's length unit "
+                         "in millimetres (10 for centimetres, 56.4 for CMU's BVH files)")
     wh = None
     if size is not None:
         try:
@@ -141,7 +151,7 @@ def reconstruct(
                       refine_prior=(D.REFINE_PRIOR if D.REFINE_PRIOR is not None else 0.1) if refine else None, focal_px="auto" if estimate_focal else focal, elevation_deg=elevation,
                       foot_lock=foot_lock, contact_threshold=contact_threshold, contact_gap_s=contact_gap,
                       pin_drift=pin_drift, cache_dir=index_cache, view_step_cost=view_step_cost,
-                      view_dwell_s=view_dwell)
+                      view_dwell_s=view_dwell, height=None if height is None else height * 1000.0 / unit_mm)
 
 
 @evaluate_app.command("reconstruct")

@@ -10,8 +10,11 @@ Sources of the 2D keypoints: ``true2d`` (the truth projected through the render 
 azimuth) and, per ``poses_dirs`` entry, the pose stage's estimate (``<dir>/<video id>.poses.json``, named
 by its backend). Methods: the reconstructor's ``method`` values (per-frame nearest neighbours ``nn``,
 the lazy neighbourhood graph ``olng``). Skeletons: ``library`` (the output skeleton is the library's:
-the performer's body is unknown, as for a user's video) and ``performer`` (the take's own skeleton given
-as ``--skeleton``: the error of the motion alone, without the body-size difference). When the estimated
+the performer's body is unknown, as for a user's video), ``height`` (the same reconstruction scaled to the
+performer's standing height, as ``vidstyle reconstruct --height`` does when a user knows it: the
+library's proportions at the performer's size; scored from the ``library`` run, which it only rescales)
+and ``performer`` (the take's own skeleton given as ``--skeleton``: the error of the motion alone,
+without the body-size difference). When the estimated
 poses carry BlazePose's 3D world landmarks, they are scored too (method ``blazepose-world``: the offline
 peer), turned into the reconstruction's world with the same assumed camera pitch; they are hip-centred, so
 their MPJPE after one alignment per take and their foot skate are not scored (null).
@@ -42,7 +45,7 @@ from ..errors import InputError
 
 log = logging.getLogger(__name__)
 
-SKELETONS = ("library", "performer")
+SKELETONS = ("library", "height", "performer")
 
 
 def _truth(dataset, video_id: str, n_frames: int | None):
@@ -226,10 +229,14 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
     # in the same order (frames_per_second is each run's own time, measured with the other workers busy)
     from ..parallel import parallel_map
 
+    if "height" in skeletons and "library" not in skeletons:
+        raise InputError("--skeleton-kind height: needs library too (it rescales the library skeleton's run)")
+    runs_of = [s for s in skeletons if s != "height"]
     items = [(dataset, vid, max_frames, mm, tuple(str(d) for d in poses_dirs), tuple(methods), skel,
               lib if skel == "library" else None, library, params, fps0,
-              str(animation) if animation is not None and vid == videos[0] and skel == skeletons[0] else None,
-              skel == skeletons[-1]) for vid in videos for skel in skeletons]
+              str(animation) if animation is not None and vid == videos[0] and skel == runs_of[0] else None,
+              skel == runs_of[-1], skel == "library" and "height" in skeletons)
+             for vid in videos for skel in runs_of]
     runs: list[dict] = [row for rows in parallel_map(_evaluate_video, items, jobs=jobs, description="videos")
                         for row in rows]
     pooled = []
@@ -252,6 +259,7 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
         headline["reconstruct.mpjpe_mm"] = pick(estimated[0], best, "library")
         headline["reconstruct.pa_mpjpe_mm"] = pick(estimated[0], best, "library", "pa_mpjpe_mm")
         headline["reconstruct.mpjpe_performer_skeleton_mm"] = pick(estimated[0], best, "performer")
+        headline["reconstruct.mpjpe_height_given_mm"] = pick(estimated[0], best, "height")
         headline["reconstruct.foot_skate_mm_per_frame"] = pick(estimated[0], best, "library", "foot_skate_mm_per_frame")
         headline["reconstruct.source"] = estimated[0]
     headline["reconstruct.mpjpe_true2d_mm"] = pick("true2d", best, "library")
@@ -273,7 +281,7 @@ def _evaluate_video(item) -> list[dict]:
     from ..reconstruct.library import ReconstructionLibrary
 
     (dataset, vid, max_frames, mm, poses_dirs, methods, skel, lib, library, params, fps0, animation,
-     world_rows) = item
+     world_rows, height_rows) = item
     base = Reconstructor(jobs=1, **params)
     runs: list[dict] = []
     true_pts, uv, az, size, fps, bvh = _truth(dataset, vid, max_frames)
@@ -294,6 +302,11 @@ def _evaluate_video(item) -> list[dict]:
         lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, 1).fit(
             library, skeleton=read_bvh(bvh).skeleton)
     rec = Reconstructor(jobs=1, **params).fit_library(lib)
+    scale = None
+    if height_rows:  # the performer's stature over the output skeleton's: what Reconstructor(height=) applies
+        from ..mocap.retarget import stature
+
+        scale = stature(read_bvh(bvh).skeleton) / stature(lib.skeleton_)
     for src, obs in sources.items():
         for method in methods:
             rec.set_params(method=method)
@@ -304,6 +317,9 @@ def _evaluate_video(item) -> list[dict]:
                    **_figures(out.points * mm, true_mm, fps),
                    "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
             runs.append(row)
+            if scale is not None:
+                runs.append({**row, "skeleton": "height", **_figures(out.points * (scale * mm), true_mm, fps),
+                             "scale": scale})
             if (animation is not None and method == shown
                     and src == list(sources)[min(1, len(sources) - 1)]):
                 write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")

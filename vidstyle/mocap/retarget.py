@@ -47,6 +47,14 @@ def leg_length(skeleton: Skeleton) -> float:
     return float(max(pos[0, 1] - ys.min(), 0.0))
 
 
+def stature(skeleton: Skeleton) -> float:
+    """Standing height in the rest pose: from the lowest to the highest joint or End Site (a sole to the top
+    of the head for an upright rest pose, as a person's height is measured), in the skeleton's length unit."""
+    pos, ends = rest_positions(skeleton)
+    ys = np.concatenate([pos[:, 1], [e[1] for e in ends.values()]]) if ends else pos[:, 1]
+    return float(ys.max() - ys.min())
+
+
 def retarget(motion: Motion, reference: Skeleton, source: str = "motion") -> tuple[Motion, float]:
     """``motion`` on ``reference`` (same joint layout): rotations kept, offsets the reference's, root
     translation scaled by the leg-length ratio. Returns the motion and the scale. Raises

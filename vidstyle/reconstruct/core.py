@@ -60,6 +60,12 @@ the camera's azimuth about the performer when the pose stage estimated it):
    ``pin_max_offset`` leg lengths (thigh + shin) from where the pose puts it (beyond that the contact or
    the root path is wrong, and bending the leg further would only trade slide for pose error: the foot
    then trails the pose at that distance). The keypoints are those of the pinned motion.
+8. **Size** (``height``, when the performer's standing height is known): a single camera cannot tell a
+   small performer near it from a tall one further away, so without it the performer has the output
+   skeleton's size. With it, the whole result (skeleton, root path, keypoints, camera height) is scaled
+   about the floor under the camera so that the skeleton's rest-pose stature
+   (:func:`vidstyle.mocap.retarget.stature`, sole to head top) is ``height``: the images it projects to are
+   the same, the body and its strides the performer's size. The library's proportions stay.
 
 The result (:class:`Reconstruction`) is a :class:`vidstyle.mocap.motion.Motion` on the library's skeleton
 at the video's frame rate (library length units), with per-frame keypoints, labels from the matched library
@@ -341,7 +347,8 @@ class Reconstructor:
     which keeps the default unless the data clearly prefer another lens); ``elevation_deg`` of the camera (None: the library's); ``n_views``,
     ``library_elevation_deg`` and ``target_fps`` of the library index; ``refine_smooth_frames`` the Gaussian sigma
     (frames) of the refined pose in time (0: none; the refinement bends each frame on its own)
-    (:class:`.library.ReconstructionLibrary`); ``jobs`` / ``scheduler``."""
+    (:class:`.library.ReconstructionLibrary`); ``height`` the performer's standing height in the library's
+    length unit when known (step 8; None: the output skeleton's own size); ``jobs`` / ``scheduler``."""
 
     def __init__(self, k: int = D.K, window_s: float = D.WINDOW_S, n_blend: int = D.N_BLEND, method: str = D.METHOD,
                  use_azimuth: bool = True, spread: int = 1, smooth_frames: float = D.SMOOTH_FRAMES,
@@ -351,8 +358,8 @@ class Reconstructor:
                  ssg_overlap: float = 0.4, ssg_k: int = 16, ssg_transition_weight: float = 1.0,
                  pin_max_offset: float | None = D.PIN_MAX_OFFSET, refine_prior: float | None = D.REFINE_PRIOR,
                  refine_smooth_frames: float = D.REFINE_SMOOTH_FRAMES, contact_threshold: float | None = None,
-                 contact_gap_s: float | None = None, pin_drift: bool | None = None, jobs: int = 1,
-                 scheduler: str | None = None) -> None:
+                 contact_gap_s: float | None = None, pin_drift: bool | None = None, height: float | None = None,
+                 jobs: int = 1, scheduler: str | None = None) -> None:
         self.k = k
         self.window_s = window_s
         self.n_blend = n_blend
@@ -378,6 +385,7 @@ class Reconstructor:
         self.contact_threshold = contact_threshold
         self.contact_gap_s = contact_gap_s
         self.pin_drift = pin_drift
+        self.height = height
         self.jobs = jobs
         self.scheduler = scheduler
 
@@ -386,7 +394,7 @@ class Reconstructor:
             "k", "window_s", "n_blend", "method", "use_azimuth", "spread", "smooth_frames", "root_smooth_frames",
             "foot_lock", "relax_s", "focal_px", "elevation_deg", "n_views", "library_elevation_deg", "target_fps",
             "ssg_window_s", "ssg_overlap", "ssg_k", "ssg_transition_weight", "pin_max_offset",
-            "refine_prior", "refine_smooth_frames", "contact_threshold", "contact_gap_s", "pin_drift")}
+            "refine_prior", "refine_smooth_frames", "contact_threshold", "contact_gap_s", "pin_drift", "height")}
 
     def contact_settings(self, backend: str | None) -> dict:
         """``contact_threshold``, ``contact_gap_s`` and ``pin_drift`` for 2D from ``backend``: each parameter
@@ -441,6 +449,9 @@ class Reconstructor:
             raise ParameterError("focal_px", f"must be a finite number > 0 or 'auto', got {self.focal_px}")
         if self.elevation_deg is not None and not -80 <= self.elevation_deg <= 80:
             raise ParameterError("elevation_deg", f"must be in -80..80 degrees, got {self.elevation_deg}")
+        if self.height is not None and not (isinstance(self.height, (int, float, np.floating)) and self.height > 0
+                                            and math.isfinite(self.height)):
+            raise ParameterError("height", f"must be a finite number > 0 (library length units) or None, got {self.height}")
 
     # ------------------------------------------------------------------ fit
     def fit(self, clips, skeleton=None, cache_dir=None) -> Reconstructor:
@@ -709,9 +720,17 @@ class Reconstructor:
             points = self._keypoints(motion)
         else:
             points = rel + root[:, None, :]
+        scale = 1.0
+        if self.height is not None:  # step 8: the whole scene scaled about the floor under the camera
+            from ..mocap.retarget import rescale, stature
+
+            scale = float(self.height) / stature(skeleton)
+            motion = rescale(motion, scale)
+            points = points * scale
+            cam_height *= scale
         return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
                               {**self.get_params(), **cset, "stride": int(lib.stride_),
-                               "library_frames": lib.n_frames})
+                               "library_frames": lib.n_frames, "scale": scale})
 
     # ------------------------------------------------------------------ helpers
     def _keypoints(self, motion) -> np.ndarray:

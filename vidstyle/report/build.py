@@ -443,7 +443,9 @@ def _reconstruct_section(page: Page, run: Path) -> None:
             f'<p class="note">{esc(", ".join(m.get("videos") or []))}: the first {esc(str(params.get("max_frames")))} '
             f'frames of each, against {esc(str(params.get("library_frames", "?")))} indexed library frames. Skeleton '
             f'"library": the output skeleton is the library\'s (the performer\'s body unknown, as for any video); '
-            f'"performer": the take\'s own skeleton given (the motion\'s error alone) (metrics/reconstruct.json)</p>']
+            f'"height": the same, scaled to the performer\'s standing height (reconstruct --height, when a user '
+            f'knows it); "performer": the take\'s own skeleton given (the motion\'s error alone) '
+            f'(metrics/reconstruct.json)</p>']
     folder = run / "reconstruct"
     for p, caption in [*((p, f"{p.stem}: the video with the reconstruction projected over it (yellow) and the "
                           "reconstruction from the side") for p in sorted(folder.glob("*.preview.mp4"))[:1]),

@@ -75,6 +75,7 @@ GROUPS: list[tuple[str, str, list[tuple[str, str, str]]]] = [
     ]),
     ("reconstruct", "reconstruct", [
         ("mpjpe_mm", "root-relative MPJPE", " mm"),
+        ("mpjpe_height_given_mm", "at the performer's height", " mm"),
         ("mpjpe_performer_skeleton_mm", "on the performer's skeleton", " mm"),
         ("pa_mpjpe_mm", "PA-MPJPE", " mm"),
         ("mpjpe_true2d_mm", "with true 2D", " mm"),
