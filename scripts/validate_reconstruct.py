@@ -8,7 +8,9 @@ what the pipeline uses on renders; cached in ``--cache``; BlazePose's in its ``b
 against the demo library (``out/augmg/library``) on the library's skeleton. Score: the pooled root-relative
 MPJPE (mm; lower is better). Search: per method, coordinate descent over the factors that method uses, from
 the starting values, twice over them; the method whose best scores least wins. Of a factor's candidates within
-``TIE_MM`` of its best score the first listed (the cheaper) wins, except the foot-pinning cap
+``TIE_MM`` of its best score the first listed (the cheaper) wins, except the neighbours per frame ``k`` (the
+reconstruction's cost grows with it: kNN and the lazy neighbourhood graph), of which the least within
+``POSE_TOLERANCE`` of the best wins, and the foot-pinning cap
 (``pin_max_offset``, leg lengths; None: no cap), chosen by the least foot skate among those within
 ``POSE_TOLERANCE`` of the best pose error (pinning may trade one for the other). Then, for the chosen method
 with a refinement, ``refine_smooth_frames`` (the refined pose smoothed in time): the least acceleration error
@@ -52,7 +54,8 @@ RUN = ROOT / "pipelines" / "kickboxing" / "out"
 DEFAULT_OUT = ROOT / "pipelines" / "kickboxing" / "validation" / "reconstruct.json"
 DEFAULT_CACHE = Path(os.environ.get("TMPDIR", "/tmp")) / "vidstyle_validate_reconstruct"
 
-#: the pinning cap may cost at most this share of pose error (relative to its factor's best) for less skate
+#: the pinning cap may cost at most this share of pose error (relative to its factor's best) for less skate, and
+#: the neighbours per frame (k) as much for less computation
 POSE_TOLERANCE = 0.02
 #: differences below this are noise: of the candidates within it of the best, the first listed (the cheaper) wins
 TIE_MM = 0.1
@@ -156,7 +159,9 @@ def main() -> int:
                     cands = CANDIDATES[factor]
                     scores = {c: score({**best, factor: c}) for c in cands}
                     low = min(scores.values())
-                    if factor == "pin_max_offset":  # least skate among those within POSE_TOLERANCE of the best pose
+                    if factor == "k":  # a cost: the fewest neighbours within POSE_TOLERANCE of the best pose error
+                        best[factor] = next(c for c in cands if scores[c] <= low * (1 + POSE_TOLERANCE))
+                    elif factor == "pin_max_offset":  # least skate among those within POSE_TOLERANCE of the best pose
                         ok = [c for c in cands if scores[c] <= low * (1 + POSE_TOLERANCE)]
                         skate = {c: rows[key_of({**best, factor: c})]
                                  ["foot_skate_mm_per_frame"] for c in ok}

@@ -30,8 +30,10 @@ def test_defaults_are_the_validated_choice():
     at_start = {**chosen, **{k: doc["start"][k] for k in contact}}
     scores = [r["mpjpe_root_relative_mm"] for r in doc["table"] if all(r[k] == doc["start"][k] for k in contact)]
     best = [r for r in doc["table"] if all(r[k] == v for k, v in at_start.items())]
-    # the pose error is the search's score; the smoothing of the refined pose may give up POSE_TOLERANCE of it
-    assert len(best) == 1 and best[0]["mpjpe_root_relative_mm"] <= (min(scores) + doc["tie_mm"] * 2) * tol
+    # the pose error is the search's score; the fewest neighbours per frame (k) may give up POSE_TOLERANCE of it
+    # for less computation, and the smoothing of the refined pose as much again
+    assert len(best) == 1 and best[0]["mpjpe_root_relative_mm"] <= (min(scores) + doc["tie_mm"] * 2) * tol * tol
+    assert chosen["k"] in doc["candidates"]["k"]
     same = [r for r in doc["table"] if all(r[k] == v for k, v in at_start.items() if k != "refine_smooth_frames")]
     assert {r["refine_smooth_frames"] for r in same} == set(doc["candidates"]["refine_smooth_frames"])
     smooth = [r for r in same if r["mpjpe_root_relative_mm"] <= min(x["mpjpe_root_relative_mm"] for x in same) * tol]
