@@ -17,7 +17,10 @@ on the validation performers, then the test split scored once.
    alone), on the split's validation videos (from their pose files; smoothed frame accuracy) and on the
    real-motion validation clips ``--real-val`` at the validation camera (family accuracy,
    :mod:`vidstyle.evaluation.realmotion`); the best mean of the two wins (ties: video accuracy, then the
-   simpler: fewer recognizers, default noise). Written to ``--validation-out``.
+   simpler: fewer recognizers, default noise). The fusions are smoothed by the pose recognizer's smoother
+   with the fused scores to the power of the first of ``--fusion-emission-weights`` (1: the pose
+   recognizer's own); then, for a chosen fusion, each other power is scored the same way (``stage`` 2 rows)
+   and the best wins (ties: the earlier listed). Written to ``--validation-out``.
 4. Test, scored once with what validation chose, on the unseen-performer split and (``--camera-dataset``)
    the unseen-camera split: the chosen noise's recognizer on the estimated poses, and the chosen fusion.
    One metrics file each in ``--results-dir``: ``recognition_pose_ps_{split}_seed{S}.json``,
@@ -85,6 +88,9 @@ def main() -> None:
     ap.add_argument("--input-name", default="ps-2d", help="what the metrics call the pose files' source")
     ap.add_argument("--views", type=int, default=2, help="virtual cameras per training take")
     ap.add_argument("--weights", type=float, nargs="+", default=[0.0, 0.25, 0.5, 0.75, 1.0])
+    ap.add_argument("--fusion-emission-weights", type=float, nargs="+", default=[1.0, 2.0, 3.0, 5.0],
+                    help="powers of the fused scores in the smoother: the first for every fusion, the others "
+                         "tried on the chosen one")
     ap.add_argument("--C", type=float, default=10.0)
     ap.add_argument("--cap", type=int, default=1500, help="SVM training frames per class")
     ap.add_argument("--validation-out", type=Path)
@@ -155,13 +161,18 @@ def main() -> None:
     # fusion weight scores those predictions
     rows = []
     sift_cache: dict = {}
+    powers = [float(p) for p in a.fusion_emission_weights]
+    if any(not p > 0 for p in powers):
+        raise SystemExit(f"--fusion-emission-weights: must be > 0, got {powers}")
+    predictions = {}
     for name, (rec, training) in recs.items():
-        predicted = predict_pose_set(rec, ds, split, None, a.poses_dir, "val")
+        predicted = predictions[name] = predict_pose_set(rec, ds, split, None, a.poses_dir, "val")
         for w in a.weights:
-            fuse = None if w == 1.0 else (sift, a.features, w)
+            fuse = None if w == 1.0 else (sift, a.features, w, powers[0])
             m = score_pose_recognizer(rec, training, ds, split, None, a.poses_dir, "val", fuse, a.input_name,
                                       predicted=predicted, sift_cache=sift_cache)
-            rows.append({"noise": name, "weight_pose": w, **_acc(m)})
+            rows.append({"noise": name, "weight_pose": w, "emission_weight": powers[0] if fuse else None,
+                         "stage": 1, **_acc(m)})
             log.info("val %s w=%.2f: %s", name, w, rows[-1])
     # the real-motion validation set: CMU clips of a subject no test list uses, at the validation camera
     real = None
@@ -183,17 +194,22 @@ def main() -> None:
             real = {}
             mid = [w for w in a.weights if 0.0 < w < 1.0]
             for name, (rec, _t) in recs.items():
-                doc = evaluate_real_motion(clips, Recognizers(sift, rec, mid), VAL_CAMERAS,
-                                           StrikeEvalParams(pose_input="ps"), seed=seed)
+                doc = evaluate_real_motion(clips, Recognizers(sift, rec, mid, fusion_emission_weight=powers),
+                                           VAL_CAMERAS, StrikeEvalParams(pose_input="ps"), seed=seed)
                 real[name] = {k: v["family_accuracy"] for k, v in doc["overall"].items()}
                 log.info("real-motion val %s: %s", name, real[name])
-    for r in rows:
+    def scored(r):
         if real is not None:
-            tag = "sift" if r["weight_pose"] == 0.0 else "pose" if r["weight_pose"] == 1.0 else f"fusion@{r['weight_pose']:g}"
+            w, p = r["weight_pose"], r["emission_weight"]
+            tag = ("sift" if w == 0.0 else "pose" if w == 1.0
+                   else f"fusion@{w:g}" + ("" if p == powers[0] else f"^{p:g}"))
             r["real_motion_val"] = real[r["noise"]][tag]
             r["score"] = (r["smoothed"] + r["real_motion_val"]) / 2
         else:
             r["score"] = r["smoothed"]
+        return r
+
+    rows = [scored(r) for r in rows]
     simpler = {"default": 0, "calibrated": 1, "residuals": 2, "residuals_gated": 3}
 
     def key(r):
@@ -203,6 +219,20 @@ def main() -> None:
     best = min(rows, key=key)
     if best["weight_pose"] == 0.0:  # 3D SIFT alone: the noise does not matter, keep the default
         best = {**best, "noise": "default"}
+    if 0.0 < best["weight_pose"] < 1.0 and len(powers) > 1:
+        # stage 2: the chosen fusion's smoother, each other power of the fused scores, scored alike
+        rec, training = recs[best["noise"]]
+        tried = [best]
+        for p in powers[1:]:
+            m = score_pose_recognizer(rec, training, ds, split, None, a.poses_dir, "val",
+                                      (sift, a.features, best["weight_pose"], p), a.input_name,
+                                      predicted=predictions[best["noise"]], sift_cache=sift_cache)
+            tried.append(scored({"noise": best["noise"], "weight_pose": best["weight_pose"], "emission_weight": p,
+                                 "stage": 2, **_acc(m)}))
+            rows.append(tried[-1])
+            log.info("val %s w=%.2f power %g: %s", best["noise"], best["weight_pose"], p, rows[-1])
+        top = max(round(r["score"], 4) for r in tried)
+        best = next(r for r in tried if round(r["score"], 4) == top)  # ties: the earlier listed power
     log.info("validation chose %s", best)
     doc = {**validation_header(POSE_RECOGNITION), "seed": seed,
            "command": command, "split": split.to_dict(), "scored_set": "V",
@@ -211,9 +241,12 @@ def main() -> None:
            "clip_labels": [str(c) for c in a.clip_labels], "sift_model": str(a.sift_model),
            "rows": rows, "chosen": best,
            "real_motion_val": str(a.real_val) if real is not None else None,
+           "fusion_emission_weights": powers,
            "rule": "highest score on V: the mean of the smoothed frame accuracy on the validation performers and "
                    "the family accuracy on the real-motion validation clips at the validation camera (the first "
-                   "alone when those are absent); ties: video accuracy, fewer recognizers, default noise"}
+                   "alone when those are absent); ties: video accuracy, fewer recognizers, default noise; the "
+                   "fusions smoothed with the first power of the fused scores, then (stage 2) the chosen fusion "
+                   "with each other power (ties: the earlier listed)"}
     write_validation(val_out, doc)
     if a.model_out is not None and best["weight_pose"] > 0.0:
         from vidstyle.recognition.poserecognizer import save_pose_model
@@ -239,7 +272,7 @@ def main() -> None:
             raise SystemExit(f"{poses}: no poses of {len(missing)} test videos (e.g. {missing[0]})")
         runs = [("pose_ps", None)]
         if 0.0 < best["weight_pose"] < 1.0:
-            runs.append(("fusion_ps", (sift, feats, best["weight_pose"])))
+            runs.append(("fusion_ps", (sift, feats, best["weight_pose"], best["emission_weight"])))
         predicted = predict_pose_set(rec, d, sp, tds, poses, "test")  # once for both runs
         for name, fuse in runs:
             t0 = time.perf_counter()

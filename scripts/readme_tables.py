@@ -122,6 +122,8 @@ def _config(d: dict) -> str:
                                      f"{views} virtual views per take" if views else "",
                                      _noise_text(noise),
                                      (f"fused with the seed's 3D SIFT recognizer, pose weight {fusion['weight_pose']:g}"
+                                      + (f", fused scores ^{fusion['emission_weight']:g} in the smoother"
+                                         if fusion.get("emission_weight") not in (None, 1, 1.0) else "")
                                       if fusion.get("weight_pose") is not None else ""),
                                      f"C {q['C']:g}" if q.get("C") is not None else "",
                                      f"cap {q['max_frames_per_class']}" if "max_frames_per_class" in q else "",
@@ -566,13 +568,19 @@ def real_motion_table(items, root: Path) -> list[str]:
 
 def pose_recognition_validation_table(items, root: Path) -> list[str]:
     """Pose recognizer vs 3D SIFT vs fusion on the validation sets (``scripts/pose_recognition_results.py``)."""
-    lines = ["| seed | training noise | pose weight (0 = 3D SIFT alone) | validation performers, smoothed | "
-             "real-motion validation, family | score | file |", "|---|---|---:|---:|---:|---:|---|"]
+    lines = ["| seed | training noise | pose weight (0 = 3D SIFT alone) | fused scores' power in the smoother | "
+             "validation performers, smoothed | real-motion validation, family | score | file |",
+             "|---|---|---:|---:|---:|---:|---:|---|"]
     for p, d in sorted(items, key=lambda t: (t[1].get("seed") is None, t[1].get("seed"))):
         ch = d.get("chosen") or {}
         for r in d.get("rows", []):
-            mark = " **(chosen)**" if (r["noise"], r["weight_pose"]) == (ch.get("noise"), ch.get("weight_pose")) else ""
-            lines.append(f"| {d.get('seed')} | {r['noise']} | {r['weight_pose']:g}{mark} | {_pct(r['smoothed'])} | "
+            # files from before the power was validated: their fusions used the pose recognizer's own (1)
+            power = r.get("emission_weight", 1.0 if 0 < r["weight_pose"] < 1 else None)
+            mine = (r["noise"], r["weight_pose"], power)
+            mark = " **(chosen)**" if mine == (ch.get("noise"), ch.get("weight_pose"),
+                                               ch.get("emission_weight", power)) else ""
+            lines.append(f"| {d.get('seed')} | {r['noise']} | {r['weight_pose']:g}{mark} | "
+                         f"{'—' if power is None else f'{power:g}'} | {_pct(r['smoothed'])} | "
                          f"{_pct(r.get('real_motion_val'))} | {_pct(r.get('score'))} | `{_rel(p, root)}` |")
     return lines
 

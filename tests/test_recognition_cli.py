@@ -271,6 +271,31 @@ def test_recognize_with_late_fusion(ds, tmp_path):
                                         pose.classes_))
         assert doc["labels"] == [str(pose.classes_[i]) for i in want["smoothed"]]
         assert doc["fusion"]["weight_pose"] == 0.7
+    # a duration smoother: the fused scores' power (--fusion-emission-weight) is the smoother's for this run,
+    # recorded in the labels file, and the model's own power is left as it was
+    import copy
+
+    pose_d = PoseRecognizer(max_frames_per_class=None, mirror=False, smoothing="duration", random_state=0)
+    save_pose_model(tmp_path / "pd.joblib", pose_d.fit(tracks, labels, classes=classes))
+    changed = 0
+    for power in (1.0, 4.0):
+        out_dir = tmp_path / f"lab_d{power:g}"
+        assert main(["recognize", *map(str, inputs), "--model", str(tmp_path / "m.joblib"), "--pose-model",
+                     str(tmp_path / "pd.joblib"), "--poses-dir", str(tmp_path / "poses"), "--fusion-weight", "0.7",
+                     "--fusion-emission-weight", str(power), "--out-dir", str(out_dir)]) == 0
+        for p in inputs:
+            doc = json.loads((out_dir / f"{p.stem}.json").read_text())
+            so = sift.predict_video(load_features(p))
+            po = pose_d.predict_video(track_from_poses(read_poses(tmp_path / "poses" / f"{p.stem}.poses.json"), 20.0,
+                                                       len(so["raw"])))
+            fused = fuse_scores([po["scores"], so["scores"]], [pose_d.classes_, sift.classes_], [0.7, 0.3], pose_d.classes_)
+            ref = copy.deepcopy(pose_d)
+            ref.emission_weight = power  # the independent route: the model's own power set to it
+            want = ref.smooth(*fused)
+            assert doc["labels"] == [str(pose_d.classes_[i]) for i in want["smoothed"]]
+            assert doc["emission_weight"] == power and pose_d.emission_weight == 1.0
+            changed += power != 1.0 and want["smoothed"].tolist() != pose_d.smooth(*fused)["smoothed"].tolist()
+    assert changed  # the power changed some labels: the comparison above can fail
     # --pose-model without --poses-dir; a weight outside [0, 1]; a missing poses file
     assert main([*args[:-4], "--out-dir", str(tmp_path / "x")]) == 2
     assert main([*args[:-1], "1.5", "--out-dir", str(tmp_path / "x")]) == 2

@@ -67,8 +67,8 @@ def test_noise_calibration_recovers_known_noise():
 
 
 def test_the_fusion_default_is_the_validated_choice():
-    """The default weight is the choice of the validation run with the best score (with and without the
-    extra labelled walks in training: validation/pose_recognition{,_cmuwalks}_seed0.json)."""
+    """The default weight and the fused scores' power are the choice of the validation run with the best score
+    (with and without the extra labelled walks in training: validation/pose_recognition{,_cmuwalks}_seed0.json)."""
     import json
     from pathlib import Path
 
@@ -81,3 +81,6 @@ def test_the_fusion_default_is_the_validated_choice():
         assert max(r["score"] for r in d["rows"]) == d["chosen"]["score"]
     best = max(docs, key=lambda d: d["chosen"]["score"])
     assert D.FUSION_WEIGHT == best["chosen"]["weight_pose"]
+    # the fused scores' power in the smoother: chosen with it (stage 2 of the same validation)
+    assert D.FUSION_EMISSION_WEIGHT == best["chosen"]["emission_weight"]
+    assert best["chosen"]["emission_weight"] in best["fusion_emission_weights"]

@@ -100,3 +100,22 @@ def test_command_with_both_recognizers_and_fusion(cmu_dir, tmp_path, rng):
         assert main(["evaluate", "real-motion", "--clips", str(tmp_path / "l.csv"), *extra,
                      "--out", str(tmp_path / "bad.json")]) == 2
         assert not (tmp_path / "bad.json").exists()
+
+
+def test_fused_recognizers_are_named_by_weight_and_power():
+    """Several fusion weights and powers: the first power keeps the plain names (what the committed files
+    and the validation's stage 1 read), each other one adds ``^P``; a power <= 0 is refused."""
+    import pytest
+
+    from vidstyle.errors import ParameterError
+    from vidstyle.evaluation.realmotion import Recognizers
+    from vidstyle.recognition import defaults as D
+
+    recs = Recognizers(sift=object(), pose=object(), fusion_weight=[0.25, 0.5], fusion_emission_weight=[1.0, 3.0])
+    assert recs.fusions() == {"fusion@0.25": (0.25, 1.0), "fusion@0.25^3": (0.25, 3.0),
+                              "fusion@0.5": (0.5, 1.0), "fusion@0.5^3": (0.5, 3.0)}
+    assert recs.names() == ["sift", "pose", "fusion@0.25", "fusion@0.25^3", "fusion@0.5", "fusion@0.5^3"]
+    assert Recognizers(sift=object(), pose=object(), fusion_weight=0.5).fusions() == {
+        "fusion": (0.5, D.FUSION_EMISSION_WEIGHT)}
+    with pytest.raises(ParameterError):
+        Recognizers(sift=object(), pose=object(), fusion_weight=0.5, fusion_emission_weight=0.0).check()

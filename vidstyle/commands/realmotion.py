@@ -27,6 +27,9 @@ def evaluate_real_motion_cmd(
                                     "--features pose)."),
     fusion_weight: float = typer.Option(None, "--fusion-weight", help="Also their late fusion, this weight on "
                                         "the pose recognizer's scores (0..1)."),
+    fusion_emission_weight: float = typer.Option(None, "--fusion-emission-weight", help="The fused scores' power "
+                                                 "in the pose recognizer's smoother (default: the validated one, as "
+                                                 "vidstyle recognize)."),
     pose_input: str = typer.Option("ps", "--pose-input", help="The pose recognizer's input: ps or blazepose (that "
                                    "pose backend on each render) or true (the clip's keypoints projected)."),
     cameras: str = typer.Option(None, "--cameras", help="AZIMUTH:ELEVATION:BACKGROUND, comma-separated (default: "
@@ -60,6 +63,7 @@ def evaluate_real_motion_cmd(
         recs = Recognizers()
         if fusion_weight is not None:
             recs.fusion_weight = fusion_weight
+        recs.fusion_emission_weight = fusion_emission_weight
         for path, slot in ((model, "sift"), (pose_model, "pose")):
             if path is not None:
                 m, _ = load_model(path)

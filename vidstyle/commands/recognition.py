@@ -220,6 +220,10 @@ def recognize(
     fusion_weight: float = number(D.FUSION_WEIGHT, "--fusion-weight", integer=False, lo=0, hi=1,
                                   help="With --pose-model: the weight of the pose recognizer's scores (the rest is the "
                                   "3D SIFT recognizer's)."),
+    fusion_emission_weight: float = number(D.FUSION_EMISSION_WEIGHT, "--fusion-emission-weight", integer=False, lo=0,
+                                           lo_open=True, hi=100,
+                                           help="With --pose-model: the power of the fused frame scores in the pose "
+                                           "recognizer's smoother (validated with --fusion-weight)."),
 ) -> None:
     """Per-frame action labels with confidence, raw and smoothed.
 
@@ -247,7 +251,8 @@ def recognize(
     into = output_dir(out_dir, targets) if out_dir is not None else contextlib.nullcontext()
     with as_flags(jobs="--jobs", scheduler="--scheduler"), into:
         run(model, inputs, targets, window=window, smoothing=smoothing, emission_weight=emission_weight, fps=fps,
-            jobs=jobs, scheduler=scheduler, pose_model=pose_model, poses=poses, fusion_weight=fusion_weight)
+            jobs=jobs, scheduler=scheduler, pose_model=pose_model, poses=poses, fusion_weight=fusion_weight,
+            fusion_emission_weight=fusion_emission_weight)
     if out_dir is not None:
         log.info("recognize: %d input(s) -> %s", len(inputs), out_dir)
 

@@ -206,9 +206,11 @@ def sift_outputs(model, features_dir: str | Path, ids: list[str], cache: dict | 
 
 
 def fused_outputs(pose_rec: PoseRecognizer, pose_outs: list[dict], sift_model, sift_outs: list[dict],
-                  weight: float) -> list[dict]:
+                  weight: float, emission_weight: float | None = None) -> list[dict]:
     """Late fusion (:func:`~vidstyle.recognition.fusion.fuse_scores`) of the two recognizers' frame
-    scores, ``weight`` on the pose recognizer's, smoothed by the pose recognizer's smoother."""
+    scores, ``weight`` on the pose recognizer's, smoothed by the pose recognizer's smoother with the fused
+    scores to the power ``emission_weight`` (None: :data:`vidstyle.recognition.defaults.FUSION_EMISSION_WEIGHT`)."""
+    from ..recognition import defaults as RD
     from ..recognition.fusion import fuse_scores
 
     out = []
@@ -219,7 +221,8 @@ def fused_outputs(pose_rec: PoseRecognizer, pose_outs: list[dict], sift_model, s
         raw, fused, conf = fuse_scores([po["scores"][:n], so["scores"][:n]],
                                        [pose_rec.classes_, sift_model.classes_], [weight, 1.0 - weight],
                                        pose_rec.classes_)
-        out.append(pose_rec.smooth(raw, fused, conf))
+        out.append(pose_rec.smooth(raw, fused, conf, emission_weight=RD.FUSION_EMISSION_WEIGHT
+                                   if emission_weight is None else emission_weight))
     return out
 
 
@@ -284,9 +287,9 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
                           input_name: str | None = None, predicted: PredictedSet | None = None,
                           sift_cache: dict | None = None) -> dict[str, Any]:
     """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
-    or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight)``, of its late fusion
-    with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT recognizer alone, smoothed
-    by the pose recognizer's smoother). ``input_name``: what the metrics call the pose files' source
+    or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight[, emission_weight])``,
+    of its late fusion with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT
+    recognizer alone, smoothed by the pose recognizer's smoother; :func:`fused_outputs`). ``input_name``: what the metrics call the pose files' source
     (default ``poses:<poses_dir>``). ``predicted``: :func:`predict_pose_set` of the same arguments, already
     run (several fusion weights score one prediction); ``sift_cache``: of :func:`sift_outputs`."""
     if predicted is None:
@@ -295,10 +298,15 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
     by_id = predicted.score_ds.by_id()
     fusion = None
     if sift is not None:
-        model, features_dir, weight = sift
-        outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used, sift_cache), weight)
+        model, features_dir, weight = sift[:3]
+        power = sift[3] if len(sift) > 3 else None
+        outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used, sift_cache), weight,
+                                power)
         truths = [t[: len(o["raw"])] for t, o in zip(truths, outputs)]
-        fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir)}
+        from ..recognition import defaults as RD
+
+        fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir),
+                  "emission_weight": RD.FUSION_EMISSION_WEIGHT if power is None else float(power)}
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in used]
     metrics = score_videos(rec.classes_, truths, outputs, used, actions)
     t_pred = predicted.seconds

@@ -113,11 +113,34 @@ def read_clip_list(path: str | os.PathLike, root: str | os.PathLike | None = Non
 class Recognizers:
     """What is run on each render: a 3D SIFT recognizer and/or a pose-sequence recognizer (models as
     loaded by :func:`vidstyle.recognition.recognizer.load_model`), and the pose weight of their fusion
-    (None: no fusion; several weights: one fused recognizer ``fusion@W`` each)."""
+    (None: no fusion; several weights: one fused recognizer ``fusion@W`` each), smoothed by the pose
+    recognizer's smoother with the fused scores to the power ``fusion_emission_weight`` (None:
+    :data:`vidstyle.recognition.defaults.FUSION_EMISSION_WEIGHT`; several: the first keeps the fused
+    recognizers' names, each other power ``P`` adds ``<name>^P``)."""
 
     sift: Any = None
     pose: Any = None
     fusion_weight: float | Sequence[float] | None = None
+    fusion_emission_weight: float | Sequence[float] | None = None
+
+    def powers(self) -> list[float]:
+        """The fused scores' powers in the smoother (:data:`~vidstyle.recognition.defaults.FUSION_EMISSION_WEIGHT`
+        when none is given)."""
+        from ..recognition import defaults as RD
+
+        p = self.fusion_emission_weight
+        if p is None:
+            return [float(RD.FUSION_EMISSION_WEIGHT)]
+        return [float(p)] if isinstance(p, (int, float)) else [float(x) for x in p]
+
+    def fusions(self) -> dict[str, tuple[float, float]]:
+        """Fused recognizer name -> (pose weight, power of the fused scores)."""
+        powers = self.powers()
+        out = {}
+        for name, w in self.weights().items():
+            out[name] = (w, powers[0])
+            out.update({f"{name}^{p:g}": (w, p) for p in powers[1:]})
+        return out
 
     def weights(self) -> dict[str, float]:
         """Fusion name -> pose weight: ``fusion`` for one weight, ``fusion@W`` for each of several."""
@@ -130,7 +153,7 @@ class Recognizers:
 
     def names(self) -> list[str]:
         out = [n for n, m in (("sift", self.sift), ("pose", self.pose)) if m is not None]
-        return out + list(self.weights())
+        return out + list(self.fusions())
 
     def check(self) -> None:
         if self.sift is None and self.pose is None:
@@ -141,6 +164,9 @@ class Recognizers:
             for w in self.weights().values():
                 if not 0.0 <= w <= 1.0:
                     raise ParameterError("fusion_weight", f"must be in [0, 1], got {w}")
+            for p in self.powers():
+                if not (p > 0 and np.isfinite(p)):
+                    raise ParameterError("fusion_emission_weight", f"must be > 0, got {p}")
 
 
 def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: StrikeEvalParams,
@@ -159,14 +185,14 @@ def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: Strike
         out["sift"] = recs.sift.predict_video(load_features(feats))
     if recs.pose is not None:
         out["pose"] = pose_prediction(recs.pose, motion, video, truth, params)
-    for fname, w in recs.weights().items():
+    for fname, (w, power) in recs.fusions().items():
         from ..recognition.fusion import fuse_scores
 
         po, so = out["pose"], out["sift"]
         n = min(len(po["raw"]), len(so["raw"]))
         out[fname] = recs.pose.smooth(*fuse_scores(
             [po["scores"][:n], so["scores"][:n]], [recs.pose.classes_, recs.sift.classes_], [w, 1.0 - w],
-            recs.pose.classes_))
+            recs.pose.classes_), emission_weight=power)
     return out
 
 
@@ -226,7 +252,9 @@ def evaluate_real_motion(clips: Sequence[RealClip], recs: Recognizers,
                              "camera": cam.name, "recognizer": rname, "appearance": appearance.to_dict(),
                              **_score(model.classes_, outs[rname]["smoothed"], vmask, clip.family)})
     return {"seed": int(seed), "params": params.to_dict(), "recognizers": names,
-            "fusion_weight": recs.fusion_weight, "cameras": [c.to_dict() for c in cameras],
+            "fusion_weight": recs.fusion_weight,
+            "fusion_emission_weight": (recs.powers() if len(recs.powers()) > 1 else recs.powers()[0])
+            if recs.fusion_weight is not None else None, "cameras": [c.to_dict() for c in cameras],
             "clips": [{"clip": c.name, "bvh": str(c.bvh), "family": c.family, "frames": c.frames,
                        "start": c.start, "end": c.end} for c in clips],
             "rows": rows, "overall": summarise(rows, names)}

@@ -39,10 +39,15 @@ MIRROR = True                  # also train on mirror images (scovanner2007 desc
 # ------------------------------------------------------------------ late fusion with the pose recognizer
 # the weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model): chosen by
 # scripts/pose_recognition_results.py on seed 0's validation performers and the real-motion validation clips
-# (pictorial-structures 2D; the training noise its own errors, gated: --noise-poses); the two runs, with and
-# without CMU walks labelled Step in the pose recognizer's training, chose the same weight, and the one
-# without scored higher (pipelines/kickboxing/validation/pose_recognition{,_cmuwalks}_seed0.json)
+# (pictorial-structures 2D, the real-motion clips at the pose command's zooms; the training noise calibrated
+# on the validation performers); the two runs, with and without CMU walks labelled Step in the pose
+# recognizer's training, chose the same weight, and the one with them scored higher
+# (pipelines/kickboxing/validation/pose_recognition{,_cmuwalks}_seed0.json)
 FUSION_WEIGHT = 0.5
+# the power of the fused frame scores in the pose recognizer's duration smoother, chosen by the same runs after
+# the weight (their stage 2 rows): higher powers smooth the flatter fused scores better on the validation
+# performers and call more real walking frames strikes; both runs kept the pose recognizer's own, 1
+FUSION_EMISSION_WEIGHT = 1.0
 
 # ------------------------------------------------------------------ runs
 SPLIT = "unseen-performer"     # unseen-performer | unseen-view | unseen-camera

@@ -104,18 +104,23 @@ class FrameRecognizerMixin:
             return np.zeros(0, np.int64), np.zeros((0, len(self.classes_))), np.zeros(0)
         return self._scores_full(*self.clf_.predict_with_scores(Z))
 
-    def smooth(self, raw: np.ndarray, scores: np.ndarray, conf: np.ndarray) -> dict[str, np.ndarray]:
+    def smooth(self, raw: np.ndarray, scores: np.ndarray, conf: np.ndarray,
+               emission_weight: float | None = None) -> dict[str, np.ndarray]:
         """Smooth frame scores with the recognizer's ``smoothing``, ``smoothing_window`` and
-        ``emission_weight`` (and its learned ``transitions_`` / ``durations_``); returns the
+        ``emission_weight`` (``emission_weight``: another power of the scores for this call, e.g. for fused
+        scores; the model is not changed) and its learned ``transitions_`` / ``durations_``; returns the
         ``predict_video`` dict (``raw``, ``scores``, ``confidence``, ``smoothed``, ``smoothed_confidence``)."""
         self._check_prediction_params()
+        if emission_weight is not None and not emission_weight > 0:
+            raise ParameterError("emission_weight", f"must be > 0, got {emission_weight}")
+        power = self.emission_weight if emission_weight is None else float(emission_weight)
         if len(raw) == 0:
             e = np.zeros(0, np.int64)
             return {"raw": e, "scores": np.zeros((0, len(self.classes_))), "confidence": np.zeros(0),
                     "smoothed": e, "smoothed_confidence": np.zeros(0)}
         sm, sconf = smooth_labels(
             raw, len(self.classes_), self.smoothing_window, conf, scores, self.smoothing,
-            transitions=getattr(self, "transitions_", None), emission_weight=self.emission_weight,
+            transitions=getattr(self, "transitions_", None), emission_weight=power,
             durations=getattr(self, "durations_", None),
         )
         return {"raw": raw, "scores": scores, "confidence": conf, "smoothed": sm, "smoothed_confidence": sconf}

@@ -358,9 +358,11 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
     training files were) as a :class:`~vidstyle.formats.recognised.RecognisedLabels`: raw and smoothed
     labels with confidence. ``fps``: frame rate to record (default: the features', else 20).
 
-    ``fusion = (pose_model, poses_path, weight)``: late fusion (:mod:`vidstyle.recognition.fusion`) with a
-    pose-sequence recognizer on that video's ``poses.json``, ``weight`` on the pose recognizer's scores;
-    the labels are then smoothed by the pose recognizer's smoother (its classes name them)."""
+    ``fusion = (pose_model, poses_path, weight[, emission_weight])``: late fusion
+    (:mod:`vidstyle.recognition.fusion`) with a pose-sequence recognizer on that video's ``poses.json``,
+    ``weight`` on the pose recognizer's scores; the labels are then smoothed by the pose recognizer's
+    smoother (its classes name them) with the fused scores to the power ``emission_weight`` (default
+    :data:`.defaults.FUSION_EMISSION_WEIGHT`)."""
     from ..formats.recognised import RecognisedLabels
 
     input = Path(input)
@@ -381,15 +383,16 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
         from .fusion import fuse_scores
         from .posefeatures import track_from_poses
 
-        pose_model, poses_path, weight = fusion
+        pose_model, poses_path, weight = fusion[:3]
+        power = float(fusion[3]) if len(fusion) > 3 and fusion[3] is not None else D.FUSION_EMISSION_WEIGHT
         n = len(res["raw"])
         pres = pose_model.predict_video(track_from_poses(read_poses(poses_path), float(pose_model.fps), n))
         if len(pres["raw"]) != n:
             raise InputError(f"{poses_path}: {len(pres['raw'])} pose frames for the {n} frames of {input}")
         res = pose_model.smooth(*fuse_scores([pres["scores"], res["scores"]], [pose_model.classes_, model.classes_],
-                                             [weight, 1.0 - weight], pose_model.classes_))
+                                             [weight, 1.0 - weight], pose_model.classes_), emission_weight=power)
         model = pose_model
-        extra.update(emission_weight=pose_model.emission_weight, fusion={"poses": str(poses_path), "weight_pose": weight})
+        extra.update(emission_weight=power, fusion={"poses": str(poses_path), "weight_pose": weight})
     classes = [str(c) for c in model.classes_]
     return RecognisedLabels(
         labels=[classes[i] for i in res["smoothed"]], classes=tuple(classes), fps=float(fps) if fps else D.FPS,
@@ -433,8 +436,8 @@ def _recognize_task(item: tuple) -> None:
     rec, header = load_recognizer(model, window, smoothing, emission_weight)
     fuse = None
     if fusion is not None:
-        pose_path, poses, weight = fusion
-        fuse = (load_recognizer(pose_path)[0], poses, weight)
+        pose_path, poses, weight, power = fusion
+        fuse = (load_recognizer(pose_path)[0], poses, weight, power)
     track = recognize_file(rec, header, input, fps, model_path=model, fusion=fuse)
     write_recognised(target, track)
     classes = [str(c) for c in rec.classes_]
@@ -446,12 +449,14 @@ def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[Pat
               window: int | None = None, smoothing: str | None = None,
               emission_weight: float | None = None, fps: float | None = None, jobs: int = 1,
               scheduler: str | None = None, pose_model: PathLike | None = None,
-              poses: Sequence[PathLike] | None = None, fusion_weight: float | None = None) -> None:
+              poses: Sequence[PathLike] | None = None, fusion_weight: float | None = None,
+              fusion_emission_weight: float | None = None) -> None:
     """Recognise every input (features ``.npz`` or video) with the model file ``model`` and write its
     labels JSON to the matching target, in parallel (``jobs`` workers or a Dask ``scheduler``; each worker
     loads the model once). With ``pose_model``, ``poses`` (one ``poses.json`` per input) and
     ``fusion_weight``: the late fusion of ``model`` (3D SIFT) with that pose-sequence recognizer
-    (:func:`recognize_file`). A bad model or missing input fails before any work."""
+    (:func:`recognize_file`; ``fusion_emission_weight``: the fused scores' power in its smoother, default
+    :data:`.defaults.FUSION_EMISSION_WEIGHT`). A bad model or missing input fails before any work."""
     from ..parallel import parallel_map
 
     if len(inputs) != len(targets):
@@ -474,7 +479,10 @@ def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[Pat
                 raise InputError(f"{p}: file not found (the poses of an input; vidstyle pose VIDEO --out-dir)")
         if fusion_weight is None or not 0.0 <= fusion_weight <= 1.0:
             raise InputError(f"recognize: the fusion weight must be in [0, 1], got {fusion_weight}")
-        fusion = [(str(pose_model), str(p), float(fusion_weight)) for p in poses]
+        power = D.FUSION_EMISSION_WEIGHT if fusion_emission_weight is None else float(fusion_emission_weight)
+        if not power > 0:
+            raise InputError(f"recognize: the fusion's emission weight must be > 0, got {power}")
+        fusion = [(str(pose_model), str(p), float(fusion_weight), power) for p in poses]
     items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps, f)
              for p, t, f in zip(inputs, targets, fusion)]
     parallel_map(_recognize_task, items, jobs=jobs, scheduler=scheduler, description="recognize")
