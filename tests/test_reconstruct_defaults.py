@@ -100,11 +100,31 @@ def test_view_step_cost_is_the_view_tracking_validation_choice():
     tested = {"05_01", "06_01"} | {f"{s}_" for s in ("03", "07", "08")}  # real-motion, held-out and pose test clips
     assert not any(v["clip"] in tested or v["clip"][:3] in tested for v in doc["videos"])
     assert {v["clip"][:2] for v in doc["videos"]} <= set(doc["subjects"])
-    assert inspect.signature(Reconstructor).parameters  # the library reads the default where it builds observations
     from vidstyle.reconstruct.core import Observation
 
     params = inspect.signature(Observation.from_poses).parameters
     assert params["view_step_cost"].default is None and params["view_dwell_s"].default is None
+    # the library reads the defaults where it builds observations: a confident flicker to the back inside a
+    # front video is tracked away (left and right exchanged) by default, as with the validated values given,
+    # and kept when the tracking is off
+    import numpy as np
+
+    from vidstyle.formats.poses import PoseFrame, Poses
+    from vidstyle.pose.viewtrack import RING
+
+    def frame(i, view, scores):
+        pts = np.column_stack([np.arange(30.0).reshape(15, 2) + 40 + i, np.full(15, 0.8)])
+        return PoseFrame(i, view, pts, dict(zip(RING, scores)))
+
+    frames = [frame(i, "front", (0.9, 0.04, 0.02, 0.04)) for i in range(12)]
+    frames[5] = frame(5, "back", (0.3, 0.05, 0.6, 0.05))
+    poses = Poses("v.mp4", "ps", frames)
+    by_default = Observation.from_poses(poses, 20.0, (160, 120))
+    given = Observation.from_poses(poses, 20.0, (160, 120), view_step_cost=D.VIEW_STEP_COST,
+                                   view_dwell_s=D.VIEW_DWELL_S)
+    off = Observation.from_poses(poses, 20.0, (160, 120), view_step_cost=0.0)
+    np.testing.assert_array_equal(by_default.xy, given.xy)
+    assert not np.array_equal(by_default.xy[5], off.xy[5])
     cli = inspect.signature(reconstruct_cmd).parameters  # the CLI's defaults are the validated ones
     assert cli["view_step_cost"].default.default == D.VIEW_STEP_COST
     assert cli["view_dwell"].default.default == D.VIEW_DWELL_S

@@ -289,9 +289,12 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
     """Metrics of a trained pose recognizer on ``split``'s test set (or ``score_set="val"``) from true 2D
     or the pose files in ``poses_dir``; with ``sift = (model, features_dir, weight[, emission_weight])``,
     of its late fusion with that 3D SIFT recognizer (``weight`` on the pose scores; 0 = the 3D SIFT
-    recognizer alone, smoothed by the pose recognizer's smoother; :func:`fused_outputs`). ``input_name``: what the metrics call the pose files' source
-    (default ``poses:<poses_dir>``). ``predicted``: :func:`predict_pose_set` of the same arguments, already
-    run (several fusion weights score one prediction); ``sift_cache``: of :func:`sift_outputs`."""
+    recognizer alone, smoothed by the pose recognizer's smoother; :func:`fused_outputs`). ``input_name``:
+    what the metrics call the pose files' source (default ``poses:<poses_dir>``). ``predicted``:
+    :func:`predict_pose_set` of the same arguments, already run (several fusion weights score one
+    prediction); ``sift_cache``: of :func:`sift_outputs`."""
+    from ..recognition import defaults as RD
+
     if predicted is None:
         predicted = predict_pose_set(rec, dataset, split, test_dataset, poses_dir, score_set)
     used, outputs, truths = predicted.used, predicted.outputs, predicted.truths
@@ -303,8 +306,6 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
         outputs = fused_outputs(rec, outputs, model, sift_outputs(model, features_dir, used, sift_cache), weight,
                                 power)
         truths = [t[: len(o["raw"])] for t, o in zip(truths, outputs)]
-        from ..recognition import defaults as RD
-
         fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir),
                   "emission_weight": RD.FUSION_EMISSION_WEIGHT if power is None else float(power)}
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in used]

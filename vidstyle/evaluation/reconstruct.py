@@ -230,7 +230,7 @@ def evaluate(dataset_dir: str | os.PathLike, library: Sequence[str | os.PathLike
     from ..parallel import parallel_map
 
     if "height" in skeletons and "library" not in skeletons:
-        raise InputError("--skeleton-kind height: needs library too (it rescales the library skeleton's run)")
+        raise InputError("skeletons: 'height' needs 'library' too (it rescales the library skeleton's run)")
     runs_of = [s for s in skeletons if s != "height"]
     items = [(dataset, vid, max_frames, mm, tuple(str(d) for d in poses_dirs), tuple(methods), skel,
               lib if skel == "library" else None, library, params, fps0,
