@@ -506,7 +506,9 @@ def reconstruct_heldout_table(items, root: Path) -> list[str]:
         if cmu:
             lines += [f"CMU subjects {', '.join(cmu['test_subjects'])} against a library of subjects "
                       f"{', '.join(cmu['library_subjects'])} ({cmu['library_frames']:,} indexed frames), seeded "
-                      f"cameras (`{_rel(p, root)}`, `scripts/reconstruct_heldout.py`):", "", *_REC_HEAD,
+                      f"cameras (`{_rel(p, root)}`, `scripts/reconstruct_heldout.py`)"
+                      + ("; skeletons: the library's and the library's at the subject's height (*height*)"
+                         if any(r.get("skeleton") == "height" for r in cmu["runs"]) else "") + ":", "", *_REC_HEAD,
                       *_reconstruct_rows(cmu["runs"], "cmu held-out"), ""]
         rend = d.get("cmu_rendered")
         if rend:

@@ -156,6 +156,32 @@ def test_a_known_height_scales_the_scene_and_recovers_a_larger_body(tmp_path, li
     assert e_sized < 0.7 * e_plain, (e_sized, e_plain)
 
 
+def test_held_out_rows_at_the_subjects_height(tmp_path, library):
+    """The held-out evaluations' ``height`` rows (evaluate_cmu_heldout): at scale 1 they are the library
+    rows; for a body 15 % larger than the library's, filmed by the model camera, the row at its stature
+    ratio has the lower error, and every row names its method and skeleton."""
+    from vidstyle.evaluation.reconstruct import _runs_for
+    from vidstyle.mocap import write_bvh
+    from vidstyle.mocap.retarget import rescale
+
+    clip = sorted(library.glob("*hook*.bvh"))[0]
+    own = sorted(library.glob(clip.name.split("_")[0] + "_*.bvh"))
+    big = tmp_path / "big.bvh"
+    write_bvh(rescale(read_bvh(clip), 1.15), big)
+    pts, uv, az = filmed(big, yaw=2.0, place=np.array([0.0, 80.0]))
+    obs = Observation(uv, np.ones(uv.shape[:2]), az, FPS, (W, H))
+    rec = Reconstructor().fit(own)
+    same = _runs_for(rec, obs, pts, 1.0, FPS, ["nn"], "x", "true2d", "library", height_scale=1.0)
+    assert [r["skeleton"] for r in same] == ["library", "height"]
+    assert same[0]["mpjpe_root_relative_mm"] == pytest.approx(same[1]["mpjpe_root_relative_mm"])
+    rows = _runs_for(rec, obs, pts, 1.0, FPS, ["nn", "olng"], "x", "true2d", "library", height_scale=1.15)
+    assert [(r["method"], r["skeleton"]) for r in rows] == [("nn", "library"), ("nn", "height"),
+                                                           ("olng", "library"), ("olng", "height")]
+    for lib_row, sized in zip(rows[::2], rows[1::2]):
+        assert sized["mpjpe_root_relative_mm"] < 0.7 * lib_row["mpjpe_root_relative_mm"]
+        assert sized["pa_mpjpe_mm"] == pytest.approx(lib_row["pa_mpjpe_mm"], rel=1e-6)  # scale-free
+
+
 def test_cli_height_needs_the_unit_and_sets_the_bvh_stature(tmp_path, library, capsys):
     from vidstyle.cli import main
     from vidstyle.mocap.retarget import stature

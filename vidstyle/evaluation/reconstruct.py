@@ -333,9 +333,11 @@ def _evaluate_video(item) -> list[dict]:
 
 # ------------------------------------------------------------------------------------------ beyond the demo
 def _runs_for(rec_base, obs: Observation, true_mm: np.ndarray, mm: float, fps: float, methods, data: str,
-              source: str, skeleton: str, keypoints=None) -> list[dict]:
+              source: str, skeleton: str, keypoints=None, height_scale: float | None = None) -> list[dict]:
     """One row per method; ``keypoints`` maps the reconstruction's keypoints (mm) to the truth's
-    definitions first (e.g. :func:`vidstyle.augmg.index.girdle_midpoints`)."""
+    definitions first (e.g. :func:`vidstyle.augmg.index.girdle_midpoints`). With ``height_scale`` (the
+    performer's stature over the output skeleton's) also a ``height`` row per method: the same
+    reconstruction scaled so, as :func:`evaluate`'s ``height`` skeleton kind."""
     out = []
     for method in methods:
         rec_base.set_params(method=method)
@@ -346,6 +348,10 @@ def _runs_for(rec_base, obs: Observation, true_mm: np.ndarray, mm: float, fps: f
         out.append({"data": data, "source": source, "method": method, "skeleton": skeleton,
                     **_figures(pred, true_mm, fps), "observed_frames": int(r.observed.sum()),
                     "frames_per_second": len(true_mm) / max(seconds, 1e-9)})
+        if height_scale is not None:
+            scaled = r.points * (height_scale * mm)
+            out.append({**out[-1], "skeleton": "height", "scale": float(height_scale),
+                        **_figures(scaled if keypoints is None else keypoints(scaled), true_mm, fps)})
     return out
 
 
@@ -360,10 +366,12 @@ def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[
     elevation (0-20 degrees) and distance (4.5-6.5 m) with the default 60-degree lens; 2D sources: the true
     projection (``true2d``) and it plus Gaussian noise of ``noise`` torso lengths per keypoint (``noisy``),
     both with the true azimuth. The output skeleton is the library's (the test subject's own body is not
-    given). ``unit_mm``: millimetres per CMU unit (1/0.45 inch)."""
+    given), and scaled to the subject's stature (skeleton ``height``: as ``vidstyle reconstruct --height``
+    when a user knows it). ``unit_mm``: millimetres per CMU unit (1/0.45 inch)."""
     from ..augmg.projection import facing_of_keypoints, relative_azimuth
     from ..mocap import read_bvh
     from ..mocap.keypoints import keypoint_positions
+    from ..mocap.retarget import stature
     from ..motiongraph.graph import has_tpose_first_frame
     from ..reconstruct.camera import default_intrinsics, project
     from ..reconstruct.core import Observation, Reconstructor, camera_rotation
@@ -412,11 +420,12 @@ def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[
             inside = np.all((xy >= 0) & (xy < np.array(size)), axis=-1)
             scores = inside.astype(float)
             obs = Observation(np.where(inside[..., None], xy, np.nan), scores, az, fps, size, source=f.name)
-            runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"cmu:{f.stem}", name, "library")
+            runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"cmu:{f.stem}", name, "library",
+                              height_scale=stature(m.skeleton) / stature(base.library_.skeleton_))
     pooled = []
-    for key in sorted({(r["source"], r["method"]) for r in runs}):
-        rows = [r for r in runs if (r["source"], r["method"]) == key]
-        pooled.append({"data": "cmu held-out subjects", "source": key[0], "method": key[1], "skeleton": "library",
+    for key in sorted({(r["source"], r["method"], r["skeleton"]) for r in runs}):
+        rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]
+        pooled.append({"data": "cmu held-out subjects", "source": key[0], "method": key[1], "skeleton": key[2],
                        **_pool(rows)})
     if truths:
         pooled.append(library_bound_row("cmu held-out subjects", base.library_.points_, np.concatenate(truths)))
