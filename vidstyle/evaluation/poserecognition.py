@@ -210,19 +210,14 @@ def fused_outputs(pose_rec: PoseRecognizer, pose_outs: list[dict], sift_model, s
     """Late fusion (:func:`~vidstyle.recognition.fusion.fuse_scores`) of the two recognizers' frame
     scores, ``weight`` on the pose recognizer's, smoothed by the pose recognizer's smoother with the fused
     scores to the power ``emission_weight`` (None: :data:`vidstyle.recognition.defaults.FUSION_EMISSION_WEIGHT`)."""
-    from ..recognition import defaults as RD
-    from ..recognition.fusion import fuse_scores
+    from ..recognition.fusion import smooth_fused
 
     out = []
     for po, so in zip(pose_outs, sift_outs):
         n = min(len(po["raw"]), len(so["raw"]))
         if abs(len(po["raw"]) - len(so["raw"])) > 1:
             raise InputError(f"fusion: {len(po['raw'])} pose frames against {len(so['raw'])} video frames")
-        raw, fused, conf = fuse_scores([po["scores"][:n], so["scores"][:n]],
-                                       [pose_rec.classes_, sift_model.classes_], [weight, 1.0 - weight],
-                                       pose_rec.classes_)
-        out.append(pose_rec.smooth(raw, fused, conf, emission_weight=RD.FUSION_EMISSION_WEIGHT
-                                   if emission_weight is None else emission_weight))
+        out.append(smooth_fused(pose_rec, po["scores"][:n], sift_model, so["scores"][:n], weight, emission_weight))
     return out
 
 
@@ -293,7 +288,7 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
     what the metrics call the pose files' source (default ``poses:<poses_dir>``). ``predicted``:
     :func:`predict_pose_set` of the same arguments, already run (several fusion weights score one
     prediction); ``sift_cache``: of :func:`sift_outputs`."""
-    from ..recognition import defaults as RD
+    from ..recognition.fusion import fusion_power
 
     if predicted is None:
         predicted = predict_pose_set(rec, dataset, split, test_dataset, poses_dir, score_set)
@@ -307,7 +302,7 @@ def score_pose_recognizer(rec: PoseRecognizer, training: dict, dataset: Dataset,
                                 power)
         truths = [t[: len(o["raw"])] for t, o in zip(truths, outputs)]
         fusion = {"weight_pose": weight, "weight_sift": 1.0 - weight, "features": str(features_dir),
-                  "emission_weight": RD.FUSION_EMISSION_WEIGHT if power is None else float(power)}
+                  "emission_weight": fusion_power(power)}
     actions = [by_id[i].action if by_id[i].kind == "single" else None for i in used]
     metrics = score_videos(rec.classes_, truths, outputs, used, actions)
     t_pred = predicted.seconds

@@ -126,12 +126,12 @@ class Recognizers:
     def powers(self) -> list[float]:
         """The fused scores' powers in the smoother (:data:`~vidstyle.recognition.defaults.FUSION_EMISSION_WEIGHT`
         when none is given)."""
-        from ..recognition import defaults as RD
+        from ..recognition.fusion import fusion_power
 
         p = self.fusion_emission_weight
-        if p is None:
-            return [float(RD.FUSION_EMISSION_WEIGHT)]
-        return [float(p)] if isinstance(p, (int, float)) else [float(x) for x in p]
+        if p is None or isinstance(p, (int, float)):
+            return [fusion_power(p)]
+        return [float(x) for x in p]
 
     def fusions(self) -> dict[str, tuple[float, float]]:
         """Fused recognizer name -> (pose weight, power of the fused scores)."""
@@ -186,13 +186,11 @@ def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: Strike
     if recs.pose is not None:
         out["pose"] = pose_prediction(recs.pose, motion, video, truth, params)
     for fname, (w, power) in recs.fusions().items():
-        from ..recognition.fusion import fuse_scores
+        from ..recognition.fusion import smooth_fused
 
         po, so = out["pose"], out["sift"]
         n = min(len(po["raw"]), len(so["raw"]))
-        out[fname] = recs.pose.smooth(*fuse_scores(
-            [po["scores"][:n], so["scores"][:n]], [recs.pose.classes_, recs.sift.classes_], [w, 1.0 - w],
-            recs.pose.classes_), emission_weight=power)
+        out[fname] = smooth_fused(recs.pose, po["scores"][:n], recs.sift, so["scores"][:n], w, power)
     return out
 
 
@@ -253,8 +251,9 @@ def evaluate_real_motion(clips: Sequence[RealClip], recs: Recognizers,
                              **_score(model.classes_, outs[rname]["smoothed"], vmask, clip.family)})
     return {"seed": int(seed), "params": params.to_dict(), "recognizers": names,
             "fusion_weight": recs.fusion_weight,
-            "fusion_emission_weight": (recs.powers() if len(recs.powers()) > 1 else recs.powers()[0])
-            if recs.fusion_weight is not None else None, "cameras": [c.to_dict() for c in cameras],
+            "fusion_emission_weight": (None if recs.fusion_weight is None
+                                       else powers[0] if len(powers := recs.powers()) == 1 else powers),
+            "cameras": [c.to_dict() for c in cameras],
             "clips": [{"clip": c.name, "bvh": str(c.bvh), "family": c.family, "frames": c.frames,
                        "start": c.start, "end": c.end} for c in clips],
             "rows": rows, "overall": summarise(rows, names)}

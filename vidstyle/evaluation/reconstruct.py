@@ -298,15 +298,15 @@ def _evaluate_video(item) -> list[dict]:
         if w is not None:
             world[name] = w
     shown = "olng" if "olng" in methods else methods[-1]
+    performer = read_bvh(bvh).skeleton if lib is None or height_rows else None
     if lib is None:
-        lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, 1).fit(
-            library, skeleton=read_bvh(bvh).skeleton)
+        lib = ReconstructionLibrary(base.n_views, base.library_elevation_deg, fps0, 1).fit(library, skeleton=performer)
     rec = Reconstructor(jobs=1, **params).fit_library(lib)
     scale = None
     if height_rows:  # the performer's stature over the output skeleton's: what Reconstructor(height=) applies
         from ..mocap.retarget import stature
 
-        scale = stature(read_bvh(bvh).skeleton) / stature(lib.skeleton_)
+        scale = stature(performer) / stature(lib.skeleton_)
     for src, obs in sources.items():
         for method in methods:
             rec.set_params(method=method)
@@ -318,8 +318,7 @@ def _evaluate_video(item) -> list[dict]:
                    "observed_frames": int(out.observed.sum()), "frames_per_second": T / max(seconds, 1e-9)}
             runs.append(row)
             if scale is not None:
-                runs.append({**row, "skeleton": "height", **_figures(out.points * (scale * mm), true_mm, fps),
-                             "scale": scale})
+                runs.append(_height_row(row, out, scale, mm, true_mm, fps))
             if (animation is not None and method == shown
                     and src == list(sources)[min(1, len(sources) - 1)]):
                 write_comparison(animation, out.points * mm, true_mm, fps, f"{vid} {src} {method}")
@@ -349,10 +348,16 @@ def _runs_for(rec_base, obs: Observation, true_mm: np.ndarray, mm: float, fps: f
                     **_figures(pred, true_mm, fps), "observed_frames": int(r.observed.sum()),
                     "frames_per_second": len(true_mm) / max(seconds, 1e-9)})
         if height_scale is not None:
-            scaled = r.points * (height_scale * mm)
-            out.append({**out[-1], "skeleton": "height", "scale": float(height_scale),
-                        **_figures(scaled if keypoints is None else keypoints(scaled), true_mm, fps)})
+            out.append(_height_row(out[-1], r, height_scale, mm, true_mm, fps, keypoints))
     return out
+
+
+def _height_row(row: dict, rec, scale: float, mm: float, true_mm: np.ndarray, fps: float, keypoints=None) -> dict:
+    """``row`` of the reconstruction ``rec`` scored again at the performer's height: ``rec.scaled(scale)``
+    (what ``Reconstructor(height=)`` returns), skeleton ``height``."""
+    pred = rec.scaled(scale).points * mm
+    return {**row, "skeleton": "height", "scale": float(scale),
+            **_figures(pred if keypoints is None else keypoints(pred), true_mm, fps)}
 
 
 def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[str], test_subjects: Sequence[str],
@@ -386,6 +391,7 @@ def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[
     rng = np.random.default_rng(seed)
     base = Reconstructor(jobs=jobs, target_fps=fps, **params).fit([str(f) for f in lib_files])
     K = default_intrinsics(*size)
+    lib_stature = stature(base.library_.skeleton_)
     runs: list[dict] = []
     truths: list[np.ndarray] = []
     for f in test_files:
@@ -421,7 +427,7 @@ def evaluate_cmu_heldout(cmu_dir: str | os.PathLike, library_subjects: Sequence[
             scores = inside.astype(float)
             obs = Observation(np.where(inside[..., None], xy, np.nan), scores, az, fps, size, source=f.name)
             runs += _runs_for(base, obs, true_mm, unit_mm, fps, methods, f"cmu:{f.stem}", name, "library",
-                              height_scale=stature(m.skeleton) / stature(base.library_.skeleton_))
+                              height_scale=stature(m.skeleton) / lib_stature)
     pooled = []
     for key in sorted({(r["source"], r["method"], r["skeleton"]) for r in runs}):
         rows = [r for r in runs if (r["source"], r["method"], r["skeleton"]) == key]

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError, ParameterError
+from . import defaults as D
 
 
 def aligned_scores(scores: np.ndarray, classes: Sequence[str], target: Sequence[str]) -> np.ndarray:
@@ -58,3 +59,20 @@ def fuse_scores(scores: Sequence[np.ndarray], classes: Sequence[Sequence[str]], 
     raw = np.argmax(fused, axis=1).astype(np.int64) if fused.size else np.zeros(0, np.int64)
     conf = fused[np.arange(len(raw)), raw] if len(raw) else np.zeros(0)
     return raw, fused, conf
+
+
+def fusion_power(power: float | None = None) -> float:
+    """The power of the fused scores in the smoother: ``power``, or the validated default
+    :data:`.defaults.FUSION_EMISSION_WEIGHT` when None."""
+    return float(D.FUSION_EMISSION_WEIGHT if power is None else power)
+
+
+def smooth_fused(pose_model, pose_scores: np.ndarray, sift_model, sift_scores: np.ndarray, weight: float,
+                 power: float | None = None) -> dict[str, np.ndarray]:
+    """The fused recognizer's ``predict_video`` dict: :func:`fuse_scores` of the pose-sequence recognizer's and
+    the 3D SIFT recognizer's frame scores (``weight`` on the pose recognizer's, the pose recognizer's classes),
+    smoothed by the pose recognizer's smoother with the fused scores to the power :func:`fusion_power`
+    (``power``)."""
+    return pose_model.smooth(*fuse_scores([pose_scores, sift_scores], [pose_model.classes_, sift_model.classes_],
+                                          [weight, 1.0 - weight], pose_model.classes_),
+                             emission_weight=fusion_power(power))

@@ -380,17 +380,16 @@ def recognize_file(model: ActionRecognizer, header: dict, input: PathLike, fps: 
     extra = {"emission_weight": model.emission_weight}
     if fusion is not None:
         from ..formats.poses import read_poses
-        from .fusion import fuse_scores
+        from .fusion import fusion_power, smooth_fused
         from .posefeatures import track_from_poses
 
         pose_model, poses_path, weight = fusion[:3]
-        power = float(fusion[3]) if len(fusion) > 3 and fusion[3] is not None else D.FUSION_EMISSION_WEIGHT
+        power = fusion_power(fusion[3] if len(fusion) > 3 else None)
         n = len(res["raw"])
         pres = pose_model.predict_video(track_from_poses(read_poses(poses_path), float(pose_model.fps), n))
         if len(pres["raw"]) != n:
             raise InputError(f"{poses_path}: {len(pres['raw'])} pose frames for the {n} frames of {input}")
-        res = pose_model.smooth(*fuse_scores([pres["scores"], res["scores"]], [pose_model.classes_, model.classes_],
-                                             [weight, 1.0 - weight], pose_model.classes_), emission_weight=power)
+        res = smooth_fused(pose_model, pres["scores"], model, res["scores"], weight, power)
         model = pose_model
         extra.update(emission_weight=power, fusion={"poses": str(poses_path), "weight_pose": weight})
     classes = [str(c) for c in model.classes_]
@@ -479,7 +478,9 @@ def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[Pat
                 raise InputError(f"{p}: file not found (the poses of an input; vidstyle pose VIDEO --out-dir)")
         if fusion_weight is None or not 0.0 <= fusion_weight <= 1.0:
             raise InputError(f"recognize: the fusion weight must be in [0, 1], got {fusion_weight}")
-        power = D.FUSION_EMISSION_WEIGHT if fusion_emission_weight is None else float(fusion_emission_weight)
+        from .fusion import fusion_power
+
+        power = fusion_power(fusion_emission_weight)
         if not power > 0:
             raise InputError(f"recognize: the fusion's emission weight must be > 0, got {power}")
         fusion = [(str(pose_model), str(p), float(fusion_weight), power) for p in poses]

@@ -76,7 +76,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -193,6 +193,17 @@ class Reconstruction:
     elevation_deg: float
     camera_height: float
     params: dict = field(default_factory=dict)
+
+    def scaled(self, factor: float) -> Reconstruction:
+        """The same reconstruction ``factor`` times as large about the floor under the camera (step 8 of the
+        module docstring): skeleton, root path, keypoints and camera height; it projects to the same images.
+        ``params["scale"]`` records the factor applied in all."""
+        from ..mocap.retarget import rescale
+
+        f = float(factor)
+        return replace(self, motion=rescale(self.motion, f), points=self.points * f,
+                       camera_height=self.camera_height * f,
+                       params={**self.params, "scale": self.params.get("scale", 1.0) * f})
 
     def camera_points(self) -> np.ndarray:
         """(T, 15, 3) the keypoints in camera coordinates (x right, y down, z forward)."""
@@ -720,17 +731,14 @@ class Reconstructor:
             points = self._keypoints(motion)
         else:
             points = rel + root[:, None, :]
-        scale = 1.0
+        out = Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
+                             {**self.get_params(), **cset, "stride": int(lib.stride_),
+                              "library_frames": lib.n_frames, "scale": 1.0})
         if self.height is not None:  # step 8: the whole scene scaled about the floor under the camera
-            from ..mocap.retarget import rescale, stature
+            from ..mocap.retarget import stature
 
-            scale = float(self.height) / stature(skeleton)
-            motion = rescale(motion, scale)
-            points = points * scale
-            cam_height *= scale
-        return Reconstruction(motion, points, observed, az, chosen, w, labels, contacts, K, elevation, cam_height,
-                              {**self.get_params(), **cset, "stride": int(lib.stride_),
-                               "library_frames": lib.n_frames, "scale": scale})
+            out = out.scaled(float(self.height) / stature(skeleton))
+        return out
 
     # ------------------------------------------------------------------ helpers
     def _keypoints(self, motion) -> np.ndarray:
