@@ -80,7 +80,6 @@ def main() -> int:
     log.setLevel(logging.INFO)
     import numpy as np
 
-    from vidstyle.actionmodel import defaults as D
     from vidstyle.evaluation.actionmodel import split_groups
     from vidstyle.evaluation.actionstyle import (
         demo_truth,
@@ -90,6 +89,7 @@ def main() -> int:
         performer_videos,
         population_tempo,
         row_json,
+        style_params,
         summarise,
         true_instances,
     )
@@ -141,11 +141,7 @@ def main() -> int:
         "command": "python scripts/eval_action_style.py " + " ".join(sys.argv[1:]),
         "dataset": str(args.dataset), "mm_per_unit": unit_mm,
         "splits": {str(s): g for s, g in splits.items()},
-        "params": {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
-                   "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS, "rounds": D.STYLE_ROUNDS,
-                   "validation": "pipelines/kickboxing/validation/action_style.json",
-                   "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE,
-                   "min_run_confidence_validation": "pipelines/kickboxing/validation/tempo_runs.json"},
+        "params": style_params(),
         "inputs_note": {"estimated": f"pose files of {args.poses_dir} (the performers with pose files there)",
                         "noisy": "Gaussian 5 % of the torso + 5 % outliers within +-2 torso lengths"},
         "goals": GOALS,

@@ -140,7 +140,8 @@ def _recognised(runs):
 
 def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_tempo():
     pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4)])] * 2
-    est = GlobalStyleEstimator(min_run_confidence=0.5).fit(pop)
+    # the runs' own lengths (the random points have no motion to time), every length measured
+    est = GlobalStyleEstimator(min_run_confidence=0.5, run_timing="labels", max_run_factor=None).fit(pop)
     # the performer's real steps last 15 frames (speed 12 / 15) and jabs 18; the recognizer also reports two
     # spurious 7-frame steps and a 6-frame jab at low confidence
     perf = _recognised([("Guard", 4, 0.9), ("Step", 15, 0.8), ("Guard", 3, 0.9), ("Step", 7, 0.3), ("Guard", 3, 0.9),
@@ -152,12 +153,13 @@ def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_
     t = est.estimate([perf[:3]])
     assert t.speed == pytest.approx(12 / 11) and t.tempo == pytest.approx({"Jab": 12 / 15})
     # a threshold of 0 trusts every run, as true labels are
-    assert GlobalStyleEstimator(min_run_confidence=0.0).fit(pop).estimate([perf]).speed == pytest.approx(12 / 11)
+    assert (GlobalStyleEstimator(min_run_confidence=0.0, run_timing="labels").fit(pop).estimate([perf]).speed
+            == pytest.approx(12 / 11))
 
 
 def test_a_label_whose_runs_are_all_doubtful_keeps_its_most_confident_run():
     pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Hook", 20), ("Guard", 4)])]
-    est = GlobalStyleEstimator(min_run_confidence=0.5).fit(pop)
+    est = GlobalStyleEstimator(min_run_confidence=0.5, run_timing="labels", max_run_factor=None).fit(pop)
     perf = _recognised([("Guard", 3, 0.9), ("Hook", 30, 0.2), ("Guard", 3, 0.9), ("Hook", 24, 0.45),
                         ("Guard", 3, 0.9), ("Step", 10, 0.9)])
     assert est.estimate([perf]).tempo == pytest.approx({"Hook": 24 / 20})
@@ -516,7 +518,7 @@ def test_learn_action_style_reads_the_labels_confidence_and_leaves_doubtful_runs
     write_poses(tmp_path / "v.poses.json", Poses("videos/v.mp4", "ps", [PoseFrame(i, "front", p) for i, p in enumerate(pts)]))
     mp = tmp_path / "m.npz"
     model.save(mp)
-    est = GlobalStyleEstimator.from_model(model, 20.0)
+    est = GlobalStyleEstimator.from_model(model, 20.0, run_timing="labels")  # the runs' lengths, to see the fake one
     tempo = {}
     for name, extra in (("recognised", {"confidence": conf}), ("true", {})):
         doc = label_document(labels, 20.0, take.chain, video="videos/v.mp4", performer="p01", view="front")
@@ -527,6 +529,29 @@ def test_learn_action_style_reads_the_labels_confidence_and_leaves_doubtful_runs
     assert len(true_jabs) >= 2 and np.median(true_jabs + [2]) != np.median(true_jabs)  # the fake run would show
     assert tempo["recognised"] == pytest.approx(float(np.median(true_jabs)) / ref)
     assert tempo["true"] == pytest.approx(float(np.median(true_jabs + [2])) / ref)
+
+
+def test_without_a_population_recognised_runs_are_timed_against_the_models_mean_instance(model):
+    """``from_model`` times recognised runs by their motion against the action model's own mean jab: runs the
+    recognizer cut a frame short at each end measure (nearly) what the true runs do; their own lengths do not."""
+    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator, label_runs, model_videos
+
+    assert {v[1][len(v[1]) // 2] for v in model_videos(model, 20.0)} == {"Jab"}
+    _, take = _take("Jab", 1, lead="orthodox")  # a performer the model did not see
+    xy, labels, view = _video(take, "front")
+    labels = list(labels)
+    cut = list(labels)
+    for lab, s, e in label_runs(labels):
+        if lab == "Jab":
+            cut[s] = cut[e - 1] = "Guard"
+    conf = np.full(len(cut), 0.9)
+    est = GlobalStyleEstimator.from_model(model, 20.0, min_run_confidence=0.0, max_run_factor=None)
+    assert est.motion_ratio_["Jab"] > 1.0
+    true = est.estimate([(xy, labels, view)]).tempo["Jab"]  # true labels: the runs' own lengths
+    timed = est.estimate([(xy, cut, view, conf)]).tempo["Jab"]
+    runs = est.set_params(run_timing="labels").estimate([(xy, cut, view, conf)]).tempo["Jab"]
+    assert runs < 0.9 * true  # two frames of ~10 lost
+    assert abs(timed - true) < 0.5 * abs(runs - true)
 
 
 def test_restyle_motion_replaces_actions_only(style, model):
@@ -684,3 +709,89 @@ def test_dtw_mpjpe_is_zero_for_a_time_warped_copy_and_the_offset_for_a_shifted_o
     assert dtw_mpjpe(warped, seq) == pytest.approx(0.0, abs=1e-12)
     # every joint moved by the same 3-4-0 vector: the aligned frames are the same, each 5 apart
     assert dtw_mpjpe(seq + np.array([3.0, 4.0, 0.0]), seq) == pytest.approx(5.0)
+
+
+# ----------------------------------------------------------------------------- timing runs from the motion
+def _bump(n_frames: int, t0: float, dur: float) -> np.ndarray:
+    """sin^2 rise and fall over [t0, t0 + dur] (sub-frame start and length), sampled at whole frames."""
+    t = np.arange(n_frames, dtype=np.float64)
+    u = np.clip((t - t0) / dur, 0.0, 1.0)
+    return np.sin(np.pi * u) ** 2
+
+
+def test_motion_width_is_the_analytic_width_whatever_the_runs_ends():
+    from vidstyle.actionmodel.stylefit import motion_width
+
+    for dur, t0, level in ((12.0, 20.3, 0.3), (17.6, 15.8, 0.2), (9.4, 30.5, 0.5)):
+        d = 2.0 * _bump(80, t0, dur)
+        # sin^2(pi u) = level at u = asin(sqrt(level)) / pi, so the width is dur * (1 - 2u)
+        expected = dur * (1.0 - 2.0 * np.arcsin(np.sqrt(level)) / np.pi)
+        s, e = int(round(t0)), int(round(t0 + dur))
+        for ds, de in ((0, 0), (2, -2), (-2, 1), (3, 0)):  # a recognizer's ends, a few frames off
+            w = motion_width(d, s + ds, e + de, level)
+            assert w == pytest.approx(expected, abs=0.12 * dur / 10)
+    # a side that never falls below the level near the run, or meets a missing frame: not measurable
+    d = 2.0 * _bump(60, 10.0, 12.0)
+    d[:16] = 2.0
+    assert np.isnan(motion_width(d, 10, 22, 0.3))
+    d = 2.0 * _bump(60, 10.0, 12.0)
+    d[20] = np.nan
+    assert np.isnan(motion_width(d, 10, 22, 0.3))
+
+
+def _moving(runs, dur_of=None, amp=0.8):
+    """(xy, labels, view) of a still figure (torso 1) whose lead wrist swings out and back (a sin^2 bump)
+    over each ``Jab`` run, the swing lasting ``dur_of(run length)`` frames centred on the run."""
+    labels = [lab for lab, n in runs for _ in range(n)]
+    F = len(labels)
+    base = np.zeros((15, 2))
+    base[1] = (0.0, -1.0)  # neck above the pelvis (image y down)
+    base[0] = (0.0, -1.4)
+    for k, (x, y) in {3: (-0.3, -1.0), 4: (0.3, -1.0), 5: (-0.4, -0.7), 6: (0.4, -0.7), 7: (-0.3, -0.9),
+                      8: (0.3, -0.9), 9: (-0.15, 0.0), 10: (0.15, 0.0), 11: (-0.2, 0.5), 12: (0.2, 0.5),
+                      13: (-0.2, 1.0), 14: (0.2, 1.0)}.items():
+        base[k] = (x, y)
+    xy = np.repeat(base[None], F, axis=0)
+    t = 0
+    for lab, n in runs:
+        if lab == "Jab":
+            dur = n if dur_of is None else dur_of(n)
+            xy[:, 7, 0] -= amp * _bump(F, t + 0.5 * (n - dur), dur)
+        t += n
+    return xy, labels, "front"
+
+
+def test_recognised_runs_are_timed_by_their_motion_not_by_their_ends():
+    pop = [_moving([("Guard", 10), ("Jab", 15), ("Guard", 10), ("Jab", 15), ("Guard", 10)])] * 2
+    est = GlobalStyleEstimator(run_timing="motion", motion_level=0.3, motion_filter=3, min_run_confidence=0.0,
+                               max_run_factor=None).fit(pop)
+    assert est.durations_ == {"Jab": 15.0} and est.motion_ratio_["Jab"] > 1.0
+    assert est.motion_weights_["Jab"][7] == est.motion_weights_["Jab"][8] > 0  # left and right weigh alike
+    # the performer's jabs last 18 frames (tempo 1.2); the recognizer cut each run two frames short at both ends
+    xy, labels, view = _moving([("Guard", 10), ("Jab", 18), ("Guard", 10), ("Jab", 18), ("Guard", 10)])
+    cut = ["Guard" if lab == "Jab" and (labels[max(0, i - 2)] != "Jab" or labels[min(len(labels) - 1, i + 2)] != "Jab")
+           else lab for i, lab in enumerate(labels)]
+    assert cut.count("Jab") == 2 * 14
+    conf = np.full(len(cut), 0.9)
+    assert est.estimate([(xy, cut, view, conf)]).tempo["Jab"] == pytest.approx(1.2, abs=0.02)
+    # the run's own length says 14 / 15; true labels (no confidence) keep their runs' lengths too
+    runs_only = est.set_params(run_timing="labels")
+    runs_only.fit(pop)
+    assert runs_only.estimate([(xy, cut, view, conf)]).tempo["Jab"] == pytest.approx(14 / 15)
+    est.set_params(run_timing="motion").fit(pop)
+    assert est.estimate([(xy, cut, view)]).tempo["Jab"] == pytest.approx(14 / 15)
+    with pytest.raises(ParameterError, match="run_timing"):
+        GlobalStyleEstimator(run_timing="beats").fit(pop)
+    with pytest.raises(ParameterError, match="motion_level"):
+        GlobalStyleEstimator(motion_level=1.0).fit(pop)
+
+
+def test_recognised_runs_much_longer_than_the_populations_do_not_measure():
+    pop = [_labelled([("Guard", 5), ("Hook", 20), ("Guard", 4)])]
+    est = GlobalStyleEstimator(run_timing="labels", min_run_confidence=0.0, max_run_factor=1.8).fit(pop)
+    # two hooks joined into one 40-frame run (2x the population's 20) and a real 22-frame hook
+    perf = _recognised([("Guard", 3, 0.9), ("Hook", 40, 0.8), ("Guard", 3, 0.9), ("Hook", 22, 0.8), ("Guard", 3, 0.9)])
+    assert est.estimate([perf]).tempo == pytest.approx({"Hook": 22 / 20})
+    assert est.set_params(max_run_factor=None).estimate([perf]).tempo == pytest.approx({"Hook": 31 / 20})
+    with pytest.raises(ParameterError, match="max_run_factor"):
+        est.set_params(max_run_factor=0.5).estimate([perf])

@@ -24,16 +24,22 @@ def test_lead_cue_is_the_validation_choice_and_saw_no_test_performer():
         assert s["lead_accuracy"] == sum(r["correct"] for r in rs) / len(rs)
 
 
-def test_run_confidence_threshold_is_the_validation_choice_and_saw_no_test_performer():
+def test_run_timing_and_confidence_are_the_validation_choice_and_saw_no_test_performer():
     import math
 
     from vidstyle.formats.validation import TEMPO_RUNS
 
     doc = read_validation(ROOT / "pipelines" / "kickboxing" / "validation" / "tempo_runs.json", TEMPO_RUNS)
-    assert doc["chosen"] == {"min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "max_run_factor": None}
+    assert doc["chosen"] == {"run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL,
+                             "motion_filter": D.STYLE_MOTION_FILTER, "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE,
+                             "max_run_factor": D.STYLE_MAX_RUN_FACTOR}
     measured = [c for c in doc["candidates"] if c["pairs_missing"] == 0]
     best = min(measured, key=lambda c: c["score"])  # the rule, reapplied to the recorded table
     assert {k: best[k] for k in doc["chosen"]} == doc["chosen"]
+    assert doc["inputs"] == ["true", "estimated"]  # the pose stage's 2D took part in the choice
     for c in doc["candidates"]:
-        assert math.isclose(c["score"], 0.5 * (c["error_all"] + c["error_perf0"]))
+        assert math.isclose(c["score"], sum(c[f"error_{k}_{n}"] for k in doc["inputs"] for n in ("all", "perf0")) / 4)
+    # the run's own length (the recognizer's ends) was a candidate and lost
+    labels = [c["score"] for c in measured if c["run_timing"] == "labels"]
+    assert labels and min(labels) > best["score"]
     assert doc["validation_performers"] == doc["split"]["V"] and not set(doc["split"]["V"]) & set(doc["split"]["T"])

@@ -42,12 +42,21 @@ training population, so only the view's identity is used, never its angle).
   ``action_tempo[a] = tempo[a] * speed``).
 
   *Recognised labels* (a video given with its per-frame confidence, ``(xy, labels, view, confidence)``):
-  ``estimate`` measures lengths on the runs it can trust: a run whose mean confidence is below
-  ``min_run_confidence`` is left out (spurious runs: on the validation performers a false ``Step`` run was
-  7-9 frames, a third shorter than a real one, and pulled the speed up); a label left with no run keeps
-  its most confident one. Runs without a confidence (true labels) are always trusted.
-  ``scripts/validate_tempo_runs.py`` chose the threshold (it also tried dropping runs much longer than the
-  population's, repeats the recognizer joined into one run: the median did as well without).
+  the recognizer's ends of a run are often a frame or two off, as much as the performers' tempi differ, so
+  with ``run_timing="motion"`` an action run is timed by its motion (:meth:`GlobalStyleEstimator.timed_runs`):
+  the keypoints' distance from their place in the video's guard (pelvis-relative, torso lengths), weighted
+  per action by how far each moves in the population's instances (left and right alike), median-filtered
+  over ``motion_filter`` frames; from the run's peak outward to where it falls below ``motion_level`` of
+  the peak, interpolated between frames (:func:`motion_width`). An action leaves and returns to the guard
+  and its motion scales in time with its duration, so that width, times the population's run length over
+  width of the label, is a sub-frame length in frames. ``Step`` and a run whose motion does not fall back
+  near it keep the run's length. ``estimate`` then measures lengths on the runs it can trust: a run whose
+  mean confidence is below ``min_run_confidence`` is left out (spurious runs: on the validation performers a
+  false ``Step`` run was 7-9 frames, a third shorter than a real one, and pulled the speed up), as is one
+  longer than ``max_run_factor`` times the population's length of its label (repeats the recognizer joined
+  into one run); a label left with no run keeps its most confident one. Runs without a confidence (true
+  labels) are always trusted and keep their lengths. ``scripts/validate_tempo_runs.py`` chose the timing,
+  its level and filter, the threshold and the factor on the validation performers' true and estimated 2D.
 
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
 coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
@@ -159,9 +168,8 @@ def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
     jab, side, runs = [], [], []
     conf = None if confidence is None else np.asarray(confidence, dtype=np.float64)
     for label, s, e in label_runs(labels):
-        if label == "Step" or label not in NON_ACTIONS:
-            c = float(np.mean(conf[s:e])) if conf is not None and e <= len(conf) else math.nan
-            runs.append((label, e - s, c))
+        if _timed(label):
+            runs.append((label, e - s, _run_confidence(conf, s, e)))
         if label in NON_ACTIONS:
             continue
         if label == "Jab" and np.isfinite(torso):
@@ -186,6 +194,89 @@ def video_figures(xy: np.ndarray, labels, confidence=None) -> dict:
         out["stance_side"] = float(np.mean(np.sign(front_x - 0.5 * (X[:, LHIP, 0] + X[:, RHIP, 0]))))
     out["stance_frames"] = int(ok.sum()) if "stance_side" in out else 0
     return out
+
+
+def _timed(label: str) -> bool:
+    """Whether runs of ``label`` measure a length (the actions and ``Step``)."""
+    return label == "Step" or label not in NON_ACTIONS
+
+
+def _run_confidence(conf, s: int, e: int) -> float:
+    return float(np.mean(conf[s:e])) if conf is not None and e <= len(conf) else math.nan
+
+
+# ----------------------------------------------------------------------------- timing a run from the motion
+#: left/right keypoint pairs (shoulders, elbows, wrists, hips, knees, ankles): the timing weights are
+#: symmetric, so a southpaw's mirrored action weighs the same keypoints
+LR_PAIRS = ((LSH, RSH), (LEL, REL), (LWR, RWR), (LHIP, RHIP), (LKN, RKN), (LAN, RAN))
+RUN_TIMINGS = ("labels", "motion")
+MOTION_MARGIN = 0.75  # how far (in run lengths) either side of a run its motion may be timed
+
+
+def guard_displacement(xy: np.ndarray, labels) -> np.ndarray:
+    """``(F, 15)``: each keypoint's image distance, in torso lengths, from its place in the video's guard,
+    both relative to the pelvis; the guard is the median over the frames labelled ``Guard`` (over all
+    frames when none is). NaN where a keypoint is missing."""
+    xy = np.asarray(xy, dtype=np.float64)
+    torso = _torso(xy)
+    if not np.isfinite(torso):
+        return np.full(xy.shape[:2], np.nan)
+    rel = (xy - xy[:, PELVIS:PELVIS + 1]) / torso
+    lab = np.array((list(labels) + ["unlabelled"] * len(xy))[: len(xy)])
+    ref = rel[lab == "Guard"]
+    if not np.isfinite(ref).any():
+        ref = rel
+    with np.errstate(all="ignore"):
+        guard = np.nanmedian(ref, axis=0) if np.isfinite(ref).any() else np.full(rel.shape[1:], np.nan)
+    return np.linalg.norm(rel - guard, axis=-1)
+
+
+def displacement_signal(disp: np.ndarray, weights: np.ndarray, filter_frames: int = D.STYLE_MOTION_FILTER) -> np.ndarray:
+    """The weighted mean over keypoints of :func:`guard_displacement`'s ``disp`` per frame (NaN where a
+    weighted keypoint is missing), median-filtered over ``filter_frames`` frames (a median of 3 removes a
+    one-frame spike of the pose stage and leaves a monotone rise or fall unchanged)."""
+    from scipy.ndimage import median_filter
+
+    w = np.asarray(weights, dtype=np.float64)
+    used = w > 0
+    ok = np.isfinite(disp[:, used]).all(axis=1)
+    d = np.where(ok, np.nan_to_num(disp[:, used]) @ w[used] / max(float(w[used].sum()), 1e-12), 0.0)
+    if filter_frames > 1:
+        d = median_filter(d, size=int(filter_frames), mode="nearest")
+    d[~ok] = np.nan
+    return d
+
+
+def _crossing(d: np.ndarray, i: int, step: int, level: float, lo: int, hi: int) -> float:
+    j = i
+    while lo <= j + step < hi:
+        if not np.isfinite(d[j + step]):
+            return math.nan
+        if d[j + step] < level:
+            return j + step * (d[j] - level) / (d[j] - d[j + step])
+        j += step
+    return math.nan
+
+
+def motion_width(d: np.ndarray, s: int, e: int, level: float = D.STYLE_MOTION_LEVEL,
+                 margin: float = MOTION_MARGIN) -> float:
+    """The sub-frame duration of the motion of the run ``[s, e)`` of the displacement signal ``d``: from
+    the run's peak outward to where ``d`` first falls below ``level`` times the peak on each side,
+    linearly interpolated between frames. NaN when a side does not fall below it within ``margin`` run
+    lengths of the run or meets a missing frame. An action starts and ends in the guard and its motion
+    scales in time with its duration, so the width is proportional to the duration whatever the run's
+    recognised ends."""
+    seg = d[s:e]
+    if e <= s or not np.isfinite(seg).any():
+        return math.nan
+    pk = s + int(np.nanargmax(seg))
+    if d[pk] <= 0:
+        return math.nan
+    pad = math.ceil(margin * (e - s))
+    lo, hi = max(0, s - pad), min(len(d), e + pad)
+    thr = level * d[pk]
+    left, right = _crossing(d, pk, -1, thr, lo, hi), _crossing(d, pk, +1, thr, lo, hi)
+    return right - left if np.isfinite(left) and np.isfinite(right) else math.nan
 
 
 @dataclass
@@ -231,18 +322,25 @@ class GlobalStyleEstimator(BaseEstimator):
 
     def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5, lead_cue: str = D.STYLE_LEAD_CUE,
                  min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES,
-                 min_run_confidence: float = D.STYLE_MIN_RUN_CONFIDENCE):
+                 min_run_confidence: float = D.STYLE_MIN_RUN_CONFIDENCE,
+                 max_run_factor: float | None = D.STYLE_MAX_RUN_FACTOR, run_timing: str = D.STYLE_RUN_TIMING,
+                 motion_level: float = D.STYLE_MOTION_LEVEL, motion_filter: int = D.STYLE_MOTION_FILTER):
         self.lead_threshold = lead_threshold
         self.min_front_jabs = min_front_jabs
         self.lead_cue = lead_cue
         self.min_stance_frames = min_stance_frames
         self.min_run_confidence = min_run_confidence
+        self.max_run_factor = max_run_factor
+        self.run_timing = run_timing
+        self.motion_level = motion_level
+        self.motion_filter = motion_filter
 
     @classmethod
     def from_model(cls, model, video_fps: float, **kw) -> GlobalStyleEstimator:
         """An estimator without a population: guard / stance / crouch are the raw figures (stance the ankle
         ratio itself), tempo relative to the action model's mean instance length (``mean_frames`` at the
-        model's rate, converted to ``video_fps``)."""
+        model's rate, converted to ``video_fps``). Recognised runs are timed by their motion against the
+        model's mean instance of each action (:func:`model_videos`) in place of a population's instances."""
         est = cls(**kw)
         est.population_ = {}
         est.orthodox_side_ = 0.0  # unknown without a population: the labelled jab hand decides
@@ -250,6 +348,7 @@ class GlobalStyleEstimator(BaseEstimator):
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
         est.step_frames_ = math.nan  # no population: the speed is unknown
         est.action_step_ratio_ = {}
+        est._fit_motion_timing(model_videos(model, video_fps))
         return est
 
     def fit(self, videos, y=None, groups=None) -> GlobalStyleEstimator:
@@ -309,15 +408,99 @@ class GlobalStyleEstimator(BaseEstimator):
                 self.step_frames_ = float(np.mean([st for _, st in own]))
                 self.action_step_ratio_ = {a: float(np.mean(r)) for a in self.durations_
                                            if (r := [float(np.median(d[a])) / st for d, st in own if d.get(a)])}
+        self._fit_motion_timing(videos)
         return self
 
-    def trusted_lengths(self, runs) -> dict[str, list[int]]:
+    def _check_timing(self) -> None:
+        if self.run_timing not in RUN_TIMINGS:
+            raise ParameterError("run_timing", f"must be one of {', '.join(RUN_TIMINGS)}, got {self.run_timing!r}")
+        if not 0.0 < self.motion_level < 1.0:
+            raise ParameterError("motion_level", f"must be in (0, 1), got {self.motion_level}")
+        if int(self.motion_filter) != self.motion_filter or self.motion_filter < 1:
+            raise ParameterError("motion_filter", f"must be a whole number of frames >= 1, got {self.motion_filter}")
+
+    def _fit_motion_timing(self, videos) -> None:
+        """``motion_weights_`` (action -> per-keypoint weight: the population's mean peak displacement from
+        guard in its runs, left and right averaged) and ``motion_ratio_`` (action -> the population's
+        median run length over motion width, which turns a width into frames)."""
+        self._check_timing()
+        self.motion_weights_, self.motion_ratio_ = {}, {}
+        if self.run_timing != "motion":
+            return
+        parts = []
+        peaks: dict[str, list[np.ndarray]] = {}
+        for video in videos:
+            xy, labels, _view, _conf = video_parts(video)
+            labels = list(labels)[: len(xy)]
+            Dk = guard_displacement(xy, labels)
+            parts.append((Dk, labels))
+            for label, s, e in label_runs(labels):
+                if label not in NON_ACTIONS and np.isfinite(Dk[s:e]).any():
+                    with np.errstate(all="ignore"):
+                        peaks.setdefault(label, []).append(np.nanmax(Dk[s:e], axis=0))
+        for label, pk in peaks.items():
+            with np.errstate(all="ignore"):
+                w = np.nan_to_num(np.nanmean(np.stack(pk), axis=0))
+            for a, b in LR_PAIRS:
+                w[a] = w[b] = 0.5 * (w[a] + w[b])
+            if w.sum() > 0:
+                self.motion_weights_[label] = w
+        ratios: dict[str, list[float]] = {}
+        for Dk, labels in parts:
+            signals: dict[str, np.ndarray] = {}
+            for label, s, e in label_runs(labels):
+                if label in self.motion_weights_:
+                    m = self._run_width(Dk, signals, label, s, e)
+                    if np.isfinite(m):
+                        ratios.setdefault(label, []).append((e - s) / m)
+        self.motion_ratio_ = {a: float(np.median(r)) for a, r in ratios.items()}
+
+    def _run_width(self, disp: np.ndarray, signals: dict, label: str, s: int, e: int) -> float:
+        """:func:`motion_width` of the run ``[s, e)`` of ``label`` (NaN when not measurable or not positive);
+        ``signals`` caches the video's displacement signal per label."""
+        if label not in signals:
+            signals[label] = displacement_signal(disp, self.motion_weights_[label], int(self.motion_filter))
+        m = motion_width(signals[label], s, e, self.motion_level)
+        return m if m > 0 else math.nan
+
+    def timed_runs(self, video) -> list[tuple[str, float, float]]:
+        """``(label, length, mean confidence)`` of every action and ``Step`` run of ``video`` (module text).
+        With ``run_timing="motion"``, a run of recognised labels (the video has a confidence) of an action
+        the population timed is measured from the motion (:func:`motion_width` times ``motion_ratio_``, a
+        sub-frame length in frames) where the width is measurable; the recognizer's ends of a run are
+        often a frame or two off, as much as the performers' tempi differ. True labels (no confidence),
+        ``Step`` and unmeasurable runs keep the run's length."""
+        self._check_timing()
+        xy, labels, _view, conf = video_parts(video)
+        labels = list(labels)[: len(xy)]
+        ratio = getattr(self, "motion_ratio_", {}) if self.run_timing == "motion" and conf is not None else {}
+        Dk = guard_displacement(xy, labels) if ratio else None
+        signals: dict[str, np.ndarray] = {}
+        out = []
+        for label, s, e in label_runs(labels):
+            if not _timed(label):
+                continue
+            n: float = e - s
+            if label in ratio and np.isfinite(m := self._run_width(Dk, signals, label, s, e)):
+                n = ratio[label] * m
+            out.append((label, n, _run_confidence(conf, s, e)))
+        return out
+
+    def trusted_lengths(self, runs) -> dict[str, list[float]]:
         """Label -> the lengths of ``runs`` (``(label, length, mean confidence)``, pooled over a performer's
         videos) that measure it (module text: recognised labels)."""
         if not 0.0 <= self.min_run_confidence <= 1.0:
             raise ParameterError("min_run_confidence", f"must be in [0, 1], got {self.min_run_confidence}")
-        by_label: dict[str, list[tuple[float, int]]] = {}
+        cap = self.max_run_factor
+        if cap is not None and not cap > 1.0:
+            raise ParameterError("max_run_factor", f"must be > 1 (or None: no cap), got {cap}")
+        def ref(label: str) -> float:  # the population's length of the label
+            return getattr(self, "step_frames_", math.nan) if label == "Step" else getattr(self, "durations_", {}).get(label, math.nan)
+
+        by_label: dict[str, list[tuple[float, float]]] = {}
         for label, n, c in runs:
+            if cap is not None and np.isfinite(c) and n > cap * ref(label):
+                continue  # a recognised run much longer than the population's: repeats joined into one
             by_label.setdefault(label, []).append((c, n))
         out = {}
         for label, rr in by_label.items():
@@ -349,7 +532,7 @@ class GlobalStyleEstimator(BaseEstimator):
                 s.append(f["stance"] / pop["stance"])
                 c.append(pop["extension"] - f["extension"])
             jab += f["jab_scores"]
-            runs += f["runs"]
+            runs += self.timed_runs(video)
         dur = self.trusted_lengths(runs)
         steps = dur.pop("Step", [])
         side = getattr(self, "orthodox_side_", 0.0)
@@ -373,6 +556,27 @@ class GlobalStyleEstimator(BaseEstimator):
         return GlobalStyle("orthodox" if score >= self.lead_threshold else "southpaw", score, _nanmedian(g),
                            _nanmedian(s), _nanmedian(c), tempo, {a: v / mt for a, v in tempo.items()},
                            len(videos), len(jab), speed, action_tempo)
+
+
+def model_videos(model, video_fps: float, yaws_deg=(0.0, 45.0, 90.0, -45.0, -90.0),
+                 elevation_deg: float = D.STYLE_ELEVATION_DEG) -> list:
+    """``(xy, labels, view)`` videos of each label's mean instance (the GMM's heaviest component, decoded at
+    its mean length in frames of ``video_fps``) seen from ``yaws_deg`` (weak perspective at
+    ``elevation_deg``), with the instance's first and last poses held as guard for as long again before
+    and after it: a stand-in population for timing runs from the motion (:meth:`GlobalStyleEstimator.from_model`)."""
+    from ..mocap.keypoints import keypoint_positions
+
+    out = []
+    for label, lm in model.models_.items():
+        n = max(round(lm.mean_frames * float(video_fps) / model.fps_), 2)
+        z = np.asarray(lm.gmm_means[int(np.argmax(lm.gmm_weights))], dtype=np.float64)
+        P3 = keypoint_positions(model.decode(z, label, n_frames=n))
+        P3 = np.concatenate([np.repeat(P3[:1], n, axis=0), P3, np.repeat(P3[-1:], n, axis=0)])
+        labels = ["Guard"] * n + [label] * n + ["Guard"] * n
+        for yaw in yaws_deg:
+            xy = project(P3, math.radians(yaw), 1.0, np.zeros(2), math.radians(elevation_deg))
+            out.append((xy, labels, "front"))
+    return out
 
 
 # ----------------------------------------------------------------------------- orthodox clips for the model

@@ -272,6 +272,18 @@ def population_tempo(truth_style: dict, performers, actions: list[str]) -> dict[
     return {a: float(np.mean([truth_style[p]["tempo"][k] for p in performers])) for k, a in enumerate(actions)}
 
 
+def style_params() -> dict:
+    """The fitting and run-timing defaults an action-style metrics file records, with their validations."""
+    from ..actionmodel import defaults as D
+
+    return {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
+            "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS, "rounds": D.STYLE_ROUNDS,
+            "validation": "pipelines/kickboxing/validation/action_style.json",
+            "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "max_run_factor": D.STYLE_MAX_RUN_FACTOR,
+            "run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL, "motion_filter": D.STYLE_MOTION_FILTER,
+            "min_run_confidence_validation": "pipelines/kickboxing/validation/tempo_runs.json"}
+
+
 def row_json(r: dict) -> dict:
     return {k: v for k, v in r.items() if k != "style"}
 
@@ -476,11 +488,7 @@ def evaluate_split(dataset: str | Path, seed: int = 0, poses_dir: str | Path | N
     doc = {
         "seed": seed, "seeds": [seed], "dataset": str(dataset), "mm_per_unit": unit_mm,
         "splits": {str(seed): groups},
-        "params": {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
-                   "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS,
-                   "rounds": D.STYLE_ROUNDS, "validation": "pipelines/kickboxing/validation/action_style.json",
-                   "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE,
-                   "min_run_confidence_validation": "pipelines/kickboxing/validation/tempo_runs.json"},
+        "params": style_params(),
         "inputs_note": {"true": "true 2D keypoints of every video of the performer, true labels",
                         "estimated": f"pose files of {poses_dir} (the frames they cover), labels of {labels_dir}"},
         "by_input": by_input,

@@ -13,7 +13,7 @@ kind                                          version   written by
 ``vidstyle.validation.inbetween``             1         ``scripts/validate_inbetween.py``
 ``vidstyle.validation.actionmodel``           1         ``scripts/validate_actionmodel.py``
 ``vidstyle.validation.lead_cue``              1         ``scripts/validate_lead_cue.py``
-``vidstyle.validation.tempo_runs``            1         ``scripts/validate_tempo_runs.py``
+``vidstyle.validation.tempo_runs``            2         ``scripts/validate_tempo_runs.py``
 ``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
 ``vidstyle.validation.view_tracking``         1         ``scripts/validate_view_tracking.py``
 ============================================  ========  ==================================================
@@ -64,7 +64,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
     ACTION_STYLE_POSES: (1, 1, True, False),
     LEAD_CUE: (1, 1, True, False),
-    TEMPO_RUNS: (1, 1, True, False),
+    TEMPO_RUNS: (2, 1, True, False),
     POSE_SCALES: (1, 1, True, False),
     VIEW_TRACKING: (1, 1, True, False),
 }
