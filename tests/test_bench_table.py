@@ -89,20 +89,20 @@ def test_bench_demo_pairs_each_round_and_the_table_shows_the_median_ratio(tmp_pa
     assert p["wall_per_cpu_ratio"] == pytest.approx(700 / 720)
     res = tmp_path / "bench_results"
     res.mkdir()
-    (res / "demo_timing.json").write_text(json.dumps({
-        "started": 1796389669.0, "cores": 2, "run_wall_seconds": 400.0, "cpu_seconds": 700.0,
-        "stages": [{"stage": "features", "wall_seconds": 80.0}], "runs": [], "median_run_wall_seconds": 400.0,
-        "baseline": {**p, "pipeline_ratio": 0.9512}}))
-    out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
-                         check=True).stdout
-    row = [line for line in out.splitlines() if "against commit bbbbbbb" in line]
-    assert len(row) == 1 and "| 0.951 wall, 1.000 CPU, 0.962 with the install, 0.972 wall per CPU second (median of 3 " in row[0]
-    assert "baseline median 400 s) | <= 1.05: not slower than the baseline" in row[0] and "| yes |" in row[0]
+
+    def baseline_row(ratio: float) -> str:
+        """The table's baseline row for a timing document whose HEAD / baseline pipeline ratio is ``ratio``."""
+        (res / "demo_timing.json").write_text(json.dumps({
+            "started": 1796389669.0, "cores": 2, "run_wall_seconds": 400.0, "cpu_seconds": 700.0,
+            "stages": [{"stage": "features", "wall_seconds": 80.0}], "runs": [], "median_run_wall_seconds": 400.0,
+            "baseline": {**p, "pipeline_ratio": ratio}}))
+        out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
+                             check=True).stdout
+        (row,) = [line for line in out.splitlines() if "against commit bbbbbbb" in line]
+        return row
+
+    row = baseline_row(0.9512)
+    assert "| 0.951 wall, 1.000 CPU, 0.962 with the install, 0.972 wall per CPU second (median of 3 " in row
+    assert "baseline median 400 s) | <= 1.05: not slower than the baseline" in row and "| yes |" in row
     # a HEAD slower than its baseline beyond the noise is shown as a miss
-    (res / "demo_timing.json").write_text(json.dumps({
-        "started": 1796389669.0, "cores": 2, "run_wall_seconds": 400.0, "cpu_seconds": 700.0,
-        "stages": [{"stage": "features", "wall_seconds": 80.0}], "runs": [], "median_run_wall_seconds": 400.0,
-        "baseline": {**p, "pipeline_ratio": 1.08}}))
-    out = subprocess.run([sys.executable, str(SCRIPT), "--results", str(res)], capture_output=True, text=True,
-                         check=True).stdout
-    assert "| **no** |" in next(line for line in out.splitlines() if "against commit bbbbbbb" in line)
+    assert "| **no** |" in baseline_row(1.08)

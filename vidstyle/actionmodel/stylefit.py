@@ -348,7 +348,7 @@ class GlobalStyleEstimator(BaseEstimator):
         est.durations_ = {k: lm.mean_frames * float(video_fps) / model.fps_ for k, lm in model.models_.items()}
         est.step_frames_ = math.nan  # no population: the speed is unknown
         est.action_step_ratio_ = {}
-        est._fit_motion_timing(model_videos(model, video_fps))
+        est._fit_motion_timing(model_videos(model, video_fps) if est.run_timing == "motion" else [])
         return est
 
     def fit(self, videos, y=None, groups=None) -> GlobalStyleEstimator:
