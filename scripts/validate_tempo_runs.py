@@ -21,7 +21,10 @@ pipeline's action-style evaluation has pose files for). The error of a (performe
 ``|log(recognised median / true median)|``, the true median over the true labels' runs of the same
 videos. Rule: the candidate of least mean error over the inputs and both video sets; every pair must be
 measured. The estimator's tempo figures against the performers' true style parameters are recorded too
-(two performers: a guide, not the rule).
+(two performers: a guide, not the rule), as is ``model_reference_error``: the mean error of the six
+actions' lengths over the same inputs and video sets when the reference is the training performers'
+orthodox action model (:meth:`~vidstyle.actionmodel.stylefit.GlobalStyleEstimator.from_model`, what
+``learn-style --poses-dir`` uses without a population).
 
     python scripts/validate_tempo_runs.py --poses-dir /tmp/ps_validation
 
@@ -62,9 +65,15 @@ def main() -> int:
     log.setLevel(logging.INFO)
     import numpy as np
 
-    from vidstyle.actionmodel.stylefit import label_runs
+    from vidstyle.actionmodel.stylefit import GlobalStyleEstimator, label_runs
     from vidstyle.evaluation.actionmodel import split_groups
-    from vidstyle.evaluation.actionstyle import demo_truth, fit_population, pearson, performer_videos
+    from vidstyle.evaluation.actionstyle import (
+        demo_truth,
+        fit_population,
+        orthodox_model,
+        pearson,
+        performer_videos,
+    )
     from vidstyle.formats.validation import TEMPO_RUNS, validation_header, write_validation
 
     t_start = time.perf_counter()
@@ -92,14 +101,24 @@ def main() -> int:
                         truth.setdefault(label, []).append(e - s)
                 data[(kind, p, name)] = ({a: float(np.median(truth[a])) for a in (*actions, "Step") if truth.get(a)},
                                          [rec_v[i] for i in sel])
+    # the reference learn-style uses without a population: the training performers' orthodox action model
+    model = orthodox_model(args.dataset, manifest, train, args.seed)
     timings = [("labels", None, None)] + [("motion", lv, fl) for lv in args.motion_level for fl in args.motion_filter]
     cands = []
     for timing, level, filt in timings:
         extra = {"run_timing": timing} | ({"motion_level": level, "motion_filter": filt} if timing == "motion" else {})
         est = fit_population(ds, manifest, train, cache=cache, **extra)
         runs = {key: [r for v in vids for r in est.timed_runs(v)] for key, (_t, vids) in data.items()}
+        mest = GlobalStyleEstimator.from_model(model, float(manifest["fps"]), **extra)
+        model_runs = {key: [r for v in vids for r in mest.timed_runs(v)] for key, (_t, vids) in data.items()}
         for tau, cap in itertools.product(args.min_run_confidence, args.max_run_factor):
             est.set_params(min_run_confidence=tau, max_run_factor=None if math.isinf(cap) else cap)
+            mest.set_params(min_run_confidence=tau, max_run_factor=None if math.isinf(cap) else cap)
+            model_errs = []
+            for (_kind, _p, _name), (truth, _vids) in data.items():
+                got = mest.trusted_lengths(model_runs[(_kind, _p, _name)])
+                model_errs += [abs(math.log(float(np.median(got[a])) / t)) for a, t in truth.items()
+                               if a != "Step" and a in got]
             errs = {(kind, name): [] for kind in inputs for name in ("all", "perf0")}
             missing = 0
             fig = {kind: {"action_tempo": ([], []), "duration_factor": ([], []), "speed": ([], [])} for kind in inputs}
@@ -132,6 +151,9 @@ def main() -> int:
                 c[f"speed_abs_log_error_{kind}"] = float(np.mean(np.abs(np.log(np.asarray(fk["speed"][1])
                                                                                 / np.asarray(fk["speed"][0])))))
             c["score"] = float(np.mean([c[f"error_{kind}_{name}"] for kind in inputs for name in ("all", "perf0")]))
+            # a guide, not the rule: the same error of the six actions (no steps: the model has no step
+            # length) with the action model as the reference, as learn-style estimates without a population
+            c["model_reference_error"] = float(np.mean(model_errs))
             cands.append(c)
         log.info("%s level %s filter %s: best score %.4f", timing, level, filt,
                  min(c["score"] for c in cands if c["run_timing"] == timing and c["motion_level"] == level
@@ -153,14 +175,14 @@ def main() -> int:
     head = f"{'timing':>6s} {'level':>5s} {'filt':>4s} {'min conf':>8s} {'max fac':>7s}"
     for kind in inputs:
         head += f" {'err ' + kind[:4] + ' all':>13s} {'perf0':>6s} {'act.t r':>7s} {'dur.f r':>7s}"
-    print(head + f" {'score':>6s} {'missing':>7s}")
+    print(head + f" {'score':>6s} {'missing':>7s} {'model ref':>9s}")
     for c in cands:
         row = (f"{c['run_timing']:>6s} {f(c['motion_level'], 1):>5s} {'-' if c['motion_filter'] is None else c['motion_filter']:>4} "
                f"{c['min_run_confidence']:8.2f} {f(c['max_run_factor'], 1):>7s}")
         for kind in inputs:
             row += (f" {c[f'error_{kind}_all']:13.3f} {c[f'error_{kind}_perf0']:6.3f} "
                     f"{f(c[f'action_tempo_r_{kind}']):>7s} {f(c[f'duration_factor_r_{kind}']):>7s}")
-        print(row + f" {c['score']:6.3f} {c['pairs_missing']:7d}")
+        print(row + f" {c['score']:6.3f} {c['pairs_missing']:7d} {c['model_reference_error']:9.3f}")
     print("chosen:", chosen, f"wrote {args.out}")
     return 0
 

@@ -40,6 +40,8 @@ def test_run_timing_and_confidence_are_the_validation_choice_and_saw_no_test_per
     for c in doc["candidates"]:
         assert math.isclose(c["score"], sum(c[f"error_{k}_{n}"] for k in doc["inputs"] for n in ("all", "perf0")) / 4)
     # the run's own length (the recognizer's ends) was a candidate and lost
-    labels = [c["score"] for c in measured if c["run_timing"] == "labels"]
-    assert labels and min(labels) > best["score"]
+    labels = [c for c in measured if c["run_timing"] == "labels"]
+    assert labels and min(c["score"] for c in labels) > best["score"]
+    # and for learn-style's reference without a population (the action model), recorded as a guide
+    assert min(c["model_reference_error"] for c in labels) > best["model_reference_error"]
     assert doc["validation_performers"] == doc["split"]["V"] and not set(doc["split"]["V"]) & set(doc["split"]["T"])
