@@ -3,9 +3,9 @@
 of :class:`vidstyle.actionmodel.stylefit.GlobalStyleEstimator`) on the *validation* performers: the run
 timing (``run_timing``: the recognised run's length, or the motion's width at ``motion_level`` of the
 run's peak displacement from guard after a ``motion_filter``-frame median filter, turned into frames by the
-population's ratio), the ``min_run_confidence`` of a run that measures, and whether dropping runs longer
-than ``max_run_factor`` times the population's median length of the label (back-to-back repeats the
-recognizer joined into one run) helps (a candidate the library keeps only if validation chooses it).
+population's ratio), the ``min_run_confidence`` of a run that measures, and the ``max_run_factor``: runs
+longer than it times the population's median length of the label (back-to-back repeats the recognizer
+joined into one run) do not measure (none: every run does).
 
 The recognised labels are the pipeline's (``--recognised-dir``; the recognizer of split seed 0, trained
 on its sets A and B). The validation performers are set V of split seed 0 (never its test performers; of
