@@ -79,3 +79,13 @@ def test_metrics_document_is_checked():
         parse_metrics(bad)
     with pytest.raises(Exception, match="30"):
         parse_metrics({**doc, "gaps": [15, 30]})
+
+
+def test_the_goal_asks_markov_below_slerp_on_both_measures_per_gap():
+    from vidstyle.evaluation.inbetween import markov_goal
+
+    res = {"markov": {"15": {"l2p": 0.9, "l2q": 0.51}, "45": {"l2p": 3.2, "l2q": 1.4}},
+           "slerp": {"15": {"l2p": 1.0, "l2q": 0.50}, "45": {"l2p": 3.4, "l2q": 1.5}}}
+    assert markov_goal(res, [15, 45]) == {"markov_below_slerp_l2p_15": True, "markov_below_slerp_l2p_45": True,
+                                          "markov_below_slerp_l2q_15": False, "markov_below_slerp_l2q_45": True}
+    assert markov_goal({"slerp": res["slerp"]}, [15]) == {}
