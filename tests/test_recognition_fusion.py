@@ -84,3 +84,18 @@ def test_the_fusion_default_is_the_validated_choice():
     # the fused scores' power in the smoother: chosen with it (stage 2 of the same validation)
     assert D.FUSION_EMISSION_WEIGHT == best["chosen"]["emission_weight"]
     assert best["chosen"]["emission_weight"] in best["fusion_emission_weights"]
+
+
+def test_the_fused_scores_power_is_resolved_and_checked_in_one_place():
+    import math
+
+    import pytest
+
+    from vidstyle.errors import ParameterError
+    from vidstyle.recognition import defaults as D
+    from vidstyle.recognition.fusion import fusion_power
+
+    assert fusion_power(None) == D.FUSION_EMISSION_WEIGHT and fusion_power(3) == 3.0
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(ParameterError, match="fusion_emission_weight"):
+            fusion_power(bad)

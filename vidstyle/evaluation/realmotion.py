@@ -131,7 +131,7 @@ class Recognizers:
         p = self.fusion_emission_weight
         if p is None or isinstance(p, (int, float)):
             return [fusion_power(p)]
-        return [float(x) for x in p]
+        return [fusion_power(x) for x in p]
 
     def fusions(self) -> dict[str, tuple[float, float]]:
         """Fused recognizer name -> (pose weight, power of the fused scores)."""
@@ -164,9 +164,7 @@ class Recognizers:
             for w in self.weights().values():
                 if not 0.0 <= w <= 1.0:
                     raise ParameterError("fusion_weight", f"must be in [0, 1], got {w}")
-            for p in self.powers():
-                if not (p > 0 and np.isfinite(p)):
-                    raise ParameterError("fusion_emission_weight", f"must be > 0, got {p}")
+            self.powers()  # each resolved (and checked) by fusion_power
 
 
 def _outputs(recs: Recognizers, motion, video: Path, truth: dict, params: StrikeEvalParams,

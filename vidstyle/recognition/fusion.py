@@ -14,6 +14,7 @@ what each recognizer makes of its own missing input.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -63,8 +64,12 @@ def fuse_scores(scores: Sequence[np.ndarray], classes: Sequence[Sequence[str]], 
 
 def fusion_power(power: float | None = None) -> float:
     """The power of the fused scores in the smoother: ``power``, or the validated default
-    :data:`.defaults.FUSION_EMISSION_WEIGHT` when None."""
-    return float(D.FUSION_EMISSION_WEIGHT if power is None else power)
+    :data:`.defaults.FUSION_EMISSION_WEIGHT` when None; a power that is not finite and > 0 is a
+    :class:`~vidstyle.errors.ParameterError` (every caller resolves the power here, before any work)."""
+    p = float(D.FUSION_EMISSION_WEIGHT if power is None else power)
+    if not (p > 0 and math.isfinite(p)):
+        raise ParameterError("fusion_emission_weight", f"must be a finite number > 0, got {power}")
+    return p
 
 
 def smooth_fused(pose_model, pose_scores: np.ndarray, sift_model, sift_scores: np.ndarray, weight: float,

@@ -481,8 +481,6 @@ def recognize(model: PathLike, inputs: Sequence[PathLike], targets: Sequence[Pat
         from .fusion import fusion_power
 
         power = fusion_power(fusion_emission_weight)
-        if not power > 0:
-            raise InputError(f"recognize: the fusion's emission weight must be > 0, got {power}")
         fusion = [(str(pose_model), str(p), float(fusion_weight), power) for p in poses]
     items = [(str(model), window, smoothing, emission_weight, str(p), str(t), fps, f)
              for p, t, f in zip(inputs, targets, fusion)]
