@@ -3,7 +3,8 @@
 of :class:`vidstyle.actionmodel.stylefit.GlobalStyleEstimator`) on the *validation* performers: the run
 timing (``run_timing``: the recognised run's length, or the motion's width at ``motion_level`` of the
 run's peak displacement from guard after a ``motion_filter``-frame median filter, turned into frames by the
-population's ratio), the ``min_run_confidence`` of a run that measures, and the ``max_run_factor``: runs
+population's ratio), the ``min_run_confidence`` of a run that measures (and the ``step_min_run_confidence``
+of a ``Step`` run, whose lengths time the speed; ``same``: the actions' threshold), and the ``max_run_factor``: runs
 longer than it times the population's median length of the label (back-to-back repeats the recognizer
 joined into one run) do not measure (none: every run does).
 
@@ -56,6 +57,9 @@ def main() -> int:
                     help="the validation performers' pose files (estimated 2D); without it, true 2D alone")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--min-run-confidence", type=float, nargs="+", default=[0.0, 0.3, 0.4, 0.5, 0.6, 0.7])
+    ap.add_argument("--step-min-run-confidence", nargs="+", default=[None, 0.4, 0.5, 0.6, 0.7],
+                    type=lambda x: None if x == "same" else float(x),
+                    help="candidates for Step runs (same: the actions' threshold)")
     ap.add_argument("--max-run-factor", type=float, nargs="+", default=[math.inf, 2.2, 1.8, 1.5])
     ap.add_argument("--motion-level", type=float, nargs="+", default=[0.2, 0.3, 0.4, 0.5])
     ap.add_argument("--motion-filter", type=int, nargs="+", default=[1, 3, 5])
@@ -111,9 +115,14 @@ def main() -> int:
         runs = {key: [r for v in vids for r in est.timed_runs(v)] for key, (_t, vids) in data.items()}
         mest = GlobalStyleEstimator.from_model(model, float(manifest["fps"]), **extra)
         model_runs = {key: [r for v in vids for r in mest.timed_runs(v)] for key, (_t, vids) in data.items()}
-        for tau, cap in itertools.product(args.min_run_confidence, args.max_run_factor):
-            est.set_params(min_run_confidence=tau, max_run_factor=None if math.isinf(cap) else cap)
-            mest.set_params(min_run_confidence=tau, max_run_factor=None if math.isinf(cap) else cap)
+        for tau, step_tau, cap in itertools.product(args.min_run_confidence, args.step_min_run_confidence,
+                                                    args.max_run_factor):
+            if step_tau is not None and step_tau == tau:
+                continue  # the same as "same"
+            thresholds = {"min_run_confidence": tau, "step_min_run_confidence": step_tau,
+                          "max_run_factor": None if math.isinf(cap) else cap}
+            est.set_params(**thresholds)
+            mest.set_params(**thresholds)
             model_errs = []
             for (_kind, _p, _name), (truth, _vids) in data.items():
                 got = mest.trusted_lengths(model_runs[(_kind, _p, _name)])
@@ -140,8 +149,8 @@ def main() -> int:
                             fk["duration_factor"][1].append(gs.tempo[a])
                     fk["speed"][0].append(st["speed"])
                     fk["speed"][1].append(gs.speed)
-            c = {"run_timing": timing, "motion_level": level, "motion_filter": filt, "min_run_confidence": tau,
-                 "max_run_factor": None if math.isinf(cap) else cap, "pairs_missing": missing}
+            c = {"run_timing": timing, "motion_level": level, "motion_filter": filt, **thresholds,
+                 "pairs_missing": missing}
             for kind in inputs:
                 c[f"error_{kind}_all"] = float(np.mean(errs[(kind, "all")]))
                 c[f"error_{kind}_perf0"] = float(np.mean(errs[(kind, "perf0")]))
@@ -160,7 +169,8 @@ def main() -> int:
                      and c["motion_filter"] == filt))
     ok = [c for c in cands if c["pairs_missing"] == 0]
     best = min(ok, key=lambda c: c["score"])
-    chosen = {k: best[k] for k in ("run_timing", "motion_level", "motion_filter", "min_run_confidence", "max_run_factor")}
+    chosen = {k: best[k] for k in ("run_timing", "motion_level", "motion_filter", "min_run_confidence",
+                                   "step_min_run_confidence", "max_run_factor")}
     doc = {**validation_header(TEMPO_RUNS), "seed": args.seed,
            "command": " ".join(["python scripts/validate_tempo_runs.py", *sys.argv[1:]]),
            "recognised_dir": os.path.relpath(args.recognised_dir.resolve(), ROOT),
@@ -172,13 +182,13 @@ def main() -> int:
            "candidates": cands, "chosen": chosen, "wall_seconds": time.perf_counter() - t_start}
     write_validation(args.out, json.loads(json.dumps(doc), parse_constant=lambda x: None))
     f = lambda x, d=3: "-" if x is None else f"{x:.{d}f}"
-    head = f"{'timing':>6s} {'level':>5s} {'filt':>4s} {'min conf':>8s} {'max fac':>7s}"
+    head = f"{'timing':>6s} {'level':>5s} {'filt':>4s} {'min conf':>8s} {'step':>5s} {'max fac':>7s}"
     for kind in inputs:
         head += f" {'err ' + kind[:4] + ' all':>13s} {'perf0':>6s} {'act.t r':>7s} {'dur.f r':>7s}"
     print(head + f" {'score':>6s} {'missing':>7s} {'model ref':>9s}")
     for c in cands:
         row = (f"{c['run_timing']:>6s} {f(c['motion_level'], 1):>5s} {'-' if c['motion_filter'] is None else c['motion_filter']:>4} "
-               f"{c['min_run_confidence']:8.2f} {f(c['max_run_factor'], 1):>7s}")
+               f"{c['min_run_confidence']:8.2f} {f(c['step_min_run_confidence'], 2):>5s} {f(c['max_run_factor'], 1):>7s}")
         for kind in inputs:
             row += (f" {c[f'error_{kind}_all']:13.3f} {c[f'error_{kind}_perf0']:6.3f} "
                     f"{f(c[f'action_tempo_r_{kind}']):>7s} {f(c[f'duration_factor_r_{kind}']):>7s}")

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from vidstyle.actionmodel import ActionModel, cut_instances
+from vidstyle.actionmodel import defaults as D
 from vidstyle.actionmodel.stylefit import (
     GlobalStyleEstimator,
     SegmentFitter,
@@ -152,9 +153,37 @@ def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_
     # the same labels without their confidence (true labels) are all trusted: median steps of (15, 7, 7, 15)
     t = est.estimate([perf[:3]])
     assert t.speed == pytest.approx(12 / 11) and t.tempo == pytest.approx({"Jab": 12 / 15})
-    # a threshold of 0 trusts every run, as true labels are
-    assert (GlobalStyleEstimator(min_run_confidence=0.0, run_timing="labels").fit(pop).estimate([perf]).speed
-            == pytest.approx(12 / 11))
+    # a threshold of 0 (for the steps too: None is "the same") trusts every run, as true labels are
+    assert (GlobalStyleEstimator(min_run_confidence=0.0, step_min_run_confidence=None, run_timing="labels")
+            .fit(pop).estimate([perf]).speed == pytest.approx(12 / 11))
+
+
+def test_step_runs_have_their_own_confidence_threshold():
+    pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4)])] * 2
+    # steps of 15 frames at confidence 0.8 and 0.6, spurious 7-frame steps at 0.35 and 0.45; jabs of 18 at 0.35
+    # and of 12 at 0.8
+    perf = _recognised([("Guard", 4, 0.9), ("Step", 15, 0.8), ("Guard", 3, 0.9), ("Step", 7, 0.35), ("Guard", 3, 0.9),
+                        ("Jab", 18, 0.35), ("Guard", 2, 0.9), ("Step", 7, 0.45), ("Jab", 12, 0.8), ("Guard", 3, 0.9),
+                        ("Step", 15, 0.6)])
+
+    def est(**kw):
+        return GlobalStyleEstimator(run_timing="labels", max_run_factor=None, **kw).fit(pop)
+
+    # one threshold of 0.3: every run measures, steps (15, 7, 7, 15): median 11; jabs (18, 12): 15
+    g = est(min_run_confidence=0.3, step_min_run_confidence=None).estimate([perf])
+    assert g.speed == pytest.approx(12 / 11) and g.tempo == pytest.approx({"Jab": 1.0})
+    # steps at 0.5: the spurious steps drop out (speed 12 / 15); the jabs keep the actions' 0.3
+    g = est(min_run_confidence=0.3, step_min_run_confidence=0.5).estimate([perf])
+    assert g.speed == pytest.approx(12 / 15) and g.tempo == pytest.approx({"Jab": 1.0})
+    # and the other way round: steps at 0.4 keep the 0.45 one (15, 7, 15), the jabs at 0.5 lose the 18
+    g = est(min_run_confidence=0.5, step_min_run_confidence=0.4).estimate([perf])
+    assert g.speed == pytest.approx(12 / 15) and g.tempo == pytest.approx({"Jab": 12 / 15})
+    g = est(min_run_confidence=0.5, step_min_run_confidence=0.0).estimate([perf])
+    assert g.speed == pytest.approx(12 / 11)
+    with pytest.raises(ParameterError, match="step_min_run_confidence"):
+        est(step_min_run_confidence=-0.1).estimate([perf])
+    # the default is the validated one (validation/tempo_runs.json)
+    assert GlobalStyleEstimator().step_min_run_confidence == D.STYLE_STEP_MIN_RUN_CONFIDENCE
 
 
 def test_a_label_whose_runs_are_all_doubtful_keeps_its_most_confident_run():

@@ -32,6 +32,7 @@ def test_run_timing_and_confidence_are_the_validation_choice_and_saw_no_test_per
     doc = read_validation(ROOT / "pipelines" / "kickboxing" / "validation" / "tempo_runs.json", TEMPO_RUNS)
     assert doc["chosen"] == {"run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL,
                              "motion_filter": D.STYLE_MOTION_FILTER, "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE,
+                             "step_min_run_confidence": D.STYLE_STEP_MIN_RUN_CONFIDENCE,
                              "max_run_factor": D.STYLE_MAX_RUN_FACTOR}
     measured = [c for c in doc["candidates"] if c["pairs_missing"] == 0]
     best = min(measured, key=lambda c: c["score"])  # the rule, reapplied to the recorded table

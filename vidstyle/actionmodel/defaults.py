@@ -29,6 +29,7 @@ STYLE_MAX_NFEV = 30  # least-squares function evaluations per segment
 STYLE_MAX_SEGMENTS = 8  # segments fitted per performer and label (a seeded spread over all)
 STYLE_LEAD_CUE = "stance"  # the lead from the front foot's image side before the jab rules; validation/lead_cue.json
 STYLE_MIN_RUN_CONFIDENCE = 0.3  # recognised labels: runs of lower mean confidence do not measure a length; validation/tempo_runs.json
+STYLE_STEP_MIN_RUN_CONFIDENCE: float | None = 0.4  # the same for Step runs (they time the speed; None: STYLE_MIN_RUN_CONFIDENCE); validation/tempo_runs.json
 STYLE_MAX_RUN_FACTOR: float | None = 1.8  # recognised runs longer than this times the population's length of the label do not measure (None: all); validation/tempo_runs.json
 STYLE_RUN_TIMING = "motion"  # recognised labels: an action run's length from the width of its motion ("labels": the run's own); validation/tempo_runs.json
 STYLE_MOTION_LEVEL = 0.3  # the level (share of the run's peak displacement from guard) whose crossings time it; validation/tempo_runs.json

@@ -51,12 +51,13 @@ training population, so only the view's identity is used, never its angle).
   and its motion scales in time with its duration, so that width, times the population's run length over
   width of the label, is a sub-frame length in frames. ``Step`` and a run whose motion does not fall back
   near it keep the run's length. ``estimate`` then measures lengths on the runs it can trust: a run whose
-  mean confidence is below ``min_run_confidence`` is left out (spurious runs: on the validation performers a
-  false ``Step`` run was 7-9 frames, a third shorter than a real one, and pulled the speed up), as is one
+  mean confidence is below ``min_run_confidence`` (``step_min_run_confidence`` for ``Step`` runs, which
+  time the speed; None: the same) is left out (spurious runs: on the validation performers a false
+  ``Step`` run was 7-9 frames, a third shorter than a real one, and pulled the speed up), as is one
   longer than ``max_run_factor`` times the population's length of its label (repeats the recognizer joined
   into one run); a label left with no run keeps its most confident one. Runs without a confidence (true
   labels) are always trusted and keep their lengths. ``scripts/validate_tempo_runs.py`` chose the timing,
-  its level and filter, the threshold and the factor on the validation performers' true and estimated 2D.
+  its level and filter, the thresholds and the factor on the validation performers' true and estimated 2D.
 
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
 coefficients of the label's :class:`~vidstyle.actionmodel.ActionModel` (the rest at the prior
@@ -323,6 +324,7 @@ class GlobalStyleEstimator(BaseEstimator):
     def __init__(self, lead_threshold: float = 0.0, min_front_jabs: int = 5, lead_cue: str = D.STYLE_LEAD_CUE,
                  min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES,
                  min_run_confidence: float = D.STYLE_MIN_RUN_CONFIDENCE,
+                 step_min_run_confidence: float | None = D.STYLE_STEP_MIN_RUN_CONFIDENCE,
                  max_run_factor: float | None = D.STYLE_MAX_RUN_FACTOR, run_timing: str = D.STYLE_RUN_TIMING,
                  motion_level: float = D.STYLE_MOTION_LEVEL, motion_filter: int = D.STYLE_MOTION_FILTER):
         self.lead_threshold = lead_threshold
@@ -330,6 +332,7 @@ class GlobalStyleEstimator(BaseEstimator):
         self.lead_cue = lead_cue
         self.min_stance_frames = min_stance_frames
         self.min_run_confidence = min_run_confidence
+        self.step_min_run_confidence = step_min_run_confidence
         self.max_run_factor = max_run_factor
         self.run_timing = run_timing
         self.motion_level = motion_level
@@ -491,6 +494,11 @@ class GlobalStyleEstimator(BaseEstimator):
         videos) that measure it (module text: recognised labels)."""
         if not 0.0 <= self.min_run_confidence <= 1.0:
             raise ParameterError("min_run_confidence", f"must be in [0, 1], got {self.min_run_confidence}")
+        step_tau = self.step_min_run_confidence
+        if step_tau is None:
+            step_tau = self.min_run_confidence
+        elif not 0.0 <= step_tau <= 1.0:
+            raise ParameterError("step_min_run_confidence", f"must be in [0, 1] (or None: min_run_confidence), got {step_tau}")
         cap = self.max_run_factor
         if cap is not None and not cap > 1.0:
             raise ParameterError("max_run_factor", f"must be > 1 (or None: no cap), got {cap}")
@@ -504,7 +512,8 @@ class GlobalStyleEstimator(BaseEstimator):
             by_label.setdefault(label, []).append((c, n))
         out = {}
         for label, rr in by_label.items():
-            keep = [n for c, n in rr if not np.isfinite(c) or c >= self.min_run_confidence]
+            tau = step_tau if label == "Step" else self.min_run_confidence
+            keep = [n for c, n in rr if not np.isfinite(c) or c >= tau]
             out[label] = keep or [max(rr)[1]]
         return out
 

@@ -279,7 +279,8 @@ def style_params() -> dict:
     return {"n_fit": D.STYLE_N_FIT, "prior_weight": D.STYLE_PRIOR_WEIGHT, "loss_scale": D.STYLE_LOSS_SCALE,
             "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS, "rounds": D.STYLE_ROUNDS,
             "validation": "pipelines/kickboxing/validation/action_style.json",
-            "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "max_run_factor": D.STYLE_MAX_RUN_FACTOR,
+            "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "step_min_run_confidence": D.STYLE_STEP_MIN_RUN_CONFIDENCE,
+            "max_run_factor": D.STYLE_MAX_RUN_FACTOR,
             "run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL, "motion_filter": D.STYLE_MOTION_FILTER,
             "min_run_confidence_validation": "pipelines/kickboxing/validation/tempo_runs.json"}
 
