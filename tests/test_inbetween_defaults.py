@@ -31,9 +31,22 @@ def test_defaults_are_the_validation_choice():
     chosen = doc["chosen"]
     assert chosen == {"n_clusters": D.N_CLUSTERS, "n_components": D.N_COMPONENTS, "warp_cost": D.WARP_COST,
                       "root_path": D.ROOT_PATH, "coverage_scale": D.COVERAGE_SCALE}
-    best = min(doc["rows"], key=lambda r: r["mean_l2p"])
+    # the rule, reapplied to the recorded table: the score is L2P and L2Q as fractions of SLERP's on the same
+    # windows, mean over both metrics and the gaps (the goal is against SLERP on both)
+    gaps, slerp = doc["gaps"], doc["baselines"]["slerp"]
+
+    def ratio(r, ref):
+        return sum(r[f"{m}_{g}"] / ref(m, g) for m in ("l2p", "l2q") for g in gaps) / (2 * len(gaps))
+
+    for r in doc["rows"]:
+        assert r["score"] == pytest.approx(ratio(r, lambda m, g: slerp[str(g)][m]))
+    best = min(doc["rows"], key=lambda r: r["score"])
     assert best["params"] == {**chosen, "coverage_scale": None}  # the grid and root path: without the gate
-    gate = min(doc["coverage"]["rows"], key=lambda r: r["mean_l2p"])
+    folds = doc["coverage"]["baselines"]["slerp"]["folds"]
+    for r in doc["coverage"]["rows"]:
+        per = [ratio(f, lambda m, g, h=h: folds[h][f"{m}_{g}"]) for h, f in r["folds"].items()]
+        assert r["score"] == pytest.approx(sum(per) / len(per))
+    gate = min(doc["coverage"]["rows"], key=lambda r: r["score"])
     assert gate["coverage_scale"] == chosen["coverage_scale"]
     # the gate's folds: the validation subject and library subjects, never a test subject
     held = {f["held_out"][0] for f in doc["coverage"]["folds"]}

@@ -60,7 +60,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     RECONSTRUCT_HELDOUT: (1, 1, True, False),
     RECONSTRUCT_DEFAULTS: (1, 1, True, False),
     POSE_RECOGNITION: (1, 1, True, False),
-    INBETWEEN: (1, 1, True, False),
+    INBETWEEN: (2, 1, True, False),
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
     ACTION_STYLE_POSES: (1, 1, True, False),
     LEAD_CUE: (1, 1, True, False),

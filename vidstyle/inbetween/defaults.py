@@ -2,8 +2,8 @@
 the library.
 
 The learned model's size (``N_CLUSTERS``, ``N_COMPONENTS``), ``WARP_COST`` and ``ROOT_PATH`` were chosen on the validation
-subject of the CMU split by ``scripts/validate_inbetween.py`` (lowest mean L2P over gaps of 15/30/45
-frames), then ``COVERAGE_SCALE`` on that subject and on each library subject held out from the other three,
+subject of the CMU split by ``scripts/validate_inbetween.py`` (lowest mean of L2P and L2Q over SLERP's on the
+same windows, over gaps of 15/30/45 frames), then ``COVERAGE_SCALE`` on that subject and on each library subject held out from the other three,
 recorded in ``pipelines/kickboxing/validation/inbetween.json``; never on the test subjects
 (``tests/test_inbetween_defaults.py`` checks these values equal that file's choice). The level-2 costs
 (``MISMATCH_COST``, ``JUMP_COST``, ``KEY_WEIGHT``) and ``VELOCITY_WEIGHT`` were set from a smaller exploration on
@@ -31,7 +31,7 @@ ROOT_PATH = "hermite"
 #: keys far from every library pose shrink the library's body motion toward the keys' SLERP
 #: (:func:`vidstyle.inbetween.markov.coverage_weight`; None: never), searched after the root path, on the
 #: validation subject and on each library subject held out from the others
-COVERAGE_SCALE = 1.5
+COVERAGE_SCALE = 1.0
 
 # -- fixed
 #: root height feature weight, per leg length (a squat of half a leg ~ a 0.5 rad joint change)
