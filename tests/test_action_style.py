@@ -142,7 +142,8 @@ def _recognised(runs):
 def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_tempo():
     pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4)])] * 2
     # the runs' own lengths (the random points have no motion to time), every length measured
-    est = GlobalStyleEstimator(min_run_confidence=0.5, run_timing="labels", max_run_factor=None).fit(pop)
+    est = GlobalStyleEstimator(min_run_confidence=0.5, step_min_run_confidence=None, run_timing="labels",
+                               max_run_factor=None, min_run_factor=None).fit(pop)
     # the performer's real steps last 15 frames (speed 12 / 15) and jabs 18; the recognizer also reports two
     # spurious 7-frame steps and a 6-frame jab at low confidence
     perf = _recognised([("Guard", 4, 0.9), ("Step", 15, 0.8), ("Guard", 3, 0.9), ("Step", 7, 0.3), ("Guard", 3, 0.9),
@@ -154,8 +155,8 @@ def test_recognised_runs_below_the_confidence_threshold_do_not_measure_speed_or_
     t = est.estimate([perf[:3]])
     assert t.speed == pytest.approx(12 / 11) and t.tempo == pytest.approx({"Jab": 12 / 15})
     # a threshold of 0 (for the steps too: None is "the same") trusts every run, as true labels are
-    assert (GlobalStyleEstimator(min_run_confidence=0.0, step_min_run_confidence=None, run_timing="labels")
-            .fit(pop).estimate([perf]).speed == pytest.approx(12 / 11))
+    assert (GlobalStyleEstimator(min_run_confidence=0.0, step_min_run_confidence=None, run_timing="labels",
+                                 min_run_factor=None).fit(pop).estimate([perf]).speed == pytest.approx(12 / 11))
 
 
 def test_step_runs_have_their_own_confidence_threshold():
@@ -167,7 +168,7 @@ def test_step_runs_have_their_own_confidence_threshold():
                         ("Step", 15, 0.6)])
 
     def est(**kw):
-        return GlobalStyleEstimator(run_timing="labels", max_run_factor=None, **kw).fit(pop)
+        return GlobalStyleEstimator(run_timing="labels", max_run_factor=None, min_run_factor=None, **kw).fit(pop)
 
     # one threshold of 0.3: every run measures, steps (15, 7, 7, 15): median 11; jabs (18, 12): 15
     g = est(min_run_confidence=0.3, step_min_run_confidence=None).estimate([perf])
@@ -184,6 +185,29 @@ def test_step_runs_have_their_own_confidence_threshold():
         est(step_min_run_confidence=-0.1).estimate([perf])
     # the default is the validated one (validation/tempo_runs.json)
     assert GlobalStyleEstimator().step_min_run_confidence == D.STYLE_STEP_MIN_RUN_CONFIDENCE
+
+
+def test_recognised_runs_much_shorter_than_the_populations_do_not_measure():
+    pop = [_labelled([("Guard", 5), ("Step", 12), ("Guard", 3), ("Jab", 15), ("Guard", 4)])] * 2
+    # confident runs: steps of 14, 13 and two fragments of 6 and 7; jabs of 16, 17 and one of 5
+    perf = _recognised([("Guard", 4, 0.9), ("Step", 14, 0.8), ("Guard", 3, 0.9), ("Step", 6, 0.8), ("Guard", 3, 0.9),
+                        ("Jab", 16, 0.7), ("Guard", 2, 0.9), ("Step", 7, 0.8), ("Jab", 5, 0.8), ("Guard", 3, 0.9),
+                        ("Step", 13, 0.8), ("Guard", 2, 0.9), ("Jab", 17, 0.8)])
+
+    def est(**kw):
+        return GlobalStyleEstimator(run_timing="labels", max_run_factor=None, min_run_confidence=0.3,
+                                    step_min_run_confidence=None, **kw).fit(pop)
+
+    g = est(min_run_factor=None).estimate([perf])  # steps (14, 6, 7, 13): median 10; jabs (16, 5, 17): 16
+    assert g.speed == pytest.approx(12 / 10) and g.tempo == pytest.approx({"Jab": 16 / 15})
+    # a floor of 0.7 of the population's lengths (8.4 and 10.5 frames) leaves the fragments out
+    g = est(min_run_factor=0.7).estimate([perf])
+    assert g.speed == pytest.approx(12 / 13.5) and g.tempo == pytest.approx({"Jab": 16.5 / 15})
+    # true labels (no confidence) are never floored
+    assert est(min_run_factor=0.7).estimate([perf[:3]]).speed == pytest.approx(12 / 10)
+    for bad in (0.0, 1.0, 1.5):
+        with pytest.raises(ParameterError, match="min_run_factor"):
+            est(min_run_factor=bad).estimate([perf])
 
 
 def test_a_label_whose_runs_are_all_doubtful_keeps_its_most_confident_run():
@@ -574,7 +598,7 @@ def test_without_a_population_recognised_runs_are_timed_against_the_models_mean_
         if lab == "Jab":
             cut[s] = cut[e - 1] = "Guard"
     conf = np.full(len(cut), 0.9)
-    est = GlobalStyleEstimator.from_model(model, 20.0, min_run_confidence=0.0, max_run_factor=None)
+    est = GlobalStyleEstimator.from_model(model, 20.0, min_run_confidence=0.0, max_run_factor=None, min_run_factor=None)
     assert est.motion_ratio_["Jab"] > 1.0
     true = est.estimate([(xy, labels, view)]).tempo["Jab"]  # true labels: the runs' own lengths
     timed = est.estimate([(xy, cut, view, conf)]).tempo["Jab"]

@@ -33,9 +33,17 @@ def test_run_timing_and_confidence_are_the_validation_choice_and_saw_no_test_per
     assert doc["chosen"] == {"run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL,
                              "motion_filter": D.STYLE_MOTION_FILTER, "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE,
                              "step_min_run_confidence": D.STYLE_STEP_MIN_RUN_CONFIDENCE,
-                             "max_run_factor": D.STYLE_MAX_RUN_FACTOR}
+                             "max_run_factor": D.STYLE_MAX_RUN_FACTOR, "min_run_factor": D.STYLE_MIN_RUN_FACTOR}
     measured = [c for c in doc["candidates"] if c["pairs_missing"] == 0]
-    best = min(measured, key=lambda c: c["score"])  # the rule, reapplied to the recorded table
+    # the rule, reapplied to the recorded table: stage 1 picks the timing (one threshold, no floor), stage 2
+    # the thresholds, cap and floor for that timing
+    timing = ("run_timing", "motion_level", "motion_filter")
+    first = min((c for c in measured if c["stage"] == 1), key=lambda c: c["score"])
+    assert all(c["step_min_run_confidence"] is None and c["min_run_factor"] is None
+               for c in doc["candidates"] if c["stage"] == 1)
+    second = [c for c in measured if c["stage"] == 2]
+    assert second and all({k: c[k] for k in timing} == {k: first[k] for k in timing} for c in second)
+    best = min(second, key=lambda c: c["score"])
     assert {k: best[k] for k in doc["chosen"]} == doc["chosen"]
     assert doc["inputs"] == ["true", "estimated"]  # the pose stage's 2D took part in the choice
     for c in doc["candidates"]:

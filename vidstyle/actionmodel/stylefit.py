@@ -55,7 +55,8 @@ training population, so only the view's identity is used, never its angle).
   time the speed; None: the same) is left out (spurious runs: on the validation performers a false
   ``Step`` run was 7-9 frames, a third shorter than a real one, and pulled the speed up), as is one
   longer than ``max_run_factor`` times the population's length of its label (repeats the recognizer joined
-  into one run); a label left with no run keeps its most confident one. Runs without a confidence (true
+  into one run) or shorter than ``min_run_factor`` times it (None: no floor; false and broken runs are
+  short); a label left with no run keeps its most confident one. Runs without a confidence (true
   labels) are always trusted and keep their lengths. ``scripts/validate_tempo_runs.py`` chose the timing,
   its level and filter, the thresholds and the factor on the validation performers' true and estimated 2D.
 
@@ -325,7 +326,8 @@ class GlobalStyleEstimator(BaseEstimator):
                  min_stance_frames: int = D.STYLE_MIN_STANCE_FRAMES,
                  min_run_confidence: float = D.STYLE_MIN_RUN_CONFIDENCE,
                  step_min_run_confidence: float | None = D.STYLE_STEP_MIN_RUN_CONFIDENCE,
-                 max_run_factor: float | None = D.STYLE_MAX_RUN_FACTOR, run_timing: str = D.STYLE_RUN_TIMING,
+                 max_run_factor: float | None = D.STYLE_MAX_RUN_FACTOR,
+                 min_run_factor: float | None = D.STYLE_MIN_RUN_FACTOR, run_timing: str = D.STYLE_RUN_TIMING,
                  motion_level: float = D.STYLE_MOTION_LEVEL, motion_filter: int = D.STYLE_MOTION_FILTER):
         self.lead_threshold = lead_threshold
         self.min_front_jabs = min_front_jabs
@@ -334,6 +336,7 @@ class GlobalStyleEstimator(BaseEstimator):
         self.min_run_confidence = min_run_confidence
         self.step_min_run_confidence = step_min_run_confidence
         self.max_run_factor = max_run_factor
+        self.min_run_factor = min_run_factor
         self.run_timing = run_timing
         self.motion_level = motion_level
         self.motion_filter = motion_filter
@@ -502,6 +505,9 @@ class GlobalStyleEstimator(BaseEstimator):
         cap = self.max_run_factor
         if cap is not None and not cap > 1.0:
             raise ParameterError("max_run_factor", f"must be > 1 (or None: no cap), got {cap}")
+        floor = self.min_run_factor
+        if floor is not None and not 0.0 < floor < 1.0:
+            raise ParameterError("min_run_factor", f"must be in (0, 1) (or None: no floor), got {floor}")
         def ref(label: str) -> float:  # the population's length of the label
             return getattr(self, "step_frames_", math.nan) if label == "Step" else getattr(self, "durations_", {}).get(label, math.nan)
 
@@ -509,6 +515,8 @@ class GlobalStyleEstimator(BaseEstimator):
         for label, n, c in runs:
             if cap is not None and np.isfinite(c) and n > cap * ref(label):
                 continue  # a recognised run much longer than the population's: repeats joined into one
+            if floor is not None and np.isfinite(c) and n < floor * ref(label):
+                continue  # a recognised run much shorter than the population's: a fragment or a false run
             by_label.setdefault(label, []).append((c, n))
         out = {}
         for label, rr in by_label.items():

@@ -280,7 +280,7 @@ def style_params() -> dict:
             "elevation_deg": D.STYLE_ELEVATION_DEG, "max_segments": D.STYLE_MAX_SEGMENTS, "rounds": D.STYLE_ROUNDS,
             "validation": "pipelines/kickboxing/validation/action_style.json",
             "min_run_confidence": D.STYLE_MIN_RUN_CONFIDENCE, "step_min_run_confidence": D.STYLE_STEP_MIN_RUN_CONFIDENCE,
-            "max_run_factor": D.STYLE_MAX_RUN_FACTOR,
+            "max_run_factor": D.STYLE_MAX_RUN_FACTOR, "min_run_factor": D.STYLE_MIN_RUN_FACTOR,
             "run_timing": D.STYLE_RUN_TIMING, "motion_level": D.STYLE_MOTION_LEVEL, "motion_filter": D.STYLE_MOTION_FILTER,
             "min_run_confidence_validation": "pipelines/kickboxing/validation/tempo_runs.json"}
 

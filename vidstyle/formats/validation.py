@@ -64,7 +64,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     ACTIONMODEL_DEFAULTS: (1, 1, True, False),
     ACTION_STYLE_POSES: (1, 1, True, False),
     LEAD_CUE: (1, 1, True, False),
-    TEMPO_RUNS: (3, 1, True, False),
+    TEMPO_RUNS: (4, 1, True, False),
     POSE_SCALES: (1, 1, True, False),
     VIEW_TRACKING: (1, 1, True, False),
 }
