@@ -848,3 +848,9 @@ def test_recognised_runs_much_longer_than_the_populations_do_not_measure():
     assert est.set_params(max_run_factor=None).estimate([perf]).tempo == pytest.approx({"Hook": 31 / 20})
     with pytest.raises(ParameterError, match="max_run_factor"):
         est.set_params(max_run_factor=0.5).estimate([perf])
+    # a performer far slower than the population: every hook is out of bounds, so all of them count
+    slow = _recognised([("Guard", 3, 0.9), ("Hook", 40, 0.8), ("Guard", 3, 0.9), ("Hook", 44, 0.8), ("Guard", 3, 0.9)])
+    assert est.set_params(max_run_factor=1.8).estimate([slow]).tempo == pytest.approx({"Hook": 42 / 20})
+    # and far faster, against the floor
+    fast = _recognised([("Guard", 3, 0.9), ("Hook", 10, 0.8), ("Guard", 3, 0.9), ("Hook", 12, 0.8), ("Guard", 3, 0.9)])
+    assert est.set_params(min_run_factor=0.7).estimate([fast]).tempo == pytest.approx({"Hook": 11 / 20})

@@ -56,8 +56,9 @@ training population, so only the view's identity is used, never its angle).
   ``Step`` run was 7-9 frames, a third shorter than a real one, and pulled the speed up), as is one
   longer than ``max_run_factor`` times the population's length of its label (repeats the recognizer joined
   into one run) or shorter than ``min_run_factor`` times it (None: no floor; false and broken runs are
-  short); a label left with no run keeps its most confident one. Runs without a confidence (true
-  labels) are always trusted and keep their lengths. ``scripts/validate_tempo_runs.py`` chose the timing,
+  short), unless every run of the label is out of those bounds (a performer far faster or slower than the
+  population: then all its runs count); a label left with no run keeps its most confident one. Runs
+  without a confidence (true labels) are always trusted and keep their lengths. ``scripts/validate_tempo_runs.py`` chose the timing,
   its level and filter, the thresholds and the factor on the validation performers' true and estimated 2D.
 
 **Latent coefficients** (:func:`fit_segment`): for one action segment, the first ``n_fit`` spatial
@@ -501,7 +502,8 @@ class GlobalStyleEstimator(BaseEstimator):
         if step_tau is None:
             step_tau = self.min_run_confidence
         elif not 0.0 <= step_tau <= 1.0:
-            raise ParameterError("step_min_run_confidence", f"must be in [0, 1] (or None: min_run_confidence), got {step_tau}")
+            raise ParameterError("step_min_run_confidence",
+                                 f"must be in [0, 1] (or None: min_run_confidence), got {step_tau}")
         cap = self.max_run_factor
         if cap is not None and not cap > 1.0:
             raise ParameterError("max_run_factor", f"must be > 1 (or None: no cap), got {cap}")
@@ -511,15 +513,18 @@ class GlobalStyleEstimator(BaseEstimator):
         def ref(label: str) -> float:  # the population's length of the label
             return getattr(self, "step_frames_", math.nan) if label == "Step" else getattr(self, "durations_", {}).get(label, math.nan)
 
-        by_label: dict[str, list[tuple[float, float]]] = {}
+        by_label: dict[str, list[tuple[float, float, bool]]] = {}
         for label, n, c in runs:
-            if cap is not None and np.isfinite(c) and n > cap * ref(label):
-                continue  # a recognised run much longer than the population's: repeats joined into one
-            if floor is not None and np.isfinite(c) and n < floor * ref(label):
-                continue  # a recognised run much shorter than the population's: a fragment or a false run
-            by_label.setdefault(label, []).append((c, n))
+            # a recognised run much longer than the population's (repeats joined into one) or much shorter
+            # (a fragment or a false run) is out of bounds
+            out_of_bounds = np.isfinite(c) and ((cap is not None and n > cap * ref(label))
+                                                or (floor is not None and n < floor * ref(label)))
+            by_label.setdefault(label, []).append((c, n, not out_of_bounds))
         out = {}
         for label, rr in by_label.items():
+            # the bounds remove a label's outliers, not the label: one whose every run is out of them (a
+            # performer far faster or slower than the population) keeps them all
+            rr = [(c, n) for c, n, ok in rr if ok] or [(c, n) for c, n, _ in rr]
             tau = step_tau if label == "Step" else self.min_run_confidence
             keep = [n for c, n in rr if not np.isfinite(c) or c >= tau]
             out[label] = keep or [max(rr)[1]]

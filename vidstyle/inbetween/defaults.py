@@ -3,8 +3,8 @@ the library.
 
 The learned model's size (``N_CLUSTERS``, ``N_COMPONENTS``), ``WARP_COST`` and ``ROOT_PATH`` were chosen on the validation
 subject of the CMU split by ``scripts/validate_inbetween.py`` (lowest mean of L2P and L2Q over SLERP's on the
-same windows, over gaps of 15/30/45 frames), then ``COVERAGE_SCALE`` on that subject and on each library subject held out from the other three,
-recorded in ``pipelines/kickboxing/validation/inbetween.json``; never on the test subjects
+same windows, over gaps of 15/30/45 frames), then ``COVERAGE_SCALE`` on that subject and on each library
+subject held out from the other three, recorded in ``pipelines/kickboxing/validation/inbetween.json``; never on the test subjects
 (``tests/test_inbetween_defaults.py`` checks these values equal that file's choice). The level-2 costs
 (``MISMATCH_COST``, ``JUMP_COST``, ``KEY_WEIGHT``) and ``VELOCITY_WEIGHT`` were set from a smaller exploration on
 the same validation subject before the grid (hard cluster mismatches and cheap jumps scored worse than
