@@ -164,6 +164,52 @@ def _configs(g) -> str:
 
 
 def recognition_table(items, root: Path) -> list[str]:
+    groups = _recognition_groups(items)
+    lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
+             "|---|---|---|---:|---:|---:|---:|---|"]
+    for kind in sorted(groups):
+        g = groups[kind]
+        seeds = ", ".join(str(d.get("seed")) for _, d in g)
+        lines.append(
+            f"| {kind} | {seeds} | {_configs(g)} | "
+            f"{_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
+            f"{_spread([d['frame_accuracy']['smoothed'] for _, d in g])} | "
+            f"{_spread([d.get('video_accuracy') for _, d in g])} | "
+            f"{sum(int(d.get('n_test_frames') or 0) for _, d in g)} | "
+            f"{', '.join('`' + _rel(p, root) + '`' for p, _ in g)} |")
+    return lines
+
+
+def confusion_tables(items, root: Path) -> list[str]:
+    """Per recognizer and split (the groups of :func:`recognition_table`), the smoothed confusion: the test
+    frames' counts summed over the group's seeds, each true class's row in % of its frames."""
+    lines = ["Rows: the true action; columns: the recognised one; % of the true action's test frames (smoothed "
+             "labels), frames pooled over the seeds of the group; the diagonal is each action's recall.", ""]
+    for kind, g in sorted(_recognition_groups(items).items()):
+        confs = [d.get("confusion") for _, d in g]
+        if not confs or any(not c or not c.get("counts_smoothed") for c in confs):
+            continue
+        classes = confs[0]["classes"]
+        if any(c["classes"] != classes for c in confs):
+            continue  # the seeds' classes differ: no pooled table
+        total = [[sum(c["counts_smoothed"][i][j] for c in confs) for j in range(len(classes))]
+                 for i in range(len(classes))]
+        seeds = ", ".join(str(d.get("seed")) for _, d in g)
+        lines += [f"*{kind}* (seeds {seeds})", "",
+                  "| true \\ recognised | " + " | ".join(classes) + " | frames |",
+                  "|---|" + "---:|" * (len(classes) + 1)]
+        for name, row in zip(classes, total):
+            n = sum(row)
+            cells = [("**" + f"{100 * v / n:.1f}" + "**" if i == classes.index(name) else f"{100 * v / n:.1f}")
+                     if n else "—" for i, v in enumerate(row)]
+            lines.append(f"| {name} | " + " | ".join(cells) + f" | {n} |")
+        lines.append("")
+    return lines[:-1] if lines and lines[-1] == "" else lines
+
+
+def _recognition_groups(items) -> dict[str, list[tuple[Path, dict]]]:
+    """The recognition metrics files by split and recognizer (the rows of :func:`recognition_table`), each
+    group sorted by seed; ablations left out."""
     groups: dict[str, list[tuple[Path, dict]]] = defaultdict(list)
     for p, d in items:
         if d.get("ablation") not in (None, "none", "from model"):
@@ -185,19 +231,7 @@ def recognition_table(items, root: Path) -> list[str]:
                 what += f", trained also on {len(extra)} labelled mocap clips"
             kind = f"{sp if isinstance(sp, str) else kind}, {what} ({d.get('input', '?')})"
         groups[kind].append((p, d))
-    lines = ["| split | seeds | recognizer | frame acc. raw | frame acc. smoothed | video acc. | test frames | files |",
-             "|---|---|---|---:|---:|---:|---:|---|"]
-    for kind in sorted(groups):
-        g = sorted(groups[kind], key=lambda x: (x[1].get("seed") is None, x[1].get("seed")))
-        seeds = ", ".join(str(d.get("seed")) for _, d in g)
-        lines.append(
-            f"| {kind} | {seeds} | {_configs(g)} | "
-            f"{_spread([d['frame_accuracy']['raw'] for _, d in g])} | "
-            f"{_spread([d['frame_accuracy']['smoothed'] for _, d in g])} | "
-            f"{_spread([d.get('video_accuracy') for _, d in g])} | "
-            f"{sum(int(d.get('n_test_frames') or 0) for _, d in g)} | "
-            f"{', '.join('`' + _rel(p, root) + '`' for p, _ in g)} |")
-    return lines
+    return {k: sorted(g, key=lambda x: (x[1].get("seed") is None, x[1].get("seed"))) for k, g in groups.items()}
 
 
 def style_table(items, root: Path) -> list[str]:
@@ -649,6 +683,8 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
             docs[kind] += items
     out = []
     sections = [("vidstyle.metrics.recognition", "Recognition (`vidstyle evaluate recognition`)", recognition_table),
+                ("vidstyle.metrics.recognition", "Confusion of each recognizer on each split (`vidstyle evaluate "
+                 "recognition` and the pose-sequence scripts' metrics files, above)", confusion_tables),
                 ("vidstyle.metrics.style", "Style (`vidstyle evaluate style`)", style_table),
                 ("vidstyle.metrics.style_viterbi_prior", "Viterbi prior and style (`scripts/style_viterbi_prior.py`)",
                  prior_table),

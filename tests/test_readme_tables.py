@@ -139,3 +139,18 @@ def test_recognition_goals_have_a_row_per_seed_and_judge_every_seed():
     assert met[col["video S"]] == "yes"
     assert rows["1"][col["unseen performer F"]] == "—" and met[col["unseen performer F"]] == "—"  # seed 1 missing
     assert rows["goal"][col["unseen camera T"]] == ">= 88.0" and rows["goal"][col["video F"]] == ">= 100.0"
+
+
+def test_confusion_tables_pool_the_seeds_counts_per_recognizer_and_split():
+    def doc(seed, counts, classes=("A", "B")):
+        return {**_recognition(seed, 0.5, 0.5, 1.0), "confusion": {"classes": list(classes), "counts_smoothed": counts}}
+
+    items = [(Path("r/s0.json"), doc(0, [[3, 1], [0, 4]])), (Path("r/s1.json"), doc(1, [[1, 3], [2, 2]])),
+             (Path("r/cam.json"), {**doc(0, [[5, 0], [0, 0]]), "split": {"kind": "unseen-camera", "seed": 0}})]
+    text = "\n".join(rt.confusion_tables(items, Path("r")))
+    perf = text[text.index("*unseen-performer*"):]
+    # pooled: A -> (4, 4) of 8 frames, B -> (2, 6) of 8; the diagonal in bold
+    assert "| A | **50.0** | 50.0 | 8 |" in perf and "| B | 25.0 | **75.0** | 8 |" in perf
+    assert "(seeds 0, 1)" in perf
+    cam = text[text.index("*unseen-camera*"):text.index("*unseen-performer*")]
+    assert "| A | **100.0** | 0.0 | 5 |" in cam and "| B | — | — | 0 |" in cam  # no B frame: no percentages
