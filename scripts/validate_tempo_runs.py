@@ -62,7 +62,7 @@ def main() -> int:
     ap.add_argument("--min-run-confidence", type=float, nargs="+", default=[0.0, 0.3, 0.4, 0.5, 0.6, 0.7])
     ap.add_argument("--step-min-run-confidence", nargs="+", default=[None, 0.4, 0.5, 0.6, 0.7],
                     type=lambda x: None if x == "same" else float(x),
-                    help="candidates for Step runs (same: the actions' threshold)")
+                    help="stage 2: candidates for Step runs (same: the actions' threshold)")
     ap.add_argument("--max-run-factor", type=float, nargs="+", default=[math.inf, 2.2, 1.8, 1.5])
     ap.add_argument("--min-run-factor", type=float, nargs="+", default=[math.inf, 0.6, 0.7, 0.8],
                     help="stage 2: runs shorter than this times the population's length do not measure (inf: no floor)")

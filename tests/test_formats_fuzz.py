@@ -127,7 +127,9 @@ METRICS = {
                     "frame_accuracy": {"raw": 0.6, "smoothed": 0.7}, "video_accuracy": None, "n_test_videos": 2,
                     "n_test_frames": 40, "split": {"kind": "unseen-performer", "test": ["a", "b"]},
                     "confusion": {"classes": ["Jab", "Hook"], "smoothed": [[1.0, 0.0], [0.25, 0.75]],
-                                  "raw": [[0.5, 0.5], [0.5, 0.5]]}},
+                                  "raw": [[0.5, 0.5], [0.5, 0.5]]},
+                    "segments": {"smoothed": {"boundary_tolerant_accuracy": {"1": 0.9, "2": 0.95},
+                                              "segmental_f1": {"10": 0.8, "50": None}}}},
     "style": {"kind": "vidstyle.metrics.style", "schema_version": 1, "seed": 0,
               "sources": {"ground_truth": {"summary": {
                   "transition_mae": {"a": 0.04, "bigram": 0.05, "b_implied": None},

@@ -154,3 +154,14 @@ def test_confusion_tables_pool_the_seeds_counts_per_recognizer_and_split():
     assert "(seeds 0, 1)" in perf
     cam = text[text.index("*unseen-camera*"):text.index("*unseen-performer*")]
     assert "| A | **100.0** | 0.0 | 5 |" in cam and "| B | — | — | 0 |" in cam  # no B frame: no percentages
+
+
+def test_segments_table_lists_the_files_that_record_boundary_scores():
+    with_segments = {**_recognition(0, 0.8, 0.85, 1.0), "segments": {"smoothed": {
+        "boundary_tolerant_accuracy": {"1": 0.9, "2": 0.95, "3": 0.97}, "segmental_f1": {"10": 0.8, "25": 0.75, "50": 0.7}}}}
+    lines = rt.segments_table([(Path("r/a.json"), with_segments), (Path("r/b.json"), _recognition(1, 0.7, 0.7, 1.0))],
+                              Path("r"))
+    assert len(lines) == 3  # header, rule, the one file with segments
+    assert lines[2] == ("| unseen-performer | 0 | 85.0 % | 90.0 % | 95.0 % | 97.0 % | 80.0 % | 75.0 % | 70.0 % "
+                        "| `a.json` |")
+    assert rt.segments_table([(Path("r/b.json"), _recognition(1, 0.7, 0.7, 1.0))], Path("r")) == []

@@ -7,7 +7,10 @@
   action; a video with no frame predicted as an action counts as wrong. Reported on the smoothed labels
   (``video_accuracy``) and on the raw ones;
 - confusion matrices, row-normalised (rows = truth, columns = prediction; a class absent from the test
-  truth has a zero row), as JSON and as a PNG heatmap drawn with OpenCV.
+  truth has a zero row), as JSON and as a PNG heatmap drawn with OpenCV;
+- ``segments``: per label kind, the boundary-tolerant frame accuracy at 1-3 frames and the segmental F1
+  at overlaps of 10 / 25 / 50 % (:mod:`.segments`): how much of the frame error is where a boundary falls,
+  and whether the actions are found as segments.
 
 Ablations (each switches one thesis choice off, everything else equal): ``no-grouping``, ``no-context``
 (histogram of frame n only), ``no-smoothing`` (window 1), ``no-mirror`` (no mirror-image training videos). Vocabulary size is ``--words``; 2D SIFT and the
@@ -33,9 +36,10 @@ from ..errors import InputError, ParameterError
 from ..formats.dataset import Dataset
 from ..formats.labels import check_length, read_labels
 from ..formats.recognised import read_recognised
-from ..recognition.io import features_path, load_features
 from ..recognition import defaults as D
+from ..recognition.io import features_path, load_features
 from ..recognition.splits import make_split
+from .segments import boundary_scores
 
 log = logging.getLogger(__name__)
 
@@ -114,8 +118,10 @@ def score_videos(
     cm_sm = np.zeros((K, K), np.int64)
     per_video = []
     vid_ok_sm, vid_ok_raw, n_single = 0, 0, 0
+    ys = []
     for vid, truth, out, action in zip(ids, truths, outputs, actions):
         y = np.array([index[c] for c in truth], np.int64)
+        ys.append(y)
         cm_raw += confusion_counts(y, out["raw"], K)
         cm_sm += confusion_counts(y, out["smoothed"], K)
         row = {
@@ -159,6 +165,7 @@ def score_videos(
             "counts_raw": cm_raw.tolist(),
             "counts_smoothed": cm_sm.tolist(),
         },
+        "segments": {kind: boundary_scores(ys, [np.asarray(o[kind]) for o in outputs]) for kind in ("smoothed", "raw")},
         "videos": per_video,
     }
 

@@ -11,7 +11,9 @@ computed, e.g. video accuracy without single-action test videos):
 * ``vidstyle.metrics.recognition`` (``vidstyle evaluate recognition``): ``frame_accuracy.raw`` and
   ``.smoothed`` in [0, 1]; ``video_accuracy`` in [0, 1] or null; ``n_test_videos``, ``n_test_frames``
   >= 0; ``split`` an object (``kind`` a string, ``test`` a list of video ids); ``confusion.classes`` unique
-  names and ``confusion.smoothed`` / ``.raw`` (K, K) in [0, 1].
+  names and ``confusion.smoothed`` / ``.raw`` (K, K) in [0, 1]; optional ``segments``, per label kind
+  (``smoothed``, ``raw``) ``boundary_tolerant_accuracy`` (tolerance in frames -> [0, 1] or null) and
+  ``segmental_f1`` (overlap in percent -> [0, 1] or null; :mod:`vidstyle.evaluation.segments`).
 * ``vidstyle.metrics.style`` (``vidstyle evaluate style``): ``sources`` an object of label sources, each
   with ``summary.transition_mae`` (numbers or null), ``summary.identification``, ``summary.fidelity`` and
   ``summary.heldout_loglik_per_event`` (objects of numbers or null per model).
@@ -161,6 +163,14 @@ def _recognition(f: Fields) -> None:
             m = c.array(key, shape=(K, K))
             if m.size and (m.min() < 0 or m.max() > 1 + 1e-9):
                 raise c.fail(key, "row-normalised values must lie in [0, 1]")
+    segs = f.sub("segments", required=False)
+    if segs is not None:  # per label kind (smoothed, raw): two objects of scores in [0, 1] or null
+        for kind in segs.obj:
+            block = segs.sub(kind)
+            for key in ("boundary_tolerant_accuracy", "segmental_f1"):
+                scores = block.sub(key)
+                for name in scores.obj:
+                    _opt_number(scores, name, 0, 1)
 
 
 def _style(f: Fields) -> None:
