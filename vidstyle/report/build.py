@@ -552,6 +552,8 @@ def headline_metrics(run: Path) -> dict:
     out["recognition"] = {
         "frame_accuracy_raw": _get(rec, "frame_accuracy", "raw"),
         "frame_accuracy_smoothed": _get(rec, "frame_accuracy", "smoothed"),
+        "frame_accuracy_within_1_frame": _get(rec, "segments", "smoothed", "boundary_tolerant_accuracy", "1"),
+        "segmental_f1_50": _get(rec, "segments", "smoothed", "segmental_f1", "50"),
         "video_accuracy": _get(rec, "video_accuracy"),
         "test_frames": _get(rec, "n_test_frames"),
         "unseen_camera_frame_accuracy_smoothed": _get(cam, "frame_accuracy", "smoothed"),

@@ -44,6 +44,8 @@ GROUPS: list[tuple[str, str, list[tuple[str, str, str]]]] = [
     ("recognition", "recognition", [
         ("frame_accuracy_smoothed", "frame accuracy", ""),
         ("frame_accuracy_raw", "unsmoothed", ""),
+        ("frame_accuracy_within_1_frame", "within a frame of the true boundaries", ""),
+        ("segmental_f1_50", "segmental F1@50", ""),
         ("video_accuracy", "video accuracy", ""),
         ("unseen_camera_frame_accuracy_smoothed", "unseen camera: frame accuracy", ""),
         ("unseen_camera_video_accuracy", "video accuracy", ""),
