@@ -113,7 +113,7 @@ def test_the_repository_keeps_tables_in_docs_and_a_headline_in_the_readme():
     assert rt.HEAD_BEGIN in readme and rt.HEAD_END in readme and rt.BEGIN not in readme
     assert rt.BEGIN in results and rt.END in results
     head = readme[readme.index(rt.HEAD_BEGIN):readme.index(rt.HEAD_END)]
-    assert 3 <= sum(line.startswith("| ") for line in head.splitlines()) - 1 <= 8  # a few rows, not the tables
+    assert 3 <= sum(line.startswith("| ") for line in head.splitlines()) - 1 <= 10  # a few rows, not the tables
 
 
 def test_recognition_goals_have_a_row_per_seed_and_judge_every_seed():
@@ -165,3 +165,16 @@ def test_segments_table_lists_the_files_that_record_boundary_scores():
     assert lines[2] == ("| unseen-performer | 0 | 85.0 % | 90.0 % | 95.0 % | 97.0 % | 80.0 % | 75.0 % | 70.0 % "
                         "| `a.json` |")
     assert rt.segments_table([(Path("r/b.json"), _recognition(1, 0.7, 0.7, 1.0))], Path("r")) == []
+
+
+def test_headline_shows_in_betweening_against_slerp_from_its_metrics_file():
+    def block(l2p, l2q):
+        return {"l2p": l2p, "l2q": l2q, "ms_per_request": 1.0, "windows": 9}
+
+    doc = {"kind": "vidstyle.metrics.inbetween", "seed": 0, "split": {"eval_subjects": ["02", "07"]},
+           "methods": {"markov": {"30": block(2.1, 0.98), "45": block(3.2, 1.449)},
+                       "slerp": {"30": block(2.4, 1.05), "45": block(3.45, 1.5)}}}
+    text = rt.headline({"vidstyle.metrics.inbetween": [(Path("r/inbetween.json"), doc)]})
+    assert ("30 frames: L2P 2.10 / L2Q 0.98 against SLERP's 2.40 / 1.05; 45 frames: L2P 3.20 / L2Q 1.45 against "
+            "SLERP's 3.45 / 1.50") in text and "subjects 02, 07" in text
+    assert "keyframes" not in rt.headline({"vidstyle.metrics.inbetween": [(Path("r/other.json"), doc)]})
