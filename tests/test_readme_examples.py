@@ -43,7 +43,7 @@ def test_commands_table_names_every_command():
 
 
 def test_readme_is_short_and_its_links_resolve():
-    assert len(README.splitlines()) <= 260
+    assert len(README.splitlines()) <= 280  # 260 until issue 28 put its per-seed goals table here
     links = re.findall(r"\]\(((?:docs/)[^)#]+)(?:#[^)]*)?\)", README)
     assert {"docs/results.md", "docs/method2.md", "docs/annotate.md", "docs/design.md"} <= set(links)
     for link in links:

@@ -178,3 +178,15 @@ def test_headline_shows_in_betweening_against_slerp_from_its_metrics_file():
     assert ("30 frames: L2P 2.10 / L2Q 0.98 against SLERP's 2.40 / 1.05; 45 frames: L2P 3.20 / L2Q 1.45 against "
             "SLERP's 3.45 / 1.50") in text and "subjects 02, 07" in text
     assert "keyframes" not in rt.headline({"vidstyle.metrics.inbetween": [(Path("r/other.json"), doc)]})
+
+
+def test_real_motion_goals_rows_come_from_the_strikes_and_real_motion_files():
+    strikes = {"overall": {"smoothed": {"punch_fraction": 0.634}}}
+    real = {"overall": {"sift": {"family_accuracy": 0.026}, "pose": {"family_accuracy": 0.871}}}
+    docs = {"vidstyle.metrics.strikes": [(Path("s/strikes_02_05_pose_cmuwalks_ps_seed0.json"), strikes)],
+            "vidstyle.metrics.real_motion": [(Path("r/real_motion_cmuwalks_seed0.json"), real)]}
+    rows = rt.real_motion_goals(docs)
+    assert any("demo mocap + real walks | 63.4 | >= 80.0 |" in r for r in rows)
+    assert any("pose sequences, PS 2D, demo mocap + real walks | 87.1 | >= 85.0 |" in r for r in rows)
+    assert not any("3D SIFT" in r for r in rows)  # the 3D SIFT row is taken from the demo-only file alone
+    assert rt.real_motion_goals({}) == []
