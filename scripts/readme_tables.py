@@ -869,8 +869,9 @@ GOAL_RECOGNIZERS = (("S", "3D SIFT", "recognition_", "vidstyle evaluate recognit
 
 def recognition_goals(docs: dict) -> str:
     """Issue 28's measure table with a row per split seed: smoothed frame accuracy on unseen performers and
-    unseen cameras and video accuracy for each recognizer (goal per column), then the real-motion figures
-    (one seed); every value from a committed metrics file named in the table."""
+    unseen cameras and video accuracy for each recognizer (goal per column), the goal and whether every seed
+    meets it; every value from a committed metrics file the block names (the real-motion goals are in the
+    full tables: :func:`real_motion_goals`)."""
     files = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.recognition", [])}
     seeds = sorted({d.get("seed") for d in files.values() if isinstance(d.get("seed"), int)})
     pct = lambda x: "—" if x is None else f"{100 * x:.1f}"  # noqa: E731
