@@ -326,6 +326,14 @@ def evaluate_recognition(
         t.add_column(col)
     t.add_row("frame accuracy raw", f"{m['frame_accuracy']['raw']:.3f}")
     t.add_row("frame accuracy smoothed", f"{m['frame_accuracy']['smoothed']:.3f}")
+    seg = (m.get("segments") or {}).get("smoothed") or {}
+    tol, f1 = seg.get("boundary_tolerant_accuracy") or {}, seg.get("segmental_f1") or {}
+    if tol.get("1") is not None:
+        t.add_row("smoothed, within 1 / 2 frames of the true boundaries",
+                  " / ".join(f"{tol[k]:.3f}" for k in ("1", "2") if tol.get(k) is not None))
+    if f1.get("50") is not None:
+        t.add_row("segmental F1 @10 / @25 / @50",
+                  " / ".join("n/a" if f1.get(k) is None else f"{f1[k]:.3f}" for k in ("10", "25", "50")))
     va = m["video_accuracy"]
     t.add_row("video accuracy", "n/a" if va is None else f"{va:.3f} of {m['n_test_single_videos']}")
     if "baseline" in m:

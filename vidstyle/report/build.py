@@ -114,6 +114,10 @@ def _recognition_section(page: Page, run: Path, dataset: Dataset | None) -> None
         ["frame accuracy, smoothed", fa.get("smoothed"), 0.70],
         ["video accuracy", m.get("video_accuracy"), 0.90],
     ]
+    within = _get(m.get("segments"), "smoothed", "boundary_tolerant_accuracy", "1")
+    if within is not None:  # metrics written before vidstyle evaluate recognition recorded segments lack it
+        rows[2:2] = [["frame accuracy, smoothed, within a frame of the true boundaries", within, None],
+                     ["segmental F1@50 (smoothed)", _get(m.get("segments"), "smoothed", "segmental_f1", "50"), None]]
     cam = _metrics(run / "metrics" / "recognition_unseen_camera.json", RECOGNITION)
     if cam is not None:
         cams = ", ".join(f"azimuth {a:g}°" + (f" elevation {e:g}°" if e is not None else "")
