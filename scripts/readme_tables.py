@@ -63,6 +63,11 @@ def _pct(x) -> str:
     return "n/a" if x is None else f"{100 * x:.1f} %"
 
 
+def _pct_number(x) -> str:
+    """A fraction as a bare percentage with one decimal (a dash for None), for tables whose header says %."""
+    return "—" if x is None else f"{100 * x:.1f}"
+
+
 def _spread(xs) -> str:
     xs = [x for x in xs if x is not None]
     if not xs:
@@ -874,7 +879,6 @@ def recognition_goals(docs: dict) -> str:
     full tables: :func:`real_motion_goals`)."""
     files = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.recognition", [])}
     seeds = sorted({d.get("seed") for d in files.values() if isinstance(d.get("seed"), int)})
-    pct = lambda x: "—" if x is None else f"{100 * x:.1f}"  # noqa: E731
     cols = []  # (header, getter(seed) -> value or None, goal)
     for kind, label in (("unseen-performer", "unseen performer"), ("unseen-camera", "unseen camera")):
         goal = RECOGNITION_GOALS[(kind, "smoothed")]
@@ -904,8 +908,8 @@ def recognition_goals(docs: dict) -> str:
              "| seed | " + " | ".join(h for h, _, _ in cols) + " |",
              "|---|" + "---:|" * len(cols)]
     for seed in seeds:
-        lines.append(f"| {seed} | " + " | ".join(pct(get(seed)) for _, get, _ in cols) + " |")
-    lines.append("| goal | " + " | ".join("—" if g is None else f">= {pct(g)}" for _, _, g in cols) + " |")
+        lines.append(f"| {seed} | " + " | ".join(_pct_number(get(seed)) for _, get, _ in cols) + " |")
+    lines.append("| goal | " + " | ".join("—" if g is None else f">= {_pct_number(g)}" for _, _, g in cols) + " |")
     met = []
     for _h, get, g in cols:
         vals = [get(sd) for sd in seeds]
@@ -917,7 +921,6 @@ def recognition_goals(docs: dict) -> str:
 def real_motion_goals(docs: dict) -> list[str]:
     """Issue 28's real-motion goals (split seed 0's recognizers): the real strikes' punch share and the
     real-motion split's right action family, each recognizer against its goal, with its file."""
-    pct = lambda x: "—" if x is None else f"{100 * x:.1f}"  # noqa: E731
     strikes = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.strikes", [])}
     real = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.real_motion", [])}
     rows = []
@@ -925,8 +928,8 @@ def real_motion_goals(docs: dict) -> list[str]:
                     ("pose sequences, PS 2D, demo mocap + real walks", "strikes_02_05_pose_cmuwalks_ps_seed0.json")):
         if f in strikes:
             rows.append(f"| real CMU punches (02_05), punch share of strike frames, `vidstyle evaluate strikes` | {name} | "
-                        f"{pct(strikes[f]['overall']['smoothed']['punch_fraction'])} | >= "
-                        f"{pct(RECOGNITION_GOALS['strikes'])} | `strikes/{f}` |")
+                        f"{_pct_number(strikes[f]['overall']['smoothed']['punch_fraction'])} | >= "
+                        f"{_pct_number(RECOGNITION_GOALS['strikes'])} | `strikes/{f}` |")
     for f, training in (("real_motion_seed0.json", "demo mocap"), ("real_motion_cmuwalks_seed0.json", "demo mocap + real walks")):
         for r, v in ((real.get(f) or {}).get("overall") or {}).items():
             name = {"sift": "3D SIFT", "pose": f"pose sequences, PS 2D, {training}",
@@ -934,7 +937,7 @@ def real_motion_goals(docs: dict) -> list[str]:
             if r == "sift" and f != "real_motion_seed0.json":
                 continue  # the same 3D SIFT recognizer in both files
             rows.append(f"| real-motion split, right action family, `vidstyle evaluate real-motion` | {name} | "
-                        f"{pct(v.get('family_accuracy'))} | >= {pct(RECOGNITION_GOALS['real_motion'])} | `results/{f}` |")
+                        f"{_pct_number(v.get('family_accuracy'))} | >= {_pct_number(RECOGNITION_GOALS['real_motion'])} | `results/{f}` |")
     return ["| figure | recognizer | % | goal | file |", "|---|---|---:|---:|---|", *rows] if rows else []
 
 

@@ -115,14 +115,23 @@ def main() -> int:
     timings = [("labels", None, None)] + [("motion", lv, fl) for lv in args.motion_level for fl in args.motion_filter]
     inf = lambda x: None if math.isinf(x) else x  # noqa: E731
     cands = []
+    timed: dict = {}  # timing -> (population estimator, its timed runs, model estimator, its timed runs)
+
+    def timed_for(timing, level, filt):
+        """The two estimators of a timing and every video set's timed runs, computed once per timing (the
+        thresholds, cap and floor only choose among the runs)."""
+        if (timing, level, filt) not in timed:
+            extra = {"run_timing": timing} | ({"motion_level": level, "motion_filter": filt} if timing == "motion" else {})
+            est = fit_population(ds, manifest, train, cache=cache, **extra)
+            mest = GlobalStyleEstimator.from_model(model, float(manifest["fps"]), **extra)
+            timed[(timing, level, filt)] = (
+                est, {key: [r for v in vids for r in est.timed_runs(v)] for key, (_t, vids) in data.items()},
+                mest, {key: [r for v in vids for r in mest.timed_runs(v)] for key, (_t, vids) in data.items()})
+        return timed[(timing, level, filt)]
 
     def stage(n: int, timing_grid, threshold_grid) -> None:
         for timing, level, filt in timing_grid:
-            extra = {"run_timing": timing} | ({"motion_level": level, "motion_filter": filt} if timing == "motion" else {})
-            est = fit_population(ds, manifest, train, cache=cache, **extra)
-            runs = {key: [r for v in vids for r in est.timed_runs(v)] for key, (_t, vids) in data.items()}
-            mest = GlobalStyleEstimator.from_model(model, float(manifest["fps"]), **extra)
-            model_runs = {key: [r for v in vids for r in mest.timed_runs(v)] for key, (_t, vids) in data.items()}
+            est, runs, mest, model_runs = timed_for(timing, level, filt)
             for thresholds in threshold_grid:
                 est.set_params(**thresholds)
                 mest.set_params(**thresholds)

@@ -23,6 +23,8 @@ from typing import Sequence
 
 import numpy as np
 
+from ..actionmodel.instances import label_runs as segments  # (label, start, end exclusive) of each run
+
 TOLERANCES = (1, 2, 3)  # frames (at the method's working rate, 20 fps: 50-150 ms)
 OVERLAPS = (0.1, 0.25, 0.5)  # the F1@{10, 25, 50} of the literature
 
@@ -44,17 +46,6 @@ def tolerant_correct(truth, pred, k: int) -> np.ndarray:
         ok[d:] |= pred[d:] == truth[: n - d]
         ok[: n - d] |= pred[: n - d] == truth[d:]
     return ok
-
-
-def segments(labels) -> list[tuple[object, int, int]]:
-    """``(label, start, end)`` of each run of equal labels (``end`` exclusive)."""
-    labels = _as_array(labels)
-    if len(labels) == 0:
-        return []
-    cut = np.flatnonzero(labels[1:] != labels[:-1]) + 1
-    starts = np.concatenate([[0], cut])
-    ends = np.concatenate([cut, [len(labels)]])
-    return [(labels[s], int(s), int(e)) for s, e in zip(starts, ends)]
 
 
 def segment_counts(truth, pred, tau: float) -> tuple[int, int, int]:
