@@ -16,7 +16,11 @@ params.yaml's values were tuned on part of their test set.
    (``vidstyle demo make-dataset --unseen-camera``, a superset of the test performers) ->
    ``recognition_unseen_camera_seedS.json``;
 4. with ``--left-right``: the unseen-view split (test view right) trained with and without mirror images
-   -> ``recognition_unseen_view_right_{mirror,nomirror}_seedS.json``.
+   -> ``recognition_unseen_view_right_{mirror,nomirror}_seedS.json``;
+5. with ``--training-views validation/training_views.json`` (``scripts/validate_training_views.py``): steps 1-3
+   with set B as each seed's validation chose it (the training performers also filmed from the cameras of
+   ``--more-views``, ``train-recognizer --more-views``, and the chosen cap on training frames per class) ->
+   ``recognition_moreviews_unseen_{performer,camera}_seedS.json`` (``--prefix``).
 
 The test split is scored once per file, by ``evaluate recognition``; nothing here tunes anything. Work
 files go to ``--work`` (models, labels). The dataset and features are the demo pipeline's (one dataset,
@@ -78,6 +82,10 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
     rp = config_for_seed(args, rp, seed)
     features = _pick(args.feature_dirs, rp, "--features")
     camera_features = _pick(args.camera_dirs, rp, "--camera-features") if camera else None
+    more = []
+    if args.training_views is not None:
+        rp, more = training_views_for_seed(args, rp, seed)
+        name = f"{args.prefix}_{name}"
     w = args.work / f"{name}_seed{seed}"
     w.mkdir(parents=True, exist_ok=True)
     ds = str(args.dataset / "dataset.json")
@@ -92,11 +100,12 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
                        "--words", str(rp["words"]), "--seed", str(seed), "--out", str(vocab)])
         shutil.copyfile(vocab, w / "vocab.npz")
         _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(features), "--split", split, *tv,
-                   "--vocab", str(w / "vocab.npz"), *_train_args(rp), "--mirror" if mirror else "--no-mirror",
+                   "--vocab", str(w / "vocab.npz"), *_train_args(rp), *more, "--mirror" if mirror else "--no-mirror",
                    "--seed", str(seed), "--jobs", str(args.jobs), "--out", str(model)])
     outs = [(split, name, features, None)]
     if camera:
-        outs.append(("unseen-camera", "unseen_camera", camera_features, args.camera_dataset / "dataset.json"))
+        cam_name = "unseen_camera" if args.training_views is None else f"{args.prefix}_unseen_camera"
+        outs.append(("unseen-camera", cam_name, camera_features, args.camera_dataset / "dataset.json"))
     for sp, nm, fdir, tds in outs:
         ids = _test_ids(args.dataset, sp, seed, tds, test_view)
         labels = w / f"labels_{nm}"
@@ -134,6 +143,23 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
                                         "coarse_context", "smoothing", "emission_weight")}}
 
 
+def training_views_for_seed(args, rp: dict, seed: int) -> tuple[dict, list[str]]:
+    """``scripts/validate_training_views.py``'s choice for seed ``seed``: the recognizer values with the chosen
+    cap, and the train-recognizer arguments of the more-views dataset (none when the validation kept three views)."""
+    import json
+
+    doc = json.loads(Path(args.training_views).read_text())
+    rows = [s for s in doc["seeds"] if s["seed"] == seed]
+    if len(rows) != 1:
+        raise SystemExit(f"{args.training_views}: no choice for seed {seed}")
+    ch = rows[0]["chosen"]
+    rp = {**rp, "max_frames_per_class": ch["max_frames_per_class"]}
+    if ch["more_views"] != "more":
+        return rp, []
+    fdir = _pick(_by_points(args.more_views_features or []), rp, "--more-views-features")
+    return rp, ["--more-views", str(args.more_views), "--more-views-features", str(fdir)]
+
+
 def _by_points(dirs) -> dict:
     out = {}
     for fdir in dirs:
@@ -163,6 +189,13 @@ def main() -> None:
                          "values chosen on seed S's own validation performers (the file with that seed), so no "
                          "seed's test performers tuned its recognizer (default: params.yaml's values for every "
                          "seed)")
+    ap.add_argument("--training-views", type=Path, default=None,
+                    help="validation/training_views.json (scripts/validate_training_views.py): each seed's recognizer "
+                         "trained as its validation chose (more camera views of the training performers or not, and "
+                         "the cap), written as recognition_<--prefix>_<split>_seedS.json")
+    ap.add_argument("--more-views", type=Path, default=None, help="with --training-views: the more-views dataset")
+    ap.add_argument("--more-views-features", type=Path, default=None, nargs="+", help="its features directories")
+    ap.add_argument("--prefix", default="moreviews", help="with --training-views: the results files' name prefix")
     ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
     ap.add_argument("--left-right", type=int, nargs="*", default=[],
                     help="seeds of the unseen-view split (test view right), with and without mirror training")

@@ -211,3 +211,23 @@ def test_cli_small_dataset(tmp_path):
     assert len(d["performers"]) == 4 and len(d["videos"]) == 4 * 7 * 2
     for v in d["videos"]:
         assert (tmp_path / "ds" / v["video"]).stat().st_size > 0 and (tmp_path / "ds" / v["truth"]).is_file()
+
+
+def test_split_sets_render_only_that_sets_performers(tmp_path):
+    """--split-seed S --split-sets B: the classifier's training performers of the split of S, the same takes
+    as the full dataset's (train-recognizer --more-views adds them to set B)."""
+    from vidstyle.recognition.splits import performer_groups
+
+    args = ["demo", "make-dataset", "--performers", "5", "--views", "45", "--single-seconds", "2",
+            "--performances", "0", "--seed", "2", "--no-video"]
+    assert main(args + ["--split-seed", "3", "--split-sets", "b,a", "--out", str(tmp_path / "ab")]) == 0
+    d = json.loads((tmp_path / "ab" / "dataset.json").read_text())
+    groups = performer_groups([f"p{i:02d}" for i in range(5)], 3)
+    assert sorted({v["performer"] for v in d["videos"]}) == sorted(groups["A"] + groups["B"])
+    assert main(args + ["--out", str(tmp_path / "all")]) == 0
+    p = groups["B"][0]
+    for name in (f"labels/{p}_jab_az45.json", f"mocap/{p}_jab.bvh"):
+        assert (tmp_path / "ab" / name).read_bytes() == (tmp_path / "all" / name).read_bytes()
+    assert main(args + ["--split-sets", "B", "--out", str(tmp_path / "x")]) == 2  # no --split-seed
+    assert main(args + ["--split-seed", "3", "--split-sets", "B,Q", "--out", str(tmp_path / "y")]) == 2
+    assert main(args + ["--split-seed", "3", "--only-performers", "p00", "--out", str(tmp_path / "z")]) == 2

@@ -138,3 +138,38 @@ def test_bad_window_is_one_flag_line_and_no_output(cli_run, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == "vidstyle: error: --window: must be an integer in 1..1000, got 0"
     assert not out.exists()
+
+
+def test_more_views_join_set_b_with_its_performers_only(ds, tmp_path):
+    """train(..., more_views=[(dataset, features)]): the videos of set B's performers in another dataset of
+    the same performers (other cameras) are appended to set B; no other performer's video trains, and the
+    split (so every test video) stays the first dataset's."""
+    from vidstyle.errors import InputError
+
+    xd = tmp_path / "views"
+    make_dataset(xd, n_performers=4, views=("right", "back"), seed=SEED + 1, dim=24, reps=(2, 3), n_actions=5)
+    voc = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS)).vocabulary
+    base = train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS))
+    run = train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+                more_views=[(xd, xd / "features")])
+    split = run.extra["split"]
+    b = set(split["train_performers"])
+    videos = json.loads((xd / "dataset.json").read_text())["videos"]
+    want = sorted(v["id"] for v in videos if v["performer"] in b)
+    n = len(base.training_files)
+    assert run.training_files[:n] == base.training_files
+    assert [t["features"].rsplit("/", 1)[-1][:-4] for t in run.training_files[n:]] == want
+    assert 0 < len(want) < len(videos) and split["more_views_videos"] == len(want)
+    assert split["test"] == base.extra["split"]["test"]
+    feats = [t["features"] for t in base.training_files]
+    labs = [t["labels"] for t in base.training_files]
+    with pytest.raises(InputError, match="--more-views"):
+        train(voc, feats, labels=labs, n_components=int(COMPONENTS), more_views=[(xd, xd / "features")])
+
+
+def test_more_views_flags_pair_up(ds, cli_run, tmp_path, capsys):
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--vocab", str(cli_run["dir"] / "v.npz"),
+              "--components", COMPONENTS, "--out", str(tmp_path / "m.joblib")]
+    assert main(["train-recognizer", *common, "--more-views", str(ds)]) == 2
+    assert "--more-views: 1 datasets for 0 --more-views-features" in capsys.readouterr().err
+    assert not (tmp_path / "m.joblib").exists()

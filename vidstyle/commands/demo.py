@@ -27,6 +27,23 @@ _JOBS = jobs_option(-1, help="Parallel workers (-1 = all cores).")
 _SCHEDULER = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:port) instead of local workers.")
 
 
+def split_set_names(text: str) -> tuple[str, ...]:
+    """``--split-sets``: a comma-separated subset of A, B, V, T (upper-cased, in that order, none repeated)."""
+    names = [t.strip().upper() for t in text.split(",") if t.strip()]
+    bad = [n for n in names if n not in ("A", "B", "V", "T")]
+    if not names or bad:
+        raise InputError(f"--split-sets: give sets among A, B, V, T, got {text!r}")
+    return tuple(n for n in ("A", "B", "V", "T") if n in names)
+
+
+def split_performers(n_performers: int, split_seed: int, sets: tuple[str, ...]) -> list[str]:
+    """The performers (p00, ...) of ``sets`` of the recognition split of ``split_seed`` among ``n_performers``."""
+    from ..recognition.splits import performer_groups
+
+    groups = performer_groups([f"p{i:02d}" for i in range(n_performers)], split_seed)
+    return sorted(p for s in sets for p in groups[s])
+
+
 @demo_app.command("make-dataset")
 def make_dataset_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output directory (created; must be empty or absent)."),
@@ -49,8 +66,11 @@ def make_dataset_cmd(
     unseen_camera: bool = typer.Option(False, "--unseen-camera", help="Test videos for `evaluate recognition "
                                        "--split unseen-camera`: views 30,150 at elevation 30 before the moon "
                                        "texture (none used by default datasets), one performance each."),
-    split_seed: int = typer.Option(None, "--split-seed", help="With --unseen-camera: render only the test "
-                                   "performers of the recognition split of this seed."),
+    split_seed: int = typer.Option(None, "--split-seed", help="Render only the performers of --split-sets of the "
+                                   "recognition split of this seed (with --unseen-camera: its test performers)."),
+    split_sets: str = typer.Option(None, "--split-sets", help="With --split-seed: comma-separated sets of the split "
+                                   "whose performers are rendered: A (vocabulary), B (classifier), V (validation), T "
+                                   "(test) [T]. B: more camera views for `train-recognizer --more-views`."),
     no_video: bool = typer.Option(False, "--no-video", help="Write mocap and labels only (no rendering; the manifest's video and truth paths then do not exist)."),
     small: bool = typer.Option(False, "--small", help="A small dataset for tests and CI (explicit options still apply)."),
     overwrite: bool = _OVERWRITE,
@@ -77,10 +97,17 @@ def make_dataset_cmd(
             parse_background(background)
         except ValueError as e:
             raise InputError(f"--background: {e}") from None
-    if split_seed is not None and not unseen_camera:
-        raise InputError("--split-seed: only used with --unseen-camera")
+    if split_sets is not None and split_seed is None:
+        raise InputError("--split-sets: give --split-seed too")
+    if split_seed is not None and only_performers is not None:
+        raise InputError("--split-seed: give it or --only-performers, not both")
+    sets = split_set_names(split_sets) if split_sets is not None else ("T",)
     if unseen_camera:
-        base = DatasetParams.unseen_camera(with_overrides(base, performers=performers), split_seed)
+        base = DatasetParams.unseen_camera(with_overrides(base, performers=performers),
+                                           split_seed if sets == ("T",) else None)
+    if split_seed is not None and not (unseen_camera and sets == ("T",)):
+        only_performers = ",".join(split_performers(with_overrides(base, performers=performers).performers,
+                                                    split_seed, sets))
     perf_views = None
     if performance_views is not None:
         perf_views = tuple(v.strip() for v in performance_views.split(",") if v.strip())

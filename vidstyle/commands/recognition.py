@@ -99,6 +99,8 @@ def train_recognizer(
     emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow training videos the vocabulary was learned on."),
+    more_views: list[Path] = typer.Option(None, "--more-views", help="With --dataset: another dataset.json (or its directory) of the same performers filmed from other cameras (vidstyle demo make-dataset --views ... --split-seed S --split-sets B); its videos of set B's performers also train. Repeatable, each with one --more-views-features."),
+    more_views_features: list[Path] = typer.Option(None, "--more-views-features", help="Directory of <video id>.npz of each --more-views dataset, same order."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
@@ -108,6 +110,8 @@ def train_recognizer(
     from ..recognition.recognizer import save_model
 
     t0 = time.perf_counter()
+    if features_kind == "pose" and (more_views or more_views_features):
+        raise InputError("--more-views: only with --features sift3d (the pose recognizer sees its mocap from any camera already)")
     if features_kind == "pose":
         _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                     max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
@@ -119,13 +123,17 @@ def train_recognizer(
         raise InputError(f"--features: must be sift3d or pose, got {features_kind!r}")
     if vocab is None:
         raise InputError("train-recognizer: --vocab is required with --features sift3d")
+    more_views, more_views_features = more_views or [], more_views_features or []
+    if len(more_views) != len(more_views_features):
+        raise InputError(f"--more-views: {len(more_views)} datasets for {len(more_views_features)} --more-views-features")
     run = train(
         vocab, features or [], labels=labels or [], annotations=annotations or [], dataset=dataset,
         features_dir=features_dir, split=split, test_view=test_view, context=context,
         coarse_context=coarse_context, grouping=grouping, grouping_threshold=grouping_threshold,
         normalize=normalize, n_components=components, classifier=classifier, C=c,
         max_frames_per_class=max_frames_per_class, smoothing_window=window, smoothing=smoothing,
-        emission_weight=emission_weight, mirror=mirror, allow_overlap=allow_overlap, seed=seed, n_jobs=jobs,
+        emission_weight=emission_weight, mirror=mirror, allow_overlap=allow_overlap,
+        more_views=list(zip(more_views, more_views_features)), seed=seed, n_jobs=jobs,
     )
     rec = run.model
     header = save_model(out, rec, training_files=run.training_files, extra=run.extra)

@@ -16,6 +16,7 @@ kind                                          version   written by
 ``vidstyle.validation.tempo_runs``            2         ``scripts/validate_tempo_runs.py``
 ``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
 ``vidstyle.validation.view_tracking``         1         ``scripts/validate_view_tracking.py``
+``vidstyle.validation.training_views``        1         ``scripts/validate_training_views.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -49,6 +50,7 @@ LEAD_CUE = "vidstyle.validation.lead_cue"
 TEMPO_RUNS = "vidstyle.validation.tempo_runs"
 POSE_SCALES = "vidstyle.validation.pose_scales"
 VIEW_TRACKING = "vidstyle.validation.view_tracking"
+TRAINING_VIEWS = "vidstyle.validation.training_views"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -67,6 +69,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     TEMPO_RUNS: (4, 1, True, False),
     POSE_SCALES: (1, 1, True, False),
     VIEW_TRACKING: (1, 1, True, False),
+    TRAINING_VIEWS: (1, 1, True, False),
 }
 
 

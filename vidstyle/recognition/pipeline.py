@@ -196,6 +196,24 @@ def annotated_training(annotations: Sequence[PathLike], features: Sequence[PathL
     return feats, ylists, used, training
 
 
+def _more_view_videos(more_views, performers, classes) -> list[tuple[Path, Path]]:
+    """(features file, labels file) of the videos of ``performers`` in each (dataset, features_dir) pair of
+    ``more_views``; a dataset with other classes than the split's, or with none of the performers, is refused."""
+    from ..formats.dataset import read_dataset
+
+    out: list[tuple[Path, Path]] = []
+    want = set(performers)
+    for d, fdir in more_views:
+        xd = read_dataset(d)
+        if classes and xd.classes and list(xd.classes) != list(classes):
+            raise InputError(f"{d}: --more-views dataset has classes {list(xd.classes)}, the split's are {list(classes)}")
+        videos = sorted((v for v in xd.videos if v.performer in want), key=lambda v: v.id)
+        if not videos:
+            raise InputError(f"{d}: --more-views dataset has no video of the training performers {sorted(want)}")
+        out += [(features_path(fdir, v.id), xd.labels_path(v)) for v in videos]
+    return out
+
+
 def train(
     vocabulary: Vocabulary | PathLike,
     features: Sequence[PathLike] = (),
@@ -220,6 +238,7 @@ def train(
     emission_weight: float = D.EMISSION_WEIGHT,
     mirror: bool = D.MIRROR,
     allow_overlap: bool = False,
+    more_views: Sequence[tuple[PathLike, PathLike]] = (),
     seed: int = D.SEED,
     n_jobs: int | None = -1,
 ) -> TrainingRun:
@@ -229,7 +248,10 @@ def train(
     with their ``features`` files or a ``features_dir`` of ``<video stem>.npz``; set B of ``split`` of
     ``dataset`` with its features in ``features_dir``. ``vocabulary`` is a fitted :class:`Vocabulary` or
     its file; set B must not share files with the vocabulary's set A unless ``allow_overlap``.
-    ``max_frames_per_class`` 0 or None = all frames. Save the result with
+    ``max_frames_per_class`` 0 or None = all frames. ``more_views``: (dataset, features_dir) pairs of the
+    same performers filmed from other cameras (``vidstyle demo make-dataset --views ... --split-seed S
+    --split-sets B``): with ``dataset``, their videos of set B's performers join set B (the split, and so
+    every test and validation video, stays ``dataset``'s). Save the result with
     :func:`vidstyle.recognition.save_model` (``run.model``, ``run.training_files``, ``run.extra``)."""
     from ..formats.labels import check_length, read_labels
 
@@ -260,6 +282,14 @@ def train(
         labels = [ds.labels_path(by_id[i]) for i in sp.train]
         classes = ds.classes or None
         split_info = split_header(sp, "B")
+        added = _more_view_videos(more_views, sp.train_performers, classes)
+        features += [f for f, _ in added]
+        labels += [lab for _, lab in added]
+        if more_views:
+            split_info["more_views"] = [{"dataset": str(d), "features_dir": str(f)} for d, f in more_views]
+            split_info["more_views_videos"] = len(added)
+    elif more_views:
+        raise InputError("--more-views: only with --dataset (its split names the performers whose other views train)")
     if len(labels) != len(features):
         raise InputError(f"--labels: {len(labels)} labels files for {len(features)} features files")
     voc = Vocabulary.load(vocab_file) if vocab_file is not None else vocabulary
