@@ -67,4 +67,14 @@ def test_pipeline_uses_the_validated_values(doc):
     final = doc["final_config"]
     assert (params["features"]["variant"], params["features"]["points"]) == (final["variant"], final["points"])
     rec = params["recognition"]
-    assert {k: rec[k] for k in ("words", *MODEL_KEYS)} == {k: final[k] for k in ("words", *MODEL_KEYS)}
+    # the pipeline trains also on more camera views (train-recognizer --more-views): its cap on training frames
+    # per class is that validation's choice for seed 0 (validation/training_views.json), the rest this file's
+    views = json.loads((ROOT / "pipelines" / "kickboxing" / "validation" / "training_views.json").read_text())
+    chosen = next(s["chosen"] for s in views["seeds"] if s["seed"] == 0)
+    assert chosen["more_views"] == "more" and rec["more_views"]
+    assert rec["max_frames_per_class"] == chosen["max_frames_per_class"]
+    keys = ("words", *(k for k in MODEL_KEYS if k != "max_frames_per_class"))
+    assert {k: rec[k] for k in keys} == {k: final[k] for k in keys}
+    # the validation's more views are the pipeline's
+    assert [str(v) for v in views["more_views"]["params"]["views"]] == str(rec["more_views"]).split(",")
+    assert float(views["more_views"]["params"]["elevation_deg"]) == float(rec["more_views_elevation"])

@@ -68,7 +68,8 @@ def test_noise_calibration_recovers_known_noise():
 
 def test_the_fusion_default_is_the_validated_choice():
     """The default weight and the fused scores' power are the choice of the validation run with the best score
-    (with and without the extra labelled walks in training: validation/pose_recognition{,_cmuwalks}_seed0.json)."""
+    (with and without the extra labelled walks in training, and with the 3D SIFT model trained also on more
+    camera views: validation/pose_recognition{,_cmuwalks,_moreviews}_seed0.json)."""
     import json
     from pathlib import Path
 
@@ -76,7 +77,7 @@ def test_the_fusion_default_is_the_validated_choice():
 
     docs = [json.loads(p.read_text()) for p in
             sorted((Path(__file__).resolve().parents[1] / "pipelines/kickboxing/validation").glob("pose_recognition*_seed0.json"))]
-    assert len(docs) == 2 and all(d["scored_set"] == "V" for d in docs)
+    assert len(docs) == 3 and all(d["scored_set"] == "V" for d in docs)
     for d in docs:
         assert max(r["score"] for r in d["rows"]) == d["chosen"]["score"]
     best = max(docs, key=lambda d: d["chosen"]["score"])

@@ -99,7 +99,7 @@ def train_recognizer(
     emission_weight: float = number(D.EMISSION_WEIGHT, "--emission-weight", lo=0, lo_open=True, hi=100, help="viterbi / duration: power of the frame scores (default: chosen on validation performers)."),
     mirror: bool = typer.Option(D.MIRROR, "--mirror/--no-mirror", help="Also train on the mirror image of every video (southpaws; scovanner2007 descriptors only)."),
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow training videos the vocabulary was learned on."),
-    more_views: list[Path] = typer.Option(None, "--more-views", help="With --dataset: another dataset.json (or its directory) of the same performers filmed from other cameras (vidstyle demo make-dataset --views ... --split-seed S --split-sets B); its videos of set B's performers also train. Repeatable, each with one --more-views-features."),
+    more_views: list[Path] = typer.Option(None, "--more-views", help="With --dataset: another dataset.json (or its directory) of the same performers filmed from other cameras (vidstyle demo make-dataset --views ... --split-seed S --split-sets=B); its videos of the performers whose videos train the classifier train it too. Repeatable, each with one --more-views-features."),
     more_views_features: list[Path] = typer.Option(None, "--more-views-features", help="Directory of <video id>.npz of each --more-views dataset, same order."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
