@@ -77,13 +77,13 @@ def _test_ids(dataset: Path, split: str, seed: int, test_dataset: Path | None = 
 
 
 def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, test_view: str | None = None,
-        camera: bool = False) -> None:
+        camera: bool = False, training_views: bool = False) -> None:
     vs = [str(args.vidstyle)] if args.vidstyle else [sys.executable, "-m", "vidstyle"]
     rp = config_for_seed(args, rp, seed)
     features = _pick(args.feature_dirs, rp, "--features")
     camera_features = _pick(args.camera_dirs, rp, "--camera-features") if camera else None
     more = []
-    if args.training_views is not None:
+    if training_views:  # the unseen-performer runs only: the validation chose for that split's set B
         rp, more = training_views_for_seed(args, rp, seed)
         name = f"{args.prefix}_{name}"
     w = args.work / f"{name}_seed{seed}"
@@ -104,7 +104,7 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
                    "--seed", str(seed), "--jobs", str(args.jobs), "--out", str(model)])
     outs = [(split, name, features, None)]
     if camera:
-        cam_name = "unseen_camera" if args.training_views is None else f"{args.prefix}_unseen_camera"
+        cam_name = f"{args.prefix}_unseen_camera" if training_views else "unseen_camera"
         outs.append(("unseen-camera", cam_name, camera_features, args.camera_dataset / "dataset.json"))
     for sp, nm, fdir, tds in outs:
         ids = _test_ids(args.dataset, sp, seed, tds, test_view)
@@ -213,7 +213,8 @@ def main() -> None:
     args.camera_dirs = _by_points(args.camera_features or [])
     args.results.mkdir(parents=True, exist_ok=True)
     for seed in args.seeds:
-        one(args, rp, seed, "unseen-performer", "unseen_performer", camera=args.camera_dataset is not None)
+        one(args, rp, seed, "unseen-performer", "unseen_performer", camera=args.camera_dataset is not None,
+            training_views=args.training_views is not None)
     for seed in args.left_right:
         for mirror in (True, False):
             one(args, rp, seed, "unseen-view", f"unseen_view_right_{'mirror' if mirror else 'nomirror'}",

@@ -66,8 +66,8 @@ def seed_config(seed: int) -> dict:
     return dict(json.loads(f.read_text())["final_config"])
 
 
-def _score(rec, ds, fdir: Path, ids: list[str]) -> dict:
-    feats, labels = load_set(ds, fdir, ids, 2)
+def _score(rec, ds, fdir: Path, ids: list[str], jobs: int) -> dict:
+    feats, labels = load_set(ds, fdir, ids, jobs)
     by = ds.by_id()
     actions = [by[i].action if by[i].kind == "single" else None for i in ids]
     outs = [rec.smooth(*rec.frame_scores(H)) for H in rec.histograms_many(feats)]
@@ -87,11 +87,11 @@ def run_seed(args, seed: int, feats: dict, cam_feats: dict, more_feats: dict) ->
             raise SystemExit(f"{what}: no directory with {pts} points per frame (seed {seed}'s recognizer)")
     ds, cam, more = read_dataset(args.dataset), read_dataset(args.camera_dataset), read_dataset(args.more_views)
     sp = make_split(ds, "unseen-performer", seed=seed)
-    A, B = load_set(ds, feats[pts], sp.vocab, 2), load_set(ds, feats[pts], sp.train, 2)
+    A, B = load_set(ds, feats[pts], sp.vocab, args.jobs), load_set(ds, feats[pts], sp.train, args.jobs)
     desc = np.concatenate([f.descriptors for f in A[0] if f.descriptors.shape[0]])
     voc = Vocabulary(n_words=cfg["words"], random_state=seed).fit(desc)
     xb_ids = sorted(v.id for v in more.videos if v.performer in set(sp.train_performers))
-    XB = load_set(more, more_feats[pts], xb_ids, 2)
+    XB = load_set(more, more_feats[pts], xb_ids, args.jobs)
     cam_ids = sorted(v.id for v in cam.videos if v.performer in set(sp.val_performers))
     rows = []
     for views, cap in [("none", int(cfg["max_frames_per_class"]))] + [("more", int(c)) for c in args.caps]:
@@ -105,7 +105,8 @@ def run_seed(args, seed: int, feats: dict, cam_feats: dict, more_feats: dict) ->
             coarse_context=cfg.get("coarse_context", 0), smoothing=cfg["smoothing"],
             emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"], n_jobs=args.jobs,
             random_state=seed).fit(fb, lb, classes=ds.classes or None)
-        v, c = _score(rec, ds, feats[pts], list(sp.val)), _score(rec, cam, cam_feats[pts], cam_ids)
+        v = _score(rec, ds, feats[pts], list(sp.val), args.jobs)
+        c = _score(rec, cam, cam_feats[pts], cam_ids, args.jobs)
         row = {"more_views": views, "max_frames_per_class": cap, "n_train_videos": len(fb),
                "validation": v, "validation_camera": c, "score": 0.5 * (v["smoothed"] + c["smoothed"]),
                "train_s": round(time.perf_counter() - t0, 1)}

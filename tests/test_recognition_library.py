@@ -165,6 +165,13 @@ def test_more_views_join_set_b_with_its_performers_only(ds, tmp_path):
     labs = [t["labels"] for t in base.training_files]
     with pytest.raises(InputError, match="--more-views"):
         train(voc, feats, labels=labs, n_components=int(COMPONENTS), more_views=[(xd, xd / "features")])
+    # a more-views dataset of other performers only is refused, naming the file
+    doc = json.loads((xd / "dataset.json").read_text())
+    doc["videos"] = [v for v in videos if v["performer"] not in b]
+    (xd / "dataset.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="no video of the training performers"):
+        train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+              more_views=[(xd, xd / "features")])
 
 
 def test_more_views_flags_pair_up(ds, cli_run, tmp_path, capsys):
