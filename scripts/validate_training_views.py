@@ -47,6 +47,7 @@ from vidstyle.formats.dataset import read_dataset  # noqa: E402
 from vidstyle.formats.features import directory_params  # noqa: E402
 from vidstyle.formats.validation import TRAINING_VIEWS as KIND  # noqa: E402
 from vidstyle.formats.validation import write_validation  # noqa: E402
+from vidstyle.recognition.pipeline import more_view_ids  # noqa: E402
 from vidstyle.recognition.splits import make_split  # noqa: E402
 
 log = logging.getLogger("validate_training_views")
@@ -90,7 +91,7 @@ def run_seed(args, seed: int, feats: dict, cam_feats: dict, more_feats: dict) ->
     A, B = load_set(ds, feats[pts], sp.vocab, args.jobs), load_set(ds, feats[pts], sp.train, args.jobs)
     desc = np.concatenate([f.descriptors for f in A[0] if f.descriptors.shape[0]])
     voc = Vocabulary(n_words=cfg["words"], random_state=seed).fit(desc)
-    xb_ids = sorted(v.id for v in more.videos if v.performer in set(sp.train_performers))
+    xb_ids = more_view_ids(more, sp.train_performers, ds.classes, args.more_views)  # what train-recognizer adds
     XB = load_set(more, more_feats[pts], xb_ids, args.jobs)
     cam_ids = sorted(v.id for v in cam.videos if v.performer in set(sp.val_performers))
     rows = []

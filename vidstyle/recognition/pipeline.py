@@ -196,21 +196,28 @@ def annotated_training(annotations: Sequence[PathLike], features: Sequence[PathL
     return feats, ylists, used, training
 
 
+def more_view_ids(dataset, performers, classes=None, where: PathLike = "--more-views") -> list[str]:
+    """Ids (sorted) of the videos of ``performers`` in ``dataset``, a ``--more-views`` dataset (the same
+    performers filmed from other cameras); one with other classes than ``classes``, or with none of the
+    performers, is refused (``where`` names it in the error)."""
+    if classes and dataset.classes and list(dataset.classes) != list(classes):
+        raise InputError(f"{where}: --more-views dataset has classes {list(dataset.classes)}, the split's are {list(classes)}")
+    want = set(performers)
+    ids = sorted(v.id for v in dataset.videos if v.performer in want)
+    if not ids:
+        raise InputError(f"{where}: --more-views dataset has no video of the training performers {sorted(want)}")
+    return ids
+
+
 def _more_view_videos(more_views, performers, classes) -> list[tuple[Path, Path]]:
-    """(features file, labels file) of the videos of ``performers`` in each (dataset, features_dir) pair of
-    ``more_views``; a dataset with other classes than the split's, or with none of the performers, is refused."""
+    """(features file, labels file) of the :func:`more_view_ids` videos of each (dataset, features_dir) pair."""
     from ..formats.dataset import read_dataset
 
     out: list[tuple[Path, Path]] = []
-    want = set(performers)
     for d, fdir in more_views:
         xd = read_dataset(d)
-        if classes and xd.classes and list(xd.classes) != list(classes):
-            raise InputError(f"{d}: --more-views dataset has classes {list(xd.classes)}, the split's are {list(classes)}")
-        videos = sorted((v for v in xd.videos if v.performer in want), key=lambda v: v.id)
-        if not videos:
-            raise InputError(f"{d}: --more-views dataset has no video of the training performers {sorted(want)}")
-        out += [(features_path(fdir, v.id), xd.labels_path(v)) for v in videos]
+        by_id = xd.by_id()
+        out += [(features_path(fdir, i), xd.labels_path(by_id[i])) for i in more_view_ids(xd, performers, classes, d)]
     return out
 
 
