@@ -20,7 +20,9 @@ params.yaml's values were tuned on part of their test set.
 5. with ``--training-views validation/training_views.json`` (``scripts/validate_training_views.py``): steps 1-3
    with set B as each seed's validation chose it (the training performers also filmed from the cameras of
    ``--more-views``, ``train-recognizer --more-views``, and the chosen cap on training frames per class) ->
-   ``recognition_moreviews_unseen_{performer,camera}_seedS.json`` (``--prefix``).
+   ``recognition_moreviews_unseen_{performer,camera}_seedS.json`` (``--prefix``); where the validation also
+   chose more performers (``--more-performers``, ``vocabulary / train-recognizer --more-performers``), they
+   join the vocabulary and set B as it chose.
 
 The test split is scored once per file, by ``evaluate recognition``; nothing here tunes anything. Work
 files go to ``--work`` (models, labels). The dataset and features are the demo pipeline's (one dataset,
@@ -82,9 +84,9 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
     rp = config_for_seed(args, rp, seed)
     features = _pick(args.feature_dirs, rp, "--features")
     camera_features = _pick(args.camera_dirs, rp, "--camera-features") if camera else None
-    more = []
+    more, vocab_more = [], []
     if training_views:  # the unseen-performer runs only: the validation chose for that split's set B
-        rp, more = training_views_for_seed(args, rp, seed)
+        rp, more, vocab_more = training_views_for_seed(args, rp, seed)
         name = f"{args.prefix}_{name}"
     w = args.work / f"{name}_seed{seed}"
     w.mkdir(parents=True, exist_ok=True)
@@ -94,10 +96,10 @@ def one(args, rp: dict, seed: int, split: str, name: str, mirror: bool = True, t
     if not model.is_file():
         # one vocabulary per split, seed and size (the mirror and no-mirror runs share theirs)
         vocab = args.work / (f"vocab_{split}{'_' + test_view if test_view else ''}_{rp['words']}w_"
-                             f"{rp['variant']}{rp['points']}_seed{seed}.npz")
+                             f"{rp['variant']}{rp['points']}{'_performers' if vocab_more else ''}_seed{seed}.npz")
         if not vocab.is_file():
             _run(vs + ["vocabulary", "--dataset", ds, "--features-dir", str(features), "--split", split, *tv,
-                       "--words", str(rp["words"]), "--seed", str(seed), "--out", str(vocab)])
+                       "--words", str(rp["words"]), *vocab_more, "--seed", str(seed), "--out", str(vocab)])
         shutil.copyfile(vocab, w / "vocab.npz")
         _run(vs + ["train-recognizer", "--dataset", ds, "--features-dir", str(features), "--split", split, *tv,
                    "--vocab", str(w / "vocab.npz"), *_train_args(rp), *more, "--mirror" if mirror else "--no-mirror",
@@ -143,9 +145,11 @@ def config_for_seed(args, rp: dict, seed: int) -> dict:
                                         "coarse_context", "smoothing", "emission_weight")}}
 
 
-def training_views_for_seed(args, rp: dict, seed: int) -> tuple[dict, list[str]]:
+def training_views_for_seed(args, rp: dict, seed: int) -> tuple[dict, list[str], list[str]]:
     """``scripts/validate_training_views.py``'s choice for seed ``seed``: the recognizer values with the chosen
-    cap, and the train-recognizer arguments of the more-views dataset (none when the validation kept three views)."""
+    cap, the train-recognizer arguments of the more-views dataset (none when the validation kept three views)
+    and of the more-performers dataset, and the vocabulary's arguments of the latter (none when it kept
+    the split's performers alone)."""
     import json
 
     doc = json.loads(Path(args.training_views).read_text())
@@ -154,10 +158,18 @@ def training_views_for_seed(args, rp: dict, seed: int) -> tuple[dict, list[str]]
         raise SystemExit(f"{args.training_views}: no choice for seed {seed}")
     ch = rows[0]["chosen"]
     rp = {**rp, "max_frames_per_class": ch["max_frames_per_class"]}
-    if ch["more_views"] != "more":
-        return rp, []
-    fdir = _pick(_by_points(args.more_views_features or []), rp, "--more-views-features")
-    return rp, ["--more-views", str(args.more_views), "--more-views-features", str(fdir)]
+    train, vocab = [], []
+    if ch["more_views"] == "more":
+        fdir = _pick(_by_points(args.more_views_features or []), rp, "--more-views-features")
+        train += ["--more-views", str(args.more_views), "--more-views-features", str(fdir)]
+    if ch.get("more_performers"):
+        if args.more_performers is None:
+            raise SystemExit(f"{args.training_views}: seed {seed} chose more performers; give --more-performers")
+        fdir = _pick(_by_points(args.more_performers_features or []), rp, "--more-performers-features")
+        vocab = ["--more-performers", str(args.more_performers), "--more-performers-features", str(fdir),
+                 "--more-performers-vocab-share", repr(float(ch["vocab_share"]))]
+        train += vocab
+    return rp, train, vocab
 
 
 def _by_points(dirs) -> dict:
@@ -195,6 +207,9 @@ def main() -> None:
                          "the cap), written as recognition_<--prefix>_<split>_seedS.json")
     ap.add_argument("--more-views", type=Path, default=None, help="with --training-views: the more-views dataset")
     ap.add_argument("--more-views-features", type=Path, default=None, nargs="+", help="its features directories")
+    ap.add_argument("--more-performers", type=Path, default=None,
+                    help="with --training-views: the more-performers dataset (vidstyle demo make-dataset --first-performer)")
+    ap.add_argument("--more-performers-features", type=Path, default=None, nargs="+", help="its features directories")
     ap.add_argument("--prefix", default="moreviews", help="with --training-views: the results files' name prefix")
     ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
     ap.add_argument("--left-right", type=int, nargs="*", default=[],

@@ -231,3 +231,19 @@ def test_split_sets_render_only_that_sets_performers(tmp_path):
     assert main(args + ["--split-sets", "B", "--out", str(tmp_path / "x")]) == 2  # no --split-seed
     assert main(args + ["--split-seed", "3", "--split-sets", "B,Q", "--out", str(tmp_path / "y")]) == 2
     assert main(args + ["--split-seed", "3", "--only-performers", "p00", "--out", str(tmp_path / "z")]) == 2
+
+
+def test_first_performer_renders_new_performers_only(tmp_path):
+    """--first-performer K: performers p<K>.. of --performers, the same takes as the full dataset's (the
+    performers `vocabulary / train-recognizer --more-performers` add; no split holds them)."""
+    args = ["demo", "make-dataset", "--performers", "5", "--views", "front", "--single-seconds", "2",
+            "--performances", "0", "--seed", "2", "--no-video"]
+    assert main(args + ["--first-performer", "3", "--out", str(tmp_path / "new")]) == 0
+    d = json.loads((tmp_path / "new" / "dataset.json").read_text())
+    assert sorted({v["performer"] for v in d["videos"]}) == ["p03", "p04"]
+    assert main(args + ["--out", str(tmp_path / "all")]) == 0
+    for name in ("labels/p04_jab_front.json", "mocap/p03_hook.bvh"):
+        assert (tmp_path / "new" / name).read_bytes() == (tmp_path / "all" / name).read_bytes()
+    assert main(args + ["--first-performer", "5", "--out", str(tmp_path / "x")]) == 2  # past the last
+    assert main(args + ["--first-performer", "1", "--split-seed", "0", "--out", str(tmp_path / "y")]) == 2
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()

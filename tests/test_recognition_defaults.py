@@ -78,3 +78,17 @@ def test_pipeline_uses_the_validated_values(doc):
     # the validation's more views are the pipeline's
     assert [str(v) for v in views["more_views"]["params"]["views"]] == str(rec["more_views"]).split(",")
     assert float(views["more_views"]["params"]["elevation_deg"]) == float(rec["more_views_elevation"])
+    # and so are its more performers: the pipeline's make_performers_dataset renders the validated dataset
+    # (performers p<dataset.performers> on, the dataset's cameras and take length), divided between the
+    # vocabulary and set B by the library's default share, which is the validated one
+    from vidstyle.recognition import defaults as D
+
+    mp = views["more_performers"]
+    n, more = int(params["dataset"]["performers"]), int(rec["more_performers"])
+    assert chosen["more_performers"] == more > 0
+    assert mp["params"]["only_performers"] == [f"p{i:02d}" for i in range(n, n + more)]
+    assert mp["params"]["performers"] == n + more
+    assert ",".join(mp["params"]["views"]) == params["dataset"]["views"]
+    assert float(mp["params"]["single_seconds"]) == float(params["dataset"]["single_seconds"])
+    assert mp["params"]["performances"] == 0 and mp["params"]["seed"] == params["seed"]
+    assert chosen["vocab_share"] == mp["vocab_share"] == D.MORE_PERFORMERS_VOCAB_SHARE

@@ -174,6 +174,80 @@ def test_more_views_join_set_b_with_its_performers_only(ds, tmp_path):
               more_views=[(xd, xd / "features")])
 
 
+def _new_performers(tmp_path, keep_from: int = 4):
+    """A dataset of 7 synthetic performers with p00..p<keep_from - 1> (the ``ds`` fixture's ids) taken out."""
+    xd = tmp_path / "people"
+    make_dataset(xd, n_performers=7, views=("front", "left"), seed=SEED + 2, dim=24, reps=(2, 3), n_actions=5)
+    doc = json.loads((xd / "dataset.json").read_text())
+    doc["videos"] = [v for v in doc["videos"] if int(v["performer"][1:]) >= keep_from]
+    (xd / "dataset.json").write_text(json.dumps(doc))
+    return xd, doc["videos"]
+
+
+def test_more_performers_divide_between_vocabulary_and_classifier(ds, tmp_path):
+    """more_performers=[(dataset, features)]: of the performers --dataset does not hold, the first
+    round(share * n) by id join the vocabulary's set A and the others the classifier's set B, so the
+    vocabulary and the classifier never share a performer; the split's test videos stay --dataset's."""
+    from vidstyle.errors import InputError
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.recognition.pipeline import more_performer_sets
+
+    xd, videos = _new_performers(tmp_path)
+    ids = lambda ps: sorted(v["id"] for v in videos if v["performer"] in ps)  # noqa: E731
+    main_performers = {f"p{i:02d}" for i in range(4)}
+    for share, a in ((1 / 3, {"p04"}), (0.5, {"p04", "p05"}), (0.0, set()), (1.0, {"p04", "p05", "p06"})):
+        got = more_performer_sets(read_dataset(xd), main_performers, share)
+        assert got == (ids(a), ids({"p04", "p05", "p06"} - a)), share
+    base_v = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS))
+    vrun = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS),
+                            more_performers=[(xd, xd / "features")])
+    n = len(base_v.training_files)
+    assert vrun.training_files[:n] == base_v.training_files
+    assert [f.rsplit("/", 1)[-1][:-4] for f in vrun.training_files[n:]] == ids({"p04"})
+    assert vrun.extra["split"]["more_performers"][0]["performers"] == ["p04"]
+    assert vrun.n_descriptors > base_v.n_descriptors
+    vfile = tmp_path / "v.npz"
+    vrun.vocabulary.save(vfile, training_files=vrun.training_files, extra=vrun.extra)
+    base = train(vfile, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS))
+    run = train(vfile, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+                more_performers=[(xd, xd / "features")])
+    m = len(base.training_files)
+    assert run.training_files[:m] == base.training_files
+    assert [t["features"].rsplit("/", 1)[-1][:-4] for t in run.training_files[m:]] == ids({"p05", "p06"})
+    assert run.extra["split"]["more_performers"][0]["performers"] == ["p05", "p06"]
+    assert run.extra["split"]["test"] == base.extra["split"]["test"]
+    # the same share on both sides: the vocabulary's videos never train the classifier (the overlap check)
+    with pytest.raises(InputError, match="also built the vocabulary"):
+        train(vfile, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+              more_performers=[(xd, xd / "features")], more_performers_vocab_share=0.0)
+    with pytest.raises(InputError, match="--more-performers"):
+        train_vocabulary([f"{ds}/features/x.npz"], words=int(WORDS), more_performers=[(xd, xd / "features")])
+    # a dataset of --dataset's own performers only adds nobody: refused, naming the file
+    with pytest.raises(InputError, match="every performer of the dataset"):
+        train(vfile, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+              more_performers=[(ds, ds / "features")])
+
+
+def test_more_performers_flags(ds, cli_run, tmp_path, capsys):
+    common = ["--dataset", str(ds), "--features-dir", str(ds / "features")]
+    assert main(["vocabulary", *common, "--words", WORDS, "--more-performers", str(ds),
+                 "--out", str(tmp_path / "v.npz")]) == 2
+    assert "--more-performers: 1 datasets for 0 --more-performers-features" in capsys.readouterr().err
+    assert main(["train-recognizer", *common, "--vocab", str(cli_run["dir"] / "v.npz"), "--components", COMPONENTS,
+                 "--more-performers", str(ds), "--more-performers-features", str(ds / "features"),
+                 "--more-performers-vocab-share", "1.5", "--out", str(tmp_path / "m.joblib")]) == 2
+    assert "--more-performers-vocab-share" in capsys.readouterr().err
+    assert not (tmp_path / "v.npz").exists() and not (tmp_path / "m.joblib").exists()
+    xd, _ = _new_performers(tmp_path)
+    more = ["--more-performers", str(xd), "--more-performers-features", str(xd / "features")]
+    assert main(["vocabulary", *common, "--words", WORDS, *more, "--out", str(tmp_path / "v.npz")]) == 0
+    assert main(["train-recognizer", *common, "--vocab", str(tmp_path / "v.npz"), "--components", COMPONENTS, *more,
+                 "--out", str(tmp_path / "m.joblib")]) == 0
+    _, header = load_model(tmp_path / "m.joblib")
+    assert header["split"]["more_performers"][0]["performers"] == ["p05", "p06"]
+    assert header["split"]["more_performers_vocab_share"] == pytest.approx(defaults.MORE_PERFORMERS_VOCAB_SHARE)
+
+
 def test_more_views_flags_pair_up(ds, cli_run, tmp_path, capsys):
     common = ["--dataset", str(ds), "--features-dir", str(ds / "features"), "--vocab", str(cli_run["dir"] / "v.npz"),
               "--components", COMPONENTS, "--out", str(tmp_path / "m.joblib")]

@@ -63,6 +63,9 @@ def make_dataset_cmd(
     elevation: float = typer.Option(None, "--elevation", help="Camera elevation in degrees [10]."),
     only_performers: str = typer.Option(None, "--only-performers", help="Comma-separated performer ids "
                                         "(p00, ...): render only these [all]."),
+    first_performer: int = typer.Option(None, "--first-performer", help="Render only performers from this number on "
+                                        "(p<K> .. the last of --performers): performers no dataset of fewer "
+                                        "performers holds, e.g. for `vocabulary / train-recognizer --more-performers`."),
     unseen_camera: bool = typer.Option(False, "--unseen-camera", help="Test videos for `evaluate recognition "
                                        "--split unseen-camera`: views 30,150 at elevation 30 before the moon "
                                        "texture (none used by default datasets), one performance each."),
@@ -101,6 +104,13 @@ def make_dataset_cmd(
         raise InputError("--split-sets: give --split-seed too")
     if split_seed is not None and only_performers is not None:
         raise InputError("--split-seed: give it or --only-performers, not both")
+    if first_performer is not None:
+        if split_seed is not None or only_performers is not None:
+            raise InputError("--first-performer: give it, --split-seed or --only-performers, not two of them")
+        n = with_overrides(base, performers=performers).performers
+        if not 0 <= first_performer < n:
+            raise InputError(f"--first-performer: must be in 0..{n - 1} (--performers {n}), got {first_performer}")
+        only_performers = ",".join(f"p{i:02d}" for i in range(first_performer, n))
     sets = split_set_names(split_sets) if split_sets is not None else ("T",)
     if unseen_camera:
         base = DatasetParams.unseen_camera(with_overrides(base, performers=performers),

@@ -28,6 +28,14 @@ def register(app: typer.Typer) -> None:
     app.command("recognize")(recognize)
 
 
+def _paired(datasets, features_dirs, option: str) -> list[tuple[Path, Path]]:
+    """``option``'s datasets with their ``option``-features directories (one each, same order)."""
+    datasets, features_dirs = datasets or [], features_dirs or []
+    if len(datasets) != len(features_dirs):
+        raise InputError(f"{option}: {len(datasets)} datasets for {len(features_dirs)} {option}-features")
+    return list(zip(datasets, features_dirs))
+
+
 def vocabulary(
     features: list[Path] = typer.Argument(None, help="Features .npz files of the videos to learn the vocabulary on (or use --dataset)."),
     out: Path = typer.Option(..., "--out", "-o", help="Output vocab.npz."),
@@ -39,6 +47,9 @@ def vocabulary(
     features_dir: Path | None = typer.Option(None, "--features-dir", help="Directory of <video id>.npz."),
     split: str = typer.Option(D.SPLIT, "--split", help=_SPLIT_HELP),
     test_view: str | None = typer.Option(None, "--test-view", help="Held-out view of an unseen-view split."),
+    more_performers: list[Path] = typer.Option(None, "--more-performers", help="With --dataset: another dataset.json (or its directory) of other performers than --dataset's (vidstyle demo make-dataset --first-performer K); a share of its performers (--more-performers-vocab-share, the first by id) train the vocabulary, the others the classifier. Repeatable, each with one --more-performers-features."),
+    more_performers_features: list[Path] = typer.Option(None, "--more-performers-features", help="Directory of <video id>.npz of each --more-performers dataset, same order."),
+    more_performers_vocab_share: float = number(D.MORE_PERFORMERS_VOCAB_SHARE, "--more-performers-vocab-share", lo=0, hi=1, help="Share of the --more-performers performers whose videos train the vocabulary (the same in `vocabulary` and `train-recognizer`)."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed (sampling, k-means, split)."),
     jobs: int = jobs_option(-1, help="Parallel file loading (-1 = all cores)."),
 ) -> None:
@@ -49,9 +60,11 @@ def vocabulary(
     from ..recognition.pipeline import train_vocabulary
 
     t0 = time.perf_counter()
+    more = _paired(more_performers, more_performers_features, "--more-performers")
     run = train_vocabulary(features or [], dataset=dataset, features_dir=features_dir, split=split,
                            test_view=test_view, words=words, method=method, branching=branching,
-                           max_descriptors=max_descriptors, seed=seed, n_jobs=jobs)
+                           max_descriptors=max_descriptors, more_performers=more,
+                           more_performers_vocab_share=more_performers_vocab_share, seed=seed, n_jobs=jobs)
     voc = run.vocabulary
     voc.save(out, training_files=run.training_files, extra=run.extra)
     log.info(
@@ -101,6 +114,9 @@ def train_recognizer(
     allow_overlap: bool = typer.Option(False, "--allow-overlap", help="Allow training videos the vocabulary was learned on."),
     more_views: list[Path] = typer.Option(None, "--more-views", help="With --dataset: another dataset.json (or its directory) of the same performers filmed from other cameras (vidstyle demo make-dataset --views ... --split-seed S --split-sets=B); its videos of the performers whose videos train the classifier train it too. Repeatable, each with one --more-views-features."),
     more_views_features: list[Path] = typer.Option(None, "--more-views-features", help="Directory of <video id>.npz of each --more-views dataset, same order."),
+    more_performers: list[Path] = typer.Option(None, "--more-performers", help="With --dataset: another dataset.json (or its directory) of other performers than --dataset's (vidstyle demo make-dataset --first-performer K); a share of its performers (--more-performers-vocab-share, the first by id) train the vocabulary, the others the classifier. Repeatable, each with one --more-performers-features."),
+    more_performers_features: list[Path] = typer.Option(None, "--more-performers-features", help="Directory of <video id>.npz of each --more-performers dataset, same order."),
+    more_performers_vocab_share: float = number(D.MORE_PERFORMERS_VOCAB_SHARE, "--more-performers-vocab-share", lo=0, hi=1, help="Share of the --more-performers performers whose videos train the vocabulary (the same in `vocabulary` and `train-recognizer`)."),
     seed: int = typer.Option(D.SEED, "--seed", help="Random seed."),
     jobs: int = jobs_option(-1, help="Parallel workers (-1 = all cores)."),
 ) -> None:
@@ -112,6 +128,8 @@ def train_recognizer(
     t0 = time.perf_counter()
     if features_kind == "pose" and (more_views or more_views_features):
         raise InputError("--more-views: only with --features sift3d (the pose recognizer sees its mocap from any camera already)")
+    if features_kind == "pose" and (more_performers or more_performers_features):
+        raise InputError("--more-performers: only with --features sift3d")
     if features_kind == "pose":
         _train_pose(dataset, out, split, test_view, views, noise_sigma, outlier_rate, dropout_rate, classifier, c,
                     max_frames_per_class, window, smoothing, emission_weight, mirror, seed, jobs, features, annotations,
@@ -123,9 +141,8 @@ def train_recognizer(
         raise InputError(f"--features: must be sift3d or pose, got {features_kind!r}")
     if vocab is None:
         raise InputError("train-recognizer: --vocab is required with --features sift3d")
-    more_views, more_views_features = more_views or [], more_views_features or []
-    if len(more_views) != len(more_views_features):
-        raise InputError(f"--more-views: {len(more_views)} datasets for {len(more_views_features)} --more-views-features")
+    views_pairs = _paired(more_views, more_views_features, "--more-views")
+    performer_pairs = _paired(more_performers, more_performers_features, "--more-performers")
     run = train(
         vocab, features or [], labels=labels or [], annotations=annotations or [], dataset=dataset,
         features_dir=features_dir, split=split, test_view=test_view, context=context,
@@ -133,7 +150,8 @@ def train_recognizer(
         normalize=normalize, n_components=components, classifier=classifier, C=c,
         max_frames_per_class=max_frames_per_class, smoothing_window=window, smoothing=smoothing,
         emission_weight=emission_weight, mirror=mirror, allow_overlap=allow_overlap,
-        more_views=list(zip(more_views, more_views_features)), seed=seed, n_jobs=jobs,
+        more_views=views_pairs, more_performers=performer_pairs,
+        more_performers_vocab_share=more_performers_vocab_share, seed=seed, n_jobs=jobs,
     )
     rec = run.model
     header = save_model(out, rec, training_files=run.training_files, extra=run.extra)

@@ -16,7 +16,7 @@ kind                                          version   written by
 ``vidstyle.validation.tempo_runs``            2         ``scripts/validate_tempo_runs.py``
 ``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
 ``vidstyle.validation.view_tracking``         1         ``scripts/validate_view_tracking.py``
-``vidstyle.validation.training_views``        1         ``scripts/validate_training_views.py``
+``vidstyle.validation.training_views``        2         ``scripts/validate_training_views.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -69,7 +69,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     TEMPO_RUNS: (4, 1, True, False),
     POSE_SCALES: (1, 1, True, False),
     VIEW_TRACKING: (1, 1, True, False),
-    TRAINING_VIEWS: (1, 1, True, False),
+    TRAINING_VIEWS: (2, 1, True, False),
 }
 
 

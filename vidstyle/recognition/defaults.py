@@ -32,6 +32,10 @@ CLASSIFIER = "ova-ovo"         # thesis
 C = 100.0                      # validated
 MAX_FRAMES_PER_CLASS = 1500    # validated (0 / None = all)
 SMOOTHING_WINDOW = 6           # thesis
+# --more-performers (procedural performers outside the split): the share of them whose videos join the
+# vocabulary's set A; the rest join the classifier's set B, so A and B stay disjoint by performer.
+# scripts/validate_training_views.py tried it on the validation performers (validation/training_views.json)
+MORE_PERFORMERS_VOCAB_SHARE = 1 / 3
 SMOOTHING = "duration"         # validated: explicit-duration HMM over frame scores
 EMISSION_WEIGHT = 1.0          # validated
 MIRROR = True                  # also train on mirror images (scovanner2007 descriptors only)

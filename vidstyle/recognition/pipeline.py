@@ -96,13 +96,17 @@ def train_vocabulary(
     method: str = D.VOCAB_METHOD,
     branching: int = D.BRANCHING,
     max_descriptors: int | None = D.MAX_DESCRIPTORS,
+    more_performers: Sequence[tuple[PathLike, PathLike]] = (),
+    more_performers_vocab_share: float = D.MORE_PERFORMERS_VOCAB_SHARE,
     seed: int = D.SEED,
     n_jobs: int | None = -1,
 ) -> VocabularyRun:
     """Cluster the 3D SIFT descriptors of set A into ``words`` visual words.
 
     Set A is either the ``features`` files, or set A of ``split`` of ``dataset`` with the features in
-    ``features_dir`` (``<video id>.npz``). Save the result with
+    ``features_dir`` (``<video id>.npz``). ``more_performers``: (dataset, features_dir) pairs of other
+    performers than ``dataset``'s (``vidstyle demo make-dataset --first-performer K``): with ``dataset``, the
+    set A share of them (:func:`more_performer_sets`) joins set A. Save the result with
     :func:`vidstyle.formats.vocabulary.write_vocabulary` (``run.vocabulary``, ``run.training_files``, ``run.extra``)."""
     features = [Path(p) for p in features or []]
     _check_sources(features, features_dir, dataset, "vocabulary")
@@ -111,6 +115,14 @@ def train_vocabulary(
         _ds, sp = dataset_split(dataset, split, seed, test_view)
         features = [features_path(features_dir, i) for i in sp.vocab]
         extra = {"split": split_header(sp, "A")}
+        if more_performers:
+            added, record = _more_performer_videos(more_performers, {v.performer for v in _ds.videos},
+                                                   more_performers_vocab_share, "A", _ds.classes or None)
+            features += [f for f, _ in added]
+            extra["split"]["more_performers"] = record
+            extra["split"]["more_performers_vocab_share"] = float(more_performers_vocab_share)
+    elif more_performers:
+        raise InputError("--more-performers: only with --dataset (its performers are the ones left out)")
     feats = load_many(features, n_jobs=n_jobs)
     dims = {f.dim for f in feats if f.descriptors.shape[0]}
     if len(dims) > 1:
@@ -221,6 +233,44 @@ def _more_view_videos(more_views, performers, classes) -> list[tuple[Path, Path]
     return out
 
 
+def more_performer_sets(dataset, exclude, vocab_share: float = D.MORE_PERFORMERS_VOCAB_SHARE, classes=None,
+                        where: PathLike = "--more-performers") -> tuple[list[str], list[str]]:
+    """Video ids (sorted) of ``dataset``'s performers that are not among ``exclude`` (the main dataset's
+    performers), divided by performer: the first ``round(vocab_share * n)`` of the n new performers (sorted by
+    id) go to set A (the vocabulary), the others to set B (the classifier), so the two stay disjoint by
+    performer. A dataset with other classes than ``classes``, or without a new performer, is refused."""
+    if classes and dataset.classes and list(dataset.classes) != list(classes):
+        raise InputError(f"{where}: dataset has classes {list(dataset.classes)}, the split's are {list(classes)}")
+    if not 0.0 <= float(vocab_share) <= 1.0:
+        raise InputError(f"{where}: the vocabulary's share of the performers must be in 0..1, got {vocab_share}")
+    new = sorted({v.performer for v in dataset.videos} - set(exclude))
+    if not new:
+        raise InputError(f"{where}: every performer of the dataset is one of --dataset's "
+                         f"(make it with `vidstyle demo make-dataset --first-performer K`, K past them)")
+    n_a = int(round(float(vocab_share) * len(new)))
+    a, b = set(new[:n_a]), set(new[n_a:])
+    return (sorted(v.id for v in dataset.videos if v.performer in a),
+            sorted(v.id for v in dataset.videos if v.performer in b))
+
+
+def _more_performer_videos(more_performers, exclude, vocab_share, set_name: str, classes=None):
+    """(features file, labels file) of the set ``set_name`` ("A" or "B") share of :func:`more_performer_sets`
+    of each (dataset, features_dir) pair, and what a model or vocabulary records of them."""
+    from ..formats.dataset import read_dataset
+
+    out: list[tuple[Path, Path]] = []
+    record = []
+    for d, fdir in more_performers:
+        xd = read_dataset(d)
+        by_id = xd.by_id()
+        a, b = more_performer_sets(xd, exclude, vocab_share, classes, d)
+        ids = a if set_name == "A" else b
+        out += [(features_path(fdir, i), xd.labels_path(by_id[i])) for i in ids]
+        record.append({"dataset": str(d), "features_dir": str(fdir), "set": set_name,
+                       "performers": sorted({by_id[i].performer for i in ids}), "videos": len(ids)})
+    return out, record
+
+
 def train(
     vocabulary: Vocabulary | PathLike,
     features: Sequence[PathLike] = (),
@@ -246,6 +296,8 @@ def train(
     mirror: bool = D.MIRROR,
     allow_overlap: bool = False,
     more_views: Sequence[tuple[PathLike, PathLike]] = (),
+    more_performers: Sequence[tuple[PathLike, PathLike]] = (),
+    more_performers_vocab_share: float = D.MORE_PERFORMERS_VOCAB_SHARE,
     seed: int = D.SEED,
     n_jobs: int | None = -1,
 ) -> TrainingRun:
@@ -258,7 +310,9 @@ def train(
     ``max_frames_per_class`` 0 or None = all frames. ``more_views``: (dataset, features_dir) pairs of the
     same performers filmed from other cameras (``vidstyle demo make-dataset --views ... --split-seed S
     --split-sets B``): with ``dataset``, their videos of set B's performers join set B (the split, and so
-    every test and validation video, stays ``dataset``'s). Save the result with
+    every test and validation video, stays ``dataset``'s). ``more_performers``: (dataset, features_dir)
+    pairs of other performers than ``dataset``'s: with ``dataset``, the set B share of them
+    (:func:`more_performer_sets`, the complement of the vocabulary's) joins set B. Save the result with
     :func:`vidstyle.recognition.save_model` (``run.model``, ``run.training_files``, ``run.extra``)."""
     from ..formats.labels import check_length, read_labels
 
@@ -295,8 +349,17 @@ def train(
         if more_views:
             split_info["more_views"] = [{"dataset": str(d), "features_dir": str(f)} for d, f in more_views]
             split_info["more_views_videos"] = len(added)
+        if more_performers:
+            added, record = _more_performer_videos(more_performers, {v.performer for v in ds.videos},
+                                                   more_performers_vocab_share, "B", classes)
+            features += [f for f, _ in added]
+            labels += [lab for _, lab in added]
+            split_info["more_performers"] = record
+            split_info["more_performers_vocab_share"] = float(more_performers_vocab_share)
     elif more_views:
         raise InputError("--more-views: only with --dataset (its split names the performers whose other views train)")
+    elif more_performers:
+        raise InputError("--more-performers: only with --dataset (its performers are the ones left out)")
     if len(labels) != len(features):
         raise InputError(f"--labels: {len(labels)} labels files for {len(features)} features files")
     voc = Vocabulary.load(vocab_file) if vocab_file is not None else vocabulary
