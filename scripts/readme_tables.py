@@ -570,10 +570,12 @@ def training_views_table(items, root: Path) -> list[str]:
                   "background); score: the mean of the two smoothed accuracies. Rule: " + str(d.get("rule")) + ".", "",
                   "| seed | more views | more performers | frames per class | training videos | V smoothed | V video | "
                   "camera smoothed | score | chosen |", "|---:|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+        def key(x: dict) -> tuple:
+            return x.get("more_views"), x.get("max_frames_per_class"), x.get("more_performers") or 0
+
         for sd in d.get("seeds") or []:
             ch = sd.get("chosen") or {}
             for r in sd.get("rows") or []:
-                key = lambda x: (x.get("more_views"), x.get("max_frames_per_class"), x.get("more_performers") or 0)  # noqa: E731
                 mark = "yes" if key(r) == key(ch) else ""
                 lines.append(f"| {sd['seed']} | {r['more_views']} | {r.get('more_performers') or 0} | "
                              f"{r['max_frames_per_class']} | {r['n_train_videos']} | "

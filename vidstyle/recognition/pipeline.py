@@ -112,12 +112,12 @@ def train_vocabulary(
     _check_sources(features, features_dir, dataset, "vocabulary")
     extra: dict[str, Any] = {}
     if dataset:
-        _ds, sp = dataset_split(dataset, split, seed, test_view)
+        ds, sp = dataset_split(dataset, split, seed, test_view)
         features = [features_path(features_dir, i) for i in sp.vocab]
         extra = {"split": split_header(sp, "A")}
         if more_performers:
-            added, record = _more_performer_videos(more_performers, {v.performer for v in _ds.videos},
-                                                   more_performers_vocab_share, "A", _ds.classes or None)
+            added, record = _more_performer_videos(more_performers, {v.performer for v in ds.videos},
+                                                   more_performers_vocab_share, "A", ds.classes or None)
             features += [f for f, _ in added]
             extra["split"]["more_performers"] = record
             extra["split"]["more_performers_vocab_share"] = float(more_performers_vocab_share)
@@ -208,12 +208,17 @@ def annotated_training(annotations: Sequence[PathLike], features: Sequence[PathL
     return feats, ylists, used, training
 
 
+def _same_classes(dataset, classes, where: PathLike, what: str) -> None:
+    """Refuse a second dataset (``what``, named by ``where``) whose classes are not the split's ``classes``."""
+    if classes and dataset.classes and list(dataset.classes) != list(classes):
+        raise InputError(f"{where}: {what} has classes {list(dataset.classes)}, the split's are {list(classes)}")
+
+
 def more_view_ids(dataset, performers, classes=None, where: PathLike = "--more-views") -> list[str]:
     """Ids (sorted) of the videos of ``performers`` in ``dataset``, a ``--more-views`` dataset (the same
     performers filmed from other cameras); one with other classes than ``classes``, or with none of the
     performers, is refused (``where`` names it in the error)."""
-    if classes and dataset.classes and list(dataset.classes) != list(classes):
-        raise InputError(f"{where}: --more-views dataset has classes {list(dataset.classes)}, the split's are {list(classes)}")
+    _same_classes(dataset, classes, where, "--more-views dataset")
     want = set(performers)
     ids = sorted(v.id for v in dataset.videos if v.performer in want)
     if not ids:
@@ -239,8 +244,7 @@ def more_performer_sets(dataset, exclude, vocab_share: float = D.MORE_PERFORMERS
     performers), divided by performer: the first ``round(vocab_share * n)`` of the n new performers (sorted by
     id) go to set A (the vocabulary), the others to set B (the classifier), so the two stay disjoint by
     performer. A dataset with other classes than ``classes``, or without a new performer, is refused."""
-    if classes and dataset.classes and list(dataset.classes) != list(classes):
-        raise InputError(f"{where}: dataset has classes {list(dataset.classes)}, the split's are {list(classes)}")
+    _same_classes(dataset, classes, where, "dataset")
     if not 0.0 <= float(vocab_share) <= 1.0:
         raise InputError(f"{where}: the vocabulary's share of the performers must be in 0..1, got {vocab_share}")
     new = sorted({v.performer for v in dataset.videos} - set(exclude))
