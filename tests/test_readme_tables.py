@@ -190,3 +190,17 @@ def test_real_motion_goals_rows_come_from_the_strikes_and_real_motion_files():
     assert any("pose sequences, PS 2D, demo mocap + real walks | 87.1 | >= 85.0 |" in r for r in rows)
     assert not any("3D SIFT" in r for r in rows)  # the 3D SIFT row is taken from the demo-only file alone
     assert rt.real_motion_goals({}) == []
+    # the pipeline's default 3D SIFT (S++) has its own files and rows beside the three-camera one's (S)
+    docs = {"vidstyle.metrics.strikes": [(Path("s/strikes_02_05_seed0.json"), strikes),
+                                         (Path("s/strikes_02_05_moreperformers_seed0.json"),
+                                          {"overall": {"smoothed": {"punch_fraction": 0.5}}})],
+            "vidstyle.metrics.real_motion": [(Path("r/real_motion_seed0.json"), real),
+                                             (Path("r/real_motion_moreperformers_seed0.json"),
+                                              {"overall": {"sift": {"family_accuracy": 0.3}}})]}
+    rows = rt.real_motion_goals(docs)
+    assert any("3D SIFT S (three demo cameras) | 63.4 | >= 80.0 | `results/strikes_02_05_seed0.json` |" in r for r in rows)
+    assert any("3D SIFT S++ (more views and performers, the pipeline's default) | 50.0 | >= 80.0 | "
+               "`results/strikes_02_05_moreperformers_seed0.json` |" in r for r in rows)
+    assert any("3D SIFT S (three demo cameras) | 2.6 | >= 85.0 | `results/real_motion_seed0.json` |" in r for r in rows)
+    assert any("the pipeline's default) | 30.0 | >= 85.0 | `results/real_motion_moreperformers_seed0.json` |" in r
+               for r in rows)

@@ -81,3 +81,26 @@ def test_separable_problem(rng, cls):
 def test_needs_two_classes(rng):
     with pytest.raises(InputError, match="at least 2"):
         OvaOvoSVC().fit(rng.normal(size=(10, 2)), np.zeros(10))
+
+
+def test_kernel_cache_changes_speed_not_the_machines(rng, monkeypatch):
+    # 1500 frames: the whole kernel (~9 MB as libsvm's float rows) overflows a 0.5 MB cache many times over
+    X = rng.normal(size=(1500, 6))
+    y = rng.integers(0, 3, 1500)
+    X[np.arange(1500), y] += 1.0
+    small = OvaOvoSVC(C=10.0, cache_size=0.5).fit(X, y)
+    large = OvaOvoSVC(C=10.0, cache_size=200.0).fit(X, y)
+    assert np.array_equal(small.support_vectors_, large.support_vectors_)
+    assert np.allclose(small.dual_coef_, large.dual_coef_, atol=1e-9)
+    assert np.allclose(small.intercept_, large.intercept_, atol=1e-9)
+    # the default divides the budget among the machines trained at once
+    import vidstyle.recognition.classifier as classifier
+    from vidstyle.recognition.defaults import SVM_CACHE_MB
+
+    seen = []
+    real = classifier._fit_binary
+    monkeypatch.setattr(classifier, "_fit_binary", lambda *a: seen.append(a[-1]) or real(*a))
+    OvaOvoSVC(n_jobs=2).fit(X[:90], y[:90])
+    assert seen and set(seen) == {SVM_CACHE_MB / 2}
+    with pytest.raises(InputError, match="cache_size"):
+        OvaOvoSVC(cache_size=0).fit(X[:90], y[:90])

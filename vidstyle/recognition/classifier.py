@@ -100,6 +100,9 @@ class OvaOvoSVC(ClassifierMixin, BaseEstimator):
         being out-voted by "the rest" (the one-vs-one machines are unweighted).
     claim_threshold: a one-vs-all decision above this claims the frame.
     n_competitors: classes that compete when no one-vs-all machine claims a frame.
+    cache_size: libsvm's kernel cache in MB for each machine; None: the budget
+        :data:`~vidstyle.recognition.defaults.SVM_CACHE_MB` divided among the machines trained at once. Speed
+        only: the fitted machines do not depend on it.
     n_jobs: machines trained in parallel (joblib).
     """
 
@@ -110,7 +113,7 @@ class OvaOvoSVC(ClassifierMixin, BaseEstimator):
         class_weight: str | None = "balanced",
         claim_threshold: float = 0.0,
         n_competitors: int = 2,
-        cache_size: float = 500.0,
+        cache_size: float | None = None,
         n_jobs: int | None = None,
     ):
         self.C = C
@@ -138,8 +141,17 @@ class OvaOvoSVC(ClassifierMixin, BaseEstimator):
         for i, j in self.pairs_:
             rows = np.flatnonzero((yi == i) | (yi == j))
             jobs.append((X[rows], yi[rows] == i, None, rows))
+        cache = self.cache_size
+        if cache is None:
+            from joblib import effective_n_jobs
+
+            from .defaults import SVM_CACHE_MB
+
+            cache = SVM_CACHE_MB / max(1, min(effective_n_jobs(self.n_jobs), len(jobs)))
+        if not cache > 0:
+            raise InputError(f"classifier: cache_size must be > 0 MB, got {cache}")
         fitted = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(_fit_binary)(Xs, ys, cw, self.C, self.gamma_, self.cache_size) for Xs, ys, cw, _ in jobs
+            delayed(_fit_binary)(Xs, ys, cw, self.C, self.gamma_, cache) for Xs, ys, cw, _ in jobs
         )
         self.ova_ = fitted[:K]
         self.ovo_ = fitted[K:]

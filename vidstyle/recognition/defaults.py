@@ -39,6 +39,12 @@ MORE_PERFORMERS_VOCAB_SHARE = 1 / 3
 SMOOTHING = "duration"         # validated: explicit-duration HMM over frame scores
 EMISSION_WEIGHT = 1.0          # validated
 MIRROR = True                  # also train on mirror images (scovanner2007 descriptors only)
+# libsvm's kernel cache (MB), shared by the binary SVMs trained at once (OvaOvoSVC, n_jobs): a speed setting, the
+# fitted machines are the same at any size. The demo's training (37,302 frames at the cap 5000) fitted its largest
+# one-vs-all machine in 110.5 s with scikit-learn's 500 MB per machine, 41.8 s with 1000, 33.3 s with 2000 and
+# 38.9 s with 4000 (one core each, 2026-12-06); the whole training stage of the demo went from 241 s to 105 s
+# with the same model (scripts/bench_demo.py --baseline c3221c0 measures the demo with and without it)
+SVM_CACHE_MB = 4000.0
 
 # ------------------------------------------------------------------ late fusion with the pose recognizer
 # the weight of the pose-sequence recognizer's scores (vidstyle recognize --pose-model): chosen by
