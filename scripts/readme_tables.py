@@ -831,6 +831,8 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
     walks, demo_only = strikes.get("strikes_02_05_pose_cmuwalks_ps_seed0.json"), strikes.get("strikes_02_05_pose_ps_seed0.json")
     # the pipeline's default 3D SIFT recognizer (S++) where its file is committed, else the three-camera one's
     sift_s = strikes.get("strikes_02_05_moreperformers_seed0.json") or strikes.get("strikes_02_05_seed0.json")
+    sift_name = ("the pipeline's 3D SIFT recognizer" if "strikes_02_05_moreperformers_seed0.json" in strikes
+                 else "the thesis' 3D SIFT recognizer")
     if sift_s and (walks or demo_only):
         # which training the validation preferred: the higher chosen score of the two runs' validation files
         val = {Path(p).name: d for p, d in docs.get("vidstyle.validation.pose_recognition", [])}
@@ -845,8 +847,8 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
                     else f"by the one trained on {what}")
                  for i, (d, what) in enumerate([r for r in runs if r[0]])]
         rows.append("| Real mocap punches (CMU 02_05) rendered from six cameras: strike frames recognised as punches "
-                    f"| {', '.join(parts)}, {_pct(sift_s['overall']['smoothed']['punch_fraction'])} by the thesis' 3D "
-                    "SIFT recognizer | [recognition](" + results_link + ") |")
+                    f"| {', '.join(parts)}, {_pct(sift_s['overall']['smoothed']['punch_fraction'])} by {sift_name} "
+                    "| [recognition](" + results_link + ") |")
     first = _first([(p, d) for p, d in docs.get("vidstyle.metrics.style", [])
                     if "recognised" in (d.get("sources") or {})])
     if first:

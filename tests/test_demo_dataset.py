@@ -247,3 +247,21 @@ def test_first_performer_renders_new_performers_only(tmp_path):
     assert main(args + ["--first-performer", "5", "--out", str(tmp_path / "x")]) == 2  # past the last
     assert main(args + ["--first-performer", "1", "--split-seed", "0", "--out", str(tmp_path / "y")]) == 2
     assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+
+
+def test_footwork_option(tmp_path):
+    """--footwork F: the dataset and each performer record it; the punches' mocap differs from the same seed's
+    without it, the kicks' does not (footwork is the punches'); out of 0..1 is refused."""
+    args = ["demo", "make-dataset", "--performers", "1", "--views", "front", "--single-seconds", "2",
+            "--performances", "0", "--seed", "2", "--no-video"]
+    assert main(args + ["--footwork", "0.8", "--out", str(tmp_path / "fw")]) == 0
+    assert main(args + ["--out", str(tmp_path / "plain")]) == 0
+    d = json.loads((tmp_path / "fw" / "dataset.json").read_text())
+    assert d["params"]["footwork"] == 0.8
+    styles = [p["style"]["footwork"] for p in d["performers"]]
+    assert styles and all(0.4 <= f <= 0.8 for f in styles)
+    assert "footwork" not in json.loads((tmp_path / "plain" / "dataset.json").read_text())["params"]
+    for name, same in (("mocap/p00_jab.bvh", False), ("mocap/p00_lowkick.bvh", True)):
+        assert ((tmp_path / "fw" / name).read_bytes() == (tmp_path / "plain" / name).read_bytes()) is same, name
+    assert main(args + ["--footwork", "1.5", "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()

@@ -187,3 +187,63 @@ def test_same_seed_same_motion_different_seed_different_motion():
     same_motion = a.motion.rotations.shape == c.motion.rotations.shape and np.allclose(a.motion.rotations,
                                                                                        c.motion.rotations)
     assert not (a.labels == c.labels and same_motion)  # another seed: other labels or other motion
+
+
+@pytest.mark.parametrize("lead", ["orthodox", "southpaw"])
+@pytest.mark.parametrize("seed", [7, 15, 16])  # 15, 16: performers whose key noise once put the stepping foot underground
+def test_punch_footwork_moves_the_lower_body_and_keeps_the_feet_honest(seed, lead):
+    from dataclasses import replace
+
+    from vidstyle.demo.actions import PUNCH_STEP
+
+    plain = _performer(seed, lead)
+    p = replace(plain, style=replace(plain.style, footwork=1.0))
+    sk_h = p.body.H
+    for action in ("Jab", "Hook", "Uppercut"):
+        take, start, end = _isolated(p, action, np.random.default_rng(seed + 100))
+        ref, _, _ = _isolated(plain, action, np.random.default_rng(seed + 100))
+        assert take.labels == ref.labels  # the same action, frame for frame
+        pos, pos0 = global_positions(take.motion), global_positions(ref.motion)
+        hips = take.motion.skeleton.index("Hips")
+        # the hips travel during the punch with footwork, and much less without it
+        travel = np.linalg.norm(pos[start:end, hips] - pos[start, hips], axis=-1).max() / sk_h
+        travel0 = np.linalg.norm(pos0[start:end, hips] - pos0[start, hips], axis=-1).max() / sk_h
+        assert travel > 0.015 and travel > 1.5 * travel0, (action, travel, travel0)
+        # back in the guard at the end, where it started
+        assert np.linalg.norm(pos[end] - pos[start], axis=-1).max() < 0.01 * sk_h, action
+        ankles, toes = _feet(p, take)
+        ah = p.body.ankle_height
+        assert ankles[..., 1].min() > ah - 0.002 * sk_h and toes[..., 1].min() > 0.008 * sk_h, action
+        for k in range(2):  # planted feet do not skid (the rule of test_planted_feet_do_not_skid)
+            down = ankles[:, k, 1] < ah + 0.001 * sk_h
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], down.astype(int), [0]])))
+            for s, e in zip(edges[::2], edges[1::2]):
+                xz = ankles[s:e, k][:, [0, 2]]
+                assert np.linalg.norm(xz - xz[0], axis=1).max() < 0.004 * sk_h, (action, k, s, e)
+        if action in PUNCH_STEP:
+            # the lead foot steps towards the opponent by about the step (times the performer's amplitude),
+            # lifted on the way, and comes back
+            lead_k = 0 if lead == "orthodox" else 1
+            facing = pos[start, take.motion.skeleton.index("LeftUpLeg" if lead == "orthodox" else "RightUpLeg")]
+            fwd = ankles[start:end, lead_k] - ankles[start, lead_k]
+            reach = np.abs(fwd[:, 2]).max() / sk_h
+            want = PUNCH_STEP[action] * p.style.amplitude
+            assert 0.6 * want < reach < 1.4 * want, (reach, want, facing)
+            assert (ankles[start:end, lead_k, 1] - ah).max() > 0.01 * sk_h
+            assert np.abs(ankles[end, lead_k] - ankles[start, lead_k]).max() < 0.004 * sk_h
+
+
+def test_footwork_off_leaves_performers_and_their_documents_alone():
+    from vidstyle.demo.dataset import DatasetParams, make_performer
+    from vidstyle.errors import ParameterError
+
+    plain = make_performer(DatasetParams(seed=3), 4)
+    with_fw = make_performer(DatasetParams(seed=3, footwork=0.6), 4)
+    assert "footwork" not in plain.style.to_dict() and "footwork" not in DatasetParams().to_dict()
+    assert 0.3 <= with_fw.style.footwork <= 0.6
+    # everything else about the performer is the same person
+    assert with_fw.body == plain.body and with_fw.transitions == plain.transitions
+    assert {k: v for k, v in with_fw.style.to_dict().items() if k != "footwork"} == plain.style.to_dict()
+    assert MovementTraits.from_dict(with_fw.style.to_dict()).to_dict() == with_fw.style.to_dict()
+    with pytest.raises(ParameterError, match="footwork"):
+        DatasetParams(footwork=1.5).validate()

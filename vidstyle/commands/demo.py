@@ -66,6 +66,9 @@ def make_dataset_cmd(
     first_performer: int = typer.Option(None, "--first-performer", help="Render only performers from this number on "
                                         "(p<K> .. the last of --performers): performers no dataset of fewer "
                                         "performers holds, e.g. for `vocabulary / train-recognizer --more-performers`."),
+    footwork: float = typer.Option(None, "--footwork", help="Punches with footwork, 0..1: the weight shifts, the lead "
+                                   "foot steps in on the jab, the rear foot pivots, as real fighters move; each performer's "
+                                   "amount is drawn up to this [0: the lower body stays in the guard while punching]."),
     unseen_camera: bool = typer.Option(False, "--unseen-camera", help="Test videos for `evaluate recognition "
                                        "--split unseen-camera`: views 30,150 at elevation 30 before the moon "
                                        "texture (none used by default datasets), one performance each."),
@@ -125,6 +128,7 @@ def make_dataset_cmd(
                             performances=performances, performance_seconds=performance_seconds,
                             performance_views=perf_views,
                             background=background, render=False if no_video else None, elevation_deg=elevation,
+                            footwork=footwork,
                             only_performers=None if only_performers is None else
                             tuple(p.strip() for p in only_performers.split(",") if p.strip()))
     t0 = time.perf_counter()

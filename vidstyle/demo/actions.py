@@ -108,6 +108,53 @@ ACTION_KEYS: dict[str, list[Key]] = {
     ],
 }
 
+# Footwork of the punches (MovementTraits.footwork, off by default): what a real fighter's lower body does while
+# an arm strikes, which the keys above leave in the guard (the strikes diagnostics found the recognizer learned
+# punches by that still lower body, and read real punches, with their weight shift, as kicks). Channel deltas
+# at full footwork for an orthodox fighter (statures, degrees), added to each key of the punch in proportion
+# to how far the striking hands are out of the guard at that key, so the action still starts and ends in it:
+# Jab - the weight goes onto the lead leg, the rear foot turns in; the lead foot steps in (PUNCH_STEP) and back;
+# Hook - the weight shifts over the lead leg and the rear foot pivots;
+# Uppercut - a deeper dip, the hips drive forward, the rear foot pivots.
+# (The rig turns a foot about its ankle, so a heel lifted off a planted ball is not drawn.)
+PUNCH_FOOTWORK: dict[str, dict[str, float]] = {
+    "Jab": {"pz": 0.04, "py": -0.006, "rfyaw": 10.0, "pitch": 4.0},
+    "Hook": {"px": -0.03, "pz": 0.015, "py": -0.01, "rfyaw": 25.0, "yaw": -8.0},
+    "Uppercut": {"pz": 0.025, "px": -0.015, "py": -0.012, "rfyaw": 35.0},
+}
+#: the lead foot's step in (statures forward at full footwork) and its lift on the way there and back
+PUNCH_STEP: dict[str, float] = {"Jab": 0.07}
+STEP_LIFT = 0.025
+
+
+def with_footwork(action: str, keys: list[Key], amount: float) -> tuple[list[Key], list[tuple[int, int, float]]]:
+    """``keys`` of ``action`` with :data:`PUNCH_FOOTWORK` added at ``amount`` (0..1), and for the actions of
+    :data:`PUNCH_STEP` the lead foot stepped in while the hand is out; unchanged for 0 and for actions without
+    footwork. Also the lifts of the lead foot as ``(first key, last key, height in statures)``: it travels
+    between those keys, on its way in and out, and is to be raised by a smooth bump over that span after the keys
+    are interpolated (a lift in the keys would get their noise and could put the foot through the floor)."""
+    if amount <= 0 or action not in PUNCH_FOOTWORK:
+        return keys, []
+    hands = [CH[c] for g in ("lh", "rh") for c in GROUPS[g]]
+    vecs = [pose_vector(pose) for _, pose in keys]
+    reach = np.array([float(np.linalg.norm((v - GUARD_VECTOR)[hands])) for v in vecs])
+    if reach.max() <= 0:
+        return keys, []
+    w = amount * reach / reach.max()
+    for v, wk in zip(vecs, w):
+        for ch, d in PUNCH_FOOTWORK[action].items():
+            v[CH[ch]] += wk * d
+    lifts = []
+    if action in PUNCH_STEP:
+        out = np.flatnonzero(reach >= 0.999 * reach.max())
+        first, last = int(out[0]), int(out[-1])  # the strike's hit and the end of its hold
+        for i in range(first, last + 1):
+            vecs[i][CH["lfz"]] += amount * PUNCH_STEP[action]
+        lifts = [(first - 1, first, amount * STEP_LIFT), (last, last + 1, amount * STEP_LIFT)]
+    return [(ph, {c: float(v[i]) for i, c in enumerate(CHANNELS) if abs(v[i] - GUARD_VECTOR[i]) > 1e-12})
+            for (ph, _), v in zip(keys, vecs)], lifts
+
+
 # A step is a forward shuffle of STEP_LENGTH statures (lead foot first); backward is the reverse order.
 STEP_LENGTH = 0.11
 STEP_KEYS_FORWARD: list[Key] = [

@@ -65,6 +65,9 @@ class DatasetParams:
     noise_sigma: float = 2.0
     render: bool = True
     only_performers: tuple[str, ...] | None = None  # render only these performer ids (None: all)
+    # punches with footwork (MovementTraits.footwork): each performer's amount drawn in [footwork / 2, footwork]
+    # from a stream of its own, so the performers are otherwise those of the same seed without it (0: none)
+    footwork: float = 0.0
 
     @classmethod
     def small(cls, seed: int = 0, **overrides) -> DatasetParams:
@@ -89,6 +92,8 @@ class DatasetParams:
             raise ParameterError("performances", f"must be >= 0, got {self.performances}")
         if self.performances and self.performance_seconds < 3:
             raise ParameterError("performance_seconds", f"must be at least 3, got {self.performance_seconds}")
+        if not 0.0 <= self.footwork <= 1.0:
+            raise ParameterError("footwork", f"must be in 0..1, got {self.footwork}")
         if self.fps <= 0 or self.mocap_fps % self.fps:
             raise ParameterError("fps", f"the mocap rate {self.mocap_fps} must be a multiple of the video rate {self.fps}")
         return self
@@ -99,6 +104,8 @@ class DatasetParams:
         d["performance_views"] = None if self.performance_views is None else list(self.performance_views)
         d["size"] = list(self.size)
         d["only_performers"] = None if self.only_performers is None else list(self.only_performers)
+        if not self.footwork:
+            del d["footwork"]  # the documents of datasets made without footwork stay as they were
         return d
 
     @classmethod
@@ -139,7 +146,11 @@ def validate_views(views) -> None:
 # --------------------------------------------------------------------------- performers and takes
 def make_performer(params: DatasetParams, index: int) -> Performer:
     rng = np.random.default_rng(np.random.SeedSequence([params.seed, index]))
-    return Performer.random(f"p{index:02d}", rng, video_fps=params.fps)
+    performer = Performer.random(f"p{index:02d}", rng, video_fps=params.fps)
+    if params.footwork > 0:
+        u = np.random.default_rng(np.random.SeedSequence([params.seed, index, 2])).uniform(0.5, 1.0)
+        performer = replace(performer, style=replace(performer.style, footwork=float(params.footwork * u)))
+    return performer
 
 
 def _take_rng(params: DatasetParams, performer: int, take: int) -> np.random.Generator:

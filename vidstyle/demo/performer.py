@@ -29,9 +29,14 @@ class MovementTraits:
     tempo: tuple[float, ...] = (1.0,) * len(ACTIONS)  # per-action duration factors (this performer's rhythm)
     gap_seconds: float = 0.5  # mean guard pause between actions in a performance
     step_prob: float = 0.15  # chance that a pause contains a step
+    # how much a punch moves the feet and hips (0..1; actions.PUNCH_FOOTWORK): 0, the default, keeps the lower body
+    # in the guard while the arms strike; never drawn by random(), so a performer is the same with or without it
+    footwork: float = 0.0
 
     def to_dict(self) -> dict:
         d = asdict(self)
+        if not self.footwork:
+            del d["footwork"]  # the documents of datasets made without footwork stay as they were
         return {k: (round(v, 6) if isinstance(v, float) else [round(x, 6) for x in v] if isinstance(v, tuple) else v)
                 for k, v in d.items()}
 

@@ -26,6 +26,7 @@ from .actions import (
     STEP_KEYS_FORWARD,
     Key,
     pose_vector,
+    with_footwork,
 )
 from .performer import Performer
 from .rig import CH, CHANNELS, solve_motion
@@ -38,6 +39,8 @@ for _c in ("px", "py", "pz"):
     _NOISE_SCALE[CH[_c]] = 0.1
 for _c in ("lfx", "lfy", "lfz", "rfx", "rfy", "rfz"):
     _NOISE_SCALE[CH[_c]] = 0.5
+
+_FOOT_POSITIONS = tuple(tuple(CH[f"{f}{a}"] for a in "xyz") for f in ("lf", "rf"))
 
 
 @dataclass
@@ -95,6 +98,9 @@ def _keys_of(p: Performer, guard: np.ndarray, keys: list[Key], t0: float, durati
         delta = pose_vector(pose) - GUARD_VECTOR
         v = guard + p.style.amplitude * delta
         moving = np.abs(delta) > 1e-12
+        for foot in _FOOT_POSITIONS:  # a foot at the guard's height is planted: its place gets no noise
+            if not moving[foot[1]]:
+                moving[list(foot)] = False
         if var > 0 and moving.any():
             v = v + moving * rng.normal(0.0, var, len(v)) * _NOISE_SCALE
         v[list(POSITION_X)] += origin[0]
@@ -114,6 +120,7 @@ def build_take(p: Performer, plan: list[PlanStep], rng: np.random.Generator, vid
     values: list[np.ndarray] = [guard.copy()]
     frame = 0
     bounce_windows: list[tuple[float, float]] = []
+    lift_windows: list[tuple[float, float, float]] = []  # the lead foot's lifts of punches with footwork
     labels: list[str] = []
     for seg in plan:
         t0, dur = frame / video_fps, seg.frames / video_fps
@@ -127,7 +134,9 @@ def build_take(p: Performer, plan: list[PlanStep], rng: np.random.Generator, vid
             tk, vk = _keys_of(p, guard, keys, t0, dur, origin, rng, noisy=False)
             origin = origin + np.array([0.0, p.style.amplitude * float(keys[-1][1]["pz"])])
         else:
-            tk, vk = _keys_of(p, guard, ACTION_KEYS[seg.label], t0, dur, origin, rng, noisy=True)
+            keys, lifts = with_footwork(seg.label, ACTION_KEYS[seg.label], p.style.footwork)
+            tk, vk = _keys_of(p, guard, keys, t0, dur, origin, rng, noisy=True)
+            lift_windows += [(tk[a], tk[b] - tk[a], p.style.amplitude * h) for a, b, h in lifts]
         # the segment's first key repeats the previous segment's last one (both are the guard)
         held = seg.label == "Guard" and seg.keys is None
         times += tk if held else tk[1:]
@@ -147,6 +156,9 @@ def build_take(p: Performer, plan: list[PlanStep], rng: np.random.Generator, vid
         channels[inside, CH["py"]] -= p.style.bounce * wave
         channels[inside, CH["lhy"]] -= 0.6 * p.style.bounce * wave
         channels[inside, CH["rhy"]] -= 0.6 * p.style.bounce * wave
+    for t0, dur, height in lift_windows:
+        inside = (t >= t0) & (t < t0 + dur)
+        channels[inside, CH["lfy"]] += height * np.sin(np.pi * (t[inside] - t0) / dur) ** 2
     motion = solve_motion(channels, p.body, mocap_fps)
     if p.style.lead == "southpaw":
         motion = motion.mirror()
