@@ -250,6 +250,9 @@ def _recognition_groups(items) -> dict[str, list[tuple[Path, dict]]]:
             kind += ", 3D SIFT trained also on more camera views"
         if msplit.get("more_performers"):
             kind += " and more performers"
+            for m in msplit["more_performers"]:
+                if m.get("classes"):  # a dataset of some classes only: rendered real mocap (make-cmu-dataset)
+                    kind += f", and real mocap of {', '.join(m['classes'])} ({', '.join(m['performers'])})"
         if d.get("recognizer") in ("pose", "pose+sift"):
             sp = d.get("split")
             what = "pose sequences" if d["recognizer"] == "pose" else "pose sequences + 3D SIFT"
@@ -584,6 +587,32 @@ def training_views_table(items, root: Path) -> list[str]:
     return lines
 
 
+def real_walks_table(items, root: Path) -> list[str]:
+    """``scripts/validate_real_walks.py``: 3D SIFT recognizers of one split seed, with and without rendered real
+    walks in set B, on the validation performers, the validation camera and the real-motion validation clips."""
+    lines = []
+    for p, d in items:
+        lines += [f"`{_rel(p, root)}` (split seed {d.get('seed')}; real-motion validation clips "
+                  f"{', '.join(d.get('clips') or [])}). *V*: the validation performers' own videos, *camera*: their "
+                  "validation-camera videos, *real walks*: right action family of the real-motion validation frames. "
+                  "Rule: " + str(d.get("rule")) + ".", "",
+                  "| model | training sets B beyond the split's | V smoothed | camera smoothed | real walks | "
+                  "score (mean of the three) | mean of V and camera | chosen |",
+                  "|---|---|---:|---:|---:|---:|---:|---|"]
+        for r in d.get("rows") or []:
+            extra = [f"{len(m.get('performers') or [])} performer{'' if len(m.get('performers') or []) == 1 else 's'} "
+                     f"of `{m.get('dataset')}`"
+                     + (f" ({', '.join(m['classes'])} only)" if m.get("classes") else "")
+                     for m in r.get("more_performers") or []]
+            if r.get("more_views"):
+                extra.insert(0, "more views")
+            lines.append(f"| {r['name']} | {'; '.join(extra) or '—'} | {_pct(r['validation']['smoothed'])} | "
+                         f"{_pct(r['validation_camera']['smoothed'])} | {_pct(r['real_motion'])} | {r['score']:.4f} | "
+                         f"{r['score_demo']:.4f} | {'yes' if r['name'] == d.get('chosen') else ''} |")
+        lines.append("")
+    return lines[:-1]
+
+
 def reconstruct_table(items, root: Path) -> list[str]:
     lines = []
     for p, d in items:
@@ -756,6 +785,8 @@ def tables(root: Path, extra: list[Path] | tuple = ()) -> str:
                  validation_table),
                 ("vidstyle.validation.training_views", "More camera views of the training performers, chosen on "
                  "validation performers (`scripts/validate_training_views.py`)", training_views_table),
+                ("vidstyle.validation.real_walks", "Real walks in 3D SIFT's training, chosen on the validation sets "
+                 "(`scripts/validate_real_walks.py`)", real_walks_table),
                 ("vidstyle.validation.pose_recognition", "Pose sequences, 3D SIFT and their fusion on the validation "
                  "sets (`scripts/pose_recognition_results.py`; estimated 2D: pictorial structures)",
                  pose_recognition_validation_table),
@@ -830,10 +861,10 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
     strikes = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.strikes", [])}
     walks, demo_only = strikes.get("strikes_02_05_pose_cmuwalks_ps_seed0.json"), strikes.get("strikes_02_05_pose_ps_seed0.json")
     # the pipeline's default 3D SIFT recognizer (S++) where its file is committed, else the three-camera one's
-    sift_s = strikes.get("strikes_02_05_moreperformers_seed0.json") or strikes.get("strikes_02_05_seed0.json")
+    sift_doc = strikes.get("strikes_02_05_moreperformers_seed0.json") or strikes.get("strikes_02_05_seed0.json")
     sift_name = ("the pipeline's 3D SIFT recognizer" if "strikes_02_05_moreperformers_seed0.json" in strikes
                  else "the thesis' 3D SIFT recognizer")
-    if sift_s and (walks or demo_only):
+    if sift_doc and (walks or demo_only):
         # which training the validation preferred: the higher chosen score of the two runs' validation files
         val = {Path(p).name: d for p, d in docs.get("vidstyle.validation.pose_recognition", [])}
         score = {k: (val.get(f) or {}).get("chosen", {}).get("score", float("-inf"))
@@ -847,7 +878,7 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
                     else f"by the one trained on {what}")
                  for i, (d, what) in enumerate([r for r in runs if r[0]])]
         rows.append("| Real mocap punches (CMU 02_05) rendered from six cameras: strike frames recognised as punches "
-                    f"| {', '.join(parts)}, {_pct(sift_s['overall']['smoothed']['punch_fraction'])} by {sift_name} "
+                    f"| {', '.join(parts)}, {_pct(sift_doc['overall']['smoothed']['punch_fraction'])} by {sift_name} "
                     "| [recognition](" + results_link + ") |")
     first = _first([(p, d) for p, d in docs.get("vidstyle.metrics.style", [])
                     if "recognised" in (d.get("sources") or {})])
@@ -983,17 +1014,21 @@ def real_motion_goals(docs: dict) -> list[str]:
     real = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.real_motion", [])}
     rows = []
     sift_s, sift_spp = "3D SIFT S (three demo cameras)", "3D SIFT S++ (more views and performers, the pipeline's default)"
+    sift_walks = "3D SIFT S++ + real walks (rendered CMU 03 walks as `Step`; validated, needs `../shared`)"
     for name, f in ((sift_s, "strikes_02_05_seed0.json"), (sift_spp, "strikes_02_05_moreperformers_seed0.json"),
+                    (sift_walks, "strikes_02_05_realwalks_seed0.json"),
                     ("pose sequences, PS 2D, demo mocap", "strikes_02_05_pose_ps_seed0.json"),
                     ("pose sequences, PS 2D, demo mocap + real walks", "strikes_02_05_pose_cmuwalks_ps_seed0.json")):
         if f in strikes:
             rows.append(f"| real CMU punches (02_05), punch share of strike frames, `vidstyle evaluate strikes` | {name} | "
                         f"{_pct_number(strikes[f]['overall']['smoothed']['punch_fraction'])} | >= "
                         f"{_pct_number(RECOGNITION_GOALS['strikes'])} | `results/{f}` |")
+    sift_of = {"real_motion_seed0.json": sift_s, "real_motion_moreperformers_seed0.json": sift_spp,
+               "real_motion_realwalks_seed0.json": sift_walks}
     for f, training in (("real_motion_seed0.json", "demo mocap"), ("real_motion_moreperformers_seed0.json", None),
-                        ("real_motion_cmuwalks_seed0.json", "demo mocap + real walks")):
+                        ("real_motion_realwalks_seed0.json", None), ("real_motion_cmuwalks_seed0.json", "demo mocap + real walks")):
         for r, v in ((real.get(f) or {}).get("overall") or {}).items():
-            name = {"sift": sift_spp if training is None else sift_s, "pose": f"pose sequences, PS 2D, {training}",
+            name = {"sift": sift_of.get(f), "pose": f"pose sequences, PS 2D, {training}",
                     "fusion": f"fusion, PS 2D, {training}"}.get(r, r)
             if r == "sift" and f == "real_motion_cmuwalks_seed0.json":
                 continue  # the same 3D SIFT recognizer (S) as real_motion_seed0.json's

@@ -62,6 +62,29 @@ def test_cap_is_independent_of_class_grouping():
     assert {s.label for s in b} == {"walk", "other"}
 
 
+def test_subjects_and_class_case():
+    """--subjects keeps only those subjects' clips (the windows are the ones the full plan gives them);
+    a class keeps its case (Step=walk: the demo's class), so another dataset's labels can name it."""
+    clips = [CmuClip(f"{s}_{t:02d}.bvh", s, f"{t:02d}", "walk", 600, 120.0, "walk") for s in ("03", "07") for t in (1, 2)]
+    full, _ = plan_segments(clips, CMUParams(classes=parse_actions("Step=walk"), segment_seconds=1.5, seed=3))
+    only, _ = plan_segments(clips, CMUParams(classes=parse_actions("Step=walk"), segment_seconds=1.5, seed=3,
+                                             subjects=("03",)))
+    assert {s.performer for s in full} == {"s03", "s07"}
+    assert [s.stem for s in only] == [s.stem for s in full if s.clip.subject == "03"] and only
+    assert {s.label for s in only} == {"Step"}
+    assert parse_actions("Walk,Other=run+jump") == (("Walk", ("walk",)), ("Other", ("run", "jump")))
+    assert "subjects" not in CMUParams(classes=parse_actions("walk")).to_dict()
+    assert CMUParams(classes=parse_actions("walk"), subjects=("03",)).to_dict()["subjects"] == ["03"]
+    with pytest.raises(InputError, match="two digits"):
+        CMUParams(classes=parse_actions("walk"), subjects=("3a",)).validate()
+
+
+def test_unknown_subject_is_refused(cmu_dir, tmp_path):
+    with pytest.raises(InputError, match="no clip of subject.*99"):
+        make_cmu_dataset(cmu_dir, tmp_path / "x", CMUParams(classes=parse_actions("walk"), subjects=("99",)), jobs=1)
+    assert not (tmp_path / "x").exists()
+
+
 # --------------------------------------------------------------------------- rendered datasets
 @pytest.fixture(scope="module")
 def cmu_small(cmu_dir, tmp_path_factory):

@@ -204,3 +204,27 @@ def test_real_motion_goals_rows_come_from_the_strikes_and_real_motion_files():
     assert any("3D SIFT S (three demo cameras) | 2.6 | >= 85.0 | `results/real_motion_seed0.json` |" in r for r in rows)
     assert any("the pipeline's default) | 30.0 | >= 85.0 | `results/real_motion_moreperformers_seed0.json` |" in r
                for r in rows)
+    # S++ trained also on rendered real walks: its own rows, named as such
+    docs["vidstyle.metrics.strikes"].append((Path("s/strikes_02_05_realwalks_seed0.json"),
+                                             {"overall": {"smoothed": {"punch_fraction": 0.171}}}))
+    docs["vidstyle.metrics.real_motion"].append((Path("r/real_motion_realwalks_seed0.json"),
+                                                 {"overall": {"sift": {"family_accuracy": 0.759}}}))
+    rows = rt.real_motion_goals(docs)
+    walks = [r for r in rows if "3D SIFT S++ + real walks" in r]
+    assert [r.split(" | ")[-3:] for r in walks] == [["17.1", ">= 80.0", "`results/strikes_02_05_realwalks_seed0.json` |"],
+                                                    ["75.9", ">= 85.0", "`results/real_motion_realwalks_seed0.json` |"]]
+
+
+def test_real_walks_validation_table_marks_the_chosen_model_and_the_class_only_datasets():
+    row = lambda name, v, c, rm, more: {"name": name, "validation": {"smoothed": v}, "validation_camera": {"smoothed": c},  # noqa: E731
+                                        "real_motion": rm, "score": (v + c + rm) / 3, "score_demo": (v + c) / 2,
+                                        "more_views": [{}], "more_performers": more}
+    perf = {"dataset": "out/performers_dataset", "performers": ["p20", "p21"]}
+    walks = {"dataset": "/tmp/walks", "performers": ["s03"], "classes": ["Step"]}
+    doc = {"seed": 0, "clips": ["07_01.bvh"], "rule": "the highest score", "chosen": "with walks",
+           "rows": [row("S++", 0.905, 0.856, 0.0, [perf]), row("with walks", 0.901, 0.854, 1.0, [perf, walks])]}
+    lines = rt.real_walks_table([(Path("/v/real_walks_seed0.json"), doc)], Path("/v"))
+    body = [ln for ln in lines if ln.startswith("| S++") or ln.startswith("| with walks")]
+    assert body[0] == ("| S++ | more views; 2 performers of `out/performers_dataset` | 90.5 % | 85.6 % | 0.0 % | "
+                       "0.5870 | 0.8805 |  |")
+    assert "1 performer of `/tmp/walks` (Step only)" in body[1] and body[1].endswith("| 0.9183 | 0.8775 | yes |")

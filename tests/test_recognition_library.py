@@ -228,6 +228,45 @@ def test_more_performers_divide_between_vocabulary_and_classifier(ds, tmp_path):
               more_performers=[(ds, ds / "features")])
 
 
+def test_more_performers_of_some_of_the_classes(ds, tmp_path):
+    """A more-performers dataset of one of the split's classes (real walks labelled ``Step``: ``demo
+    make-cmu-dataset --actions Step=walk``) trains the same machines: its frames join set B under that
+    class; a dataset with a class the split lacks is refused, naming the file and the class."""
+    from vidstyle.errors import InputError
+    from vidstyle.recognition.synthetic import CLASSES
+
+    xd, videos = _new_performers(tmp_path)
+    only = CLASSES[1]
+    doc = json.loads((xd / "dataset.json").read_text())
+    doc["classes"] = doc["actions"] = [only]
+    doc["videos"] = videos = [{**v, "action": only if v["action"] else None} for v in videos]
+    (xd / "dataset.json").write_text(json.dumps(doc))
+    n_frames = 0
+    for v in videos:
+        lab = json.loads((xd / v["labels"]).read_text())
+        lab["classes"], lab["labels"] = [only], [only] * len(lab["labels"])
+        n_frames += len(lab["labels"])
+        (xd / v["labels"]).write_text(json.dumps(lab))
+    voc = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS)).vocabulary
+    base = train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+                 max_frames_per_class=0)
+    run = train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+                more_performers=[(xd, xd / "features")], more_performers_vocab_share=0.0, max_frames_per_class=0)
+    assert list(run.model.classes_) == list(base.model.classes_)
+    assert run.extra["split"]["more_performers"][0]["classes"] == [only]
+    m = len(base.training_files)
+    assert [t["features"].rsplit("/", 1)[-1][:-4] for t in run.training_files[m:]] == sorted(v["id"] for v in videos)
+    # every one of their frames trains under that class, and no other class gains a frame
+    factor = 2 if run.model.n_mirrored_videos_ else 1
+    gained = {c: run.model.train_class_counts_[c] - base.model.train_class_counts_[c] for c in CLASSES}
+    assert gained == {c: n_frames * factor if c == only else 0 for c in CLASSES}
+    doc["classes"] = [only, "Somersault"]
+    (xd / "dataset.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"people.*Somersault"):
+        train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS),
+              more_performers=[(xd, xd / "features")], more_performers_vocab_share=0.0)
+
+
 def test_more_performers_flags(ds, cli_run, tmp_path, capsys):
     common = ["--dataset", str(ds), "--features-dir", str(ds / "features")]
     assert main(["vocabulary", *common, "--words", WORDS, "--more-performers", str(ds),

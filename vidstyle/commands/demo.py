@@ -175,6 +175,8 @@ def make_cmu_dataset_cmd(
     camera: str = typer.Option("fit", "--camera", help="fit: a static camera framing the whole window; follow: "
                                "remove the performer's horizontal drift (a panning camera), so walkers are not "
                                "drawn smaller than performers who stay on the spot."),
+    subjects: str = typer.Option("", "--subjects", help="Comma-separated CMU subjects whose clips are used "
+                                 "(e.g. 03); default: every subject."),
     seed: int = typer.Option(0, "--seed", help="Everything is drawn from this seed (same seed, same files)."),
     overwrite: bool = _OVERWRITE,
     jobs: int = _JOBS,
@@ -184,7 +186,8 @@ def make_cmu_dataset_cmd(
     per CMU subject (so an unseen-performer split tests on unseen subjects).
 
     Each clip of the chosen actions loses its T-pose frame, is cut into --segment-seconds windows and
-    rendered in every view with its subject's appearance. Logs clips, windows and subjects per class,
+    rendered in every view with its subject's appearance. A class keeps the case it is given in
+    (Step=walk makes walking windows of the demo's class Step, to train a demo recognizer on real walks). Logs clips, windows and subjects per class,
     and warns about classes recorded by fewer than 3 subjects. Deterministic in --seed.
     """
     from ..demo.cmu import CMUParams, make_cmu_dataset, parse_actions
@@ -192,7 +195,7 @@ def make_cmu_dataset_cmd(
     view_list = tuple(v.strip() for v in views.split(",") if v.strip())
     params = CMUParams(seed=seed, classes=parse_actions(actions), views=view_list, segment_seconds=segment_seconds,
                        min_seconds=min_seconds, max_per_subject=max_per_subject, background=background,
-                       camera=camera)
+                       camera=camera, subjects=tuple(x.strip().zfill(2) for x in subjects.split(",") if x.strip()))
     t0 = time.perf_counter()
     manifest = make_cmu_dataset(cmu, out, params, overwrite=overwrite, jobs=jobs, scheduler=scheduler)
     log.info("dataset %s ready in %.1f s", manifest, time.perf_counter() - t0)

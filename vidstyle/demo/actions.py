@@ -146,8 +146,8 @@ def with_footwork(action: str, keys: list[Key], amount: float) -> tuple[list[Key
             v[CH[ch]] += wk * d
     lifts = []
     if action in PUNCH_STEP:
-        out = np.flatnonzero(reach >= 0.999 * reach.max())
-        first, last = int(out[0]), int(out[-1])  # the strike's hit and the end of its hold
+        hold = np.flatnonzero(reach >= 0.999 * reach.max())
+        first, last = int(hold[0]), int(hold[-1])  # the strike's hit and the end of its hold
         for i in range(first, last + 1):
             vecs[i][CH["lfz"]] += amount * PUNCH_STEP[action]
         lifts = [(first - 1, first, amount * STEP_LIFT), (last, last + 1, amount * STEP_LIFT)]

@@ -67,6 +67,9 @@ class CMUParams:
     #: drift (its 1 s moving average) is removed, as a camera operator panning with the performer would,
     #: so every action is framed at about the same size and only the body's own motion tells them apart
     camera: str = "fit"
+    #: CMU subjects whose clips are used ("03", ...); empty = every subject. A training set of real motion
+    #: for another dataset's recognizer keeps the subjects of its validation and test clips out
+    subjects: tuple[str, ...] = ()
 
     @property
     def class_names(self) -> list[str]:
@@ -89,6 +92,9 @@ class CMUParams:
             raise ParameterError("camera", f"must be fit or follow, got {self.camera!r}")
         if self.background not in ("plain", "texture"):
             raise ParameterError("background", f"must be plain or texture, got {self.background!r}")
+        bad = [s for s in self.subjects if not (s.isdigit() and len(s) == 2)]
+        if bad:
+            raise ParameterError("subjects", f"CMU subjects are two digits (03, 12), got {', '.join(map(repr, bad))}")
         return self
 
     def to_dict(self) -> dict:
@@ -96,6 +102,10 @@ class CMUParams:
         d["classes"] = {c: list(srcs) for c, srcs in self.classes}
         d["views"] = list(self.views)
         d["size"] = list(self.size)
+        if self.subjects:
+            d["subjects"] = list(self.subjects)
+        else:  # documents of datasets made before the option stay as they were
+            del d["subjects"]
         return d
 
 
@@ -113,7 +123,7 @@ def parse_actions(spec: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
         if not item:
             continue
         name, _, rhs = item.partition("=")
-        name = name.strip().lower()
+        name = name.strip()  # a class keeps the case it is given in (Step=walk: another dataset's class)
         sources = [s.strip().lower() for s in (rhs.split("+") if rhs else [name])]
         if not name or not all(sources):
             raise ParameterError("actions", f"malformed item {item!r} (use ACTION or CLASS=ACTION+ACTION)")
@@ -217,6 +227,8 @@ def plan_segments(clips: list[CmuClip], params: CMUParams) -> tuple[list[ClipWin
     min_frames = int(round(params.min_seconds * params.fps))
     pools: dict[tuple[str, str], list[ClipWindow]] = defaultdict(list)
     dropped_short = []
+    if params.subjects:
+        clips = [c for c in clips if c.subject in set(params.subjects)]
     for clip in clips:
         if clip.source_action not in to_class:
             continue
@@ -365,6 +377,9 @@ def make_cmu_dataset(cmu_dir: str | os.PathLike, out: str | os.PathLike, params:
     params.validate()
     cmu_dir, out = Path(cmu_dir), Path(out)
     clips = read_clips(cmu_dir)
+    missing = sorted(set(params.subjects) - {c.subject for c in clips})
+    if missing:
+        raise InputError(f"{cmu_dir / 'clips.csv'}: no clip of subject(s) {', '.join(missing)}")
     segments, stats = plan_segments(clips, params)
     log_stats(stats)
     if not segments:

@@ -17,6 +17,7 @@ kind                                          version   written by
 ``vidstyle.validation.pose_scales``           1         ``scripts/validate_pose_scales.py``
 ``vidstyle.validation.view_tracking``         1         ``scripts/validate_view_tracking.py``
 ``vidstyle.validation.training_views``        2         ``scripts/validate_training_views.py``
+``vidstyle.validation.real_walks``            1         ``scripts/validate_real_walks.py``
 ============================================  ========  ==================================================
 
 Each is a JSON object with ``kind`` and ``schema_version`` first, then what its script records (see the
@@ -51,6 +52,7 @@ TEMPO_RUNS = "vidstyle.validation.tempo_runs"
 POSE_SCALES = "vidstyle.validation.pose_scales"
 VIEW_TRACKING = "vidstyle.validation.view_tracking"
 TRAINING_VIEWS = "vidstyle.validation.training_views"
+REAL_WALKS = "vidstyle.validation.real_walks"
 
 # kind -> (schema version, JSON indent, final newline, non-JSON values as str)
 LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
@@ -70,6 +72,7 @@ LAYOUTS: dict[str, tuple[int, int, bool, bool]] = {
     POSE_SCALES: (1, 1, True, False),
     VIEW_TRACKING: (1, 1, True, False),
     TRAINING_VIEWS: (2, 1, True, False),
+    REAL_WALKS: (1, 1, True, False),
 }
 
 

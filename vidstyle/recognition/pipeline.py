@@ -208,9 +208,17 @@ def annotated_training(annotations: Sequence[PathLike], features: Sequence[PathL
     return feats, ylists, used, training
 
 
-def _same_classes(dataset, classes, where: PathLike, what: str) -> None:
-    """Refuse a second dataset (``what``, named by ``where``) whose classes are not the split's ``classes``."""
-    if classes and dataset.classes and list(dataset.classes) != list(classes):
+def _same_classes(dataset, classes, where: PathLike, what: str, subset: bool = False) -> None:
+    """Refuse a second dataset (``what``, named by ``where``) whose classes are not the split's ``classes``
+    (with ``subset``: not among them; labels are class names, so a dataset of some of the classes, such as
+    real walks labelled ``Step``, trains the same machines)."""
+    if not (classes and dataset.classes):
+        return
+    if subset:
+        other = [c for c in dataset.classes if c not in set(classes)]
+        if other:
+            raise InputError(f"{where}: {what} has classes {other} the split does not have (its are {list(classes)})")
+    elif list(dataset.classes) != list(classes):
         raise InputError(f"{where}: {what} has classes {list(dataset.classes)}, the split's are {list(classes)}")
 
 
@@ -243,8 +251,10 @@ def more_performer_sets(dataset, exclude, vocab_share: float = D.MORE_PERFORMERS
     """Video ids (sorted) of ``dataset``'s performers that are not among ``exclude`` (the main dataset's
     performers), divided by performer: the first ``round(vocab_share * n)`` of the n new performers (sorted by
     id) go to set A (the vocabulary), the others to set B (the classifier), so the two stay disjoint by
-    performer. A dataset with other classes than ``classes``, or without a new performer, is refused."""
-    _same_classes(dataset, classes, where, "dataset")
+    performer. Its classes may be some of ``classes`` (real walks labelled ``Step``: ``vidstyle demo
+    make-cmu-dataset --actions Step=walk``); a dataset with a class ``classes`` lacks, or without a new
+    performer, is refused."""
+    _same_classes(dataset, classes, where, "dataset", subset=True)
     if not 0.0 <= float(vocab_share) <= 1.0:
         raise InputError(f"{where}: the vocabulary's share of the performers must be in 0..1, got {vocab_share}")
     new = sorted({v.performer for v in dataset.videos} - set(exclude))
@@ -272,6 +282,8 @@ def _more_performer_videos(more_performers, exclude, vocab_share, set_name: str,
         out += [(features_path(fdir, i), xd.labels_path(by_id[i])) for i in ids]
         record.append({"dataset": str(d), "features_dir": str(fdir), "set": set_name,
                        "performers": sorted({by_id[i].performer for i in ids}), "videos": len(ids)})
+        if classes and xd.classes and list(xd.classes) != list(classes):
+            record[-1]["classes"] = list(xd.classes)  # some of the split's classes only (real walks: Step)
     return out, record
 
 
