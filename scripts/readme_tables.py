@@ -565,7 +565,8 @@ def training_views_table(items, root: Path) -> list[str]:
         if mp:
             share = float(mp.get("vocab_share") or 0.0)
             who = (f" *More performers*: procedural performers no split holds (`{mp.get('dataset')}`, "
-                   f"`vidstyle demo make-dataset --first-performer`, {', '.join(str(v) for v in (mp.get('params') or {}).get('views') or [])}), "
+                   f"`vidstyle demo make-dataset --first-performer`, {', '.join(str(v) for v in (mp.get('params') or {}).get('views') or [])}, "
+                   f"{(mp.get('params') or {}).get('single_seconds', '?')} s single-action videos), "
                    f"{share:.0%} of them (the first by id) added to the vocabulary's set A and the rest to set B.")
         lines += [f"`{_rel(p, root)}`: set B's performers also filmed from azimuths {', '.join(mv.get('views') or [])} "
                   f"at {mv.get('elevation_deg')} degrees elevation.{who} *V*: the validation performers' own videos, "

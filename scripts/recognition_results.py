@@ -22,7 +22,8 @@ params.yaml's values were tuned on part of their test set.
    ``--more-views``, ``train-recognizer --more-views``, and the chosen cap on training frames per class) ->
    ``recognition_moreviews_unseen_{performer,camera}_seedS.json`` (``--prefix``); where the validation also
    chose more performers (``--more-performers``, ``vocabulary / train-recognizer --more-performers``), they
-   join the vocabulary and set B as it chose.
+   join the vocabulary and set B as it chose; with ``--real-walks D``, D's rendered real walks join set B too
+   (``scripts/validate_real_walks.py``).
 
 The test split is scored once per file, by ``evaluate recognition``; nothing here tunes anything. Work
 files go to ``--work`` (models, labels). The dataset and features are the demo pipeline's (one dataset,
@@ -169,6 +170,9 @@ def training_views_for_seed(args, rp: dict, seed: int) -> tuple[dict, list[str],
         vocab = ["--more-performers", str(args.more_performers), "--more-performers-features", str(fdir),
                  "--more-performers-vocab-share", repr(float(ch["vocab_share"]))]
         train += vocab
+    if args.real_walks is not None:  # set B only: the one walking subject is not in the vocabulary's share
+        fdir = _pick(_by_points(args.real_walks_features or []), rp, "--real-walks-features")
+        train += ["--more-performers", str(args.real_walks), "--more-performers-features", str(fdir)]
     return rp, train, vocab
 
 
@@ -210,6 +214,10 @@ def main() -> None:
     ap.add_argument("--more-performers", type=Path, default=None,
                     help="with --training-views: the more-performers dataset (vidstyle demo make-dataset --first-performer)")
     ap.add_argument("--more-performers-features", type=Path, default=None, nargs="+", help="its features directories")
+    ap.add_argument("--real-walks", type=Path, default=None,
+                    help="with --training-views: also this dataset of rendered real walks in set B (vidstyle demo "
+                         "make-cmu-dataset --actions Step=walk --subjects 03; scripts/validate_real_walks.py)")
+    ap.add_argument("--real-walks-features", type=Path, default=None, nargs="+", help="its features directories")
     ap.add_argument("--prefix", default="moreviews", help="with --training-views: the results files' name prefix")
     ap.add_argument("--seeds", type=int, nargs="*", default=[0], help="split seeds (unseen performer [+ camera])")
     ap.add_argument("--left-right", type=int, nargs="*", default=[],

@@ -187,8 +187,9 @@ def make_cmu_dataset_cmd(
 
     Each clip of the chosen actions loses its T-pose frame, is cut into --segment-seconds windows and
     rendered in every view with its subject's appearance. A class keeps the case it is given in
-    (Step=walk makes walking windows of the demo's class Step, to train a demo recognizer on real walks). Logs clips, windows and subjects per class,
-    and warns about classes recorded by fewer than 3 subjects. Deterministic in --seed.
+    (Step=walk makes walking windows of the demo's class Step, to train a demo recognizer on real walks).
+    Logs clips, windows and subjects per class, and warns about classes recorded by fewer than 3
+    subjects. Deterministic in --seed.
     """
     from ..demo.cmu import CMUParams, make_cmu_dataset, parse_actions
 
