@@ -46,7 +46,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vidstyle.evaluation.realmotion import VAL_CAMERAS, Recognizers, evaluate_real_motion, read_clip_list  # noqa: E402
-from vidstyle.evaluation.recognition import load_set, score_videos  # noqa: E402
+from vidstyle.evaluation.recognition import score_set  # noqa: E402
 from vidstyle.formats.dataset import read_dataset  # noqa: E402
 from vidstyle.formats.validation import REAL_WALKS as KIND  # noqa: E402
 from vidstyle.formats.validation import validation_header, write_validation  # noqa: E402
@@ -55,17 +55,6 @@ from vidstyle.recognition.splits import make_split  # noqa: E402
 
 log = logging.getLogger("validate_real_walks")
 PIPELINE = ROOT / "pipelines" / "kickboxing"
-
-
-def score_set(rec, ds, fdir: Path, ids: list[str], jobs: int) -> dict:
-    """Raw and smoothed frame accuracy and video accuracy of ``rec`` on the videos ``ids`` of ``ds``."""
-    feats, labels = load_set(ds, fdir, ids, jobs)
-    by = ds.by_id()
-    actions = [by[i].action if by[i].kind == "single" else None for i in ids]
-    outs = [rec.smooth(*rec.frame_scores(H)) for H in rec.histograms_many(feats)]
-    m = score_videos(rec.classes_, [t.labels for t in labels], outs, ids, actions)
-    return {"raw": m["frame_accuracy"]["raw"], "smoothed": m["frame_accuracy"]["smoothed"],
-            "video": m["video_accuracy"], "frames": m["n_test_frames"]}
 
 
 def table(doc: dict) -> str:

@@ -48,7 +48,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from vidstyle.evaluation.recognition import load_set, score_videos  # noqa: E402
+from vidstyle.evaluation.recognition import load_set, score_set  # noqa: E402
 from vidstyle.formats.dataset import read_dataset  # noqa: E402
 from vidstyle.formats.features import directory_params  # noqa: E402
 from vidstyle.formats.validation import TRAINING_VIEWS as KIND  # noqa: E402
@@ -72,16 +72,6 @@ def by_points(dirs) -> dict[int, Path]:
 def seed_config(seed: int) -> dict:
     f = VALIDATION / ("recognition.json" if seed == 0 else f"recognition_seed{seed}.json")
     return dict(json.loads(f.read_text())["final_config"])
-
-
-def _score(rec, ds, fdir: Path, ids: list[str], jobs: int) -> dict:
-    feats, labels = load_set(ds, fdir, ids, jobs)
-    by = ds.by_id()
-    actions = [by[i].action if by[i].kind == "single" else None for i in ids]
-    outs = [rec.smooth(*rec.frame_scores(H)) for H in rec.histograms_many(feats)]
-    m = score_videos(rec.classes_, [t.labels for t in labels], outs, ids, actions)
-    return {"raw": m["frame_accuracy"]["raw"], "smoothed": m["frame_accuracy"]["smoothed"],
-            "video": m["video_accuracy"], "frames": m["n_test_frames"]}
 
 
 def run_seed(args, seed: int, feats: dict, cam_feats: dict, more_feats: dict, perf_feats: dict) -> dict:
@@ -129,8 +119,8 @@ def run_seed(args, seed: int, feats: dict, cam_feats: dict, more_feats: dict, pe
             coarse_context=cfg.get("coarse_context", 0), smoothing=cfg["smoothing"],
             emission_weight=cfg["emission_weight"], smoothing_window=cfg["smoothing_window"], n_jobs=args.jobs,
             random_state=seed).fit(fb, lb, classes=ds.classes or None)
-        v = _score(rec, ds, feats[pts], list(sp.val), args.jobs)
-        c = _score(rec, cam, cam_feats[pts], cam_ids, args.jobs)
+        v = score_set(rec, ds, feats[pts], list(sp.val), args.jobs)
+        c = score_set(rec, cam, cam_feats[pts], cam_ids, args.jobs)
         row = {"more_views": views, "max_frames_per_class": cap, "more_performers": performers,
                "vocab_share": float(args.vocab_share) if performers else None, "n_train_videos": len(fb),
                "validation": v, "validation_camera": c, "score": 0.5 * (v["smoothed"] + c["smoothed"]),

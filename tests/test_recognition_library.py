@@ -293,3 +293,31 @@ def test_more_views_flags_pair_up(ds, cli_run, tmp_path, capsys):
     assert main(["train-recognizer", *common, "--more-views", str(ds)]) == 2
     assert "--more-views: 1 datasets for 0 --more-views-features" in capsys.readouterr().err
     assert not (tmp_path / "m.joblib").exists()
+
+
+def test_score_set_counts_frames_as_the_recognizer_labels_them(ds):
+    """vidstyle.evaluation.recognition.score_set (the validation scripts' score): its frame accuracies are
+    the share of frames whose predicted label is the true one, counted here frame by frame from
+    predict_video, and its frame count is the videos' length."""
+    from vidstyle.evaluation.recognition import score_set
+    from vidstyle.formats.dataset import read_dataset
+    from vidstyle.formats.labels import read_labels
+    from vidstyle.recognition.splits import make_split
+
+    voc = train_vocabulary(dataset=ds, features_dir=ds / "features", words=int(WORDS)).vocabulary
+    run = train(voc, dataset=ds, features_dir=ds / "features", n_components=int(COMPONENTS))
+    d = read_dataset(ds)
+    ids = list(make_split(d, "unseen-performer", seed=SEED).test)
+    got = score_set(run.model, d, ds / "features", ids, 2)
+    by = d.by_id()
+    right = {"raw": 0, "smoothed": 0}
+    n = 0
+    for i in ids:
+        out = run.model.predict_video(load_features(ds / "features" / f"{i}.npz"))
+        truth = read_labels(d.labels_path(by[i])).labels
+        for k in right:
+            right[k] += sum(run.model.classes_[p] == t for p, t in zip(out[k], truth))
+        n += len(truth)
+    assert got["frames"] == n
+    assert got["raw"] == pytest.approx(right["raw"] / n) and got["smoothed"] == pytest.approx(right["smoothed"] / n)
+    assert 0.0 <= got["video"] <= 1.0

@@ -200,6 +200,19 @@ def load_set(dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: i
     return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
+def score_set(rec, dataset: Dataset, features_dir: Path, ids: Sequence[str], n_jobs: int | None = None) -> dict:
+    """Raw and smoothed frame accuracy, video accuracy and frame count of the fitted recognizer ``rec`` on
+    the videos ``ids`` of ``dataset`` (features in ``features_dir``): the validation scripts' score of a
+    candidate."""
+    feats, labels = load_set(dataset, features_dir, ids, n_jobs)
+    by = dataset.by_id()
+    actions = [by[i].action if by[i].kind == "single" else None for i in ids]
+    outs = [rec.smooth(*rec.frame_scores(H)) for H in rec.histograms_many(feats)]
+    m = score_videos(rec.classes_, [t.labels for t in labels], outs, list(ids), actions)
+    return {"raw": m["frame_accuracy"]["raw"], "smoothed": m["frame_accuracy"]["smoothed"],
+            "video": m["video_accuracy"], "frames": m["n_test_frames"]}
+
+
 def evaluate_recognition(
     dataset: Dataset,
     features_dir: str | Path,
