@@ -217,7 +217,8 @@ def _same_classes(dataset, classes, where: PathLike, what: str, subset: bool = F
     if subset:
         other = [c for c in dataset.classes if c not in set(classes)]
         if other:
-            raise InputError(f"{where}: {what} has classes {other} the split does not have (its are {list(classes)})")
+            raise InputError(f"{where}: {what} has classes {other} the split does not have "
+                             f"(the split's: {list(classes)})")
     elif list(dataset.classes) != list(classes):
         raise InputError(f"{where}: {what} has classes {list(dataset.classes)}, the split's are {list(classes)}")
 
