@@ -862,9 +862,9 @@ def headline(docs: dict, results_link: str = "docs/results.md") -> str:
     strikes = {Path(p).name: d for p, d in docs.get("vidstyle.metrics.strikes", [])}
     walks, demo_only = strikes.get("strikes_02_05_pose_cmuwalks_ps_seed0.json"), strikes.get("strikes_02_05_pose_ps_seed0.json")
     # the pipeline's default 3D SIFT recognizer (S++) where its file is committed, else the three-camera one's
-    sift_doc = strikes.get("strikes_02_05_moreperformers_seed0.json") or strikes.get("strikes_02_05_seed0.json")
-    sift_name = ("the pipeline's 3D SIFT recognizer" if "strikes_02_05_moreperformers_seed0.json" in strikes
-                 else "the thesis' 3D SIFT recognizer")
+    spp = strikes.get("strikes_02_05_moreperformers_seed0.json")
+    sift_doc = spp or strikes.get("strikes_02_05_seed0.json")
+    sift_name = "the pipeline's 3D SIFT recognizer" if spp else "the thesis' 3D SIFT recognizer"
     if sift_doc and (walks or demo_only):
         # which training the validation preferred: the higher chosen score of the two runs' validation files
         val = {Path(p).name: d for p, d in docs.get("vidstyle.validation.pose_recognition", [])}
@@ -1031,15 +1031,16 @@ def real_motion_goals(docs: dict) -> list[str]:
             rows.append(f"| real CMU punches (02_05), punch share of strike frames, `vidstyle evaluate strikes` | {name} | "
                         f"{_pct_number(strikes[f]['overall']['smoothed']['punch_fraction'])} | >= "
                         f"{_pct_number(RECOGNITION_GOALS['strikes'])} | `results/{f}` |")
-    sift_of = {"real_motion_seed0.json": sift_s, "real_motion_moreperformers_seed0.json": sift_spp,
-               "real_motion_realwalks_seed0.json": sift_walks}
-    for f, training in (("real_motion_seed0.json", "demo mocap"), ("real_motion_moreperformers_seed0.json", None),
-                        ("real_motion_realwalks_seed0.json", None), ("real_motion_cmuwalks_seed0.json", "demo mocap + real walks")):
+    # each file, the name of its 3D SIFT recognizer (None: the same as another file's) and its pose training
+    for f, sift, training in (("real_motion_seed0.json", sift_s, "demo mocap"),
+                              ("real_motion_moreperformers_seed0.json", sift_spp, None),
+                              ("real_motion_realwalks_seed0.json", sift_walks, None),
+                              ("real_motion_cmuwalks_seed0.json", None, "demo mocap + real walks")):
         for r, v in ((real.get(f) or {}).get("overall") or {}).items():
-            name = {"sift": sift_of.get(f), "pose": f"pose sequences, PS 2D, {training}",
+            if r == "sift" and sift is None:
+                continue  # the cmuwalks run's 3D SIFT is S, as in real_motion_seed0.json
+            name = {"sift": sift, "pose": f"pose sequences, PS 2D, {training}",
                     "fusion": f"fusion, PS 2D, {training}"}.get(r, r)
-            if r == "sift" and f == "real_motion_cmuwalks_seed0.json":
-                continue  # the same 3D SIFT recognizer (S) as real_motion_seed0.json's
             rows.append(f"| real-motion split, right action family, `vidstyle evaluate real-motion` | {name} | "
                         f"{_pct_number(v.get('family_accuracy'))} | >= {_pct_number(RECOGNITION_GOALS['real_motion'])} | `results/{f}` |")
     return ["| figure | recognizer | % | goal | file |", "|---|---|---:|---:|---|", *rows] if rows else []

@@ -228,7 +228,8 @@ def plan_segments(clips: list[CmuClip], params: CMUParams) -> tuple[list[ClipWin
     pools: dict[tuple[str, str], list[ClipWindow]] = defaultdict(list)
     dropped_short = []
     if params.subjects:
-        clips = [c for c in clips if c.subject in set(params.subjects)]
+        keep = set(params.subjects)
+        clips = [c for c in clips if c.subject in keep]
     for clip in clips:
         if clip.source_action not in to_class:
             continue
